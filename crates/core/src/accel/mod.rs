@@ -1,0 +1,80 @@
+//! Acceleration structures behind one [`Accel`] trait, each generic over the
+//! ray/triangle test.
+//!
+//! - [`BruteForce`]: every ray against every triangle, the reference.
+//! - [`Bvh2`]: binary BVH, binned-SAH build, stack traversal nearest child first.
+//! - [`ThreadedBvh`]: paper 001's BVH in pre-order with escape indices,
+//!   traversed without a stack.
+
+use crate::hit::Hit;
+use crate::ray::Ray;
+use rayon::prelude::*;
+use serde::Serialize;
+
+mod brute;
+pub mod bvh;
+mod registry;
+
+pub use brute::BruteForce;
+pub use bvh::{BuildOptions, Bvh2, ThreadedBvh};
+pub use registry::{build_accel, AccelKind};
+
+/// Rays per rayon task in the batch queries: large enough to amortise task
+/// overhead, small enough to balance two cores on uneven work.
+pub const BATCH_GRAIN: usize = 256;
+
+/// Size and quality figures of a built structure.
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct AccelStats {
+    /// Nodes (inner + leaves); 0 for brute force.
+    pub nodes: usize,
+    /// Leaf nodes.
+    pub leaves: usize,
+    /// Bytes held by the structure (nodes, index lists, precomputed triangles).
+    pub bytes: usize,
+    /// Bytes of the nodes alone.
+    pub node_bytes: usize,
+    /// Longest root-to-leaf path (root has depth 0).
+    pub depth: u32,
+    /// Surface area heuristic cost (traversal cost 1, triangle cost 1,
+    /// relative to the root box): `sum_inner SA(n)/SA(root) * c_trav +
+    /// sum_leaf SA(n)/SA(root) * n_tris * c_isect`.
+    pub sah_cost: f64,
+    /// Triangles referenced (can exceed the mesh count when split).
+    pub triangle_refs: usize,
+}
+
+/// A structure that answers ray queries on a triangle mesh.
+///
+/// Every implementation gives the same answers as [`BruteForce`] up to ties
+/// (two triangles at the same distance, e.g. on a shared edge), which is what
+/// the test suite checks.
+pub trait Accel: Send + Sync {
+    /// Nearest hit with `t` in `[ray.tnear, ray.tfar]`.
+    fn intersect(&self, ray: &Ray) -> Option<Hit>;
+
+    /// True if any triangle is hit with `t` in `[ray.tnear, ray.tfar]`; stops
+    /// at the first one found.
+    fn occluded(&self, ray: &Ray) -> bool;
+
+    /// Size and quality figures.
+    fn stats(&self) -> AccelStats;
+
+    /// Nearest hits for many rays, in parallel over the rayon pool.
+    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        rays.par_iter()
+            .zip(hits.par_iter_mut())
+            .with_min_len(BATCH_GRAIN)
+            .for_each(|(r, h)| *h = self.intersect(r));
+    }
+
+    /// Occlusion for many rays, in parallel over the rayon pool.
+    fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
+        assert_eq!(rays.len(), occluded.len(), "one result per ray");
+        rays.par_iter()
+            .zip(occluded.par_iter_mut())
+            .with_min_len(BATCH_GRAIN)
+            .for_each(|(r, o)| *o = self.occluded(r));
+    }
+}

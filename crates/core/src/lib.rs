@@ -1,0 +1,26 @@
+//! raykit core: rays, axis-aligned boxes, indexed triangle meshes, the three
+//! ray/triangle tests and the acceleration structures that are generic over them.
+//!
+//! The layout follows the papers summarised in `PAPERS.md`: the triangle tests
+//! of paper 000 (Plücker coordinates, Wald's projection) and paper 001
+//! (Möller–Trumbore), the binned-SAH BVH and the threaded (escape-index) BVH
+//! of paper 001.
+
+pub mod aabb;
+pub mod accel;
+pub mod camera;
+pub mod hit;
+pub mod mesh;
+pub mod ray;
+pub mod rng;
+pub mod tri;
+
+pub use aabb::Aabb;
+pub use accel::{Accel, AccelStats};
+pub use camera::Camera;
+pub use glam;
+pub use glam::{Vec2, Vec3, Vec3A};
+pub use hit::Hit;
+pub use mesh::{Material, MeshError, Part, TriangleMesh};
+pub use ray::Ray;
+pub use tri::TriangleTest;

@@ -1,0 +1,1 @@
+//! Placeholder for the f64 reference test.

@@ -1,0 +1,1 @@
+//! raykit-io (placeholder).

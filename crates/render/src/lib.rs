@@ -1,0 +1,1 @@
+//! raykit-render (placeholder).

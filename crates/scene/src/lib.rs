@@ -1,0 +1,1 @@
+//! raykit-scene (placeholder).

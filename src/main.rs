@@ -1,0 +1,2 @@
+//! The `raykit` command line.
+fn main() {}
