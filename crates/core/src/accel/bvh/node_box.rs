@@ -1,0 +1,53 @@
+//! The box part of a flattened BVH node and its ray test.
+
+use crate::aabb::Aabb;
+use crate::ray::Ray;
+
+/// 1 + 2·gamma(3) with gamma(n) = n·eps/(1 - n·eps), eps = 2^-24.
+const ROBUST_EXIT: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
+/// Box corners stored as plain arrays so that a node packs into 32 bytes.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C)]
+pub(crate) struct NodeBox {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}
+
+impl From<Aabb> for NodeBox {
+    fn from(b: Aabb) -> Self {
+        NodeBox {
+            min: b.min.to_array(),
+            max: b.max.to_array(),
+        }
+    }
+}
+
+impl NodeBox {
+    /// Entry distance of the ray into the box if it enters within
+    /// `[tnear, tfar]`, else `f32::INFINITY`.
+    ///
+    /// Slab test with the reciprocal direction; `min`/`max` written so that a
+    /// NaN from 0·inf (origin on a slab plane of an axis-parallel ray)
+    /// drops out instead of poisoning the interval.
+    #[inline(always)]
+    pub fn entry(&self, ray: &Ray, tnear: f32, tfar: f32) -> f32 {
+        let o = ray.origin;
+        let id = ray.inv_dir;
+        let tx0 = (self.min[0] - o.x) * id.x;
+        let tx1 = (self.max[0] - o.x) * id.x;
+        let ty0 = (self.min[1] - o.y) * id.y;
+        let ty1 = (self.max[1] - o.y) * id.y;
+        let tz0 = (self.min[2] - o.z) * id.z;
+        let tz1 = (self.max[2] - o.z) * id.z;
+        let enter = tx0.min(tx1).max(ty0.min(ty1)).max(tz0.min(tz1)).max(tnear);
+        // Widen the exit by 3 ulps (pbrt-v4's 1 + 2·gamma(3)) so rounding can
+        // never cull a box whose triangle the triangle test would report hit.
+        let exit = (tx0.max(tx1).min(ty0.max(ty1)).min(tz0.max(tz1)) * ROBUST_EXIT).min(tfar);
+        if enter <= exit {
+            enter
+        } else {
+            f32::INFINITY
+        }
+    }
+}

@@ -1,0 +1,158 @@
+//! Paper 001's stackless BVH: nodes in pre-order, each with an escape index.
+
+use super::build::{build, tree_shape, BuildNode, BuildOptions};
+use super::node_box::NodeBox;
+use crate::accel::{Accel, AccelStats};
+use crate::hit::Hit;
+use crate::mesh::TriangleMesh;
+use crate::ray::Ray;
+use crate::tri::TriangleTest;
+
+/// Leaf triangle counts are packed into the top bits of `prims`.
+const COUNT_BITS: u32 = 5;
+const FIRST_MASK: u32 = (1 << (32 - COUNT_BITS)) - 1;
+
+/// A 32-byte node: box, escape index, and packed triangle range
+/// (count in the top 5 bits, 0 for inner nodes; first triangle below).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C)]
+struct Node {
+    bounds: NodeBox,
+    /// Where to go when the ray misses this box (or after a leaf): the next
+    /// node in pre-order after this node's subtree; `nodes.len()` ends.
+    escape: u32,
+    prims: u32,
+}
+
+/// The threaded BVH of paper 001 (after Smits 1998, "Efficiency issues for
+/// ray tracing"): the tree is stored in pre-order, so a node's first child is
+/// the next node in the array, and each node carries an escape index — where
+/// traversal continues when the ray misses its box. Traversal is a single
+/// loop over the array with no stack: hit → next node, miss → escape. The
+/// price is a fixed visiting order (left child first), with no
+/// nearest-child-first ordering and no pruning of subtrees queued before a
+/// nearer hit was found.
+///
+/// Paper 001 builds it bottom-up as a complete tree with one triangle per
+/// leaf; here it is flattened from the same binned-SAH tree as [`super::Bvh2`]
+/// (leaf size from [`BuildOptions::max_leaf_size`], 1 reproduces the paper's
+/// one-triangle leaves), so the two layouts differ only in traversal.
+pub struct ThreadedBvh<T: TriangleTest> {
+    nodes: Vec<Node>,
+    tris: Vec<T::Tri>,
+    prims: Vec<u32>,
+    stats: AccelStats,
+}
+
+impl<T: TriangleTest> ThreadedBvh<T> {
+    /// Build over all triangles of `mesh`.
+    pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        let tree = build(mesh, options);
+        assert!(
+            tree.order.len() <= FIRST_MASK as usize + 1,
+            "threaded BVH holds at most 2^27 triangles"
+        );
+        let mut nodes = Vec::with_capacity(tree.root.count_nodes());
+        preorder(&tree.root, &mut nodes);
+        let tris: Vec<T::Tri> = tree
+            .order
+            .iter()
+            .map(|&p| {
+                let [a, b, c] = mesh.triangle(p as usize);
+                T::precompute(a, b, c)
+            })
+            .collect();
+        let (n, leaves, depth, sah) = tree_shape(&tree.root, options.traversal_cost as f64);
+        let node_bytes = nodes.len() * std::mem::size_of::<Node>();
+        let stats = AccelStats {
+            nodes: n,
+            leaves,
+            node_bytes,
+            bytes: node_bytes + tris.len() * std::mem::size_of::<T::Tri>() + tree.order.len() * 4,
+            depth,
+            sah_cost: sah,
+            triangle_refs: tree.order.len(),
+        };
+        ThreadedBvh {
+            nodes,
+            tris,
+            prims: tree.order,
+            stats,
+        }
+    }
+
+    #[inline(always)]
+    fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
+        let rd = T::prepare(ray);
+        let mut tfar = ray.tfar;
+        let mut best: Option<Hit> = None;
+        let end = self.nodes.len();
+        let mut idx = 0usize;
+        while idx < end {
+            let node = &self.nodes[idx];
+            if node.bounds.entry(ray, ray.tnear, tfar) == f32::INFINITY {
+                idx = node.escape as usize;
+                continue;
+            }
+            let count = (node.prims >> (32 - COUNT_BITS)) as usize;
+            if count > 0 {
+                let first = (node.prims & FIRST_MASK) as usize;
+                for i in first..first + count {
+                    let tri = &self.tris[i];
+                    if ANY {
+                        if T::occluded(tri, ray, &rd, tfar) {
+                            return (None, true);
+                        }
+                    } else if let Some(h) = T::intersect(tri, ray, &rd, tfar) {
+                        if best.is_none_or(|b| h.t < b.t) {
+                            tfar = h.t;
+                            best = Some(Hit {
+                                t: h.t,
+                                u: h.u,
+                                v: h.v,
+                                prim: self.prims[i],
+                            });
+                        }
+                    }
+                }
+                idx = node.escape as usize;
+            } else {
+                idx += 1;
+            }
+        }
+        (best, false)
+    }
+}
+
+/// Append `node`'s subtree in pre-order and fill in escape indices.
+fn preorder(node: &BuildNode, nodes: &mut Vec<Node>) {
+    let index = nodes.len();
+    nodes.push(Node {
+        bounds: node.bounds().into(),
+        ..Node::default()
+    });
+    match node {
+        BuildNode::Leaf { first, count, .. } => {
+            nodes[index].prims = first | (count << (32 - COUNT_BITS));
+        }
+        BuildNode::Inner { children, .. } => {
+            preorder(&children[0], nodes);
+            preorder(&children[1], nodes);
+        }
+    }
+    nodes[index].escape = nodes.len() as u32;
+}
+
+impl<T: TriangleTest> Accel for ThreadedBvh<T> {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.traverse::<false>(ray).0
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.traverse::<true>(ray).1
+    }
+
+    fn stats(&self) -> AccelStats {
+        self.stats.clone()
+    }
+}

@@ -1,0 +1,228 @@
+//! Every acceleration structure × triangle test agrees with brute force on
+//! random meshes: same hit/miss, t within 1e-5 relative, and a different
+//! triangle only at a tie (same t).
+
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::rng::Pcg32;
+use raykit_core::tri::TestKind;
+use raykit_core::{Hit, Ray, TriangleMesh, Vec3};
+
+/// A soup of `n` random triangles of varied size inside the unit cube.
+fn random_soup(n: usize, seed: u64) -> TriangleMesh {
+    let mut rng = Pcg32::new(seed);
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..n {
+        let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
+        let size = 0.002 + 0.08 * rng.next_f32().powi(3);
+        for _ in 0..3 {
+            positions.push(c + rng.unit_vector() * size);
+        }
+        let b = 3 * i as u32;
+        indices.push([b, b + 1, b + 2]);
+    }
+    TriangleMesh::new(positions, indices)
+}
+
+/// A closed height-field-like grid surface with shared edges (rays hit edges
+/// and vertices often), plus coincident duplicate triangles for ties.
+fn grid_with_duplicates(n: usize, seed: u64) -> TriangleMesh {
+    let mut rng = Pcg32::new(seed);
+    let mut positions = Vec::new();
+    for y in 0..=n {
+        for x in 0..=n {
+            let h = 0.1 * rng.next_f32();
+            positions.push(Vec3::new(x as f32 / n as f32, h, y as f32 / n as f32));
+        }
+    }
+    let mut indices = Vec::new();
+    let w = n as u32 + 1;
+    for y in 0..n as u32 {
+        for x in 0..n as u32 {
+            let a = y * w + x;
+            indices.push([a, a + 1, a + w + 1]);
+            indices.push([a, a + w + 1, a + w]);
+        }
+    }
+    let dups: Vec<[u32; 3]> = indices.iter().step_by(7).copied().collect();
+    indices.extend(dups);
+    TriangleMesh::new(positions, indices)
+}
+
+fn random_rays(mesh: &TriangleMesh, n: usize, seed: u64) -> Vec<Ray> {
+    let mut rng = Pcg32::new(seed);
+    let b = mesh.bounds();
+    let c = b.center();
+    let r = b.diagonal();
+    (0..n)
+        .map(|i| {
+            let target = rng.in_box(b.min, b.max);
+            let origin = if i % 3 == 0 {
+                // From inside the box: many hits at short distances.
+                rng.in_box(b.min, b.max)
+            } else {
+                c + rng.unit_vector() * r
+            };
+            let dir = target - origin;
+            let mut ray = Ray::new(origin, dir);
+            if i % 5 == 0 {
+                // Bounded segments exercise tnear/tfar culling.
+                ray = Ray::segment(origin, dir, 0.1 * rng.next_f32(), 0.2 + rng.next_f32());
+            }
+            ray
+        })
+        .collect()
+}
+
+fn agree(a: Option<Hit>, b: Option<Hit>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(x), Some(y)) => {
+            let tol = 1e-5 * x.t.abs().max(y.t.abs()).max(1e-6);
+            (x.t - y.t).abs() <= tol
+        }
+        _ => false,
+    }
+}
+
+fn check_mesh(mesh: &TriangleMesh, rays: &[Ray]) {
+    let opts = BuildOptions::default();
+    for test in TestKind::ALL {
+        let brute = build_accel(AccelKind::Brute, test, mesh, &opts);
+        let mut want = vec![None; rays.len()];
+        brute.intersect_batch(rays, &mut want);
+        let mut want_occ = vec![false; rays.len()];
+        brute.occluded_batch(rays, &mut want_occ);
+        for (w, o) in want.iter().zip(&want_occ) {
+            assert_eq!(
+                w.is_some(),
+                *o,
+                "brute force occluded disagrees with intersect"
+            );
+        }
+        for kind in AccelKind::ALL {
+            let accel = build_accel(kind, test, mesh, &opts);
+            let mut got = vec![None; rays.len()];
+            accel.intersect_batch(rays, &mut got);
+            let mut got_occ = vec![false; rays.len()];
+            accel.occluded_batch(rays, &mut got_occ);
+            let mut bad = 0;
+            for i in 0..rays.len() {
+                if !agree(want[i], got[i]) {
+                    bad += 1;
+                    if bad < 5 {
+                        eprintln!(
+                            "{} × {}: ray {i} {:?}: brute {:?}, got {:?}",
+                            kind.name(),
+                            test.name(),
+                            rays[i],
+                            want[i],
+                            got[i]
+                        );
+                    }
+                }
+                // Single-ray calls give the batch's answers.
+                assert_eq!(accel.intersect(&rays[i]), got[i]);
+            }
+            let bad_occ = (0..rays.len())
+                .filter(|&i| want_occ[i] != got_occ[i])
+                .count();
+            assert_eq!(
+                bad,
+                0,
+                "{} × {}: {bad} of {} rays disagree with brute force",
+                kind.name(),
+                test.name(),
+                rays.len()
+            );
+            assert_eq!(
+                bad_occ,
+                0,
+                "{} × {}: {bad_occ} occlusion answers disagree",
+                kind.name(),
+                test.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn random_soups_agree_with_brute_force() {
+    for (n, seed) in [(1, 1), (2, 2), (7, 3), (100, 4), (3000, 5)] {
+        let mesh = random_soup(n, seed);
+        let rays = random_rays(&mesh, 4000, seed + 100);
+        check_mesh(&mesh, &rays);
+    }
+}
+
+#[test]
+fn shared_edge_grid_with_ties_agrees_with_brute_force() {
+    let mesh = grid_with_duplicates(40, 9);
+    let mut rays = random_rays(&mesh, 4000, 10);
+    // Rays aimed exactly at grid vertices and edge midpoints.
+    let mut rng = Pcg32::new(11);
+    for _ in 0..2000 {
+        let t = mesh.indices[rng.below(mesh.indices.len() as u32) as usize];
+        let a = mesh.positions[t[0] as usize];
+        let b = mesh.positions[t[1] as usize];
+        let target = if rng.next_f32() < 0.5 {
+            a
+        } else {
+            (a + b) * 0.5
+        };
+        let origin = target + Vec3::new(rng.range_f32(-1.0, 1.0), 1.0, rng.range_f32(-1.0, 1.0));
+        rays.push(Ray::new(origin, target - origin));
+    }
+    check_mesh(&mesh, &rays);
+}
+
+#[test]
+fn axis_parallel_rays_and_flat_meshes_agree() {
+    // A flat mesh (zero-thickness bounds in y) and rays along the axes,
+    // which produce infinite reciprocal directions in the slab tests.
+    let mut mesh = grid_with_duplicates(10, 12);
+    for p in &mut mesh.positions {
+        p.y = 0.5;
+    }
+    let mut rng = Pcg32::new(13);
+    let mut rays = Vec::new();
+    for _ in 0..3000 {
+        let p = rng.in_box(Vec3::new(0.0, 0.5, 0.0), Vec3::new(1.0, 0.5, 1.0));
+        rays.push(Ray::new(p + Vec3::Y, -Vec3::Y));
+        rays.push(Ray::new(p - Vec3::Y * 2.0, Vec3::Y));
+        rays.push(Ray::new(Vec3::new(-1.0, 0.5, p.z), Vec3::X));
+    }
+    check_mesh(&mesh, &rays);
+}
+
+#[test]
+fn empty_mesh_never_hits() {
+    let mesh = TriangleMesh::default();
+    let ray = Ray::new(Vec3::ZERO, Vec3::X);
+    for kind in AccelKind::ALL {
+        for test in TestKind::ALL {
+            let accel = build_accel(kind, test, &mesh, &BuildOptions::default());
+            assert_eq!(accel.intersect(&ray), None);
+            assert!(!accel.occluded(&ray));
+        }
+    }
+}
+
+#[test]
+fn stats_describe_the_tree() {
+    let mesh = random_soup(5000, 21);
+    for kind in [AccelKind::Bvh2, AccelKind::ThreadedBvh] {
+        let accel = build_accel(kind, TestKind::Moller, &mesh, &BuildOptions::default());
+        let s = accel.stats();
+        assert_eq!(s.triangle_refs, 5000);
+        assert_eq!(s.nodes, 2 * s.leaves - 1, "binary tree");
+        assert!(s.leaves >= 5000 / 4, "leaves hold at most 4 triangles");
+        assert!(s.depth as usize >= (5000f64 / 4.0).log2().floor() as usize);
+        assert!(
+            s.sah_cost > 0.0 && s.sah_cost < 5000.0,
+            "SAH cost {} is below brute force",
+            s.sah_cost
+        );
+        assert_eq!(s.node_bytes, s.nodes * 32);
+    }
+}
