@@ -12,6 +12,7 @@ pub mod camera;
 pub mod hit;
 pub mod mesh;
 pub mod ray;
+pub mod raysets;
 pub mod rng;
 pub mod tri;
 

@@ -1,0 +1,119 @@
+//! The standard ray sets used by `raykit rays`, `raykit bench` and the
+//! comparisons with other engines: coherent primary rays, shadow rays from
+//! the primary hits to a point light, and incoherent rays through the scene.
+
+use crate::aabb::Aabb;
+use crate::accel::Accel;
+use crate::camera::Camera;
+use crate::hit::Hit;
+use crate::mesh::TriangleMesh;
+use crate::ray::Ray;
+use crate::rng::Pcg32;
+use glam::Vec3;
+
+/// The kinds of standard ray sets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RayKind {
+    /// Pinhole camera rays, one per pixel of a square image.
+    Primary,
+    /// From each primary hit, offset along the normal, to a point light.
+    Shadow,
+    /// Origins on a sphere around the scene, aimed at random points inside it.
+    Incoherent,
+}
+
+impl RayKind {
+    /// Every kind, in a fixed order.
+    pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Shadow, RayKind::Incoherent];
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            RayKind::Primary => "primary",
+            RayKind::Shadow => "shadow",
+            RayKind::Incoherent => "incoherent",
+        }
+    }
+
+    /// Parse a command-line name.
+    pub fn from_name(name: &str) -> Option<RayKind> {
+        RayKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
+/// Vertical field of view of the standard primary camera, degrees.
+pub const PRIMARY_FOV_DEG: f32 = 40.0;
+
+/// The standard camera for `bounds`: [`Camera::framing`] with
+/// [`PRIMARY_FOV_DEG`].
+pub fn standard_camera(bounds: &Aabb) -> Camera {
+    Camera::framing(bounds, PRIMARY_FOV_DEG)
+}
+
+/// The standard point light for `bounds`: above and to the side of the
+/// scene, one box diagonal from its centre.
+pub fn standard_light(bounds: &Aabb) -> Vec3 {
+    bounds.center() + Vec3::new(0.4, 1.0, 0.6).normalize() * bounds.diagonal().max(1e-6)
+}
+
+/// `size` × `size` primary rays from `camera`, row by row from the top-left.
+pub fn primary(camera: &Camera, size: u32) -> Vec<Ray> {
+    let gen = camera.rays(size, size);
+    (0..size)
+        .flat_map(|y| (0..size).map(move |x| gen.pixel(x, y)))
+        .collect()
+}
+
+/// Shadow rays: for each primary ray with a hit, a segment from the hit
+/// point (offset along the geometric normal towards the ray's side by
+/// `1e-4 × scene diagonal`) to `light`, with `tfar` just short of the light.
+/// Primary rays without a hit give no shadow ray.
+pub fn shadow(mesh: &TriangleMesh, primary: &[Ray], hits: &[Option<Hit>], light: Vec3) -> Vec<Ray> {
+    let eps = 1e-4 * mesh.bounds().diagonal().max(1e-6);
+    primary
+        .iter()
+        .zip(hits)
+        .filter_map(|(ray, hit)| {
+            let hit = (*hit)?;
+            let mut n = mesh.face_normal(hit.prim as usize).normalize_or_zero();
+            if n.dot(ray.dir) > 0.0 {
+                n = -n;
+            }
+            let origin = ray.at(hit.t) + n * eps;
+            Some(Ray::segment(origin, light - origin, 0.0, 1.0 - 1e-4))
+        })
+        .collect()
+}
+
+/// `count` incoherent rays: origins uniformly on the sphere of radius = box
+/// diagonal around the box centre, unit directions towards uniformly random
+/// points inside the box. Deterministic from `seed`.
+pub fn incoherent(bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
+    let mut rng = Pcg32::with_stream(seed, 0x1c0e);
+    let c = bounds.center();
+    let r = bounds.diagonal().max(1e-6);
+    (0..count)
+        .map(|_| {
+            let origin = c + rng.unit_vector() * r;
+            let target = rng.in_box(bounds.min, bounds.max);
+            Ray::new(origin, (target - origin).normalize())
+        })
+        .collect()
+}
+
+/// All three standard sets for `mesh`: `size`² primary rays, the shadow
+/// rays of their hits (found with `accel`) and `size`² incoherent rays.
+pub fn standard_sets(
+    mesh: &TriangleMesh,
+    accel: &dyn Accel,
+    size: u32,
+    seed: u64,
+) -> [Vec<Ray>; 3] {
+    let bounds = mesh.bounds();
+    let prim = primary(&standard_camera(&bounds), size);
+    let mut hits = vec![None; prim.len()];
+    accel.intersect_batch(&prim, &mut hits);
+    let shad = shadow(mesh, &prim, &hits, standard_light(&bounds));
+    let inc = incoherent(&bounds, (size as usize).pow(2), seed);
+    [prim, shad, inc]
+}
