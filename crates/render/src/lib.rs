@@ -1,1 +1,38 @@
-//! raykit-render (placeholder).
+//! raykit renderer: one primary ray per sample through a pinhole camera,
+//! Blinn-Phong shading (Phong's model as used in paper 000, with Blinn's half
+//! vector) of barycentrically interpolated vertex normals, point lights with
+//! `1/d²` falloff, hard shadows by shadow rays, a sky gradient behind,
+//! rendered tile by tile in parallel and encoded as 8-bit sRGB.
+//!
+//! ```
+//! use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+//! use raykit_core::tri::TestKind;
+//! use raykit_render::{render, RenderOptions};
+//!
+//! let scene = raykit_scene::builtin("shirley6").unwrap();
+//! let accel = build_accel(AccelKind::Bvh2, TestKind::Moller, &scene.mesh, &BuildOptions::default());
+//! let opts = RenderOptions { width: 16, height: 12, ..RenderOptions::default() };
+//! let camera = scene.camera_or_framing(45.0);
+//! let image = render(&scene.mesh, &scene.lights, accel.as_ref(), &camera, &opts, &|_| {});
+//! assert_eq!(image.rgb.len(), 16 * 12 * 3);
+//! ```
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod image;
+mod options;
+mod primary;
+mod render;
+pub mod shade;
+pub mod sky;
+mod surface;
+mod tiles;
+
+pub use image::{Encoding, Image};
+pub use options::RenderOptions;
+pub use primary::primary_hits;
+pub use raykit_scene::PointLight;
+pub use render::render;
+pub use shade::{shadow_bias, Shader, Surface};
+pub use tiles::{tiles, Tile, TILE_SIZE};

@@ -1,0 +1,65 @@
+//! The tile-parallel render loop.
+
+use crate::image::Image;
+use crate::options::RenderOptions;
+use crate::shade::Shader;
+use crate::tiles::{tiles, TILE_SIZE};
+use raykit_core::glam::Vec3;
+use raykit_core::rng::Pcg32;
+use raykit_core::{Accel, Camera, TriangleMesh};
+use raykit_scene::PointLight;
+use rayon::prelude::*;
+
+/// Render `mesh` (with `accel` built on it) lit by `lights` through `camera`.
+///
+/// Tiles of [`TILE_SIZE`]² pixels are rendered in parallel on the rayon pool;
+/// after each tile `progress` is called with its number of pixels. Each pixel
+/// averages `opts.samples_per_pixel` samples of [`Shader::radiance`] (see
+/// [`crate::shade`] for the shading), times `opts.exposure`, then encodes it.
+/// The result does not depend on the number of threads.
+pub fn render(
+    mesh: &TriangleMesh,
+    lights: &[PointLight],
+    accel: &dyn Accel,
+    camera: &Camera,
+    opts: &RenderOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Image {
+    let (width, height) = (opts.width, opts.height);
+    let shader = Shader::new(mesh, lights, accel, opts);
+    let rays = camera.rays(width, height);
+    let spp = opts.samples_per_pixel.max(1);
+    let pixel = |x: u32, y: u32| -> Vec3 {
+        if spp == 1 {
+            return shader.radiance(&rays.pixel(x, y));
+        }
+        let index = y as u64 * width as u64 + x as u64;
+        let mut rng = Pcg32::with_stream(opts.seed, index);
+        let sum: Vec3 = (0..spp)
+            .map(|_| {
+                let (jx, jy) = (rng.next_f32(), rng.next_f32());
+                shader.radiance(&rays.ray(x as f32 + jx, y as f32 + jy))
+            })
+            .sum();
+        sum / spp as f32
+    };
+    let tiles = tiles(width, height, TILE_SIZE);
+    let rendered: Vec<Vec<Vec3>> = tiles
+        .par_iter()
+        .map(|tile| {
+            let out: Vec<Vec3> = tile
+                .coords()
+                .map(|(x, y)| pixel(x, y) * opts.exposure)
+                .collect();
+            progress(tile.pixels());
+            out
+        })
+        .collect();
+    let mut linear = vec![Vec3::ZERO; width as usize * height as usize];
+    for (tile, pixels) in tiles.iter().zip(rendered) {
+        for ((x, y), c) in tile.coords().zip(pixels) {
+            linear[y as usize * width as usize + x as usize] = c;
+        }
+    }
+    Image::from_linear(width, height, linear, opts.encoding)
+}
