@@ -28,7 +28,7 @@ pub const BUILTIN_NAMES: &[&str] = &["cornell", "shirley6", "terrain", "scatter"
 pub const BUILTINS: &[BuiltinInfo] = &[
     BuiltinInfo {
         name: "cornell",
-        description: "Cornell box with a tall box, a short box and a smooth sphere, one light (~1.4k triangles)",
+        description: "Cornell box with a tall box, a short box and a smooth sphere, one light (1314 triangles)",
         keys: &["seed"],
     },
     BuiltinInfo {
