@@ -1,1 +1,51 @@
-//! raykit-io (placeholder).
+//! raykit-io: reading and writing the files raykit works with.
+//!
+//! * Meshes: [`load_mesh`] (or [`load`], which also returns warnings and the
+//!   detected encoding) reads OBJ (+MTL), PLY (ASCII and binary, also `.ply.gz`),
+//!   STL (ASCII and binary), glTF/GLB and OFF into a validated
+//!   [`TriangleMesh`](raykit_core::TriangleMesh); [`save_mesh`] writes OBJ, PLY,
+//!   STL, OFF, glTF and GLB. Every loader error is a [`LoadError`] naming the
+//!   file and the line, byte or JSON element where the problem is.
+//! * Ray, hit and occlusion files in the project's fixed binary layouts
+//!   ([`read_rays`], [`write_hits`], …).
+//! * Safe output: [`write_atomic`] (temporary file + rename) under every writer,
+//!   and [`write_png`].
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod atomic;
+mod error;
+mod format;
+mod gltf;
+mod gltf_accessor;
+mod gltf_glb;
+mod hashing;
+mod input;
+mod load;
+mod mtl;
+mod obj;
+mod off;
+mod ply;
+mod ply_header;
+mod png;
+mod rays;
+mod stl;
+mod text;
+mod uri;
+mod validate;
+mod write;
+
+pub use atomic::write_atomic;
+pub use error::{ErrorKind, LoadError, Location};
+pub use format::{MeshFormat, PlyEncoding, StlEncoding};
+pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
+pub use png::write_png;
+pub use rays::{
+    read_hits, read_occlusion, read_rays, write_hits, write_occlusion, write_rays, HIT_RECORD_SIZE,
+    RAY_RECORD_SIZE,
+};
+pub use write::{
+    save_mesh, save_mesh_as, write_gltf, write_mesh, write_mtl, write_obj, write_off, write_ply,
+    write_stl,
+};

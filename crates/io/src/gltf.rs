@@ -1,0 +1,448 @@
+//! glTF 2.0 (`.gltf` JSON with external or data-URI buffers, and `.glb`).
+//!
+//! The default scene (or the first scene, or else every root node) is walked
+//! from its root nodes; each node's transform (matrix or TRS) is composed with
+//! its parents' and applied to positions, and its inverse transpose to
+//! normals. Every node with a mesh becomes a [`Part`] (`node: Some(index)`).
+//! Primitives of mode TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN are loaded;
+//! others are skipped with a warning. Materials take the base colour factor,
+//! metallic/roughness, emission, transmission, IOR and the base-colour
+//! texture URI (embedded images have no URI and give `None`).
+
+use crate::error::{ErrorKind, LoadError, Location};
+use crate::gltf_accessor::{read_floats, read_indices};
+use crate::gltf_glb::{is_glb, split_glb};
+use crate::uri::{base64_decode, percent_decode};
+use crate::validate::finish;
+use ::gltf::mesh::Mode;
+use ::gltf::{Document, Semantic};
+use raykit_core::glam::{Mat3, Mat4};
+use raykit_core::{Material, Part, TriangleMesh, Vec2, Vec3};
+use std::borrow::Cow;
+use std::path::Path;
+
+/// Parse the glTF or GLB file `data` read from `path`: mesh, warnings, and
+/// whether it was GLB.
+pub(crate) fn parse_gltf(
+    path: &Path,
+    data: &[u8],
+) -> Result<(TriangleMesh, Vec<String>, bool), LoadError> {
+    let glb = is_glb(data);
+    let (json, bin, mut warnings) = if glb {
+        let (g, w) = split_glb(path, data)?;
+        (g.json, g.bin, w)
+    } else {
+        (data, None, Vec::new())
+    };
+    let doc = parse_document(path, json, glb)?;
+    let buffers = load_buffers(path, &doc, bin)?;
+    let mut b = Builder {
+        path,
+        doc: &doc,
+        buffers: &buffers,
+        limit: data.len(),
+        mesh: TriangleMesh::default(),
+        normals: Vec::new(),
+        uvs: Vec::new(),
+        all_normals: true,
+        all_uvs: true,
+        material_of: vec![None; doc.materials().len() + 1],
+        warnings: &mut warnings,
+    };
+    b.walk()?;
+    let mesh = b.finish();
+    let mesh = finish(path, mesh, Location::Json("scene".into()))?;
+    Ok((mesh, warnings, glb))
+}
+
+/// Deserialize and validate the JSON. The `gltf` crate's validation indexes
+/// the POSITION accessor without a bounds check, so that index is checked
+/// first; any other panic inside the crate's validation is turned into an
+/// error as a last line of defence.
+fn parse_document(path: &Path, json: &[u8], glb: bool) -> Result<Document, LoadError> {
+    let root = ::gltf::json::Root::from_slice(json)
+        .map_err(|e| json_error(path, ::gltf::Error::Deserialize(e), glb))?;
+    let positions = ::gltf::json::validation::Checked::Valid(Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(a) = prim.attributes.get(&positions) {
+                if a.value() >= root.accessors.len() {
+                    return Err(LoadError::at_json(
+                        path,
+                        format!("meshes[{m}].primitives[{p}].attributes.POSITION"),
+                        format!(
+                            "accessor index {} is out of range (the file has {} accessors)",
+                            a.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    let validated =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Document::from_json(root)));
+    match validated {
+        Ok(r) => r.map_err(|e| json_error(path, e, glb)),
+        Err(_) => Err(LoadError::at_json(
+            path,
+            "document",
+            "the glTF validator failed on this file",
+        )),
+    }
+}
+
+fn json_error(path: &Path, e: ::gltf::Error, glb: bool) -> LoadError {
+    match e {
+        ::gltf::Error::Deserialize(e) => {
+            let loc = if glb {
+                Location::Json(format!(
+                    "JSON chunk line {} column {}",
+                    e.line(),
+                    e.column()
+                ))
+            } else {
+                Location::Line(e.line().max(1))
+            };
+            LoadError::new(
+                path,
+                ErrorKind::Malformed,
+                loc,
+                format!("not valid glTF JSON: {e}"),
+            )
+        }
+        ::gltf::Error::Validation(errs) => {
+            let more = match errs.len() {
+                0 | 1 => String::new(),
+                n => format!(" (and {} more problems)", n - 1),
+            };
+            let (element, what) = match errs.first() {
+                Some((p, e)) => (p.to_string(), e.to_string()),
+                None => ("document".to_string(), "invalid".to_string()),
+            };
+            let kind = match errs.first() {
+                Some((_, ::gltf::json::validation::Error::Unsupported)) => ErrorKind::Unsupported,
+                _ => ErrorKind::Malformed,
+            };
+            LoadError::new(
+                path,
+                kind,
+                Location::Json(element),
+                format!("invalid glTF: {what}{more}"),
+            )
+        }
+        e => LoadError::new(path, ErrorKind::Malformed, Location::File, e.to_string()),
+    }
+}
+
+fn load_buffers<'a>(
+    path: &Path,
+    doc: &Document,
+    bin: Option<&'a [u8]>,
+) -> Result<Vec<Cow<'a, [u8]>>, LoadError> {
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut out = Vec::new();
+    for buf in doc.buffers() {
+        let i = buf.index();
+        let data: Cow<'a, [u8]> = match buf.source() {
+            ::gltf::buffer::Source::Bin => Cow::Borrowed(bin.ok_or_else(|| {
+                LoadError::at_json(
+                    path,
+                    format!("buffers[{i}]"),
+                    "refers to the GLB BIN chunk, but there is none",
+                )
+            })?),
+            ::gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                let (head, payload) = uri.split_once(',').unwrap_or((uri, ""));
+                if head.ends_with(";base64") {
+                    Cow::Owned(base64_decode(payload.as_bytes()).map_err(|at| {
+                        LoadError::at_json(
+                            path,
+                            format!("buffers[{i}].uri"),
+                            format!("invalid base64 at character {} of the data", at),
+                        )
+                    })?)
+                } else {
+                    Cow::Owned(percent_decode(payload).into_bytes())
+                }
+            }
+            ::gltf::buffer::Source::Uri(uri) => {
+                let file = dir.join(percent_decode(uri));
+                Cow::Owned(std::fs::read(&file).map_err(|e| {
+                    LoadError::new(
+                        path,
+                        ErrorKind::Io,
+                        Location::Json(format!("buffers[{i}].uri")),
+                        format!("cannot read {}: {e}", file.display()),
+                    )
+                })?)
+            }
+        };
+        if data.len() < buf.length() {
+            return Err(LoadError::at_json(
+                path,
+                format!("buffers[{i}]"),
+                format!(
+                    "has {} bytes of data, but byteLength says {} (truncated?)",
+                    data.len(),
+                    buf.length()
+                ),
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+struct Builder<'a, 'b> {
+    path: &'a Path,
+    doc: &'a Document,
+    buffers: &'a [Cow<'b, [u8]>],
+    limit: usize,
+    mesh: TriangleMesh,
+    normals: Vec<Vec3>,
+    uvs: Vec<Vec2>,
+    all_normals: bool,
+    all_uvs: bool,
+    /// Our material index per glTF material (last entry: the default material).
+    material_of: Vec<Option<u32>>,
+    warnings: &'a mut Vec<String>,
+}
+
+impl Builder<'_, '_> {
+    fn walk(&mut self) -> Result<(), LoadError> {
+        let doc = self.doc;
+        let n_nodes = doc.nodes().len();
+        let roots: Vec<::gltf::Node<'_>> = match doc.default_scene().or_else(|| doc.scenes().next())
+        {
+            Some(scene) => scene.nodes().collect(),
+            None => {
+                let mut is_child = vec![false; n_nodes];
+                for node in doc.nodes() {
+                    for c in node.children() {
+                        is_child[c.index()] = true;
+                    }
+                }
+                doc.nodes().filter(|n| !is_child[n.index()]).collect()
+            }
+        };
+        let mut stack: Vec<(::gltf::Node<'_>, Mat4, usize)> = roots
+            .into_iter()
+            .rev()
+            .map(|n| (n, Mat4::IDENTITY, 0))
+            .collect();
+        while let Some((node, parent, depth)) = stack.pop() {
+            if depth > n_nodes {
+                return Err(LoadError::at_json(
+                    self.path,
+                    format!("nodes[{}].children", node.index()),
+                    "the node hierarchy has a cycle",
+                ));
+            }
+            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            if let Some(mesh) = node.mesh() {
+                self.add_instance(&node, &mesh, &world)?;
+            }
+            let children: Vec<_> = node.children().collect();
+            for c in children.into_iter().rev() {
+                stack.push((c, world, depth + 1));
+            }
+        }
+        Ok(())
+    }
+
+    fn add_instance(
+        &mut self,
+        node: &::gltf::Node<'_>,
+        mesh: &::gltf::Mesh<'_>,
+        world: &Mat4,
+    ) -> Result<(), LoadError> {
+        let part = self.mesh.parts.len() as u32;
+        self.mesh.parts.push(Part {
+            name: node.name().or(mesh.name()).unwrap_or("").to_string(),
+            node: Some(node.index() as u32),
+        });
+        let m3 = Mat3::from_mat4(*world);
+        let inv_t = m3.inverse().transpose();
+        let normal_m = if inv_t.is_finite() { inv_t } else { m3 };
+        let flip = m3.determinant() < 0.0;
+        for prim in mesh.primitives() {
+            let pname = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                self.warnings.push(format!(
+                    "{pname} (node {}): mode {mode:?} skipped; only triangles, strips and fans are loaded",
+                    node.index()
+                ));
+                continue;
+            }
+            let Some(pos_acc) = prim.get(&Semantic::Positions) else {
+                self.warnings
+                    .push(format!("{pname}: no POSITION attribute; skipped"));
+                continue;
+            };
+            let (path, bufs, limit) = (self.path, self.buffers, self.limit);
+            let pos = read_floats(path, &pos_acc, bufs, 3, limit)?;
+            let nv = pos.len() / 3;
+            let attr =
+                |sem: Semantic, dims: usize, what: &str| -> Result<Option<Vec<f32>>, LoadError> {
+                    let Some(acc) = prim.get(&sem) else {
+                        return Ok(None);
+                    };
+                    let v = read_floats(path, &acc, bufs, dims, limit)?;
+                    if v.len() != nv * dims {
+                        return Err(LoadError::at_json(
+                            path,
+                            format!("{pname}.attributes.{what}"),
+                            format!("has {} elements, but POSITION has {nv}", v.len() / dims),
+                        ));
+                    }
+                    Ok(Some(v))
+                };
+            let normals = attr(Semantic::Normals, 3, "NORMAL")?;
+            let uvs = attr(Semantic::TexCoords(0), 2, "TEXCOORD_0")?;
+            let idx = match prim.indices() {
+                Some(acc) => read_indices(path, &acc, bufs, limit)?,
+                None => (0..nv as u32).collect(),
+            };
+            if let Some((k, &i)) = idx.iter().enumerate().find(|(_, &i)| i as usize >= nv) {
+                return Err(LoadError::at_json(
+                    path,
+                    format!("{pname}.indices"),
+                    format!(
+                        "index {i} at position {k} is out of range (POSITION has {nv} vertices)"
+                    ),
+                ));
+            }
+            let base = self.mesh.positions.len() as u32;
+            for (j, p) in pos.chunks_exact(3).enumerate() {
+                let w = world.transform_point3(Vec3::new(p[0], p[1], p[2]));
+                if !w.is_finite() {
+                    return Err(LoadError::at_json(
+                        path,
+                        format!("accessors[{}]", pos_acc.index()),
+                        format!(
+                            "vertex {j} is NaN or infinite after the transform of nodes[{}]",
+                            node.index()
+                        ),
+                    ));
+                }
+                self.mesh.positions.push(w);
+            }
+            match normals {
+                Some(n) => self.normals.extend(
+                    n.chunks_exact(3)
+                        .map(|c| (normal_m * Vec3::new(c[0], c[1], c[2])).normalize_or_zero()),
+                ),
+                None => {
+                    self.all_normals = false;
+                    self.normals.resize(self.mesh.positions.len(), Vec3::ZERO);
+                }
+            }
+            match uvs {
+                Some(t) => self
+                    .uvs
+                    .extend(t.chunks_exact(2).map(|c| Vec2::new(c[0], c[1]))),
+                None => {
+                    self.all_uvs = false;
+                    self.uvs.resize(self.mesh.positions.len(), Vec2::ZERO);
+                }
+            }
+            let before = self.mesh.indices.len();
+            let mut push = |a: u32, b: u32, c: u32| {
+                let t = if flip { [a, c, b] } else { [a, b, c] };
+                self.mesh.indices.push(t.map(|i| i + base));
+            };
+            match mode {
+                Mode::Triangles => {
+                    for t in idx.chunks_exact(3) {
+                        push(t[0], t[1], t[2]);
+                    }
+                }
+                Mode::TriangleStrip => {
+                    for k in 0..idx.len().saturating_sub(2) {
+                        if k % 2 == 0 {
+                            push(idx[k], idx[k + 1], idx[k + 2]);
+                        } else {
+                            push(idx[k + 1], idx[k], idx[k + 2]);
+                        }
+                    }
+                }
+                _ => {
+                    for k in 1..idx.len().saturating_sub(1) {
+                        push(idx[0], idx[k], idx[k + 1]);
+                    }
+                }
+            }
+            let added = self.mesh.indices.len() - before;
+            let mat = self.material(&prim.material());
+            self.mesh
+                .tri_material
+                .extend(std::iter::repeat_n(mat, added));
+            self.mesh.tri_part.extend(std::iter::repeat_n(part, added));
+        }
+        Ok(())
+    }
+
+    /// Our index of the glTF material `m`, converting it on first use.
+    fn material(&mut self, m: &::gltf::Material<'_>) -> u32 {
+        let slot = m.index().unwrap_or(self.material_of.len() - 1);
+        if let Some(i) = self.material_of[slot] {
+            return i;
+        }
+        let i = self.mesh.materials.len() as u32;
+        let mat = match m.index() {
+            None => Material::default(),
+            Some(k) => convert_material(self.doc, m, k),
+        };
+        self.mesh.materials.push(mat);
+        self.material_of[slot] = Some(i);
+        i
+    }
+
+    fn finish(mut self) -> TriangleMesh {
+        if self.all_normals && !self.mesh.positions.is_empty() {
+            self.mesh.normals = Some(self.normals);
+        }
+        if self.all_uvs && !self.mesh.positions.is_empty() {
+            self.mesh.uvs = Some(self.uvs);
+        }
+        self.mesh
+    }
+}
+
+fn convert_material(doc: &Document, m: &::gltf::Material<'_>, index: usize) -> Material {
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, _] = pbr.base_color_factor();
+    let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
+    let rough = pbr.roughness_factor().clamp(0.0, 1.0);
+    let lerp = |c: f32| 0.04 + (c - 0.04) * metallic;
+    // Blinn-Phong exponent with the same lobe width as GGX roughness.
+    let a2 = (rough * rough * rough * rough).max(1e-4);
+    let json = doc.as_json();
+    let texture = pbr
+        .base_color_texture()
+        .and_then(|info| json.textures.get(info.texture().index()))
+        .and_then(|t| json.images.get(t.source.value()))
+        .and_then(|img| img.uri.clone());
+    Material {
+        name: m
+            .name()
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("material{index}")),
+        diffuse: [r, g, b],
+        specular: [lerp(r), lerp(g), lerp(b)],
+        shininess: (2.0 / a2 - 2.0).clamp(0.0, 1e4),
+        reflectivity: metallic,
+        transmission: m
+            .transmission()
+            .map(|t| t.transmission_factor())
+            .unwrap_or(0.0),
+        ior: m.ior().unwrap_or(1.5),
+        emission: m.emissive_factor(),
+        diffuse_texture: texture,
+    }
+}

@@ -1,0 +1,100 @@
+//! Loading a mesh file of any supported format, chosen by its extension.
+
+use crate::error::{ErrorKind, LoadError, Location};
+use crate::format::{is_gzip_path, MeshFormat};
+use crate::input::{gunzip, read_file};
+use raykit_core::TriangleMesh;
+use std::path::Path;
+
+/// A loaded mesh with what the loader noticed along the way.
+#[derive(Clone, Debug)]
+pub struct LoadedMesh {
+    /// The mesh; it has at least one triangle and passes `TriangleMesh::validate`.
+    pub mesh: TriangleMesh,
+    /// Things skipped or approximated (for example glTF primitives that are not
+    /// triangles), one sentence each.
+    pub warnings: Vec<String>,
+    /// The format and encoding found in the file, e.g. to write a result in
+    /// the same format with [`save_mesh_as`](crate::save_mesh_as).
+    pub format: MeshFormat,
+    /// True when the file was gzip-compressed.
+    pub gzip: bool,
+}
+
+/// Load the triangle mesh in `path`, choosing the format by the extension
+/// (case-insensitive): `.obj`, `.ply`, `.stl`, `.off`, `.gltf`, `.glb`, each
+/// optionally followed by `.gz`.
+pub fn load_mesh(path: &Path) -> Result<TriangleMesh, LoadError> {
+    load(path).map(|l| l.mesh)
+}
+
+/// Like [`load_mesh`], also returning the warnings and the detected encoding.
+pub fn load(path: &Path) -> Result<LoadedMesh, LoadError> {
+    // Reject unknown extensions before touching the file.
+    format_of(path)?;
+    let bytes = read_file(path)?;
+    parse_mesh(path, &bytes)
+}
+
+/// Parse `bytes`, the contents of a file named `path`. The name chooses the
+/// format (as in [`load_mesh`]), appears in error messages and is the base
+/// for resources the file refers to (MTL libraries, glTF buffers).
+pub fn parse_mesh(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadError> {
+    let format = format_of(path)?;
+    if is_gzip_path(path) {
+        let data = gunzip(path, bytes)?;
+        let mut loaded = parse_plain(path, &data, format).map_err(|e| e.in_decompressed(path))?;
+        loaded.gzip = true;
+        Ok(loaded)
+    } else {
+        parse_plain(path, bytes, format)
+    }
+}
+
+fn format_of(path: &Path) -> Result<MeshFormat, LoadError> {
+    MeshFormat::from_path(path).ok_or_else(|| {
+        LoadError::new(
+            path,
+            ErrorKind::UnknownFormat,
+            Location::File,
+            "unknown mesh file extension: expected .obj, .ply, .stl, .off, .gltf or .glb \
+             (optionally followed by .gz)",
+        )
+    })
+}
+
+fn parse_plain(path: &Path, data: &[u8], format: MeshFormat) -> Result<LoadedMesh, LoadError> {
+    let (mesh, warnings, format) = match format {
+        MeshFormat::Obj => {
+            let (m, w) = crate::obj::parse_obj(path, data)?;
+            (m, w, MeshFormat::Obj)
+        }
+        MeshFormat::Ply(_) => {
+            let (m, w, enc) = crate::ply::parse_ply(path, data)?;
+            (m, w, MeshFormat::Ply(enc))
+        }
+        MeshFormat::Stl(_) => {
+            let (m, enc) = crate::stl::parse_stl(path, data)?;
+            (m, Vec::new(), MeshFormat::Stl(enc))
+        }
+        MeshFormat::Off => {
+            let (m, w) = crate::off::parse_off(path, data)?;
+            (m, w, MeshFormat::Off)
+        }
+        MeshFormat::Gltf | MeshFormat::Glb => {
+            let (m, w, glb) = crate::gltf::parse_gltf(path, data)?;
+            let f = if glb {
+                MeshFormat::Glb
+            } else {
+                MeshFormat::Gltf
+            };
+            (m, w, f)
+        }
+    };
+    Ok(LoadedMesh {
+        mesh,
+        warnings,
+        format,
+        gzip: false,
+    })
+}

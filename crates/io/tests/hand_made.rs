@@ -1,0 +1,169 @@
+//! Small hand-made files in `tests/data` whose exact answer is worked out by
+//! hand (see `tests/data/README.md`): glTF node transforms (TRS and matrix,
+//! nesting, mirroring), strips, skipped modes, scene choice, external and
+//! data-URI buffers, materials; OBJ groups, MTL materials and a missing MTL.
+
+mod common;
+
+use common::*;
+use raykit_core::{Part, Vec3};
+use raykit_io::{load, load_mesh, ErrorKind, Location};
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() < 1e-5
+}
+
+#[test]
+fn gltf_node_transforms_match_hand_computation() {
+    let loaded = load(&local("transforms.gltf")).unwrap();
+    let m = &loaded.mesh;
+    // root: T(10,0,0) S(2); tri_child: Rz(90°); strip_child: matrix T(0,0,5);
+    // mirror: S(-1,1,1) at the scene root. The decoy scene is not loaded.
+    let expect: [[Vec3; 3]; 4] = [
+        // (0,0,0) (1,0,0) (0,1,0) rotated, scaled, translated.
+        [
+            Vec3::new(10.0, 0.0, 0.0),
+            Vec3::new(10.0, 2.0, 0.0),
+            Vec3::new(8.0, 0.0, 0.0),
+        ],
+        // Strip (0,1,2), then (2,1,3) for the odd triangle; p -> 2(p + 5z) + 10x.
+        [
+            Vec3::new(10.0, 0.0, 10.0),
+            Vec3::new(12.0, 0.0, 10.0),
+            Vec3::new(10.0, 2.0, 10.0),
+        ],
+        [
+            Vec3::new(10.0, 2.0, 10.0),
+            Vec3::new(12.0, 0.0, 10.0),
+            Vec3::new(12.0, 2.0, 10.0),
+        ],
+        // Mirrored: winding flipped so the face still points along +z.
+        [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(-1.0, 0.0, 0.0),
+        ],
+    ];
+    assert_eq!(m.num_triangles(), 4);
+    for (i, e) in expect.iter().enumerate() {
+        let got = m.triangle(i);
+        for k in 0..3 {
+            assert!(
+                close(got[k], e[k]),
+                "triangle {i} corner {k}: {:?} vs {:?}",
+                got[k],
+                e[k]
+            );
+        }
+        assert!(m.face_normal(i).z > 0.0, "triangle {i} faces +z");
+    }
+    assert!((m.area() - (2.0 + 4.0 + 0.5)).abs() < 1e-5, "{}", m.area());
+    let b = m.bounds();
+    assert!(close(b.min, Vec3::new(-1.0, 0.0, 0.0)) && close(b.max, Vec3::new(12.0, 2.0, 10.0)));
+    // Parts: one per node with a mesh, in scene order.
+    let part = |name: &str, node| Part {
+        name: name.into(),
+        node: Some(node),
+    };
+    assert_eq!(
+        m.parts,
+        vec![
+            part("tri_child", 1),
+            part("strip_child", 2),
+            part("mirror", 3)
+        ]
+    );
+    assert_eq!(m.tri_part, vec![0, 1, 1, 2]);
+    // The LINES primitive is skipped with a warning naming it.
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    assert!(loaded.warnings[0].contains("meshes[1].primitives[1]"));
+    assert!(loaded.warnings[0].contains("Lines"));
+    // Normals are dropped because the strip has none.
+    assert!(m.normals.is_none());
+    // Materials: the tinted one, then the default for the strip.
+    assert_eq!(m.tri_material, vec![0, 1, 1, 0]);
+    assert_eq!(m.materials[0].name, "tinted");
+    assert_eq!(m.materials[0].diffuse, [0.5, 0.25, 1.0]);
+    assert_eq!(
+        m.materials[0].diffuse_texture.as_deref(),
+        Some("checker.png")
+    );
+    assert_eq!(m.materials[1].name, "default");
+}
+
+#[test]
+fn gltf_normals_follow_the_inverse_transpose() {
+    // Only the triangle mesh: keep the hierarchy but drop the strip node.
+    let text = std::fs::read_to_string(local("transforms.gltf")).unwrap();
+    let text = text.replace("\"children\": [\n    1,\n    2\n   ]", "\"children\": [1]");
+    assert!(text.contains("\"children\": [1]"), "fixture layout changed");
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(local("transforms.bin"), dir.path().join("transforms.bin")).unwrap();
+    let p = dir.path().join("t.gltf");
+    std::fs::write(&p, text).unwrap();
+    let m = load_mesh(&p).unwrap();
+    assert_eq!(m.num_triangles(), 2);
+    for n in m.normals.as_ref().unwrap() {
+        assert!(close(*n, Vec3::Z), "{n:?}");
+    }
+}
+
+#[test]
+fn gltf_missing_external_buffer_is_an_io_error_naming_the_buffer() {
+    let e = load(&local("missing_buffer.gltf")).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Io);
+    assert_eq!(e.location(), &Location::Json("buffers[0].uri".into()));
+    assert!(e
+        .to_string()
+        .contains("missing_buffer.gltf: buffers[0].uri: cannot read"));
+    assert!(e.to_string().contains("no_such_file.bin"));
+}
+
+#[test]
+fn obj_with_mtl_groups_and_vt_vn() {
+    let m = load_mesh(&local("cube.obj")).unwrap();
+    assert_eq!(m.num_triangles(), 12);
+    // 6 faces x 4 distinct (v, vt, vn) corners.
+    assert_eq!(m.positions.len(), 24);
+    assert!((m.area() - 6.0).abs() < 1e-9);
+    let b = m.bounds();
+    assert_eq!((b.min, b.max), (Vec3::ZERO, Vec3::ONE));
+    let names: Vec<&str> = m.parts.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, vec!["cube/bottom_top", "cube/sides"]);
+    assert_eq!(m.tri_part, [vec![0; 4], vec![1; 8]].concat());
+    assert_eq!(m.tri_material, [vec![0; 4], vec![1; 8]].concat());
+    let red = &m.materials[0];
+    assert_eq!((red.name.as_str(), red.diffuse), ("red", [1.0, 0.0, 0.0]));
+    assert_eq!((red.shininess, red.reflectivity), (50.0, 0.25));
+    let glass = &m.materials[1];
+    assert_eq!(glass.name, "glass");
+    assert!((glass.transmission - 0.9).abs() < 1e-6);
+    let tex = local("textures/glass tint.png");
+    assert_eq!(glass.diffuse_texture.as_deref(), tex.to_str());
+    // Each triangle's normal attribute agrees with its geometric normal.
+    let normals = m.normals.as_ref().unwrap();
+    let uvs = m.uvs.as_ref().unwrap();
+    for i in 0..m.num_triangles() {
+        let g = m.face_normal(i).normalize();
+        for &v in &m.indices[i] {
+            let n = normals[v as usize];
+            assert!(n.dot(g).abs() > 0.999, "triangle {i}");
+            let t = uvs[v as usize];
+            assert!(t.x == 0.0 || t.x == 1.0);
+        }
+    }
+}
+
+#[test]
+fn missing_mtl_falls_back_to_default_material_without_warning() {
+    let loaded = load(&local("missing_mtl.obj")).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let m = loaded.mesh;
+    assert_eq!(m.materials.len(), 1);
+    assert_eq!(m.materials[0].name, "shiny");
+    assert_eq!(
+        m.materials[0].diffuse,
+        raykit_core::Material::default().diffuse
+    );
+    assert_eq!(m.tri_material, vec![0]);
+}
