@@ -1,2 +1,53 @@
-//! The `raykit` command line.
-fn main() {}
+//! The `raykit` command line: argument parsing and wiring only; the work is
+//! done by the library crates.
+
+mod cmd;
+mod measure;
+mod scene_arg;
+mod verify;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// raykit: ray casting and spatial queries on triangle meshes.
+///
+/// Meshes are read from OBJ, PLY (.ply, .ply.gz), STL, glTF/GLB and OFF files,
+/// or generated: `builtin:NAME` picks a built-in scene (`raykit info scenes`).
+#[derive(Parser)]
+#[command(name = "raykit", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to a PNG with Phong shading and shadow rays.
+    Render(cmd::render::RenderArgs),
+    /// Generate a standard ray set (primary, shadow, incoherent) as a binary ray file.
+    Rays(cmd::rays::RaysArgs),
+    /// Trace a ray file against a mesh and write hits (or occlusion) to a file.
+    Trace(cmd::trace::TraceArgs),
+    /// Measure build time, memory and Mrays/s for every structure × triangle test.
+    Bench(cmd::bench::BenchArgs),
+    /// List the names accepted by --accel, --test and --scene.
+    Info(cmd::info::InfoArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(a) => cmd::render::run(a),
+        Command::Rays(a) => cmd::rays::run(a),
+        Command::Trace(a) => cmd::trace::run(a),
+        Command::Bench(a) => cmd::bench::run(a),
+        Command::Info(a) => cmd::info::run(a),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("raykit: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

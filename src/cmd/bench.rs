@@ -1,0 +1,362 @@
+//! `raykit bench`: build time, memory and Mrays/s of every structure ×
+//! triangle test on the standard ray sets, on one thread and on all threads.
+
+use crate::measure::{median_min_max, pool, timed};
+use crate::scene_arg;
+use crate::verify::{self, Verdict};
+use anyhow::{anyhow, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::raysets::{self, RayKind};
+use raykit_core::tri::TestKind;
+use raykit_core::{Accel, Hit, Ray, TriangleMesh};
+use serde::Serialize;
+use std::process::ExitCode;
+
+/// Arguments of `raykit bench`.
+#[derive(Args)]
+#[command(
+    after_help = "Each figure is the median of --reps runs; the spread (max-min)/median is\n\
+reported so noisy machines show. Brute force is timed on a sample of each ray set\n\
+sized to take about a second. The ray sets are those of `raykit rays`."
+)]
+pub struct BenchArgs {
+    /// Mesh file or builtin:NAME.
+    #[arg(long, default_value = "builtin:cornell")]
+    mesh: String,
+    /// Structures to measure, comma-separated, or `all`.
+    #[arg(long, default_value = "all")]
+    accel: String,
+    /// Triangle tests to measure, comma-separated, or `all`.
+    #[arg(long, default_value = "all")]
+    test: String,
+    /// Image side of the ray sets (SIZE² primary and incoherent rays).
+    #[arg(long, default_value_t = 1024)]
+    size: u32,
+    /// Repetitions of every measurement (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    reps: usize,
+    /// Threads of the parallel runs (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Check this many rays of every set against brute force.
+    #[arg(long, value_name = "N")]
+    verify: Option<usize>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Speed on one ray set.
+#[derive(Serialize)]
+struct SetResult {
+    kind: &'static str,
+    rays: usize,
+    mrays_1t: f64,
+    mrays_nt: f64,
+    spread: f64,
+    verify: Option<Verdict>,
+}
+
+/// One structure × test.
+#[derive(Serialize)]
+struct Row {
+    accel: &'static str,
+    test: &'static str,
+    build_ms: f64,
+    build_ms_1t: f64,
+    bytes: usize,
+    nodes: usize,
+    depth: u32,
+    sah_cost: f64,
+    sets: Vec<SetResult>,
+}
+
+/// The whole run.
+#[derive(Serialize)]
+struct Report {
+    mesh: String,
+    triangles: usize,
+    threads: usize,
+    reps: usize,
+    load_ms: f64,
+    rows: Vec<Row>,
+}
+
+fn parse_list<K: Copy>(
+    s: &str,
+    all: &[K],
+    name: fn(K) -> &'static str,
+    what: &str,
+) -> Result<Vec<K>> {
+    if s == "all" {
+        return Ok(all.to_vec());
+    }
+    s.split(',')
+        .map(|n| {
+            all.iter()
+                .copied()
+                .find(|k| name(*k) == n.trim())
+                .ok_or_else(|| {
+                    let names: Vec<_> = all.iter().map(|k| name(*k)).collect();
+                    anyhow!(
+                        "unknown {what} '{n}'; expected `all` or some of: {}",
+                        names.join(", ")
+                    )
+                })
+        })
+        .collect()
+}
+
+/// Run the benchmark.
+pub fn run(args: BenchArgs) -> Result<ExitCode> {
+    let accels = parse_list(&args.accel, &AccelKind::ALL, AccelKind::name, "--accel")?;
+    let tests = parse_list(&args.test, &TestKind::ALL, TestKind::name, "--test")?;
+    let reps = args.reps.max(1);
+    let one = pool(1)?;
+    let all = pool(args.threads)?;
+    let threads = all.current_num_threads();
+    let (scene, load_s) = timed(|| scene_arg::load(&args.mesh));
+    let mesh = scene?.mesh;
+    let opts = BuildOptions::default();
+    eprintln!(
+        "{}: {} triangles; generating ray sets ({}²)…",
+        args.mesh,
+        mesh.num_triangles(),
+        args.size
+    );
+    let sets = all.install(|| {
+        let helper = build_accel(AccelKind::Bvh2, TestKind::Moller, &mesh, &opts);
+        raysets::standard_sets(&mesh, helper.as_ref(), args.size, 1)
+    });
+    let brute_sample = (2e8 / mesh.num_triangles().max(1) as f64).clamp(64.0, 1e9) as usize;
+    let steps = (accels.len() * tests.len() * (1 + 2 * RayKind::ALL.len())) as u64;
+    let bar = ProgressBar::new(steps).with_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} [{elapsed}<{eta}]")
+            .expect("valid template"),
+    );
+    let mut rows = Vec::new();
+    for &test in &tests {
+        // Brute-force answers on the verification samples, shared by all structures.
+        let reference = args.verify.map(|k| {
+            bar.set_message(format!("brute force reference, {}", test.name()));
+            let brute = build_accel(AccelKind::Brute, test, &mesh, &opts);
+            all.install(|| {
+                RayKind::ALL
+                    .iter()
+                    .enumerate()
+                    .map(|(si, kind)| {
+                        answers(
+                            brute.as_ref(),
+                            &pick(&sets[si], k),
+                            *kind == RayKind::Shadow,
+                        )
+                    })
+                    .collect::<Vec<_>>()
+            })
+        });
+        for &kind in &accels {
+            bar.set_message(format!("{} × {}: build", kind.name(), test.name()));
+            let mut builds = Vec::new();
+            let mut builds_1t = Vec::new();
+            let mut accel = None;
+            for _ in 0..reps {
+                let (a, s) = all.install(|| timed(|| build_accel(kind, test, &mesh, &opts)));
+                builds.push(s * 1e3);
+                drop(a);
+                let (a, s) = one.install(|| timed(|| build_accel(kind, test, &mesh, &opts)));
+                builds_1t.push(s * 1e3);
+                accel = Some(a);
+                if s > 5.0 {
+                    break;
+                }
+            }
+            let accel = accel.expect("at least one build");
+            bar.inc(1);
+            let stats = accel.stats();
+            let mut results = Vec::new();
+            for (si, kind_set) in RayKind::ALL.into_iter().enumerate() {
+                let rays = if kind == AccelKind::Brute {
+                    pick(&sets[si], brute_sample)
+                } else {
+                    sets[si].clone()
+                };
+                let shadow = kind_set == RayKind::Shadow;
+                let mut spread: f64 = 0.0;
+                let mut speed = |p: &rayon::ThreadPool| {
+                    bar.set_message(format!(
+                        "{} × {}: {} rays",
+                        kind.name(),
+                        test.name(),
+                        kind_set.name()
+                    ));
+                    let times: Vec<f64> = (0..reps)
+                        .map(|_| p.install(|| timed(|| answers(accel.as_ref(), &rays, shadow)).1))
+                        .collect();
+                    let (med, lo, hi) = median_min_max(&times);
+                    spread = spread.max((hi - lo) / med);
+                    bar.inc(1);
+                    rays.len() as f64 / med / 1e6
+                };
+                let mrays_1t = speed(&one);
+                let mrays_nt = speed(&all);
+                let verify = reference
+                    .as_ref()
+                    .filter(|_| kind != AccelKind::Brute)
+                    .map(|r| {
+                        let k = args.verify.unwrap_or(0);
+                        let got =
+                            all.install(|| answers(accel.as_ref(), &pick(&sets[si], k), shadow));
+                        got.compare(&r[si])
+                    });
+                results.push(SetResult {
+                    kind: kind_set.name(),
+                    rays: rays.len(),
+                    mrays_1t,
+                    mrays_nt,
+                    spread,
+                    verify,
+                });
+            }
+            rows.push(Row {
+                accel: kind.name(),
+                test: test.name(),
+                build_ms: median_min_max(&builds).0,
+                build_ms_1t: median_min_max(&builds_1t).0,
+                bytes: stats.bytes,
+                nodes: stats.nodes,
+                depth: stats.depth,
+                sah_cost: stats.sah_cost,
+                sets: results,
+            });
+        }
+    }
+    bar.finish_and_clear();
+    let report = Report {
+        mesh: args.mesh.clone(),
+        triangles: mesh.num_triangles(),
+        threads,
+        reps,
+        load_ms: load_s * 1e3,
+        rows,
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_table(&report, &mesh);
+    }
+    let failed = report
+        .rows
+        .iter()
+        .flat_map(|r| &r.sets)
+        .any(|s| s.verify.as_ref().is_some_and(|v| !v.ok()));
+    Ok(if failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+/// `k` rays spread evenly over the set.
+fn pick(rays: &[Ray], k: usize) -> Vec<Ray> {
+    verify::sample(rays.len(), k)
+        .into_iter()
+        .map(|i| rays[i])
+        .collect()
+}
+
+/// Answers of one batch: nearest hits, or occlusion for shadow rays.
+enum Answers {
+    Hits(Vec<Option<Hit>>),
+    Occluded(Vec<bool>),
+}
+
+impl Answers {
+    fn compare(&self, reference: &Answers) -> Verdict {
+        match (reference, self) {
+            (Answers::Hits(r), Answers::Hits(g)) => verify::compare_hits(r, g),
+            (Answers::Occluded(r), Answers::Occluded(g)) => verify::compare_occlusion(r, g),
+            _ => unreachable!("same set, same kind of answer"),
+        }
+    }
+}
+
+fn answers(accel: &dyn Accel, rays: &[Ray], shadow: bool) -> Answers {
+    if shadow {
+        let mut out = vec![false; rays.len()];
+        accel.occluded_batch(rays, &mut out);
+        Answers::Occluded(out)
+    } else {
+        let mut out = vec![None; rays.len()];
+        accel.intersect_batch(rays, &mut out);
+        Answers::Hits(out)
+    }
+}
+
+fn print_table(report: &Report, mesh: &TriangleMesh) {
+    println!(
+        "{}: {} triangles, {} threads, median of {} runs (load {:.0} ms)",
+        report.mesh,
+        mesh.num_triangles(),
+        report.threads,
+        report.reps,
+        report.load_ms
+    );
+    let n = report.threads;
+    println!(
+        "{:<13} {:<10} {:>9} {:>9} {:>8} {:>7} | {:>8} {:>8} | {:>8} {:>8} | {:>8} {:>8} | {:>6}",
+        "accel",
+        "test",
+        "build ms",
+        "build 1T",
+        "MB",
+        "SAH",
+        "prim 1T",
+        format!("prim {n}T"),
+        "shad 1T",
+        format!("shad {n}T"),
+        "inc 1T",
+        format!("inc {n}T"),
+        "noise"
+    );
+    for r in &report.rows {
+        let s = &r.sets;
+        let spread = s.iter().map(|x| x.spread).fold(0.0, f64::max);
+        println!(
+            "{:<13} {:<10} {:>9.1} {:>9.1} {:>8.1} {:>7.1} | {:>8.2} {:>8.2} | {:>8.2} {:>8.2} | {:>8.3} {:>8.3} | {:>5.0}%",
+            r.accel, r.test, r.build_ms, r.build_ms_1t, r.bytes as f64 / 1e6, r.sah_cost,
+            s[0].mrays_1t, s[0].mrays_nt, s[1].mrays_1t, s[1].mrays_nt, s[2].mrays_1t, s[2].mrays_nt,
+            spread * 100.0
+        );
+    }
+    println!("Mrays/s: primary and incoherent = nearest hit; shadow = occlusion (any hit). noise = worst (max-min)/median.");
+    let checked: Vec<_> = report
+        .rows
+        .iter()
+        .flat_map(|r| {
+            r.sets
+                .iter()
+                .filter_map(move |s| s.verify.as_ref().map(|v| (r, s, v)))
+        })
+        .collect();
+    if checked.is_empty() {
+        return;
+    }
+    let rays: usize = checked.iter().map(|c| c.2.checked).sum();
+    let ties: usize = checked.iter().map(|c| c.2.ties).sum();
+    let failed: Vec<_> = checked.iter().filter(|c| !c.2.ok()).collect();
+    println!(
+        "verify: {} answers ({} structure × test × set cells) compared with brute force: {} cells disagree, {} ties on shared edges or coincident triangles",
+        rays,
+        checked.len(),
+        failed.len(),
+        ties
+    );
+    for (r, s, v) in failed {
+        println!(
+            "  FAILED {} × {} {}: {} of {} rays hit/miss, {} distance",
+            r.accel, r.test, s.kind, v.hit_miss, v.checked, v.distance
+        );
+    }
+}

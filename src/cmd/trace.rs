@@ -1,0 +1,138 @@
+//! `raykit trace`: trace a ray file and write hits or occlusion bytes.
+
+use crate::measure::{pool, timed};
+use crate::scene_arg;
+use crate::verify;
+use anyhow::{anyhow, bail, Result};
+use clap::Args;
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::tri::TestKind;
+use raykit_core::Ray;
+use serde_json::json;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Arguments of `raykit trace`.
+#[derive(Args)]
+#[command(after_help = "Prints one JSON line of statistics on stderr:\n\
+{\"accel\", \"test\", \"load_ms\", \"build_ms\", \"trace_ms\", \"rays\", \"mrays\", \"threads\"}\n\
+(trace_ms excludes loading and building). Hit file: per ray f32 t, u32 prim (8 bytes; a miss is\n\
+t = +inf, prim = 4294967295). Occlusion file: one byte per ray (1 = occluded).")]
+pub struct TraceArgs {
+    /// Mesh file or builtin:NAME.
+    #[arg(long)]
+    mesh: String,
+    /// Ray file (from `raykit rays` or another engine).
+    #[arg(long)]
+    rays: PathBuf,
+    /// Output hit file (or occlusion file with --occlusion).
+    #[arg(long)]
+    out: PathBuf,
+    /// Acceleration structure (`raykit info accels`).
+    #[arg(long, default_value = "bvh2")]
+    accel: String,
+    /// Ray/triangle test (`raykit info tests`).
+    #[arg(long, default_value = "moller")]
+    test: String,
+    /// Answer "is anything hit" (shadow rays) instead of the nearest hit.
+    #[arg(long)]
+    occlusion: bool,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Also trace this many rays (spread over the file) with brute force and
+    /// the same triangle test, report disagreements and fail if any.
+    #[arg(long, value_name = "N")]
+    verify: Option<usize>,
+}
+
+/// Parse `--accel` and `--test`.
+pub fn parse_names(accel: &str, test: &str) -> Result<(AccelKind, TestKind)> {
+    let a = AccelKind::from_name(accel).ok_or_else(|| {
+        let names: Vec<_> = AccelKind::ALL.iter().map(|k| k.name()).collect();
+        anyhow!(
+            "unknown --accel '{accel}'; expected one of: {}",
+            names.join(", ")
+        )
+    })?;
+    let t = TestKind::from_name(test).ok_or_else(|| {
+        let names: Vec<_> = TestKind::ALL.iter().map(|k| k.name()).collect();
+        anyhow!(
+            "unknown --test '{test}'; expected one of: {}",
+            names.join(", ")
+        )
+    })?;
+    Ok((a, t))
+}
+
+/// Trace the file.
+pub fn run(args: TraceArgs) -> Result<ExitCode> {
+    let (kind, test) = parse_names(&args.accel, &args.test)?;
+    let pool = pool(args.threads)?;
+    let threads = pool.current_num_threads();
+    let (scene, load_s) = timed(|| scene_arg::load(&args.mesh));
+    let mesh = scene?.mesh;
+    let rays = raykit_io::read_rays(&args.rays)?;
+    if rays.is_empty() {
+        bail!("{}: the ray file holds no rays", args.rays.display());
+    }
+    let opts = BuildOptions::default();
+    let (accel, build_s) = pool.install(|| timed(|| build_accel(kind, test, &mesh, &opts)));
+    let (hits, occluded);
+    let trace_s;
+    if args.occlusion {
+        let mut out = vec![false; rays.len()];
+        trace_s = pool.install(|| timed(|| accel.occluded_batch(&rays, &mut out)).1);
+        raykit_io::write_occlusion(&args.out, &out)?;
+        occluded = Some(out);
+        hits = None;
+    } else {
+        let mut out = vec![None; rays.len()];
+        trace_s = pool.install(|| timed(|| accel.intersect_batch(&rays, &mut out)).1);
+        raykit_io::write_hits(&args.out, &out)?;
+        hits = Some(out);
+        occluded = None;
+    }
+    eprintln!(
+        "{}",
+        json!({
+            "accel": kind.name(),
+            "test": test.name(),
+            "load_ms": load_s * 1e3,
+            "build_ms": build_s * 1e3,
+            "trace_ms": trace_s * 1e3,
+            "rays": rays.len(),
+            "mrays": rays.len() as f64 / trace_s / 1e6,
+            "threads": threads,
+        })
+    );
+    let Some(k) = args.verify else {
+        return Ok(ExitCode::SUCCESS);
+    };
+    let idx = verify::sample(rays.len(), k);
+    let sample: Vec<Ray> = idx.iter().map(|&i| rays[i]).collect();
+    let brute = build_accel(AccelKind::Brute, test, &mesh, &opts);
+    let verdict = pool.install(|| {
+        if let Some(h) = &hits {
+            let mut want = vec![None; sample.len()];
+            brute.intersect_batch(&sample, &mut want);
+            let got: Vec<_> = idx.iter().map(|&i| h[i]).collect();
+            verify::compare_hits(&want, &got)
+        } else {
+            let o = occluded.as_ref().expect("one of the two is set");
+            let mut want = vec![false; sample.len()];
+            brute.occluded_batch(&sample, &mut want);
+            let got: Vec<_> = idx.iter().map(|&i| o[i]).collect();
+            verify::compare_occlusion(&want, &got)
+        }
+    });
+    eprintln!(
+        "{}",
+        json!({ "verify": "brute", "test": test.name(), "result": verdict, "ok": verdict.ok() })
+    );
+    Ok(if verdict.ok() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
