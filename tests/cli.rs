@@ -1,0 +1,236 @@
+//! The `raykit` binary as a user runs it: outputs checked against the
+//! library computed independently in the test, and bad input giving a clear
+//! error (file and location) with a non-zero exit, never a panic.
+
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::tri::TestKind;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn raykit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raykit"))
+        .args(args)
+        .output()
+        .expect("the raykit binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn teapot() -> PathBuf {
+    let dir = std::env::var_os("RAYKIT_SHARED_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    let p = dir.join("meshes/teapot_992.obj");
+    assert!(
+        p.is_file(),
+        "shared data not found at {} (set RAYKIT_SHARED_DATA)",
+        p.display()
+    );
+    p
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 temp path")
+}
+
+#[test]
+fn rays_then_trace_matches_the_library_and_verifies() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh_path = teapot();
+    let rays = dir.path().join("r.bin");
+    let hits = dir.path().join("h.bin");
+    let o = raykit(&[
+        "rays",
+        "--mesh",
+        s(&mesh_path),
+        "--kind",
+        "incoherent",
+        "--size",
+        "64",
+        "--out",
+        s(&rays),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = raykit(&[
+        "trace",
+        "--mesh",
+        s(&mesh_path),
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&hits),
+        "--accel",
+        "bvh-threaded",
+        "--test",
+        "plucker",
+        "--verify",
+        "500",
+        "--threads",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The stats line is JSON with the documented keys.
+    let err = stderr(&o);
+    let stats: serde_json::Value = serde_json::from_str(err.lines().next().unwrap()).unwrap();
+    for key in [
+        "accel", "test", "load_ms", "build_ms", "trace_ms", "rays", "mrays", "threads",
+    ] {
+        assert!(stats.get(key).is_some(), "missing {key} in {err}");
+    }
+    assert_eq!(stats["rays"], 64 * 64);
+    assert_eq!(stats["threads"], 1);
+    assert!(err.contains("\"ok\":true"), "{err}");
+    // Independent check: the hit file equals brute force run in this process.
+    let mesh = raykit_io::load_mesh(&mesh_path).unwrap();
+    let ray_list = raykit_io::read_rays(&rays).unwrap();
+    let got = raykit_io::read_hits(&hits).unwrap();
+    let brute = build_accel(
+        AccelKind::Brute,
+        TestKind::Plucker,
+        &mesh,
+        &BuildOptions::default(),
+    );
+    assert_eq!(got.len(), ray_list.len());
+    let mut n_hits = 0;
+    for (r, g) in ray_list.iter().zip(&got) {
+        let want = brute.intersect(r);
+        assert_eq!(want.is_some(), g.is_some());
+        if let (Some(w), Some(g)) = (want, g) {
+            assert!((w.t - g.t).abs() <= 1e-5 * w.t, "{w:?} vs {g:?}");
+            n_hits += 1;
+        }
+    }
+    assert!(
+        n_hits > 100,
+        "the incoherent set should hit the teapot often"
+    );
+}
+
+#[test]
+fn shadow_rays_and_occlusion_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh_path = teapot();
+    let rays = dir.path().join("s.bin");
+    let occ = dir.path().join("o.bin");
+    let o = raykit(&[
+        "rays",
+        "--mesh",
+        s(&mesh_path),
+        "--kind",
+        "shadow",
+        "--size",
+        "48",
+        "--out",
+        s(&rays),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = raykit(&[
+        "trace",
+        "--mesh",
+        s(&mesh_path),
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&occ),
+        "--occlusion",
+        "--verify",
+        "10000",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mesh = raykit_io::load_mesh(&mesh_path).unwrap();
+    let ray_list = raykit_io::read_rays(&rays).unwrap();
+    let got = raykit_io::read_occlusion(&occ).unwrap();
+    let brute = build_accel(
+        AccelKind::Brute,
+        TestKind::Moller,
+        &mesh,
+        &BuildOptions::default(),
+    );
+    let shadowed = ray_list.iter().zip(&got).filter(|(r, g)| {
+        assert_eq!(brute.occluded(r), **g);
+        **g
+    });
+    let n = shadowed.count();
+    assert!(
+        n > 0 && n < ray_list.len(),
+        "some but not all points are in shadow ({n})"
+    );
+}
+
+#[test]
+fn render_writes_a_png_of_the_requested_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("img.png");
+    let o = raykit(&[
+        "render",
+        "--scene",
+        "builtin:shirley6",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (64, 48));
+    // Not a blank image: many distinct colours.
+    let mut colours: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+    colours.sort();
+    colours.dedup();
+    assert!(colours.len() > 50, "{} colours", colours.len());
+}
+
+#[test]
+fn bad_inputs_name_the_file_and_fail_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("broken.obj");
+    std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 nan\nf 1 2 3\n").unwrap();
+    let out = dir.path().join("x.png");
+    let o = raykit(&["render", "--scene", s(&bad), "--out", s(&out)]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("broken.obj") && err.contains(":3"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!out.exists(), "no output on failure");
+
+    let rays = dir.path().join("short.bin");
+    std::fs::write(&rays, [0u8; 40]).unwrap();
+    let o = raykit(&[
+        "trace",
+        "--mesh",
+        "builtin:cornell",
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&dir.path().join("h.bin")),
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("short.bin") && err.contains("byte"), "{err}");
+
+    let o = raykit(&["render", "--scene", "builtin:nosuch"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("cornell"),
+        "lists the valid names: {}",
+        stderr(&o)
+    );
+
+    let o = raykit(&[
+        "trace",
+        "--mesh",
+        "builtin:cornell",
+        "--rays",
+        "x",
+        "--out",
+        "y",
+        "--accel",
+        "kd",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("bvh2"), "{}", stderr(&o));
+}
