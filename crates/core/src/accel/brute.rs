@@ -1,6 +1,7 @@
 //! Brute force: every ray against every triangle. The reference every other
 //! structure is tested against.
 
+use super::leaf::LeafTriangles;
 use super::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
@@ -9,49 +10,36 @@ use crate::tri::TriangleTest;
 
 /// All triangles in mesh order, tested one after the other.
 pub struct BruteForce<T: TriangleTest> {
-    tris: Vec<T::Tri>,
+    tris: LeafTriangles<T>,
 }
 
 impl<T: TriangleTest> BruteForce<T> {
     /// Precompute the triangle data of `mesh`.
     pub fn new(mesh: &TriangleMesh) -> Self {
-        let tris = (0..mesh.num_triangles())
-            .map(|i| {
-                let [a, b, c] = mesh.triangle(i);
-                T::precompute(a, b, c)
-            })
-            .collect();
-        BruteForce { tris }
+        let order = (0..mesh.num_triangles() as u32).collect();
+        BruteForce {
+            tris: LeafTriangles::new(mesh, order),
+        }
+    }
+
+    fn test<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
+        let rd = T::prepare(ray);
+        let mut best = None;
+        let mut tfar = ray.tfar;
+        let any = self
+            .tris
+            .test::<ANY>(0, self.tris.len(), ray, &rd, &mut tfar, &mut best);
+        (best, any)
     }
 }
 
 impl<T: TriangleTest> Accel for BruteForce<T> {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let rd = T::prepare(ray);
-        let mut best: Option<Hit> = None;
-        let mut tfar = ray.tfar;
-        for (i, tri) in self.tris.iter().enumerate() {
-            if let Some(h) = T::intersect(tri, ray, &rd, tfar) {
-                // Strictly nearer only, so ties go to the lowest index.
-                if best.is_none_or(|b| h.t < b.t) {
-                    tfar = h.t;
-                    best = Some(Hit {
-                        t: h.t,
-                        u: h.u,
-                        v: h.v,
-                        prim: i as u32,
-                    });
-                }
-            }
-        }
-        best
+        self.test::<false>(ray).0
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        let rd = T::prepare(ray);
-        self.tris
-            .iter()
-            .any(|tri| T::occluded(tri, ray, &rd, ray.tfar))
+        self.test::<true>(ray).1
     }
 
     fn stats(&self) -> AccelStats {
@@ -59,7 +47,7 @@ impl<T: TriangleTest> Accel for BruteForce<T> {
         AccelStats {
             nodes: 0,
             leaves: 1,
-            bytes: n * std::mem::size_of::<T::Tri>(),
+            bytes: self.tris.bytes(),
             node_bytes: 0,
             depth: 0,
             sah_cost: n as f64,

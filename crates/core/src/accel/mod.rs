@@ -13,6 +13,7 @@ use serde::Serialize;
 
 mod brute;
 pub mod bvh;
+mod leaf;
 mod registry;
 
 pub use brute::BruteForce;

@@ -10,7 +10,10 @@
 
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
+use crate::accel::leaf::LeafTriangles;
+use crate::accel::AccelStats;
 use crate::mesh::TriangleMesh;
+use crate::tri::TriangleTest;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -326,4 +329,30 @@ pub fn tree_shape(root: &BuildNode, traversal_cost: f64) -> (usize, usize, u32, 
         }
     }
     (nodes, leaves, depth, cost)
+}
+
+impl BuildTree {
+    /// Precompute the triangles in leaf order and describe the structure
+    /// whose flattened nodes take `node_bytes`; consumes the tree.
+    pub(crate) fn into_leaves<T: TriangleTest>(
+        self,
+        mesh: &TriangleMesh,
+        node_bytes: usize,
+        options: &BuildOptions,
+    ) -> (LeafTriangles<T>, AccelStats) {
+        let (nodes, leaves, depth, sah_cost) =
+            tree_shape(&self.root, options.traversal_cost as f64);
+        let triangle_refs = self.order.len();
+        let tris = LeafTriangles::new(mesh, self.order);
+        let stats = AccelStats {
+            nodes,
+            leaves,
+            bytes: node_bytes + tris.bytes(),
+            node_bytes,
+            depth,
+            sah_cost,
+            triangle_refs,
+        };
+        (tris, stats)
+    }
 }

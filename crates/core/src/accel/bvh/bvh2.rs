@@ -1,8 +1,9 @@
 //! Binary BVH with a per-ray stack, nearest child first.
 
-use super::build::{build, tree_shape, BuildNode, BuildOptions};
+use super::build::{build, BuildNode, BuildOptions};
 use super::node_box::NodeBox;
 use super::MAX_DEPTH;
+use crate::accel::leaf::LeafTriangles;
 use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
@@ -28,8 +29,7 @@ struct Node {
 /// the nearer first and pushes the other on a fixed-size stack.
 pub struct Bvh2<T: TriangleTest> {
     nodes: Vec<Node>,
-    tris: Vec<T::Tri>,
-    prims: Vec<u32>,
+    tris: LeafTriangles<T>,
     stats: AccelStats,
 }
 
@@ -40,31 +40,8 @@ impl<T: TriangleTest> Bvh2<T> {
         let mut nodes = Vec::with_capacity(tree.root.count_nodes());
         nodes.push(Node::default());
         flatten(&tree.root, 0, &mut nodes);
-        let tris: Vec<T::Tri> = tree
-            .order
-            .iter()
-            .map(|&p| {
-                let [a, b, c] = mesh.triangle(p as usize);
-                T::precompute(a, b, c)
-            })
-            .collect();
-        let (n, leaves, depth, sah) = tree_shape(&tree.root, options.traversal_cost as f64);
-        let node_bytes = nodes.len() * std::mem::size_of::<Node>();
-        let stats = AccelStats {
-            nodes: n,
-            leaves,
-            node_bytes,
-            bytes: node_bytes + tris.len() * std::mem::size_of::<T::Tri>() + tree.order.len() * 4,
-            depth,
-            sah_cost: sah,
-            triangle_refs: tree.order.len(),
-        };
-        Bvh2 {
-            nodes,
-            tris,
-            prims: tree.order,
-            stats,
-        }
+        let (tris, stats) = tree.into_leaves(mesh, std::mem::size_of_val(&nodes[..]), options);
+        Bvh2 { nodes, tris, stats }
     }
 
     #[inline(always)]
@@ -72,7 +49,7 @@ impl<T: TriangleTest> Bvh2<T> {
         let rd = T::prepare(ray);
         let mut tfar = ray.tfar;
         let mut best: Option<Hit> = None;
-        if self.tris.is_empty() || self.nodes[0].bounds.entry(ray, ray.tnear, tfar) == f32::INFINITY
+        if self.tris.len() == 0 || self.nodes[0].bounds.entry(ray, ray.tnear, tfar) == f32::INFINITY
         {
             return (None, false);
         }
@@ -83,23 +60,11 @@ impl<T: TriangleTest> Bvh2<T> {
             let node = &self.nodes[idx];
             if node.count > 0 {
                 let first = node.first as usize;
-                for i in first..first + node.count as usize {
-                    let tri = &self.tris[i];
-                    if ANY {
-                        if T::occluded(tri, ray, &rd, tfar) {
-                            return (None, true);
-                        }
-                    } else if let Some(h) = T::intersect(tri, ray, &rd, tfar) {
-                        if best.is_none_or(|b| h.t < b.t) {
-                            tfar = h.t;
-                            best = Some(Hit {
-                                t: h.t,
-                                u: h.u,
-                                v: h.v,
-                                prim: self.prims[i],
-                            });
-                        }
-                    }
+                if self
+                    .tris
+                    .test::<ANY>(first, node.count as usize, ray, &rd, &mut tfar, &mut best)
+                {
+                    return (None, true);
                 }
             } else {
                 let l = node.first as usize;

@@ -2,6 +2,8 @@
 
 use crate::aabb::Aabb;
 use crate::ray::Ray;
+use crate::tri::MAX_EDGE_TOLERANCE;
+use glam::Vec3;
 
 /// 1 + 2·gamma(3) with gamma(n) = n·eps/(1 - n·eps), eps = 2^-24.
 const ROBUST_EXIT: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
@@ -15,10 +17,16 @@ pub(crate) struct NodeBox {
 }
 
 impl From<Aabb> for NodeBox {
+    /// The box padded by `4 · MAX_EDGE_TOLERANCE` of its largest extent, so
+    /// that it contains every point a triangle test may report as a hit on a
+    /// triangle inside it (the tests accept hits up to that fraction of the
+    /// triangle beyond its edges). A child's padded box stays inside its
+    /// parent's, since the child's extent is the smaller.
     fn from(b: Aabb) -> Self {
+        let pad = Vec3::splat(4.0 * MAX_EDGE_TOLERANCE * b.extent().max_element().max(0.0));
         NodeBox {
-            min: b.min.to_array(),
-            max: b.max.to_array(),
+            min: (b.min - pad).to_array(),
+            max: (b.max + pad).to_array(),
         }
     }
 }

@@ -1,7 +1,8 @@
 //! Paper 001's stackless BVH: nodes in pre-order, each with an escape index.
 
-use super::build::{build, tree_shape, BuildNode, BuildOptions};
+use super::build::{build, BuildNode, BuildOptions};
 use super::node_box::NodeBox;
+use crate::accel::leaf::LeafTriangles;
 use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
@@ -39,8 +40,7 @@ struct Node {
 /// one-triangle leaves), so the two layouts differ only in traversal.
 pub struct ThreadedBvh<T: TriangleTest> {
     nodes: Vec<Node>,
-    tris: Vec<T::Tri>,
-    prims: Vec<u32>,
+    tris: LeafTriangles<T>,
     stats: AccelStats,
 }
 
@@ -54,31 +54,8 @@ impl<T: TriangleTest> ThreadedBvh<T> {
         );
         let mut nodes = Vec::with_capacity(tree.root.count_nodes());
         preorder(&tree.root, &mut nodes);
-        let tris: Vec<T::Tri> = tree
-            .order
-            .iter()
-            .map(|&p| {
-                let [a, b, c] = mesh.triangle(p as usize);
-                T::precompute(a, b, c)
-            })
-            .collect();
-        let (n, leaves, depth, sah) = tree_shape(&tree.root, options.traversal_cost as f64);
-        let node_bytes = nodes.len() * std::mem::size_of::<Node>();
-        let stats = AccelStats {
-            nodes: n,
-            leaves,
-            node_bytes,
-            bytes: node_bytes + tris.len() * std::mem::size_of::<T::Tri>() + tree.order.len() * 4,
-            depth,
-            sah_cost: sah,
-            triangle_refs: tree.order.len(),
-        };
-        ThreadedBvh {
-            nodes,
-            tris,
-            prims: tree.order,
-            stats,
-        }
+        let (tris, stats) = tree.into_leaves(mesh, std::mem::size_of_val(&nodes[..]), options);
+        ThreadedBvh { nodes, tris, stats }
     }
 
     #[inline(always)]
@@ -97,23 +74,11 @@ impl<T: TriangleTest> ThreadedBvh<T> {
             let count = (node.prims >> (32 - COUNT_BITS)) as usize;
             if count > 0 {
                 let first = (node.prims & FIRST_MASK) as usize;
-                for i in first..first + count {
-                    let tri = &self.tris[i];
-                    if ANY {
-                        if T::occluded(tri, ray, &rd, tfar) {
-                            return (None, true);
-                        }
-                    } else if let Some(h) = T::intersect(tri, ray, &rd, tfar) {
-                        if best.is_none_or(|b| h.t < b.t) {
-                            tfar = h.t;
-                            best = Some(Hit {
-                                t: h.t,
-                                u: h.u,
-                                v: h.v,
-                                prim: self.prims[i],
-                            });
-                        }
-                    }
+                if self
+                    .tris
+                    .test::<ANY>(first, count, ray, &rd, &mut tfar, &mut best)
+                {
+                    return (None, true);
                 }
                 idx = node.escape as usize;
             } else {

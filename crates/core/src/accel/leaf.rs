@@ -1,0 +1,73 @@
+//! Triangles precomputed in a structure's leaf order, and the leaf loop that
+//! every structure shares.
+
+use crate::hit::Hit;
+use crate::mesh::TriangleMesh;
+use crate::ray::Ray;
+use crate::tri::TriangleTest;
+use rayon::prelude::*;
+
+/// Precomputed triangle data in leaf order (a leaf's triangles are
+/// contiguous), with the map back to mesh triangle indices.
+pub(crate) struct LeafTriangles<T: TriangleTest> {
+    tris: Vec<T::Tri>,
+    prims: Vec<u32>,
+}
+
+impl<T: TriangleTest> LeafTriangles<T> {
+    /// Precompute the triangles of `mesh` in the given order.
+    pub fn new(mesh: &TriangleMesh, order: Vec<u32>) -> Self {
+        let tris = order
+            .par_iter()
+            .map(|&p| {
+                let [a, b, c] = mesh.triangle(p as usize);
+                T::precompute(a, b, c)
+            })
+            .collect();
+        LeafTriangles { tris, prims: order }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Bytes held (precomputed data and the index map).
+    pub fn bytes(&self) -> usize {
+        self.tris.len() * std::mem::size_of::<T::Tri>() + self.prims.len() * 4
+    }
+
+    /// Test triangles `first..first + count`. Nearest-hit mode (`ANY =
+    /// false`) keeps the nearest hit in `best` and shrinks `tfar` to it (ties
+    /// keep the earlier triangle); any-hit mode returns true at the first hit.
+    #[inline(always)]
+    pub fn test<const ANY: bool>(
+        &self,
+        first: usize,
+        count: usize,
+        ray: &Ray,
+        rd: &T::RayData,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        for i in first..first + count {
+            let tri = &self.tris[i];
+            if ANY {
+                if T::occluded(tri, ray, rd, *tfar) {
+                    return true;
+                }
+            } else if let Some(h) = T::intersect(tri, ray, rd, *tfar) {
+                if best.is_none_or(|b| h.t < b.t) {
+                    *tfar = h.t;
+                    *best = Some(Hit {
+                        t: h.t,
+                        u: h.u,
+                        v: h.v,
+                        prim: self.prims[i],
+                    });
+                }
+            }
+        }
+        false
+    }
+}
