@@ -10,25 +10,60 @@ use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
 
-/// A 32-byte flattened node: box, then either the index of the first of two
-/// adjacent children (`count == 0`) or a leaf's triangle range.
+/// A reference to a child: an inner node (`count == 0`, `index` into the
+/// node array) or a leaf (`count` triangles from `index` in leaf order).
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C)]
-struct Node {
-    bounds: NodeBox,
-    /// Inner: index of the left child (the right one follows it).
-    /// Leaf: index of the first triangle.
-    first: u32,
-    /// Number of triangles; 0 for inner nodes.
+struct Child {
+    index: u32,
     count: u32,
 }
 
+/// A 64-byte inner node (one cache line) holding the boxes of both
+/// children, so that one memory access serves both slab tests; leaves have
+/// no node of their own. The boxes are stored per axis, `lo[axis][child]`.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+struct Node {
+    lo: [[f32; 2]; 3],
+    hi: [[f32; 2]; 3],
+    child: [Child; 2],
+}
+
+impl Node {
+    /// Entry distances of the ray into both child boxes within `[tnear, tfar]`,
+    /// `f32::INFINITY` for a miss (see [`NodeBox::entry`] for the rounding).
+    #[inline(always)]
+    fn entries(&self, ray: &Ray, tnear: f32, tfar: f32) -> [f32; 2] {
+        let o = ray.origin.to_array();
+        let id = ray.inv_dir.to_array();
+        let mut out = [0.0; 2];
+        for (c, slot) in out.iter_mut().enumerate() {
+            let mut enter = tnear;
+            let mut exit = f32::INFINITY;
+            for a in 0..3 {
+                let t0 = (self.lo[a][c] - o[a]) * id[a];
+                let t1 = (self.hi[a][c] - o[a]) * id[a];
+                enter = enter.max(t0.min(t1));
+                exit = exit.min(t0.max(t1));
+            }
+            let exit = (exit * NodeBox::ROBUST_EXIT).min(tfar);
+            *slot = if enter <= exit { enter } else { f32::INFINITY };
+        }
+        out
+    }
+}
+
 /// Binary BVH over precomputed triangles, built with the binned SAH
-/// ([`super::build`]). Sibling nodes are stored side by side, so an inner node
-/// needs a single child index; traversal tests both children's boxes, visits
-/// the nearer first and pushes the other on a fixed-size stack.
+/// ([`super::build`]). Each inner node stores both children's boxes in one
+/// cache line; traversal tests both, visits the nearer first and pushes the
+/// other, with its entry distance, on a fixed-size stack, skipping it on pop
+/// when a nearer hit has been found since. Occlusion queries stop at the
+/// first hit.
 pub struct Bvh2<T: TriangleTest> {
     nodes: Vec<Node>,
+    root_box: NodeBox,
+    root: Child,
     tris: LeafTriangles<T>,
     stats: AccelStats,
 }
@@ -37,11 +72,17 @@ impl<T: TriangleTest> Bvh2<T> {
     /// Build over all triangles of `mesh`.
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
         let tree = build(mesh, options);
-        let mut nodes = Vec::with_capacity(tree.root.count_nodes());
-        nodes.push(Node::default());
-        flatten(&tree.root, 0, &mut nodes);
+        let mut nodes = Vec::with_capacity(tree.root.count_nodes() / 2 + 1);
+        let root = flatten(&tree.root, &mut nodes);
+        let root_box = tree.root.bounds().into();
         let (tris, stats) = tree.into_leaves(mesh, std::mem::size_of_val(&nodes[..]), options);
-        Bvh2 { nodes, tris, stats }
+        Bvh2 {
+            nodes,
+            root_box,
+            root,
+            tris,
+            stats,
+        }
     }
 
     #[inline(always)]
@@ -49,51 +90,48 @@ impl<T: TriangleTest> Bvh2<T> {
         let rd = T::prepare(ray);
         let mut tfar = ray.tfar;
         let mut best: Option<Hit> = None;
-        if self.tris.len() == 0 || self.nodes[0].bounds.entry(ray, ray.tnear, tfar) == f32::INFINITY
-        {
+        if self.tris.len() == 0 || self.root_box.entry(ray, ray.tnear, tfar) == f32::INFINITY {
             return (None, false);
         }
-        let mut stack = [0u32; MAX_DEPTH];
+        let mut stack = [(Child::default(), 0f32); MAX_DEPTH];
         let mut sp = 0usize;
-        let mut idx = 0usize;
+        let mut cur = self.root;
         loop {
-            let node = &self.nodes[idx];
-            if node.count > 0 {
-                let first = node.first as usize;
+            if cur.count > 0 {
+                let (first, count) = (cur.index as usize, cur.count as usize);
                 if self
                     .tris
-                    .test::<ANY>(first, node.count as usize, ray, &rd, &mut tfar, &mut best)
+                    .test::<ANY>(first, count, ray, &rd, &mut tfar, &mut best)
                 {
                     return (None, true);
                 }
             } else {
-                let l = node.first as usize;
-                let tl = self.nodes[l].bounds.entry(ray, ray.tnear, tfar);
-                let tr = self.nodes[l + 1].bounds.entry(ray, ray.tnear, tfar);
+                let node = &self.nodes[cur.index as usize];
+                let [tl, tr] = node.entries(ray, ray.tnear, tfar);
                 let (near, far, tn, tf) = if tl <= tr {
-                    (l, l + 1, tl, tr)
+                    (node.child[0], node.child[1], tl, tr)
                 } else {
-                    (l + 1, l, tr, tl)
+                    (node.child[1], node.child[0], tr, tl)
                 };
                 if tn != f32::INFINITY {
                     if tf != f32::INFINITY {
-                        stack[sp] = far as u32;
+                        stack[sp] = (far, tf);
                         sp += 1;
                     }
-                    idx = near;
+                    cur = near;
                     continue;
                 }
             }
-            // Pop, skipping nodes that lie beyond the nearest hit found since
-            // they were pushed.
+            // Pop, skipping entries that lie beyond the nearest hit found
+            // since they were pushed.
             loop {
                 if sp == 0 {
                     return (best, false);
                 }
                 sp -= 1;
-                let n = stack[sp] as usize;
-                if ANY || self.nodes[n].bounds.entry(ray, ray.tnear, tfar) != f32::INFINITY {
-                    idx = n;
+                let (c, t) = stack[sp];
+                if t <= tfar {
+                    cur = c;
                     break;
                 }
             }
@@ -101,33 +139,31 @@ impl<T: TriangleTest> Bvh2<T> {
     }
 }
 
-/// Write `node` at `index`; its children go to a freshly appended pair.
-fn flatten(node: &BuildNode, index: usize, nodes: &mut Vec<Node>) {
+/// Append the inner nodes of `node`'s subtree (depth first) and return the
+/// reference to `node`.
+fn flatten(node: &BuildNode, nodes: &mut Vec<Node>) -> Child {
     match node {
-        BuildNode::Leaf {
-            bounds,
-            first,
-            count,
-        } => {
-            nodes[index] = Node {
-                bounds: (*bounds).into(),
-                first: *first,
-                count: *count,
-            };
-        }
-        BuildNode::Inner {
-            bounds, children, ..
-        } => {
-            let left = nodes.len();
+        BuildNode::Leaf { first, count, .. } => Child {
+            index: *first,
+            count: *count,
+        },
+        BuildNode::Inner { children, .. } => {
+            let index = nodes.len();
             nodes.push(Node::default());
-            nodes.push(Node::default());
-            nodes[index] = Node {
-                bounds: (*bounds).into(),
-                first: left as u32,
+            let mut n = Node::default();
+            for (c, child) in children.iter().enumerate() {
+                let b: NodeBox = child.bounds().into();
+                for a in 0..3 {
+                    n.lo[a][c] = b.min[a];
+                    n.hi[a][c] = b.max[a];
+                }
+                n.child[c] = flatten(child, nodes);
+            }
+            nodes[index] = n;
+            Child {
+                index: index as u32,
                 count: 0,
-            };
-            flatten(&children[0], left, nodes);
-            flatten(&children[1], left + 1, nodes);
+            }
         }
     }
 }

@@ -5,9 +5,6 @@ use crate::ray::Ray;
 use crate::tri::MAX_EDGE_TOLERANCE;
 use glam::Vec3;
 
-/// 1 + 2·gamma(3) with gamma(n) = n·eps/(1 - n·eps), eps = 2^-24.
-const ROBUST_EXIT: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
-
 /// Box corners stored as plain arrays so that a node packs into 32 bytes.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C)]
@@ -32,6 +29,11 @@ impl From<Aabb> for NodeBox {
 }
 
 impl NodeBox {
+    /// 1 + 2·gamma(3) with gamma(n) = n·eps/(1 - n·eps), eps = 2^-24: the
+    /// factor that widens a slab test's exit distance past its rounding.
+    pub const ROBUST_EXIT: f32 =
+        1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
     /// Entry distance of the ray into the box if it enters within
     /// `[tnear, tfar]`, else `f32::INFINITY`.
     ///
@@ -51,7 +53,7 @@ impl NodeBox {
         let enter = tx0.min(tx1).max(ty0.min(ty1)).max(tz0.min(tz1)).max(tnear);
         // Widen the exit by 3 ulps (pbrt-v4's 1 + 2·gamma(3)) so rounding can
         // never cull a box whose triangle the triangle test would report hit.
-        let exit = (tx0.max(tx1).min(ty0.max(ty1)).min(tz0.max(tz1)) * ROBUST_EXIT).min(tfar);
+        let exit = (tx0.max(tx1).min(ty0.max(ty1)).min(tz0.max(tz1)) * Self::ROBUST_EXIT).min(tfar);
         if enter <= exit {
             enter
         } else {
