@@ -14,7 +14,7 @@ use std::process::ExitCode;
 /// Meshes are read from OBJ, PLY (.ply, .ply.gz), STL, glTF/GLB and OFF files,
 /// or generated: `builtin:NAME` picks a built-in scene (`raykit info scenes`).
 #[derive(Parser)]
-#[command(name = "raykit", version, about, long_about = None)]
+#[command(name = "raykit", version)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
