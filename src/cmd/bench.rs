@@ -324,9 +324,19 @@ fn print_table(report: &Report, mesh: &TriangleMesh) {
         let s = &r.sets;
         let spread = s.iter().map(|x| x.spread).fold(0.0, f64::max);
         println!(
-            "{:<13} {:<10} {:>9.1} {:>9.1} {:>8.1} {:>7.1} | {:>8.2} {:>8.2} | {:>8.2} {:>8.2} | {:>8.3} {:>8.3} | {:>5.0}%",
-            r.accel, r.test, r.build_ms, r.build_ms_1t, r.bytes as f64 / 1e6, r.sah_cost,
-            s[0].mrays_1t, s[0].mrays_nt, s[1].mrays_1t, s[1].mrays_nt, s[2].mrays_1t, s[2].mrays_nt,
+            "{:<13} {:<10} {:>9.1} {:>9.1} {:>8.1} {:>7.1} | {:>8} {:>8} | {:>8} {:>8} | {:>8} {:>8} | {:>5.0}%",
+            r.accel,
+            r.test,
+            r.build_ms,
+            r.build_ms_1t,
+            r.bytes as f64 / 1e6,
+            r.sah_cost,
+            rate(s[0].mrays_1t),
+            rate(s[0].mrays_nt),
+            rate(s[1].mrays_1t),
+            rate(s[1].mrays_nt),
+            rate(s[2].mrays_1t),
+            rate(s[2].mrays_nt),
             spread * 100.0
         );
     }
@@ -358,5 +368,16 @@ fn print_table(report: &Report, mesh: &TriangleMesh) {
             "  FAILED {} × {} {}: {} of {} rays hit/miss, {} distance",
             r.accel, r.test, s.kind, v.hit_miss, v.checked, v.distance
         );
+    }
+}
+
+/// Mrays/s with enough digits to show slow structures too.
+fn rate(mrays: f64) -> String {
+    if mrays >= 1.0 {
+        format!("{mrays:.2}")
+    } else if mrays >= 0.01 {
+        format!("{mrays:.3}")
+    } else {
+        format!("{mrays:.5}")
     }
 }
