@@ -3,6 +3,7 @@
 
 mod cmd;
 mod measure;
+mod paths;
 mod scene_arg;
 mod verify;
 

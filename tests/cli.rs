@@ -212,6 +212,21 @@ fn bad_inputs_name_the_file_and_fail_cleanly() {
     let err = stderr(&o);
     assert!(err.contains("short.bin") && err.contains("byte"), "{err}");
 
+    // An output that is also an input is refused, and the input survives.
+    std::fs::write(&rays, [0u8; 64]).unwrap();
+    let o = raykit(&[
+        "trace",
+        "--mesh",
+        "builtin:cornell",
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&rays),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("also an input"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&rays).unwrap(), vec![0u8; 64]);
+
     let o = raykit(&["render", "--scene", "builtin:nosuch"]);
     assert!(!o.status.success());
     assert!(

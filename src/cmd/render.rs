@@ -93,6 +93,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         bail!("--fov must be between 1 and 179 degrees");
     }
     let (kind, test) = parse_names(&args.accel, &args.test)?;
+    crate::paths::ensure_not_input(&args.out, &[std::path::Path::new(&args.scene)])?;
     let pool = pool(args.threads)?;
     let (scene, load_s) = timed(|| scene_arg::load(&args.scene));
     let mut scene = scene?;

@@ -68,6 +68,7 @@ pub fn parse_names(accel: &str, test: &str) -> Result<(AccelKind, TestKind)> {
 /// Trace the file.
 pub fn run(args: TraceArgs) -> Result<ExitCode> {
     let (kind, test) = parse_names(&args.accel, &args.test)?;
+    crate::paths::ensure_not_input(&args.out, &[&args.rays, std::path::Path::new(&args.mesh)])?;
     let pool = pool(args.threads)?;
     let threads = pool.current_num_threads();
     let (scene, load_s) = timed(|| scene_arg::load(&args.mesh));
