@@ -1,6 +1,7 @@
 //! The `raykit` command line: argument parsing and wiring only; the work is
 //! done by the library crates.
 
+mod build_args;
 mod cmd;
 mod measure;
 mod paths;

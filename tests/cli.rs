@@ -63,6 +63,8 @@ fn rays_then_trace_matches_the_library_and_verifies() {
         s(&hits),
         "--accel",
         "bvh-threaded",
+        "--max-leaf",
+        "1",
         "--test",
         "plucker",
         "--verify",

@@ -7,7 +7,7 @@ use crate::verify::{self, Verdict};
 use anyhow::{anyhow, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::accel::{build_accel, AccelKind};
 use raykit_core::raysets::{self, RayKind};
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Hit, Ray, TriangleMesh};
@@ -46,6 +46,8 @@ pub struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    build: crate::build_args::BuildArgs,
 }
 
 /// Speed on one ray set.
@@ -119,7 +121,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     let threads = all.current_num_threads();
     let (scene, load_s) = timed(|| scene_arg::load(&args.mesh));
     let mesh = scene?.mesh;
-    let opts = BuildOptions::default();
+    let opts = args.build.options();
     eprintln!(
         "{}: {} triangles; generating ray sets ({}²)…",
         args.mesh,

@@ -6,7 +6,7 @@ use crate::scene_arg;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use raykit_core::accel::{build_accel, BuildOptions};
+use raykit_core::accel::build_accel;
 use raykit_core::raysets::standard_light;
 use raykit_core::{Camera, Vec3};
 use raykit_render::{render, PointLight, RenderOptions};
@@ -66,6 +66,8 @@ pub struct RenderArgs {
     /// Output PNG.
     #[arg(long, default_value = "render.png")]
     out: PathBuf,
+    #[command(flatten)]
+    build: crate::build_args::BuildArgs,
 }
 
 /// Parse `x,y,z`.
@@ -129,7 +131,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         ));
     }
     let (accel, build_s) =
-        pool.install(|| timed(|| build_accel(kind, test, &scene.mesh, &BuildOptions::default())));
+        pool.install(|| timed(|| build_accel(kind, test, &scene.mesh, &args.build.options())));
     let opts = RenderOptions {
         width: args.width,
         height: args.height,

@@ -5,7 +5,7 @@ use crate::scene_arg;
 use crate::verify;
 use anyhow::{anyhow, bail, Result};
 use clap::Args;
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::accel::{build_accel, AccelKind};
 use raykit_core::tri::TestKind;
 use raykit_core::Ray;
 use serde_json::json;
@@ -44,6 +44,8 @@ pub struct TraceArgs {
     /// the same triangle test, report disagreements and fail if any.
     #[arg(long, value_name = "N")]
     verify: Option<usize>,
+    #[command(flatten)]
+    build: crate::build_args::BuildArgs,
 }
 
 /// Parse `--accel` and `--test`.
@@ -77,7 +79,7 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
     if rays.is_empty() {
         bail!("{}: the ray file holds no rays", args.rays.display());
     }
-    let opts = BuildOptions::default();
+    let opts = args.build.options();
     let (accel, build_s) = pool.install(|| timed(|| build_accel(kind, test, &mesh, &opts)));
     let (hits, occluded);
     let trace_s;

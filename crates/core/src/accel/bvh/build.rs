@@ -18,7 +18,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 /// Options of the BVH builds.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct BuildOptions {
     /// Most triangles per leaf (1..=31). Nodes with more are always split.
     pub max_leaf_size: usize,
