@@ -46,7 +46,7 @@ pub fn run(args: RaysArgs) -> Result<ExitCode> {
     let bounds = mesh.bounds();
     let kind = RayKind::from_name(&args.kind).expect("clap checked the name");
     let rays = match kind {
-        RayKind::Primary => raysets::primary(&raysets::standard_camera(&bounds), args.size),
+        RayKind::Primary => raysets::primary(&raysets::standard_camera(mesh), args.size),
         RayKind::Incoherent => raysets::incoherent(&bounds, (args.size as usize).pow(2), args.seed),
         RayKind::Shadow => {
             let accel = build_accel(
@@ -55,7 +55,7 @@ pub fn run(args: RaysArgs) -> Result<ExitCode> {
                 mesh,
                 &BuildOptions::default(),
             );
-            let prim = raysets::primary(&raysets::standard_camera(&bounds), args.size);
+            let prim = raysets::primary(&raysets::standard_camera(mesh), args.size);
             let mut hits = vec![None; prim.len()];
             accel.intersect_batch(&prim, &mut hits);
             raysets::shadow(mesh, &prim, &hits, raysets::standard_light(&bounds))

@@ -103,7 +103,14 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         scene.mesh.compute_vertex_normals();
     }
     let bounds = scene.mesh.bounds();
-    let mut camera = scene.camera_or_framing(args.fov);
+    let mut camera = scene.camera.unwrap_or_else(|| {
+        Camera::fit_points(
+            &bounds,
+            &scene.mesh.positions,
+            args.fov,
+            args.width as f32 / args.height as f32,
+        )
+    });
     if let Some(eye) = args.eye {
         camera = Camera {
             eye,

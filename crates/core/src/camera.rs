@@ -36,6 +36,61 @@ impl Camera {
         }
     }
 
+    /// A camera that frames `bounds` tightly for an image of the given
+    /// `aspect` (width / height): [`Camera::fit_points`] on the box corners.
+    pub fn fit(bounds: &Aabb, vfov_deg: f32, aspect: f32) -> Camera {
+        let corners: Vec<Vec3> = (0..8)
+            .map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 {
+                        bounds.min.x
+                    } else {
+                        bounds.max.x
+                    },
+                    if i & 2 == 0 {
+                        bounds.min.y
+                    } else {
+                        bounds.max.y
+                    },
+                    if i & 4 == 0 {
+                        bounds.min.z
+                    } else {
+                        bounds.max.z
+                    },
+                )
+            })
+            .collect();
+        Camera::fit_points(bounds, &corners, vfov_deg, aspect)
+    }
+
+    /// A camera that frames `points` (which lie in `bounds`) tightly for an
+    /// image of the given `aspect` (width / height): it looks at the box
+    /// centre from the same direction as [`Camera::framing`], at the smallest
+    /// distance at which every point projects inside the image (with a 4%
+    /// margin), so elongated objects fill the picture instead of their
+    /// bounding sphere. Pass a mesh's vertices for the tightest fit.
+    pub fn fit_points(bounds: &Aabb, points: &[Vec3], vfov_deg: f32, aspect: f32) -> Camera {
+        let mut camera = Camera::framing(bounds, vfov_deg);
+        if bounds.is_empty() || points.is_empty() {
+            return camera;
+        }
+        let (right, up, forward) = camera.basis();
+        let tan_v = (vfov_deg.to_radians() * 0.5).tan() / 1.04;
+        let tan_h = tan_v * aspect.max(1e-3);
+        let center = bounds.center();
+        // A point at depth offset z lies at dist + z from the eye; it fits
+        // when |x| <= tan_h (dist + z) and |y| <= tan_v (dist + z). The eye
+        // stays outside the box: dist >= 1.05 · (largest depth offset).
+        let dist = points.iter().fold(0.0f32, |dist, &p| {
+            let q = p - center;
+            let (x, y, z) = (q.dot(right), q.dot(up), q.dot(forward));
+            dist.max(x.abs() / tan_h - z).max(y.abs() / tan_v - z)
+        });
+        let depth = (bounds.extent() * 0.5).dot(forward.abs());
+        camera.eye = center - forward * dist.max(depth * 1.05).max(1e-6);
+        camera
+    }
+
     /// Orthonormal basis (right, up, forward).
     pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
         let forward = (self.target - self.eye).normalize();
@@ -91,5 +146,50 @@ impl PrimaryRays {
     #[inline]
     pub fn pixel(&self, px: u32, py: u32) -> Ray {
         self.ray(px as f32 + 0.5, py as f32 + 0.5)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fit_keeps_every_corner_inside_and_touches_the_border() {
+        let boxes = [
+            Aabb::new(Vec3::new(-1.0, -0.2, -3.0), Vec3::new(2.0, 0.5, 4.0)),
+            Aabb::new(Vec3::splat(10.0), Vec3::new(10.1, 13.0, 10.2)),
+            Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)),
+        ];
+        for b in boxes {
+            for aspect in [0.5f32, 1.0, 16.0 / 9.0] {
+                let (w, h) = ((400.0 * aspect) as u32, 400);
+                let cam = Camera::fit(&b, 40.0, w as f32 / h as f32);
+                let (right, up, forward) = cam.basis();
+                let tan_v = (20f32).to_radians().tan();
+                let tan_h = tan_v * w as f32 / h as f32;
+                let mut most = 0.0f32;
+                for i in 0..8 {
+                    let p = Vec3::new(
+                        if i & 1 == 0 { b.min.x } else { b.max.x },
+                        if i & 2 == 0 { b.min.y } else { b.max.y },
+                        if i & 4 == 0 { b.min.z } else { b.max.z },
+                    ) - cam.eye;
+                    let depth = p.dot(forward);
+                    assert!(depth > 0.0, "corner behind the eye");
+                    let sx = p.dot(right) / depth / tan_h;
+                    let sy = p.dot(up) / depth / tan_v;
+                    assert!(
+                        sx.abs() <= 1.0 && sy.abs() <= 1.0,
+                        "{b:?} {aspect}: corner at {sx}, {sy}"
+                    );
+                    most = most.max(sx.abs()).max(sy.abs());
+                }
+                // The box is not lost in the middle of the frame.
+                assert!(
+                    most > 0.9,
+                    "{b:?} {aspect}: the box reaches only {most} of the frame"
+                );
+            }
+        }
     }
 }

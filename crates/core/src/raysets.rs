@@ -44,10 +44,10 @@ impl RayKind {
 /// Vertical field of view of the standard primary camera, degrees.
 pub const PRIMARY_FOV_DEG: f32 = 40.0;
 
-/// The standard camera for `bounds`: [`Camera::framing`] with
-/// [`PRIMARY_FOV_DEG`].
-pub fn standard_camera(bounds: &Aabb) -> Camera {
-    Camera::framing(bounds, PRIMARY_FOV_DEG)
+/// The standard camera for `mesh`: [`Camera::fit_points`] on its vertices
+/// for a square image with [`PRIMARY_FOV_DEG`].
+pub fn standard_camera(mesh: &TriangleMesh) -> Camera {
+    Camera::fit_points(&mesh.bounds(), &mesh.positions, PRIMARY_FOV_DEG, 1.0)
 }
 
 /// The standard point light for `bounds`: above and to the side of the
@@ -110,7 +110,7 @@ pub fn standard_sets(
     seed: u64,
 ) -> [Vec<Ray>; 3] {
     let bounds = mesh.bounds();
-    let prim = primary(&standard_camera(&bounds), size);
+    let prim = primary(&standard_camera(mesh), size);
     let mut hits = vec![None; prim.len()];
     accel.intersect_batch(&prim, &mut hits);
     let shad = shadow(mesh, &prim, &hits, standard_light(&bounds));
