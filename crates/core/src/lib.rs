@@ -11,6 +11,7 @@ pub mod accel;
 pub mod camera;
 pub mod hit;
 pub mod mesh;
+pub mod query;
 pub mod ray;
 pub mod raysets;
 pub mod rng;

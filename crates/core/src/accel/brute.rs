@@ -3,6 +3,7 @@
 
 use super::leaf::LeafTriangles;
 use super::{Accel, AccelStats};
+use crate::aabb::Aabb;
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
@@ -11,6 +12,8 @@ use crate::tri::TriangleTest;
 /// All triangles in mesh order, tested one after the other.
 pub struct BruteForce<T: TriangleTest> {
     tris: LeafTriangles<T>,
+    /// Bounds of the mesh: the one region of [`Accel::visit_regions`].
+    bounds: Aabb,
 }
 
 impl<T: TriangleTest> BruteForce<T> {
@@ -19,6 +22,7 @@ impl<T: TriangleTest> BruteForce<T> {
         let order = (0..mesh.num_triangles() as u32).collect();
         BruteForce {
             tris: LeafTriangles::new(mesh, order),
+            bounds: mesh.bounds(),
         }
     }
 
@@ -40,6 +44,14 @@ impl<T: TriangleTest> Accel for BruteForce<T> {
 
     fn occluded(&self, ray: &Ray) -> bool {
         self.test::<true>(ray).1
+    }
+
+    /// One leaf holding every triangle, its region the mesh bounds.
+    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+        let n = self.tris.len();
+        if n > 0 && enter(&self.bounds) {
+            leaf(self.tris.prims(0, n));
+        }
     }
 
     fn stats(&self) -> AccelStats {

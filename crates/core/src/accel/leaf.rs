@@ -32,6 +32,11 @@ impl<T: TriangleTest> LeafTriangles<T> {
         self.tris.len()
     }
 
+    /// Mesh triangle indices of triangles `first..first + count`.
+    pub fn prims(&self, first: usize, count: usize) -> &[u32] {
+        &self.prims[first..first + count]
+    }
+
     /// Bytes held (precomputed data and the index map).
     pub fn bytes(&self) -> usize {
         self.tris.len() * std::mem::size_of::<T::Tri>() + self.prims.len() * 4

@@ -6,6 +6,7 @@
 //! - [`ThreadedBvh`]: paper 001's BVH in pre-order with escape indices,
 //!   traversed without a stack.
 
+use crate::aabb::Aabb;
 use crate::hit::Hit;
 use crate::ray::Ray;
 use rayon::prelude::*;
@@ -60,6 +61,21 @@ pub trait Accel: Send + Sync {
 
     /// Size and quality figures.
     fn stats(&self) -> AccelStats;
+
+    /// Walk the structure's regions for spatial queries: `enter` is called
+    /// with a node's region (conservative: contains every triangle point and
+    /// the triangles' tolerance bands stored below it) and returns false to
+    /// prune it; `leaf` is called with the mesh triangle indices stored in a
+    /// reached leaf (a triangle may be reported by several leaves).
+    ///
+    /// A child's region is entered only after its parent's was accepted, and
+    /// a leaf's own region is entered just before its triangles are reported.
+    /// Space-partitioning trees whose leaves hold triangles clipped to their
+    /// cells (kd-trees) may pass the cells instead: it suffices that the
+    /// regions of the leaves storing a triangle together cover it, and that a
+    /// parent's region contains its children's. The frustum, box and sphere
+    /// queries of [`crate::query`] (paper 002's game queries) are built on it.
+    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32]));
 
     /// Nearest hits for many rays, in parallel over the rayon pool.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {

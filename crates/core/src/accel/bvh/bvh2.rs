@@ -3,12 +3,14 @@
 use super::build::{build, BuildNode, BuildOptions};
 use super::node_box::NodeBox;
 use super::MAX_DEPTH;
+use crate::aabb::Aabb;
 use crate::accel::leaf::LeafTriangles;
 use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
+use glam::Vec3;
 
 /// A reference to a child: an inner node (`count == 0`, `index` into the
 /// node array) or a leaf (`count` triangles from `index` in leaf order).
@@ -31,6 +33,14 @@ struct Node {
 }
 
 impl Node {
+    /// The (padded) box of child `c`.
+    fn child_box(&self, c: usize) -> Aabb {
+        Aabb::new(
+            Vec3::new(self.lo[0][c], self.lo[1][c], self.lo[2][c]),
+            Vec3::new(self.hi[0][c], self.hi[1][c], self.hi[2][c]),
+        )
+    }
+
     /// Entry distances of the ray into both child boxes within `[tnear, tfar]`,
     /// `f32::INFINITY` for a miss (see [`NodeBox::entry`] for the rounding).
     #[inline(always)]
@@ -175,6 +185,29 @@ impl<T: TriangleTest> Accel for Bvh2<T> {
 
     fn occluded(&self, ray: &Ray) -> bool {
         self.traverse::<true>(ray).1
+    }
+
+    /// Depth first, child 0 first; a child's box is read from its parent
+    /// node, the root's from `root_box`.
+    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+        let root = Aabb::new(self.root_box.min.into(), self.root_box.max.into());
+        if self.tris.len() == 0 || !enter(&root) {
+            return;
+        }
+        let mut stack = vec![self.root];
+        while let Some(cur) = stack.pop() {
+            if cur.count > 0 {
+                leaf(self.tris.prims(cur.index as usize, cur.count as usize));
+                continue;
+            }
+            let node = &self.nodes[cur.index as usize];
+            // Push child 1 first so that child 0 is visited first.
+            for c in [1, 0] {
+                if enter(&node.child_box(c)) {
+                    stack.push(node.child[c]);
+                }
+            }
+        }
     }
 
     fn stats(&self) -> AccelStats {

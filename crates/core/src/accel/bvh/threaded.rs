@@ -2,6 +2,7 @@
 
 use super::build::{build, BuildNode, BuildOptions};
 use super::node_box::NodeBox;
+use crate::aabb::Aabb;
 use crate::accel::leaf::LeafTriangles;
 use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
@@ -115,6 +116,33 @@ impl<T: TriangleTest> Accel for ThreadedBvh<T> {
 
     fn occluded(&self, ray: &Ray) -> bool {
         self.traverse::<true>(ray).1
+    }
+
+    /// The escape-index walk of the ray traversal with the box test
+    /// replaced by `enter`: accepted → next node, pruned or leaf → escape.
+    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+        let end = if self.tris.len() == 0 {
+            0
+        } else {
+            self.nodes.len()
+        };
+        let mut idx = 0usize;
+        while idx < end {
+            let node = &self.nodes[idx];
+            let region = Aabb::new(node.bounds.min.into(), node.bounds.max.into());
+            if !enter(&region) {
+                idx = node.escape as usize;
+                continue;
+            }
+            let count = (node.prims >> (32 - COUNT_BITS)) as usize;
+            if count > 0 {
+                let first = (node.prims & FIRST_MASK) as usize;
+                leaf(self.tris.prims(first, count));
+                idx = node.escape as usize;
+            } else {
+                idx += 1;
+            }
+        }
     }
 
     fn stats(&self) -> AccelStats {

@@ -1,0 +1,71 @@
+//! Spatial queries for games on every acceleration structure: which
+//! triangles or objects lie at least partly inside a view frustum, a box or a
+//! ball. Paper 002 ("Split-plane heuristic for kd-trees in 3D games") builds
+//! its kd-trees for exactly these: frustum culling and collision detection.
+//!
+//! - [`frustum`]: [`Plane`] and [`Frustum`] (from a [`crate::Camera`] or six
+//!   planes).
+//! - [`exact`]: the triangle tests in f64 — clipping by half-spaces for
+//!   frustums and boxes, Ericson's closest point for balls.
+//! - [`shapes`]: [`QueryShape`], the conservative region test (p-vertex for
+//!   frustums, box/box, closest point for balls) with the exact test, and
+//!   [`Sphere`].
+//! - [`walk`]: the tree queries through [`Accel::visit_regions`], with
+//!   [`QueryStats`], and the brute-force references.
+//!
+//! Every query returns sorted unique ids; a tree query returns exactly what
+//! its brute-force reference returns, which the tests check on every
+//! [`crate::accel::AccelKind`].
+
+pub mod exact;
+pub mod frustum;
+pub mod shapes;
+pub mod walk;
+
+pub use exact::Triangle64;
+pub use frustum::{Frustum, Plane};
+pub use shapes::{QueryShape, Sphere};
+pub use walk::{
+    parts_overlapping, parts_overlapping_brute, triangles_overlapping, triangles_overlapping_brute,
+    QueryResult, QueryStats,
+};
+
+use crate::aabb::Aabb;
+use crate::accel::Accel;
+use crate::mesh::TriangleMesh;
+
+/// Frustum culling (paper 002): the triangles of `mesh` at least partly
+/// inside `frustum`, sorted, through `accel` built over `mesh`.
+pub fn triangles_in_frustum(accel: &dyn Accel, mesh: &TriangleMesh, frustum: &Frustum) -> Vec<u32> {
+    triangles_overlapping(accel, mesh, frustum).ids
+}
+
+/// Box overlap query (paper 002's collision queries): the triangles of
+/// `mesh` sharing a point with the closed box `query`, sorted.
+pub fn triangles_in_box(accel: &dyn Accel, mesh: &TriangleMesh, query: &Aabb) -> Vec<u32> {
+    triangles_overlapping(accel, mesh, query).ids
+}
+
+/// Ball overlap query (paper 002's collision queries): the triangles of
+/// `mesh` within `sphere.radius` of its centre, sorted.
+pub fn triangles_in_sphere(accel: &dyn Accel, mesh: &TriangleMesh, sphere: &Sphere) -> Vec<u32> {
+    triangles_overlapping(accel, mesh, sphere).ids
+}
+
+/// Object-level frustum culling (paper 002): the parts of `mesh` with a
+/// triangle at least partly inside `frustum`, sorted.
+pub fn parts_in_frustum(accel: &dyn Accel, mesh: &TriangleMesh, frustum: &Frustum) -> Vec<u32> {
+    parts_overlapping(accel, mesh, frustum).ids
+}
+
+/// Object-level box query (paper 002): the parts of `mesh` with a triangle
+/// sharing a point with the box `query`, sorted.
+pub fn parts_in_box(accel: &dyn Accel, mesh: &TriangleMesh, query: &Aabb) -> Vec<u32> {
+    parts_overlapping(accel, mesh, query).ids
+}
+
+/// Object-level ball query (paper 002): the parts of `mesh` with a triangle
+/// within `sphere.radius` of its centre, sorted.
+pub fn parts_in_sphere(accel: &dyn Accel, mesh: &TriangleMesh, sphere: &Sphere) -> Vec<u32> {
+    parts_overlapping(accel, mesh, sphere).ids
+}
