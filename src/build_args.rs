@@ -1,7 +1,7 @@
-//! Build options shared by the commands that build a BVH.
+//! Build options shared by the commands that build a BVH or a kd-tree.
 
 use clap::Args;
-use raykit_core::accel::BuildOptions;
+use raykit_core::accel::{BuildOptions, KdOptions, KdSplit};
 
 /// BVH build options on the command line.
 #[derive(Args, Clone, Debug)]
@@ -15,6 +15,14 @@ pub struct BuildArgs {
     /// SAH cost of a node traversal relative to one triangle test.
     #[arg(long, default_value_t = BuildOptions::default().traversal_cost)]
     traversal_cost: f32,
+    /// kd-tree split rule: `sah` (Wald & Havran's O(N log N) SAH with perfect
+    /// splits), `median` (spatial median) or `game:H` (paper 002's score
+    /// |front-back|·(20-H) + splits·H, H in 0..=20).
+    #[arg(long, default_value = "sah", value_parser = KdSplit::parse)]
+    kd_split: KdSplit,
+    /// kd-tree SAH cost of one triangle test relative to a node traversal.
+    #[arg(long, default_value_t = KdOptions::default().intersection_cost)]
+    kd_isect_cost: f32,
 }
 
 impl BuildArgs {
@@ -24,6 +32,11 @@ impl BuildArgs {
             max_leaf_size: self.max_leaf as usize,
             bins: self.bins as usize,
             traversal_cost: self.traversal_cost.clamp(0.0, 1e3),
+            kd: KdOptions {
+                split: self.kd_split,
+                intersection_cost: self.kd_isect_cost.clamp(1e-3, 1e3),
+                ..KdOptions::default()
+            },
             ..BuildOptions::default()
         }
     }

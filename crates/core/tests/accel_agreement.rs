@@ -2,7 +2,7 @@
 //! random meshes: same hit/miss, t within 1e-5 relative, and a different
 //! triangle only at a tie (same t).
 
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions, KdOptions, KdSplit};
 use raykit_core::rng::Pcg32;
 use raykit_core::tri::TestKind;
 use raykit_core::{Hit, Ray, TriangleMesh, Vec3};
@@ -86,7 +86,11 @@ fn agree(a: Option<Hit>, b: Option<Hit>) -> bool {
 }
 
 fn check_mesh(mesh: &TriangleMesh, rays: &[Ray]) {
-    let opts = BuildOptions::default();
+    check_kinds(mesh, rays, &BuildOptions::default(), &AccelKind::ALL);
+}
+
+fn check_kinds(mesh: &TriangleMesh, rays: &[Ray], opts: &BuildOptions, kinds: &[AccelKind]) {
+    let opts = opts.clone();
     for test in TestKind::ALL {
         let brute = build_accel(AccelKind::Brute, test, mesh, &opts);
         let mut want = vec![None; rays.len()];
@@ -100,7 +104,7 @@ fn check_mesh(mesh: &TriangleMesh, rays: &[Ray]) {
                 "brute force occluded disagrees with intersect"
             );
         }
-        for kind in AccelKind::ALL {
+        for &kind in kinds {
             let accel = build_accel(kind, test, mesh, &opts);
             let mut got = vec![None; rays.len()];
             accel.intersect_batch(rays, &mut got);
@@ -152,6 +156,36 @@ fn random_soups_agree_with_brute_force() {
         let mesh = random_soup(n, seed);
         let rays = random_rays(&mesh, 4000, seed + 100);
         check_mesh(&mesh, &rays);
+    }
+}
+
+/// The kd-tree traversals on trees from every split rule (the default
+/// SAH build is covered by the tests above through `AccelKind::ALL`).
+#[test]
+fn kd_trees_of_every_split_rule_agree_with_brute_force() {
+    let meshes = [
+        random_soup(3000, 21),
+        grid_with_duplicates(30, 22),
+        random_soup(40, 23),
+    ];
+    for split in [
+        KdSplit::Median,
+        KdSplit::Game(0),
+        KdSplit::Game(7),
+        KdSplit::Game(20),
+    ] {
+        let opts = BuildOptions {
+            kd: KdOptions {
+                split,
+                ..KdOptions::default()
+            },
+            ..BuildOptions::default()
+        };
+        for (i, mesh) in meshes.iter().enumerate() {
+            let rays = random_rays(mesh, 2500, 30 + i as u64);
+            eprintln!("split {}, mesh {i}", split.name());
+            check_kinds(mesh, &rays, &opts, &AccelKind::KD);
+        }
     }
 }
 

@@ -32,6 +32,12 @@ impl<T: TriangleTest> LeafTriangles<T> {
         self.tris.len()
     }
 
+    /// Mesh triangle index of the triangle at position `i`.
+    #[inline]
+    pub fn prim(&self, i: usize) -> u32 {
+        self.prims[i]
+    }
+
     /// Mesh triangle indices of triangles `first..first + count`.
     pub fn prims(&self, first: usize, count: usize) -> &[u32] {
         &self.prims[first..first + count]
@@ -55,7 +61,33 @@ impl<T: TriangleTest> LeafTriangles<T> {
         tfar: &mut f32,
         best: &mut Option<Hit>,
     ) -> bool {
-        for i in first..first + count {
+        self.test_each::<ANY>(first..first + count, ray, rd, tfar, best)
+    }
+
+    /// [`LeafTriangles::test`] on the triangles at the given positions (a
+    /// kd-tree leaf's entries in its triangle-index list).
+    #[inline(always)]
+    pub fn test_indexed<const ANY: bool>(
+        &self,
+        indices: &[u32],
+        ray: &Ray,
+        rd: &T::RayData,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        self.test_each::<ANY>(indices.iter().map(|&i| i as usize), ray, rd, tfar, best)
+    }
+
+    #[inline(always)]
+    fn test_each<const ANY: bool>(
+        &self,
+        positions: impl Iterator<Item = usize>,
+        ray: &Ray,
+        rd: &T::RayData,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        for i in positions {
             let tri = &self.tris[i];
             if ANY {
                 if T::occluded(tri, ray, rd, *tfar) {

@@ -14,11 +14,13 @@ use serde::Serialize;
 
 mod brute;
 pub mod bvh;
+pub mod kdtree;
 mod leaf;
 mod registry;
 
 pub use brute::BruteForce;
 pub use bvh::{BuildOptions, Bvh2, ThreadedBvh};
+pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
 pub use registry::{build_accel, AccelKind};
 
 /// Rays per rayon task in the batch queries: large enough to amortise task

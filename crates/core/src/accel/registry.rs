@@ -1,7 +1,9 @@
 //! Run-time choice of structure and triangle test, for the command line and
 //! for tests and benches that iterate over every combination.
 
-use super::{Accel, BruteForce, BuildOptions, Bvh2, ThreadedBvh};
+use super::{
+    Accel, BruteForce, BuildOptions, Bvh2, KdBacktrack, KdRestart, KdRopes, KdStack, ThreadedBvh,
+};
 use crate::mesh::TriangleMesh;
 use crate::tri::TestKind;
 use crate::with_test;
@@ -15,11 +17,35 @@ pub enum AccelKind {
     Bvh2,
     /// [`ThreadedBvh`].
     ThreadedBvh,
+    /// [`KdStack`].
+    KdStack,
+    /// [`KdRopes`].
+    KdRopes,
+    /// [`KdRestart`].
+    KdRestart,
+    /// [`KdBacktrack`].
+    KdBacktrack,
 }
 
 impl AccelKind {
     /// Every structure, in a fixed order.
-    pub const ALL: [AccelKind; 3] = [AccelKind::Brute, AccelKind::Bvh2, AccelKind::ThreadedBvh];
+    pub const ALL: [AccelKind; 7] = [
+        AccelKind::Brute,
+        AccelKind::Bvh2,
+        AccelKind::ThreadedBvh,
+        AccelKind::KdStack,
+        AccelKind::KdRopes,
+        AccelKind::KdRestart,
+        AccelKind::KdBacktrack,
+    ];
+
+    /// The kd-tree traversals.
+    pub const KD: [AccelKind; 4] = [
+        AccelKind::KdStack,
+        AccelKind::KdRopes,
+        AccelKind::KdRestart,
+        AccelKind::KdBacktrack,
+    ];
 
     /// The command-line name.
     pub fn name(self) -> &'static str {
@@ -27,6 +53,10 @@ impl AccelKind {
             AccelKind::Brute => "brute",
             AccelKind::Bvh2 => "bvh2",
             AccelKind::ThreadedBvh => "bvh-threaded",
+            AccelKind::KdStack => "kd-stack",
+            AccelKind::KdRopes => "kd-ropes",
+            AccelKind::KdRestart => "kd-restart",
+            AccelKind::KdBacktrack => "kd-backtrack",
         }
     }
 
@@ -42,6 +72,14 @@ impl AccelKind {
             AccelKind::ThreadedBvh => {
                 "paper 001: BVH nodes in pre-order with escape indices, stackless traversal"
             }
+            AccelKind::KdStack => {
+                "paper 000: kd-tree (--kd-split), 8-byte nodes, per-ray stack traversal"
+            }
+            AccelKind::KdRopes => {
+                "kd-tree with ropes and leaf boxes, stackless (Popov et al. 2007)"
+            }
+            AccelKind::KdRestart => "kd-tree, kd-restart: stackless, descends from the root per leaf (Foley & Sugerman 2005)",
+            AccelKind::KdBacktrack => "kd-tree, kd-backtrack: stackless, climbs parent links (Foley & Sugerman 2005)",
         }
     }
 
@@ -62,5 +100,9 @@ pub fn build_accel(
         AccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)) as Box<dyn Accel>,
         AccelKind::Bvh2 => Box::new(Bvh2::<T>::build(mesh, options)),
         AccelKind::ThreadedBvh => Box::new(ThreadedBvh::<T>::build(mesh, options)),
+        AccelKind::KdStack => Box::new(KdStack::<T>::build(mesh, &options.kd)),
+        AccelKind::KdRopes => Box::new(KdRopes::<T>::build(mesh, &options.kd)),
+        AccelKind::KdRestart => Box::new(KdRestart::<T>::build(mesh, &options.kd)),
+        AccelKind::KdBacktrack => Box::new(KdBacktrack::<T>::build(mesh, &options.kd)),
     })
 }

@@ -28,6 +28,8 @@ pub struct BuildOptions {
     pub traversal_cost: f32,
     /// Subtrees with more triangles than this are built on several threads.
     pub parallel_threshold: usize,
+    /// Options of the kd-tree builds (the structures `kd-*`).
+    pub kd: crate::accel::KdOptions,
 }
 
 impl Default for BuildOptions {
@@ -37,6 +39,7 @@ impl Default for BuildOptions {
             bins: 32,
             traversal_cost: 1.0,
             parallel_threshold: 4096,
+            kd: Default::default(),
         }
     }
 }

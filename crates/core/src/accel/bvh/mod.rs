@@ -10,6 +10,7 @@
 pub mod build;
 mod bvh2;
 mod node_box;
+pub(crate) use node_box::NodeBox;
 mod threaded;
 
 pub use build::{BuildNode, BuildOptions};

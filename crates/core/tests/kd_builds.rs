@@ -1,0 +1,212 @@
+//! The kd-tree builds checked against independent references: paper 002's
+//! score recomputed by brute force for the root plane, the spatial median,
+//! and the cut mesh of the game build against the original surface.
+
+use raykit_core::accel::kdtree::{
+    build_game, build_tree, cut_mesh, KdBuildNode, KdOptions, KdSplit,
+};
+use raykit_core::rng::Pcg32;
+use raykit_core::{TriangleMesh, Vec3};
+
+fn soup(n: usize, seed: u64) -> TriangleMesh {
+    let mut rng = Pcg32::new(seed);
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..n {
+        let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
+        let size = 0.01 + 0.2 * rng.next_f32().powi(2);
+        for _ in 0..3 {
+            positions.push(c + rng.unit_vector() * size);
+        }
+        let b = 3 * i as u32;
+        indices.push([b, b + 1, b + 2]);
+    }
+    TriangleMesh::new(positions, indices)
+}
+
+/// A closed, shared-vertex sphere-like mesh (icosahedron subdivided).
+fn closed_mesh(level: u32) -> TriangleMesh {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut p: Vec<Vec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut f: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..level {
+        let mut mid = std::collections::HashMap::new();
+        let mut next = Vec::new();
+        for tri in &f {
+            let m: Vec<u32> = (0..3)
+                .map(|k| {
+                    let (a, b) = (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3]));
+                    *mid.entry((a, b)).or_insert_with(|| {
+                        p.push(((p[a as usize] + p[b as usize]) * 0.5).normalize());
+                        p.len() as u32 - 1
+                    })
+                })
+                .collect();
+            next.extend([
+                [tri[0], m[0], m[2]],
+                [tri[1], m[1], m[0]],
+                [tri[2], m[2], m[1]],
+                [m[0], m[1], m[2]],
+            ]);
+        }
+        f = next;
+    }
+    TriangleMesh::new(p, f)
+}
+
+/// Paper 002's score of the plane `x[axis] = pos`, from the triangles'
+/// corners: `None` when the plane leaves no whole triangle on a side.
+fn brute_score(mesh: &TriangleMesh, axis: usize, pos: f32, h: i64) -> Option<i64> {
+    let (mut front, mut back, mut split) = (0i64, 0i64, 0i64);
+    for i in 0..mesh.num_triangles() {
+        let c = mesh.triangle(i).map(|v| v[axis]);
+        let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+        if hi <= pos {
+            back += 1;
+        } else if lo >= pos {
+            front += 1;
+        } else {
+            split += 1;
+        }
+    }
+    (front > 0 && back > 0).then_some((front - back).abs() * (20 - h) + split * h)
+}
+
+#[test]
+fn game_root_plane_has_the_lowest_brute_force_score() {
+    for (seed, h) in [(1u64, 0u8), (2, 4), (3, 10), (4, 17), (5, 20)] {
+        let mesh = soup(200, seed);
+        let opts = KdOptions {
+            split: KdSplit::Game(h),
+            max_depth: 1,
+            ..KdOptions::default()
+        };
+        let (root, cell) = build_tree(&mesh, &opts);
+        let KdBuildNode::Inner { axis, split, .. } = root else {
+            panic!("H={h}: root is a leaf");
+        };
+        let got =
+            brute_score(&mesh, axis as usize, split, h as i64).expect("chosen plane is valid");
+        let mut best = i64::MAX;
+        for axis in 0..3 {
+            for p in &mesh.positions {
+                if p[axis] > cell.min[axis] && p[axis] < cell.max[axis] {
+                    if let Some(s) = brute_score(&mesh, axis, p[axis], h as i64) {
+                        best = best.min(s);
+                    }
+                }
+            }
+        }
+        assert_eq!(
+            got, best,
+            "H={h}: chosen plane scores {got}, best candidate {best}"
+        );
+    }
+}
+
+#[test]
+fn median_root_splits_the_longest_axis_in_the_middle() {
+    let mesh = soup(300, 9);
+    let opts = KdOptions {
+        split: KdSplit::Median,
+        max_depth: 1,
+        ..KdOptions::default()
+    };
+    let (root, cell) = build_tree(&mesh, &opts);
+    let KdBuildNode::Inner { axis, split, .. } = root else {
+        panic!("root is a leaf");
+    };
+    let e = cell.extent();
+    let longest = (0..3)
+        .max_by(|&a, &b| e[a].partial_cmp(&e[b]).unwrap())
+        .unwrap();
+    assert_eq!(axis as usize, longest);
+    assert_eq!(split, 0.5 * (cell.min[longest] + cell.max[longest]));
+}
+
+/// Every piece lies in its source triangle (barycentrics within rounding),
+/// the pieces of a triangle add up to its area, and lower H cuts more.
+#[test]
+fn cut_mesh_pieces_tile_their_triangles() {
+    let mesh = closed_mesh(3);
+    let mut splits = Vec::new();
+    for h in [0u8, 5, 10, 15, 20] {
+        let opts = KdOptions {
+            split: KdSplit::Game(h),
+            max_leaf_size: 2,
+            ..KdOptions::default()
+        };
+        let (_, _, game) = build_game(&mesh, h, &opts);
+        let cut = cut_mesh(&mesh, &game);
+        assert_eq!(cut.source.len(), cut.mesh.num_triangles());
+        let mut area = vec![0f64; mesh.num_triangles()];
+        for (i, &s) in cut.source.iter().enumerate() {
+            let [a, b, c] = mesh.triangle(s as usize).map(|v| v.as_dvec3());
+            let n = (b - a).cross(c - a);
+            for p in cut.mesh.triangle(i) {
+                let p = p.as_dvec3();
+                // Barycentrics of p in the source triangle.
+                let u = (p - a).cross(c - a).dot(n) / n.length_squared();
+                let v = (b - a).cross(p - a).dot(n) / n.length_squared();
+                let dist = (p - a).dot(n.normalize()).abs();
+                assert!(
+                    u >= -1e-5 && v >= -1e-5 && u + v <= 1.0 + 1e-5 && dist < 1e-5,
+                    "H={h}: piece corner outside its triangle"
+                );
+            }
+            let [pa, pb, pc] = cut.mesh.triangle(i).map(|v| v.as_dvec3());
+            area[s as usize] += 0.5 * (pb - pa).cross(pc - pa).length();
+        }
+        for (t, got) in area.iter().enumerate() {
+            let [a, b, c] = mesh.triangle(t).map(|v| v.as_dvec3());
+            let want = 0.5 * (b - a).cross(c - a).length();
+            assert!(
+                (got - want).abs() <= 1e-5 * want,
+                "H={h}: triangle {t} pieces cover {got}, want {want}"
+            );
+        }
+        splits.push(cut.split_triangles);
+    }
+    assert!(splits[0] > 0, "balance-only build cuts triangles");
+    assert!(
+        splits[4] <= splits[0],
+        "H=20 cuts no more than H=0: {splits:?}"
+    );
+}
