@@ -21,7 +21,7 @@ mod registry;
 pub use brute::BruteForce;
 pub use bvh::{BuildOptions, Bvh2, ThreadedBvh};
 pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
-pub use registry::{build_accel, AccelKind};
+pub use registry::{build_accel, kd_accel_from_tree, AccelKind};
 
 /// Rays per rayon task in the batch queries: large enough to amortise task
 /// overhead, small enough to balance two cores on uneven work.

@@ -1,9 +1,11 @@
 //! Run-time choice of structure and triangle test, for the command line and
 //! for tests and benches that iterate over every combination.
 
+use super::kdtree::{KdBuildNode, KdTree};
 use super::{
     Accel, BruteForce, BuildOptions, Bvh2, KdBacktrack, KdRestart, KdRopes, KdStack, ThreadedBvh,
 };
+use crate::aabb::Aabb;
 use crate::mesh::TriangleMesh;
 use crate::tri::TestKind;
 use crate::with_test;
@@ -104,5 +106,29 @@ pub fn build_accel(
         AccelKind::KdRopes => Box::new(KdRopes::<T>::build(mesh, &options.kd)),
         AccelKind::KdRestart => Box::new(KdRestart::<T>::build(mesh, &options.kd)),
         AccelKind::KdBacktrack => Box::new(KdBacktrack::<T>::build(mesh, &options.kd)),
+    })
+}
+
+/// Wrap an already built kd-tree (see [`super::kdtree::build_tree`]) in the
+/// traversal `kind` with triangle test `test`, so that every traversal and
+/// test can share one build; `None` when `kind` is not a kd-tree traversal.
+pub fn kd_accel_from_tree(
+    kind: AccelKind,
+    test: TestKind,
+    mesh: &TriangleMesh,
+    root: &KdBuildNode,
+    cell: &Aabb,
+    options: &BuildOptions,
+    build_seconds: f64,
+) -> Option<Box<dyn Accel>> {
+    with_test!(test, T => {
+        let tree = || KdTree::<T>::from_build(mesh, root, cell, &options.kd, build_seconds);
+        Some(match kind {
+            AccelKind::KdStack => Box::new(KdStack::from_tree(tree())) as Box<dyn Accel>,
+            AccelKind::KdRopes => Box::new(KdRopes::from_tree(tree())),
+            AccelKind::KdRestart => Box::new(KdRestart::from_tree(tree())),
+            AccelKind::KdBacktrack => Box::new(KdBacktrack::from_tree(tree())),
+            _ => return None,
+        })
     })
 }
