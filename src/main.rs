@@ -32,6 +32,8 @@ enum Command {
     Trace(cmd::trace::TraceArgs),
     /// Measure build time, memory and Mrays/s for every structure × triangle test.
     Bench(cmd::bench::BenchArgs),
+    /// Find and remove T-junctions (vertices inside other triangles' edges), paper 002.
+    Tjunctions(cmd::tjunctions::TJunctionsArgs),
     /// List the names accepted by --accel, --test and --scene.
     Info(cmd::info::InfoArgs),
 }
@@ -43,6 +45,7 @@ fn main() -> ExitCode {
         Command::Rays(a) => cmd::rays::run(a),
         Command::Trace(a) => cmd::trace::run(a),
         Command::Bench(a) => cmd::bench::run(a),
+        Command::Tjunctions(a) => cmd::tjunctions::run(a),
         Command::Info(a) => cmd::info::run(a),
     };
     match result {

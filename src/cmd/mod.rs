@@ -4,4 +4,5 @@ pub mod bench;
 pub mod info;
 pub mod rays;
 pub mod render;
+pub mod tjunctions;
 pub mod trace;

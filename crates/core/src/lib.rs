@@ -15,6 +15,7 @@ pub mod query;
 pub mod ray;
 pub mod raysets;
 pub mod rng;
+pub mod tjunction;
 pub mod tri;
 
 pub use aabb::Aabb;
