@@ -5,6 +5,7 @@ mod build_args;
 mod cmd;
 mod measure;
 mod paths;
+mod plot;
 mod scene_arg;
 mod verify;
 
@@ -34,6 +35,8 @@ enum Command {
     Bench(cmd::bench::BenchArgs),
     /// Find and remove T-junctions (vertices inside other triangles' edges), paper 002.
     Tjunctions(cmd::tjunctions::TJunctionsArgs),
+    /// Reproduce the papers' tables and figures on this machine (CSV, Markdown, SVG).
+    Experiment(cmd::experiment::ExperimentArgs),
     /// List the names accepted by --accel, --test and --scene.
     Info(cmd::info::InfoArgs),
 }
@@ -46,6 +49,7 @@ fn main() -> ExitCode {
         Command::Trace(a) => cmd::trace::run(a),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Tjunctions(a) => cmd::tjunctions::run(a),
+        Command::Experiment(a) => cmd::experiment::run(a),
         Command::Info(a) => cmd::info::run(a),
     };
     match result {

@@ -210,3 +210,109 @@ fn cut_mesh_pieces_tile_their_triangles() {
         "H=20 cuts no more than H=0: {splits:?}"
     );
 }
+
+/// Vertices lying strictly inside another triangle's edge (distance to the
+/// line at most 1e-6 of the edge length), by brute force in f64. Points
+/// closer than 4 f32 ulps of the mesh's largest coordinate count as the same
+/// point (a cut point one rounding step from a corner is that corner).
+fn t_junctions_brute(mesh: &TriangleMesh) -> usize {
+    let used: std::collections::BTreeSet<u32> = mesh.indices.iter().flatten().copied().collect();
+    let m = mesh
+        .positions
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0f32, f32::max) as f64;
+    let same = 4.0 * m * f32::EPSILON as f64;
+    let mut count = 0;
+    for tri in &mesh.indices {
+        for k in 0..3 {
+            let a = mesh.positions[tri[k] as usize].as_dvec3();
+            let b = mesh.positions[tri[(k + 1) % 3] as usize].as_dvec3();
+            let ab = b - a;
+            let len2 = ab.length_squared();
+            for &v in &used {
+                let p = mesh.positions[v as usize].as_dvec3();
+                if (p - a).length() <= same || (p - b).length() <= same {
+                    continue;
+                }
+                let t = (p - a).dot(ab) / len2;
+                if t > 0.0 && t < 1.0 && (a + ab * t - p).length() <= 1e-6 * len2.sqrt() {
+                    count += 1;
+                }
+            }
+        }
+    }
+    count
+}
+
+/// Undirected edges used by a number of triangles other than 2, with
+/// vertices within 4 ulps of the largest coordinate taken as one point (as
+/// in [`t_junctions_brute`]); edges between two such points are ignored.
+fn open_edges(mesh: &TriangleMesh) -> usize {
+    let m = mesh
+        .positions
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0f32, f32::max) as f64;
+    let same = 4.0 * m * f32::EPSILON as f64;
+    // Cluster by brute force: each vertex takes the smallest index within
+    // `same` of it.
+    let n = mesh.positions.len();
+    let point: Vec<usize> = (0..n)
+        .map(|i| {
+            let p = mesh.positions[i].as_dvec3();
+            (0..=i)
+                .find(|&j| (mesh.positions[j].as_dvec3() - p).length() <= same)
+                .unwrap()
+        })
+        .collect();
+    let mut edges = std::collections::HashMap::new();
+    for tri in &mesh.indices {
+        for k in 0..3 {
+            let (a, b) = (point[tri[k] as usize], point[tri[(k + 1) % 3] as usize]);
+            if a != b {
+                *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+    }
+    edges.values().filter(|&&c| c != 2).count()
+}
+
+/// Paper 002's pipeline end to end: the game build cuts a closed mesh,
+/// leaving T-junctions (and so open edges); elimination removes every one
+/// and the surface is closed again. Naive and fast forms agree.
+#[test]
+fn t_junction_elimination_closes_the_game_cut_mesh() {
+    use raykit_core::tjunction::{eliminate, Method, TJunctionOptions};
+    let mesh = closed_mesh(2);
+    assert_eq!(open_edges(&mesh), 0);
+    for h in [0u8, 6, 14] {
+        let opts = KdOptions {
+            split: KdSplit::Game(h),
+            max_leaf_size: 3,
+            ..KdOptions::default()
+        };
+        let (_, _, game) = build_game(&mesh, h, &opts);
+        let cut = cut_mesh(&mesh, &game);
+        let before = t_junctions_brute(&cut.mesh);
+        assert!(before > 0, "H={h}: the cut mesh has T-junctions to remove");
+        assert!(open_edges(&cut.mesh) > 0);
+        let (fixed, report) =
+            eliminate(&cut.mesh, Method::Fast, &TJunctionOptions::default()).unwrap();
+        let (naive, _) = eliminate(&cut.mesh, Method::Naive, &TJunctionOptions::default()).unwrap();
+        assert_eq!(
+            fixed.indices, naive.indices,
+            "H={h}: naive and fast outputs differ"
+        );
+        assert!(
+            report.t_junctions > 0,
+            "H={h}: the finder found none of the {before}"
+        );
+        assert_eq!(t_junctions_brute(&fixed), 0, "H={h}: T-junctions left");
+        assert_eq!(
+            open_edges(&fixed),
+            0,
+            "H={h}: the repaired surface is not closed"
+        );
+    }
+}

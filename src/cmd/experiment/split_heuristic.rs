@@ -1,0 +1,416 @@
+//! `raykit experiment split-heuristic`: paper 002's sweep of the split-plane
+//! weight H = 0..20 (its Figures 5 to 8) with the SAH tree as a reference.
+
+use super::{shared_mesh, write_csv, write_text};
+use crate::build_args::BuildArgs;
+use crate::measure::{median_min_max, pool, timed};
+use crate::plot::{write_svg, LineChart, Series};
+use crate::scene_arg;
+use anyhow::Result;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use raykit_core::accel::kdtree::{build_game, build_tree, cut_mesh, KdOptions, KdSplit};
+use raykit_core::accel::{build_accel, kd_accel_from_tree, AccelKind, BuildOptions};
+use raykit_core::query::{parts_in_frustum, parts_overlapping_brute, Frustum};
+use raykit_core::rng::Pcg32;
+use raykit_core::tjunction::{eliminate, Method, TJunctionOptions};
+use raykit_core::tri::TestKind;
+use raykit_core::{raysets, Aabb, Camera, Hit, Ray, TriangleMesh};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Arguments of `raykit experiment split-heuristic`.
+#[derive(Args)]
+#[command(
+    after_help = "Default mesh: the shared 2CylinderEngine.glb (82 parts, the 'objects' of the\n\
+frustum queries). Writes results.csv, results.md and the SVG figures fig5..fig8\n\
+into --out. The naive T-junction finder runs where its size limit allows."
+)]
+pub struct SplitHeuristicArgs {
+    /// Mesh file or builtin:NAME.
+    #[arg(long)]
+    mesh: Option<String>,
+    /// Image side of the primary ray set (SIZE² rays).
+    #[arg(long, default_value_t = 256)]
+    size: u32,
+    /// Random view frustums per query-speed measurement.
+    #[arg(long, default_value_t = 40)]
+    frustums: usize,
+    /// Repetitions of every timing (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    reps: usize,
+    /// Threads (1 gives the steadiest figures).
+    #[arg(long, default_value_t = 1)]
+    threads: usize,
+    /// Leaf size of the game trees (nodes with at most this many pieces stop).
+    #[arg(long, default_value_t = 8)]
+    game_leaf: usize,
+    /// Output folder.
+    #[arg(long, default_value = "experiments/split-heuristic")]
+    out: PathBuf,
+    #[command(flatten)]
+    build: BuildArgs,
+}
+
+/// One tree of the sweep.
+#[derive(Serialize, Clone)]
+struct Row {
+    split: String,
+    h: Option<u8>,
+    /// Pieces cut by split planes over the build (paper 002's split polygons).
+    split_polygons: usize,
+    /// Original triangles in more than one piece (SAH: referenced by more
+    /// than one leaf).
+    split_triangles: usize,
+    cut_mesh_triangles: usize,
+    depth: u32,
+    leaves: usize,
+    build_ms: f64,
+    t_junctions: Option<usize>,
+    tjunction_fast_ms: Option<f64>,
+    tjunction_naive_ms: Option<f64>,
+    naive_equals_fast: Option<bool>,
+    ray_mrays: f64,
+    frustum_queries_per_s: f64,
+    ray_disagreements: usize,
+    frustum_disagreements: usize,
+}
+
+/// Run the experiment.
+pub fn run(args: SplitHeuristicArgs) -> Result<ExitCode> {
+    let spec = args
+        .mesh
+        .clone()
+        .unwrap_or_else(|| shared_mesh("2CylinderEngine.glb"));
+    let scene = scene_arg::load(&spec)?;
+    let mesh = &scene.mesh;
+    let threads = pool(args.threads)?;
+    let reps = args.reps.max(1);
+    let base = args.build.options();
+    let camera = raysets::standard_camera(mesh);
+    let rays = raysets::primary(&camera, args.size);
+    let reference = build_accel(AccelKind::Bvh2, TestKind::Moller, mesh, &base);
+    let mut want = vec![None; rays.len()];
+    reference.intersect_batch(&rays, &mut want);
+    let frustums = random_frustums(&mesh.bounds(), args.frustums, 7);
+    let frustum_ref: Vec<Vec<u32>> = frustums
+        .iter()
+        .map(|f| parts_overlapping_brute(mesh, f))
+        .collect();
+
+    eprintln!(
+        "{}: {} triangles, {} parts",
+        scene.name,
+        mesh.num_triangles(),
+        mesh.parts.len().max(1)
+    );
+    let bar = ProgressBar::new(22)
+        .with_style(ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}").unwrap());
+    let mut rows = Vec::new();
+    let splits: Vec<KdSplit> = (0..=20u8)
+        .map(KdSplit::Game)
+        .chain([KdSplit::Sah])
+        .collect();
+    for split in splits {
+        bar.set_message(split.name());
+        let kd = KdOptions {
+            split,
+            max_leaf_size: args.game_leaf,
+            ..base.kd.clone()
+        };
+        let opts = BuildOptions {
+            kd: kd.clone(),
+            ..base.clone()
+        };
+        let row = threads
+            .install(|| sweep_point(mesh, &opts, &rays, &want, &frustums, &frustum_ref, reps));
+        rows.push(row?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    write_csv(&args.out, "results.csv", &rows)?;
+    let md = markdown(&rows, &scene.name, mesh.num_triangles(), &args);
+    write_text(&args.out, "results.md", &md)?;
+    print!("{md}");
+    plots(&rows, &args.out, &scene.name)?;
+    eprintln!(
+        "wrote {}/results.csv, results.md, fig5..fig8 SVGs",
+        args.out.display()
+    );
+    let bad: usize = rows
+        .iter()
+        .map(|r| r.ray_disagreements + r.frustum_disagreements)
+        .sum();
+    Ok(if bad == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+fn sweep_point(
+    mesh: &TriangleMesh,
+    opts: &BuildOptions,
+    rays: &[Ray],
+    want: &[Option<Hit>],
+    frustums: &[Frustum],
+    frustum_ref: &[Vec<u32>],
+    reps: usize,
+) -> Result<Row> {
+    let mut build_times = Vec::new();
+    let mut built = None;
+    for _ in 0..reps {
+        let (b, t) = timed(|| match opts.kd.split {
+            KdSplit::Game(h) => {
+                let (root, cell, game) = build_game(mesh, h, &opts.kd);
+                (root, cell, Some(game))
+            }
+            _ => {
+                let (root, cell) = build_tree(mesh, &opts.kd);
+                (root, cell, None)
+            }
+        });
+        build_times.push(t);
+        built = Some(b);
+    }
+    let (root, cell, game) = built.expect("at least one repetition");
+    let build_s = median_min_max(&build_times).0;
+    let accel = kd_accel_from_tree(
+        AccelKind::KdStack,
+        TestKind::Moller,
+        mesh,
+        &root,
+        &cell,
+        opts,
+        build_s,
+    )
+    .expect("kd-stack is a kd-tree traversal");
+    let stats = accel.stats();
+    let h = match opts.kd.split {
+        KdSplit::Game(h) => Some(h),
+        _ => None,
+    };
+
+    // T-junction elimination on the cut mesh.
+    // Without cut polygons (SAH) count the extra leaf references instead.
+    let mut split_triangles = stats.triangle_refs.saturating_sub(mesh.num_triangles());
+    let (mut split_polygons, mut cut_tris) = (split_triangles, 0);
+    let (mut tj, mut fast_ms, mut naive_ms, mut same) = (None, None, None, None);
+    if let Some(game) = &game {
+        let cut = cut_mesh(mesh, game);
+        split_polygons = game.cuts;
+        split_triangles = cut.split_triangles;
+        cut_tris = cut.mesh.num_triangles();
+        let topts = TJunctionOptions::default();
+        let mut times = Vec::new();
+        let mut fast = None;
+        for _ in 0..reps {
+            let (r, t) = timed(|| eliminate(&cut.mesh, Method::Fast, &topts));
+            times.push(t);
+            fast = Some(r?);
+        }
+        let (fast_mesh, report) = fast.expect("at least one repetition");
+        tj = Some(report.t_junctions);
+        fast_ms = Some(median_min_max(&times).0 * 1e3);
+        let (naive, t) = timed(|| eliminate(&cut.mesh, Method::Naive, &topts));
+        if let Ok((naive_mesh, _)) = naive {
+            naive_ms = Some(t * 1e3);
+            same = Some(naive_mesh.indices == fast_mesh.indices);
+        }
+    }
+
+    // Ray casting and frustum queries.
+    let mut hits = vec![None; rays.len()];
+    let mut ray_speed = Vec::new();
+    for _ in 0..reps {
+        let (_, t) = timed(|| accel.intersect_batch(rays, &mut hits));
+        ray_speed.push(rays.len() as f64 / t / 1e6);
+    }
+    let ray_disagreements = want
+        .iter()
+        .zip(&hits)
+        .filter(|(a, b)| match (a, b) {
+            (None, None) => false,
+            (Some(x), Some(y)) => (x.t - y.t).abs() > 1e-5 * x.t.abs().max(y.t.abs()),
+            _ => true,
+        })
+        .count();
+    let mut q_speed = Vec::new();
+    let mut frustum_disagreements = 0;
+    for rep in 0..reps {
+        let (found, t) = timed(|| {
+            frustums
+                .iter()
+                .map(|f| parts_in_frustum(accel.as_ref(), mesh, f))
+                .collect::<Vec<_>>()
+        });
+        q_speed.push(frustums.len() as f64 / t);
+        if rep == 0 {
+            frustum_disagreements = found
+                .iter()
+                .zip(frustum_ref)
+                .filter(|(a, b)| a != b)
+                .count();
+        }
+    }
+    Ok(Row {
+        split: opts.kd.split.name(),
+        h,
+        split_polygons,
+        split_triangles,
+        cut_mesh_triangles: cut_tris,
+        depth: stats.depth,
+        leaves: stats.leaves,
+        build_ms: build_s * 1e3,
+        t_junctions: tj,
+        tjunction_fast_ms: fast_ms,
+        tjunction_naive_ms: naive_ms,
+        naive_equals_fast: same,
+        ray_mrays: median_min_max(&ray_speed).0,
+        frustum_queries_per_s: median_min_max(&q_speed).0,
+        ray_disagreements,
+        frustum_disagreements,
+    })
+}
+
+/// View frustums of random cameras outside the mesh looking at random
+/// points of its box (60° field of view, aspect 16:9).
+fn random_frustums(bounds: &Aabb, n: usize, seed: u64) -> Vec<Frustum> {
+    let mut rng = Pcg32::new(seed);
+    let r = bounds.diagonal() * 0.5;
+    (0..n)
+        .map(|_| {
+            let target = rng.in_box(bounds.min, bounds.max);
+            let eye = bounds.center() + rng.unit_vector() * r * (0.6 + 1.2 * rng.next_f32());
+            let camera = Camera {
+                eye,
+                target,
+                up: raykit_core::Vec3::Y,
+                vfov_deg: 60.0,
+            };
+            Frustum::from_camera(&camera, 16.0 / 9.0, 0.01 * r, 4.0 * r)
+        })
+        .collect()
+}
+
+fn fmt_opt<T: std::fmt::Display>(v: Option<T>) -> String {
+    v.map(|v| v.to_string()).unwrap_or_else(|| "–".into())
+}
+
+fn markdown(rows: &[Row], name: &str, tris: usize, args: &SplitHeuristicArgs) -> String {
+    let mut s = format!(
+        "# Split-heuristic experiment (paper 002)\n\n`raykit experiment split-heuristic --size {} --frustums {} --reps {} --threads {} --game-leaf {}` on {name} ({tris} triangles).\n\n",
+        args.size, args.frustums, args.reps, args.threads, args.game_leaf
+    );
+    s += "| split | split polygons | split triangles | depth | leaves | build ms | T-junctions | fast ms | naive ms | naive = fast | Mrays/s | frustum queries/s |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|\n";
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {:.2} | {:.1} |\n",
+            r.split,
+            r.split_polygons,
+            r.split_triangles,
+            r.depth,
+            r.leaves,
+            r.build_ms,
+            fmt_opt(r.t_junctions),
+            fmt_opt(r.tjunction_fast_ms.map(|v| format!("{v:.1}"))),
+            fmt_opt(r.tjunction_naive_ms.map(|v| format!("{v:.0}"))),
+            fmt_opt(r.naive_equals_fast),
+            r.ray_mrays,
+            r.frustum_queries_per_s
+        );
+    }
+    let bad: usize = rows
+        .iter()
+        .map(|r| r.ray_disagreements + r.frustum_disagreements)
+        .sum();
+    s += &format!("\nRay answers checked against the BVH2 and frustum answers against brute force: {bad} disagreements.\n");
+    s
+}
+
+fn plots(rows: &[Row], out: &std::path::Path, name: &str) -> Result<()> {
+    let game: Vec<&Row> = rows.iter().filter(|r| r.h.is_some()).collect();
+    let sah = rows.iter().find(|r| r.h.is_none());
+    let series = |label: &str, f: &dyn Fn(&Row) -> Option<f64>| Series {
+        name: label.to_string(),
+        points: game
+            .iter()
+            .filter_map(|r| Some((r.h? as f64, f(r)?)))
+            .collect(),
+    };
+    let reference = |f: &dyn Fn(&Row) -> f64| {
+        sah.map(|r| vec![("SAH tree".to_string(), f(r))])
+            .unwrap_or_default()
+    };
+    let figs: Vec<(&str, LineChart)> = vec![
+        (
+            "fig5_split_polygons.svg",
+            LineChart {
+                title: format!("Fig. 5: split polygons vs H ({name})"),
+                x_label: "H",
+                y_label: "split polygons",
+                series: vec![series("game heuristic", &|r| Some(r.split_polygons as f64))],
+                reference: reference(&|r| r.split_polygons as f64),
+            },
+        ),
+        (
+            "fig6_tjunction_time.svg",
+            LineChart {
+                title: format!("Fig. 6: T-junction elimination time vs H ({name})"),
+                x_label: "H",
+                y_label: "ms",
+                series: vec![
+                    series("fast (grid)", &|r| r.tjunction_fast_ms),
+                    series("naive O(n²)", &|r| r.tjunction_naive_ms),
+                ],
+                reference: Vec::new(),
+            },
+        ),
+        (
+            "fig7_query_speed.svg",
+            LineChart {
+                title: format!("Fig. 7: ray casting speed vs H ({name})"),
+                x_label: "H",
+                y_label: "Mrays/s (kd-stack, Möller)",
+                series: vec![series("game heuristic", &|r| Some(r.ray_mrays))],
+                reference: reference(&|r| r.ray_mrays),
+            },
+        ),
+        (
+            "fig7b_frustum_queries.svg",
+            LineChart {
+                title: format!("Fig. 7b: frustum culling queries/s vs H ({name})"),
+                x_label: "H",
+                y_label: "queries/s (parts in frustum)",
+                series: vec![series("game heuristic", &|r| Some(r.frustum_queries_per_s))],
+                reference: reference(&|r| r.frustum_queries_per_s),
+            },
+        ),
+        (
+            "fig8_build_time.svg",
+            LineChart {
+                title: format!("Fig. 8: tree build time vs H ({name})"),
+                x_label: "H",
+                y_label: "ms",
+                series: vec![series("game heuristic", &|r| Some(r.build_ms))],
+                reference: reference(&|r| r.build_ms),
+            },
+        ),
+        (
+            "depth.svg",
+            LineChart {
+                title: format!("Tree depth vs H ({name})"),
+                x_label: "H",
+                y_label: "depth",
+                series: vec![series("game heuristic", &|r| Some(r.depth as f64))],
+                reference: reference(&|r| r.depth as f64),
+            },
+        ),
+    ];
+    std::fs::create_dir_all(out)?;
+    for (file, chart) in figs {
+        write_svg(&chart, &out.join(file))?;
+    }
+    Ok(())
+}
