@@ -2,7 +2,8 @@
 //! of the shared data folder and on the built-in scenes, for the three
 //! standard ray sets (sampled: brute force is O(rays × triangles)).
 
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::accel::kdtree::build_tree;
+use raykit_core::accel::{build_accel, kd_accel_from_tree, AccelKind, BuildOptions};
 use raykit_core::raysets;
 use raykit_core::tri::TestKind;
 use raykit_core::{Hit, Ray, TriangleMesh};
@@ -33,11 +34,17 @@ fn check(name: &str, mesh: &TriangleMesh, k: usize) {
     let opts = BuildOptions::default();
     let helper = build_accel(AccelKind::Bvh2, TestKind::Moller, mesh, &opts);
     let sets = raysets::standard_sets(mesh, helper.as_ref(), 128, 3);
+    // One SAH kd-tree build serves the four kd traversals.
+    let (kd_root, kd_cell) = build_tree(mesh, &opts.kd);
     for test in TestKind::ALL {
         let brute = build_accel(AccelKind::Brute, test, mesh, &opts);
         let accels: Vec<_> = AccelKind::ALL[1..]
             .iter()
-            .map(|&a| (a, build_accel(a, test, mesh, &opts)))
+            .map(|&a| {
+                let accel = kd_accel_from_tree(a, test, mesh, &kd_root, &kd_cell, &opts, 0.0)
+                    .unwrap_or_else(|| build_accel(a, test, mesh, &opts));
+                (a, accel)
+            })
             .collect();
         for (si, set) in sets.iter().enumerate() {
             let step = (set.len() / k).max(1);
