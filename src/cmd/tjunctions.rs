@@ -30,7 +30,8 @@ edge and the triangle re-triangulated (no new vertices; parts and materials kept
 (flat) triangles are dropped. Vertices at identical positions count as one point. Both methods\n\
 give the same output mesh.\n\n\
 Examples:\n  raykit tjunctions level.obj level_fixed.obj\n  \
-raykit tjunctions cut.ply fixed.ply --method naive --json\n\n\
+raykit tjunctions cut.ply fixed.ply --method naive --json\n  \
+raykit tjunctions bunny.obj fixed.ply --kd-cut 8 --cut-out cut.ply   (cut by paper 002's kd-tree first)\n\n\
 Prints a summary (or, with --json, a JSON report on stdout: the library's report fields\n\
 t_junctions, inserted, degenerate_dropped, triangles_in, triangles_out, rounds, remaining_*,\n\
 find_s, retriangulate_s, plus input, output, options, threads, load_s, save_s)."
@@ -62,6 +63,17 @@ pub struct TJunctionsArgs {
     /// Print the report as JSON on stdout instead of the summary.
     #[arg(long)]
     json: bool,
+    /// First cut the mesh with paper 002's game kd-tree of weight H (0..=20):
+    /// straddling triangles are cut at the split planes, leaving the
+    /// T-junctions that are then removed.
+    #[arg(long, value_name = "H", value_parser = clap::value_parser!(u8).range(0..=20))]
+    kd_cut: Option<u8>,
+    /// With --kd-cut: nodes with at most this many pieces become leaves.
+    #[arg(long, default_value_t = 8)]
+    kd_leaf: usize,
+    /// With --kd-cut: also write the cut mesh (before elimination) here.
+    #[arg(long, value_name = "FILE")]
+    cut_out: Option<PathBuf>,
 }
 
 /// The JSON report: the library's report plus the run's context.
@@ -97,7 +109,12 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
     };
     let pool = pool(args.threads)?;
     let (mesh, load_s) = timed(|| raykit_io::load_mesh(&args.input));
-    let mesh = mesh?;
+    let mut mesh = mesh?;
+    if let Some(h) = args.kd_cut {
+        mesh = pool.install(|| kd_cut(&mesh, h, &args))?;
+    } else if args.cut_out.is_some() {
+        bail!("--cut-out needs --kd-cut H");
+    }
     let bar = ProgressBar::new_spinner().with_style(
         ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").expect("valid template"),
     );
@@ -141,6 +158,37 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Cut `mesh` with the game kd-tree of weight `h` and report it.
+fn kd_cut(
+    mesh: &raykit_core::TriangleMesh,
+    h: u8,
+    args: &TJunctionsArgs,
+) -> Result<raykit_core::TriangleMesh> {
+    use raykit_core::accel::kdtree::{build_game, cut_mesh, KdOptions, KdSplit};
+    let opts = KdOptions {
+        split: KdSplit::Game(h),
+        max_leaf_size: args.kd_leaf.max(1),
+        ..KdOptions::default()
+    };
+    let ((_, _, game), build_s) = timed(|| build_game(mesh, h, &opts));
+    let cut = cut_mesh(mesh, &game);
+    eprintln!(
+        "kd-tree game:{h}: {} pieces cut ({} triangles split), {} -> {} triangles, {:.1} ms",
+        game.cuts,
+        cut.split_triangles,
+        mesh.num_triangles(),
+        cut.mesh.num_triangles(),
+        build_s * 1e3
+    );
+    if let Some(path) = &args.cut_out {
+        crate::paths::ensure_not_input(path, &[args.input.as_path()])?;
+        raykit_io::save_mesh(path, &cut.mesh)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        eprintln!("wrote the cut mesh to {}", path.display());
+    }
+    Ok(cut.mesh)
 }
 
 fn print_summary(input: &Path, output: &Path, r: &TJunctionReport, load_s: f64, save_s: f64) {

@@ -339,22 +339,35 @@ pub fn cut_mesh(mesh: &TriangleMesh, build: &GameBuild) -> CutMesh {
     let mut indices = Vec::new();
     let mut source = Vec::new();
     let mut pieces_of = vec![0u32; mesh.num_triangles()];
-    for (t, poly) in polys.iter().flatten() {
+    let named: Vec<(u32, Vec<u32>)> = polys
+        .iter()
+        .flatten()
+        .map(|(t, poly)| {
+            let ids = poly
+                .iter()
+                .map(|v| match v.key {
+                    Key::Vertex(i) => i,
+                    k => *index.entry(k).or_insert_with(|| {
+                        positions.push(v.p.as_vec3());
+                        positions.len() as u32 - 1
+                    }),
+                })
+                .collect();
+            (*t, ids)
+        })
+        .collect();
+    let same = weld_new_vertices(&positions, mesh.positions.len());
+    for (t, ids) in &named {
         pieces_of[*t as usize] += 1;
-        let ids: Vec<u32> = poly
-            .iter()
-            .map(|v| match v.key {
-                Key::Vertex(i) => i,
-                k => *index.entry(k).or_insert_with(|| {
-                    positions.push(v.p.as_vec3());
-                    positions.len() as u32 - 1
-                }),
-            })
-            .collect();
+        let ids: Vec<u32> = ids.iter().map(|&i| same[i as usize]).collect();
         for i in 1..ids.len() - 1 {
             let tri = [ids[0], ids[i], ids[i + 1]];
             let [a, b, c] = tri.map(|k| positions[k as usize].as_dvec3());
-            if (b - a).cross(c - a).length_squared() > 0.0 {
+            if tri[0] != tri[1]
+                && tri[1] != tri[2]
+                && tri[0] != tri[2]
+                && (b - a).cross(c - a).length_squared() > 0.0
+            {
                 indices.push(tri);
                 source.push(*t);
             }
@@ -377,6 +390,56 @@ pub fn cut_mesh(mesh: &TriangleMesh, build: &GameBuild) -> CutMesh {
         source,
         split_triangles: pieces_of.iter().filter(|&&c| c > 1).count(),
     }
+}
+
+/// For each vertex, the vertex it stands for: cut points (from `first_new`
+/// on) that land within 4 f32 ulps of the largest coordinate of an earlier
+/// vertex are that vertex. A split plane can pass a rounding step away from
+/// a vertex (planes are `f32`, cut points `f64` rounded), and would otherwise
+/// leave two vertices at what is one point and sliver triangles between
+/// them.
+fn weld_new_vertices(positions: &[glam::Vec3], first_new: usize) -> Vec<u32> {
+    let m = positions
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0f32, f32::max) as f64;
+    let same = 4.0 * m * f32::EPSILON as f64;
+    let mut map: Vec<u32> = (0..positions.len() as u32).collect();
+    if same <= 0.0 || first_new >= positions.len() {
+        return map;
+    }
+    let cell = |p: DVec3| (p / same).floor().as_i64vec3();
+    let mut grid: HashMap<glam::I64Vec3, Vec<u32>> = HashMap::new();
+    for (i, p) in positions.iter().enumerate() {
+        let p = p.as_dvec3();
+        let c = cell(p);
+        if i >= first_new {
+            let mut found: Option<u32> = None;
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        for &j in grid
+                            .get(&(c + glam::I64Vec3::new(dx, dy, dz)))
+                            .into_iter()
+                            .flatten()
+                        {
+                            if (positions[j as usize].as_dvec3() - p).length() <= same
+                                && found.is_none_or(|f| j < f)
+                            {
+                                found = Some(j);
+                            }
+                        }
+                    }
+                }
+            }
+            if let Some(j) = found {
+                map[i] = j;
+                continue;
+            }
+        }
+        grid.entry(c).or_default().push(i as u32);
+    }
+    map
 }
 
 /// Clip triangle `t` of `mesh` to `cell`, naming every vertex symbolically
