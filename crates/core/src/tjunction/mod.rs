@@ -135,7 +135,8 @@ pub enum Method {
 }
 
 impl Method {
-    /// Lower-case name, as the command line spells it.
+    /// Lower-case name, as the command line spells it (`raykit tjunctions
+    /// --method`).
     pub fn name(self) -> &'static str {
         match self {
             Method::Naive => "naive",
@@ -180,7 +181,8 @@ impl fmt::Display for TJunctionError {
 
 impl std::error::Error for TJunctionError {}
 
-/// What [`eliminate`] did.
+/// What [`eliminate`] did: paper 002's measured quantities (T-junctions,
+/// triangles, elimination time) and what the rounds did.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TJunctionReport {
     /// Finder used.

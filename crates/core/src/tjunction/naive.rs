@@ -9,8 +9,9 @@ use super::{EdgeVertex, Prepared, TJunctionError};
 use crate::mesh::TriangleMesh;
 use rayon::prelude::*;
 
-/// Largest number of (kept triangle × distinct point) pairs the naive finder
-/// accepts: 2·10⁹, i.e. 6·10⁹ edge tests, about half a minute on two cores.
+/// Largest number of (kept triangle × distinct point) pairs paper 002's
+/// naive finder accepts: 2·10⁹, i.e. 6·10⁹ edge tests, about 12 s on one
+/// core (1.2·10⁹ pairs took 7 s in release on the development machine).
 /// Beyond it, [`find_naive`](super::find_naive) returns
 /// [`TJunctionError::TooLarge`].
 pub const NAIVE_MAX_PAIRS: u64 = 2_000_000_000;
