@@ -16,7 +16,7 @@ cargo build --release
 raykit=target/release/raykit
 $raykit rays --mesh "$dragon" --kind incoherent --out "$cache/dragon-incoherent.bin"
 status=0
-for accel in bvh2 bvh-threaded; do
+for accel in bvh2 bvh-threaded kd-stack kd-ropes kd-restart kd-backtrack; do
   for test in moller plucker projection; do
     $raykit trace --mesh "$dragon" --rays "$cache/dragon-incoherent.bin" --out "$cache/hits.bin" \
       --accel "$accel" --test "$test" --verify 10000 || status=1

@@ -24,7 +24,12 @@ pub struct Verdict {
 impl Verdict {
     /// True when every ray agrees.
     pub fn ok(&self) -> bool {
-        self.hit_miss == 0 && self.distance == 0
+        self.disagreements() == 0
+    }
+
+    /// Rays that disagree (hit/miss or distance; ties agree).
+    pub fn disagreements(&self) -> usize {
+        self.hit_miss + self.distance
     }
 }
 

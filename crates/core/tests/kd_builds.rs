@@ -24,71 +24,12 @@ fn soup(n: usize, seed: u64) -> TriangleMesh {
     TriangleMesh::new(positions, indices)
 }
 
-/// A closed, shared-vertex sphere-like mesh (icosahedron subdivided).
+#[path = "tjunction_support/mod.rs"]
+mod support;
+
+/// A closed, shared-vertex sphere (an octahedron subdivided `level` times).
 fn closed_mesh(level: u32) -> TriangleMesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut p: Vec<Vec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let mut f: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..level {
-        let mut mid = std::collections::HashMap::new();
-        let mut next = Vec::new();
-        for tri in &f {
-            let m: Vec<u32> = (0..3)
-                .map(|k| {
-                    let (a, b) = (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3]));
-                    *mid.entry((a, b)).or_insert_with(|| {
-                        p.push(((p[a as usize] + p[b as usize]) * 0.5).normalize());
-                        p.len() as u32 - 1
-                    })
-                })
-                .collect();
-            next.extend([
-                [tri[0], m[0], m[2]],
-                [tri[1], m[1], m[0]],
-                [tri[2], m[2], m[1]],
-                [m[0], m[1], m[2]],
-            ]);
-        }
-        f = next;
-    }
-    TriangleMesh::new(p, f)
+    support::sphere(level)
 }
 
 /// Paper 002's score of the plane `x[axis] = pos`, from the triangles'

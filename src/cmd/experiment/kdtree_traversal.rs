@@ -15,7 +15,7 @@ use raykit_core::accel::kdtree::build_tree;
 use raykit_core::accel::{build_accel, kd_accel_from_tree, AccelKind};
 use raykit_core::raysets;
 use raykit_core::tri::TestKind;
-use raykit_core::{Accel, Hit, Ray};
+use raykit_core::{Accel, Ray};
 use raykit_render::{render, RenderOptions};
 use raykit_scene::PointLight;
 use serde::Serialize;
@@ -192,7 +192,7 @@ pub fn run(args: KdTraversalArgs) -> Result<ExitCode> {
                     accel.intersect_batch(&primary, &mut hits);
                     accel.occluded_batch(&shadow, &mut occ);
                 });
-                let disagreements = disagree(&prim_ref, &hits)
+                let disagreements = crate::verify::compare_hits(&prim_ref, &hits).disagreements()
                     + shadow_ref.iter().zip(&occ).filter(|(a, b)| a != b).count();
                 speed.push(SpeedRow {
                     mesh: name.clone(),
@@ -230,18 +230,6 @@ pub fn run(args: KdTraversalArgs) -> Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// Hit/miss or distance disagreements (relative 1e-5), ties allowed.
-fn disagree(a: &[Option<Hit>], b: &[Option<Hit>]) -> usize {
-    a.iter()
-        .zip(b)
-        .filter(|(x, y)| match (x, y) {
-            (None, None) => false,
-            (Some(x), Some(y)) => (x.t - y.t).abs() > 1e-5 * x.t.abs().max(y.t.abs()),
-            _ => true,
-        })
-        .count()
 }
 
 /// Median Mrays/s of Phong-shaded primary rays and of shadow rays, and the

@@ -53,6 +53,10 @@ impl<T: TriangleTest> KdBacktrack<T> {
         }
     }
 
+    fn visit(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+        self.tree.visit(enter, leaf)
+    }
+
     #[inline(always)]
     fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
         let t = &self.tree;
@@ -93,22 +97,4 @@ impl<T: TriangleTest> KdBacktrack<T> {
     }
 }
 
-impl<T: TriangleTest> Accel for KdBacktrack<T> {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.traverse::<false>(ray).0
-    }
-
-    fn occluded(&self, ray: &Ray) -> bool {
-        self.traverse::<true>(ray).1
-    }
-
-    fn stats(&self) -> AccelStats {
-        let extra =
-            std::mem::size_of_val(&self.cells[..]) + std::mem::size_of_val(&self.parents[..]);
-        self.tree.stats_with(extra)
-    }
-
-    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
-        self.tree.visit(enter, leaf)
-    }
-}
+kd_accel!(KdBacktrack, self => std::mem::size_of_val(&self.cells[..]) + std::mem::size_of_val(&self.parents[..]));

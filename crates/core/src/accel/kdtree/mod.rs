@@ -23,6 +23,30 @@
 //! band reaches into its cell, so a kd-tree reports exactly the hits brute
 //! force reports, like the BVHs with their padded boxes.
 
+/// The `Accel` impl every kd traversal shares: `traverse::<ANY>` answers
+/// both queries, `extra_bytes` adds the traversal's own data to the stats.
+macro_rules! kd_accel {
+    ($name:ident, $self:ident => $extra:expr) => {
+        impl<T: TriangleTest> Accel for $name<T> {
+            fn intersect(&self, ray: &Ray) -> Option<Hit> {
+                self.traverse::<false>(ray).0
+            }
+
+            fn occluded(&self, ray: &Ray) -> bool {
+                self.traverse::<true>(ray).1
+            }
+
+            fn stats(&$self) -> AccelStats {
+                $self.tree.stats_with($extra)
+            }
+
+            fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+                self.visit(enter, leaf)
+            }
+        }
+    };
+}
+
 mod backtrack;
 mod base;
 mod clip;

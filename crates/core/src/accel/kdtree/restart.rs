@@ -65,6 +65,10 @@ impl<T: TriangleTest> KdRestart<T> {
         KdRestart { tree }
     }
 
+    fn visit(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+        self.tree.visit(enter, leaf)
+    }
+
     #[inline(always)]
     fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
         let t = &self.tree;
@@ -88,20 +92,4 @@ impl<T: TriangleTest> KdRestart<T> {
     }
 }
 
-impl<T: TriangleTest> Accel for KdRestart<T> {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.traverse::<false>(ray).0
-    }
-
-    fn occluded(&self, ray: &Ray) -> bool {
-        self.traverse::<true>(ray).1
-    }
-
-    fn stats(&self) -> AccelStats {
-        self.tree.stats_with(0)
-    }
-
-    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
-        self.tree.visit(enter, leaf)
-    }
-}
+kd_accel!(KdRestart, self => 0);

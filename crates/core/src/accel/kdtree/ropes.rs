@@ -75,6 +75,14 @@ impl<T: TriangleTest> KdRopes<T> {
         }
     }
 
+    fn visit(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+        let range = |n: KdNode| {
+            let r = &self.leaves[n.first()];
+            (r.first as usize, r.count as usize)
+        };
+        self.tree.visit_nodes(&self.nodes, &range, enter, leaf)
+    }
+
     #[inline(always)]
     fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
         let t = &self.tree;
@@ -192,26 +200,4 @@ fn push_down(nodes: &[KdNode], mut rope: u32, face: usize, cell: &Aabb) -> u32 {
     rope
 }
 
-impl<T: TriangleTest> Accel for KdRopes<T> {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.traverse::<false>(ray).0
-    }
-
-    fn occluded(&self, ray: &Ray) -> bool {
-        self.traverse::<true>(ray).1
-    }
-
-    fn stats(&self) -> AccelStats {
-        let nodes = std::mem::size_of_val(&self.nodes[..]);
-        self.tree
-            .stats_with(nodes + std::mem::size_of_val(&self.leaves[..]))
-    }
-
-    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
-        let range = |n: KdNode| {
-            let r = &self.leaves[n.first()];
-            (r.first as usize, r.count as usize)
-        };
-        self.tree.visit_nodes(&self.nodes, &range, enter, leaf)
-    }
-}
+kd_accel!(KdRopes, self => std::mem::size_of_val(&self.nodes[..]) + std::mem::size_of_val(&self.leaves[..]));

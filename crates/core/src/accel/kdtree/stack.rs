@@ -37,6 +37,10 @@ impl<T: TriangleTest> KdStack<T> {
         &self.tree
     }
 
+    fn visit(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+        self.tree.visit(enter, leaf)
+    }
+
     #[inline(always)]
     fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
         let t = &self.tree;
@@ -95,20 +99,4 @@ impl<T: TriangleTest> KdStack<T> {
     }
 }
 
-impl<T: TriangleTest> Accel for KdStack<T> {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.traverse::<false>(ray).0
-    }
-
-    fn occluded(&self, ray: &Ray) -> bool {
-        self.traverse::<true>(ray).1
-    }
-
-    fn stats(&self) -> AccelStats {
-        self.tree.stats_with(0)
-    }
-
-    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
-        self.tree.visit(enter, leaf)
-    }
-}
+kd_accel!(KdStack, self => 0);
