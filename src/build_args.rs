@@ -23,6 +23,10 @@ pub struct BuildArgs {
     /// kd-tree SAH cost of one triangle test relative to a node traversal.
     #[arg(long, default_value_t = KdOptions::default().intersection_cost)]
     kd_isect_cost: f32,
+    /// kd-tree node layout: subtrees of this many levels, each laid out
+    /// breadth-first (paper 000); 0 lays the whole tree out breadth-first.
+    #[arg(long, default_value_t = KdOptions::default().subtree_levels)]
+    kd_subtree_levels: u32,
 }
 
 impl BuildArgs {
@@ -35,6 +39,7 @@ impl BuildArgs {
             kd: KdOptions {
                 split: self.kd_split,
                 intersection_cost: self.kd_isect_cost.clamp(1e-3, 1e3),
+                subtree_levels: self.kd_subtree_levels,
                 ..KdOptions::default()
             },
             ..BuildOptions::default()

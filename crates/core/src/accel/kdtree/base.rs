@@ -83,7 +83,7 @@ impl<T: TriangleTest> KdTree<T> {
     ) -> Self {
         let shape = root.shape(cell, opts.traversal_cost as f64);
         let split_triangles = count_split(root, mesh.num_triangles());
-        let lay = layout(root, cell);
+        let lay = layout(root, cell, opts.subtree_levels);
         let (order, position) = first_use_order(root, mesh.num_triangles());
         let indices = lay.indices.iter().map(|&t| position[t as usize]).collect();
         let tris = LeafTriangles::new(mesh, order);

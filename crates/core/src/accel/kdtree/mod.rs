@@ -10,8 +10,9 @@
 //! - [`KdSplit::Median`]: the spatial median of the longest axis, the simple
 //!   baseline.
 //!
-//! Layout: paper 000's 8-byte [`KdNode`], breadth first, leaves pointing into
-//! one triangle-index list; the triangles are precomputed once each.
+//! Layout: paper 000's 8-byte [`KdNode`], subtrees laid out breadth first,
+//! leaves pointing into one triangle-index list; the triangles are
+//! precomputed once each.
 //!
 //! Traversals, each an [`Accel`](crate::accel::Accel) generic over the
 //! triangle test: [`KdStack`] (paper 000's per-ray stack), [`KdRopes`]
@@ -138,6 +139,11 @@ pub struct KdOptions {
     pub max_leaf_size: usize,
     /// Subtrees with more references than this are built in parallel.
     pub parallel_threshold: usize,
+    /// Levels of the subtrees that are laid out breadth-first, one after the
+    /// other depth first (default 6: a sibling pair and its descendants for
+    /// 6 levels, 126 nodes, 1 KB); 0 lays the whole tree out breadth-first
+    /// as one array level by level.
+    pub subtree_levels: u32,
 }
 
 impl Default for KdOptions {
@@ -150,6 +156,7 @@ impl Default for KdOptions {
             max_depth: 0,
             max_leaf_size: 4,
             parallel_threshold: 4096,
+            subtree_levels: 6,
         }
     }
 }
