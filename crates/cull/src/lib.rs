@@ -23,10 +23,13 @@
 //! does not clearly hide: triangles within [`CullOptions::depth_cells`]
 //! spacings behind a visible surface along an outside point's ray (a
 //! dilation), triangles in grid cells with an outside corner
-//! ([`visible::touches_outside`]), and every remaining candidate that a few random rays from its
-//! surface show to escape the model ([`visible::confirm_by_rays`]). Higher
-//! resolutions remove more hidden triangles; the conservative additions cost
-//! removals, never visible triangles.
+//! ([`visible::touches_outside`]), and, when asked for
+//! ([`CullOptions::confirm`]), every remaining candidate that a few random
+//! rays from its surface show to escape the model
+//! ([`visible::confirm_by_rays`]). Higher resolutions remove more hidden
+//! triangles; the conservative additions trade removals for safety: they
+//! make false removals rarer (none in the tests, at any resolution) but are
+//! evidence, not a proof.
 
 pub mod distance_field;
 pub mod grid;
@@ -56,7 +59,10 @@ pub struct CullOptions {
     /// Conservative mode: triangles within this many spacings behind the
     /// first surface on an outside point's ray are kept.
     pub depth_cells: f32,
-    /// Conservative mode: confirmation of candidates by rays (`None`: off).
+    /// Conservative mode: confirmation of candidates by rays (`None`, the
+    /// default: off — it costs about 115 s for 1.28M hidden triangles at the
+    /// default 4 points × 8 directions per face on 2 cores; see
+    /// [`visible::confirm_by_rays`]).
     pub confirm: Option<RayConfirm>,
 }
 
@@ -66,7 +72,7 @@ impl Default for CullOptions {
             resolution: 128,
             conservative: true,
             depth_cells: 1.0,
-            confirm: Some(RayConfirm::default()),
+            confirm: None,
         }
     }
 }
