@@ -66,67 +66,9 @@ pub fn closed_box(b: &Aabb, n: usize) -> TriangleMesh {
 /// An icosphere: the icosahedron with each triangle cut into four
 /// `subdivisions` times (20 · 4^s triangles), projected onto the sphere.
 pub fn icosphere(center: Vec3, radius: f32, subdivisions: u32) -> TriangleMesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut pos: Vec<Vec3> = [
-        (-1., t, 0.),
-        (1., t, 0.),
-        (-1., -t, 0.),
-        (1., -t, 0.),
-        (0., -1., t),
-        (0., 1., t),
-        (0., -1., -t),
-        (0., 1., -t),
-        (t, 0., -1.),
-        (t, 0., 1.),
-        (-t, 0., -1.),
-        (-t, 0., 1.),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let mut tris: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..subdivisions {
-        let mut mids = std::collections::HashMap::new();
-        let mut mid = |a: u32, b: u32, pos: &mut Vec<Vec3>| {
-            *mids.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                pos.push(((pos[a as usize] + pos[b as usize]) * 0.5).normalize());
-                pos.len() as u32 - 1
-            })
-        };
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        for [a, b, c] in tris {
-            let (ab, bc, ca) = (
-                mid(a, b, &mut pos),
-                mid(b, c, &mut pos),
-                mid(c, a, &mut pos),
-            );
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        tris = next;
-    }
-    let positions = pos.into_iter().map(|p| center + radius * p).collect();
-    TriangleMesh::new(positions, tris)
+    let ico = raykit_core::Icosphere::new(subdivisions);
+    let positions = ico.positions.iter().map(|&p| center + p * radius).collect();
+    TriangleMesh::new(positions, ico.indices)
 }
 
 /// One mesh holding `pieces` in order, each as its own part.

@@ -1,8 +1,8 @@
 //! An incremental builder for meshes with per-vertex normals, materials and
 //! parts, and the primitive shapes the built-in scenes are made of.
 
-use crate::icosphere::Icosphere;
 use raykit_core::glam::{Affine3A, Vec3};
+use raykit_core::Icosphere;
 use raykit_core::{Material, Part, TriangleMesh};
 
 /// Builds a [`TriangleMesh`] shape by shape.

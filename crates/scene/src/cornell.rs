@@ -3,11 +3,11 @@
 //! top, and one point light under the ceiling.
 
 use crate::builder::{material, MeshBuilder};
-use crate::icosphere::Icosphere;
 use crate::{PointLight, Scene};
 use raykit_core::glam::{Affine3A, Quat, Vec3};
 use raykit_core::rng::Pcg32;
 use raykit_core::Camera;
+use raykit_core::Icosphere;
 
 /// Half the side of the room (the room is `[-5, 5] × [0, 10] × [-5, 5]`,
 /// open towards `+z`).

@@ -16,7 +16,6 @@
 mod builder;
 pub mod cornell;
 mod error;
-mod icosphere;
 mod light;
 pub mod noise;
 pub mod scatter;
@@ -27,8 +26,8 @@ pub mod terrain;
 pub use builder::{material, MeshBuilder};
 pub use cornell::cornell;
 pub use error::SceneError;
-pub use icosphere::Icosphere;
 pub use light::PointLight;
+pub use raykit_core::Icosphere;
 pub use scatter::scatter;
 pub use shirley6::shirley6;
 pub use spec::{

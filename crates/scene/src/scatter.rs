@@ -3,10 +3,10 @@
 //! density stays the same), lit by one point light.
 
 use crate::builder::material;
-use crate::icosphere::Icosphere;
 use crate::{PointLight, Scene};
 use raykit_core::glam::{Affine3A, Quat, Vec3};
 use raykit_core::rng::Pcg32;
+use raykit_core::Icosphere;
 use raykit_core::{Aabb, Camera, Part, TriangleMesh};
 use rayon::prelude::*;
 

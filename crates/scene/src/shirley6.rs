@@ -3,11 +3,11 @@
 //! smooth spheres and three boxes under one point light.
 
 use crate::builder::{material, MeshBuilder};
-use crate::icosphere::Icosphere;
 use crate::{PointLight, Scene};
 use raykit_core::glam::{Affine3A, Quat, Vec3};
 use raykit_core::rng::Pcg32;
 use raykit_core::Camera;
+use raykit_core::Icosphere;
 
 /// Cells per side of the ground grid (2 triangles each).
 pub const GROUND_CELLS: u32 = 8;

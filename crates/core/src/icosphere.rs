@@ -1,7 +1,7 @@
 //! Unit icospheres: a regular icosahedron whose faces are split in four
 //! `subdivisions` times, the new vertices pushed out onto the sphere.
 
-use raykit_core::glam::Vec3;
+use glam::Vec3;
 use std::collections::HashMap;
 
 /// A closed unit sphere made of `20·4^s` triangles over `10·4^s + 2` shared
