@@ -1,73 +1,189 @@
-//! glTF 2.0 output: one scene, one node, one mesh with one triangle
-//! primitive (positions, normals and texture coordinates when present, u32
-//! indices). Parts and materials are not written.
+//! glTF 2.0 output: one scene with one node and one mesh per [`Part`] of the
+//! mesh that has triangles (parts with none are dropped), each node and mesh
+//! named after its part, each mesh one triangle primitive (positions, normals
+//! and texture coordinates when present, u32 indices) holding only its part's
+//! vertices. A mesh with a single part is written with its vertex arrays
+//! unchanged. Materials are not written.
+//!
+//! [`Part`]: raykit_core::Part
 
 use super::check;
 use crate::uri::base64_encode;
-use raykit_core::TriangleMesh;
+use raykit_core::{TriangleMesh, Vec2, Vec3};
 use std::io::{self, Write};
+
+/// The buffer, buffer views and accessors being written.
+#[derive(Default)]
+struct Buffers {
+    bin: Vec<u8>,
+    views: Vec<String>,
+    accessors: Vec<String>,
+}
+
+impl Buffers {
+    /// Append one buffer view with `bytes` and an accessor over it; returns
+    /// the accessor index.
+    fn add(&mut self, bytes: &[u8], target: u32, accessor: impl FnOnce(usize) -> String) -> usize {
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        let v = self.views.len();
+        self.views.push(format!(
+            r#"{{"buffer":0,"byteOffset":{offset},"byteLength":{},"target":{target}}}"#,
+            bytes.len()
+        ));
+        self.accessors.push(accessor(v));
+        self.accessors.len() - 1
+    }
+
+    /// Append f32 vectors of `dims` components; `extra` is added to the accessor.
+    fn add_floats(&mut self, data: &[f32], dims: usize, extra: &str) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let ty = ["SCALAR", "VEC2", "VEC3"][dims - 1];
+        let count = data.len() / dims;
+        self.add(&bytes, 34962, |v| {
+            format!(
+                r#"{{"bufferView":{v},"componentType":5126,"count":{count},"type":"{ty}"{extra}}}"#
+            )
+        })
+    }
+
+    /// One triangle primitive over the given vertex arrays and triangles;
+    /// returns its JSON.
+    fn primitive(
+        &mut self,
+        positions: &[Vec3],
+        normals: Option<&[Vec3]>,
+        uvs: Option<&[Vec2]>,
+        tris: &[[u32; 3]],
+    ) -> String {
+        let (lo, hi) = positions
+            .iter()
+            .fold((positions[0], positions[0]), |(l, h), &p| {
+                (l.min(p), h.max(p))
+            });
+        let pos: Vec<f32> = positions.iter().flat_map(|p| p.to_array()).collect();
+        let minmax = format!(
+            r#","min":[{},{},{}],"max":[{},{},{}]"#,
+            lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+        );
+        let mut attributes = vec![format!(
+            r#""POSITION":{}"#,
+            self.add_floats(&pos, 3, &minmax)
+        )];
+        if let Some(n) = normals {
+            let d: Vec<f32> = n.iter().flat_map(|p| p.to_array()).collect();
+            attributes.push(format!(r#""NORMAL":{}"#, self.add_floats(&d, 3, "")));
+        }
+        if let Some(t) = uvs {
+            let d: Vec<f32> = t.iter().flat_map(|p| p.to_array()).collect();
+            attributes.push(format!(r#""TEXCOORD_0":{}"#, self.add_floats(&d, 2, "")));
+        }
+        let bytes: Vec<u8> = tris
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let count = tris.len() * 3;
+        let ia = self.add(&bytes, 34963, |v| {
+            format!(r#"{{"bufferView":{v},"componentType":5125,"count":{count},"type":"SCALAR"}}"#)
+        });
+        format!(
+            r#"{{"attributes":{{{}}},"indices":{ia},"mode":4}}"#,
+            attributes.join(",")
+        )
+    }
+}
+
+/// The triangles of each part that has any, in part order (triangles in mesh
+/// order within a part), with the part's index.
+fn part_triangles(mesh: &TriangleMesh) -> Vec<(usize, Vec<usize>)> {
+    let n_parts = (0..mesh.num_triangles())
+        .map(|t| mesh.part_of(t) as usize + 1)
+        .max()
+        .unwrap_or(0)
+        .max(mesh.parts.len());
+    let mut groups = vec![Vec::new(); n_parts];
+    for t in 0..mesh.num_triangles() {
+        groups[mesh.part_of(t) as usize].push(t);
+    }
+    groups
+        .into_iter()
+        .enumerate()
+        .filter(|(_, g)| !g.is_empty())
+        .collect()
+}
+
+/// `s` as a JSON string literal.
+fn json_string(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
 
 /// Write `mesh` as GLB (`binary`) or as `.gltf` JSON with the buffer embedded
 /// as a base64 data URI.
 pub fn write_gltf(w: &mut dyn Write, mesh: &TriangleMesh, binary: bool) -> io::Result<()> {
     check(mesh)?;
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
-    let mut attributes = Vec::new();
-    let (lo, hi) = mesh
-        .positions
-        .iter()
-        .fold((mesh.positions[0], mesh.positions[0]), |(l, h), &p| {
-            (l.min(p), h.max(p))
-        });
-    let mut add = |bin: &mut Vec<u8>, data: &[f32], dims: usize, extra: String, target: u32| {
-        let offset = bin.len();
-        data.iter().for_each(|x| bin.extend(x.to_le_bytes()));
-        let i = views.len();
-        views.push(format!(
-            r#"{{"buffer":0,"byteOffset":{offset},"byteLength":{},"target":{target}}}"#,
-            data.len() * 4
-        ));
-        let ty = ["SCALAR", "VEC2", "VEC3"][dims - 1];
-        accessors.push(format!(
-            r#"{{"bufferView":{i},"componentType":5126,"count":{},"type":"{ty}"{extra}}}"#,
-            data.len() / dims
-        ));
-        i
-    };
-    let pos: Vec<f32> = mesh.positions.iter().flat_map(|p| p.to_array()).collect();
-    let minmax = format!(
-        r#","min":[{},{},{}],"max":[{},{},{}]"#,
-        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
-    );
-    let a = add(&mut bin, &pos, 3, minmax, 34962);
-    attributes.push(format!(r#""POSITION":{a}"#));
-    if let Some(n) = &mesh.normals {
-        let d: Vec<f32> = n.iter().flat_map(|p| p.to_array()).collect();
-        let a = add(&mut bin, &d, 3, String::new(), 34962);
-        attributes.push(format!(r#""NORMAL":{a}"#));
+    let mut buf = Buffers::default();
+    let groups = part_triangles(mesh);
+    let mut nodes = Vec::with_capacity(groups.len());
+    let mut meshes = Vec::with_capacity(groups.len());
+    // Old vertex index → index within the part being written; entries are
+    // set for a part's vertices before they are read.
+    let mut local = Vec::new();
+    for (part, tris) in &groups {
+        let prim = if groups.len() == 1 {
+            buf.primitive(
+                &mesh.positions,
+                mesh.normals.as_deref(),
+                mesh.uvs.as_deref(),
+                &mesh.indices,
+            )
+        } else {
+            let mut used: Vec<u32> = tris.iter().flat_map(|&t| mesh.indices[t]).collect();
+            used.sort_unstable();
+            used.dedup();
+            local.resize(mesh.positions.len(), 0u32);
+            for (k, &v) in used.iter().enumerate() {
+                local[v as usize] = k as u32;
+            }
+            let pick = |a: &[Vec3]| -> Vec<Vec3> { used.iter().map(|&v| a[v as usize]).collect() };
+            let positions = pick(&mesh.positions);
+            let normals = mesh.normals.as_deref().map(pick);
+            let uvs: Option<Vec<Vec2>> = mesh
+                .uvs
+                .as_ref()
+                .map(|a| used.iter().map(|&v| a[v as usize]).collect());
+            let local_tris: Vec<[u32; 3]> = tris
+                .iter()
+                .map(|&t| mesh.indices[t].map(|v| local[v as usize]))
+                .collect();
+            buf.primitive(&positions, normals.as_deref(), uvs.as_deref(), &local_tris)
+        };
+        let name = mesh
+            .parts
+            .get(*part)
+            .map(|p| p.name.as_str())
+            .filter(|n| !n.is_empty())
+            .map(|n| format!(r#","name":{}"#, json_string(n)))
+            .unwrap_or_default();
+        nodes.push(format!(r#"{{"mesh":{}{name}}}"#, meshes.len()));
+        meshes.push(format!(r#"{{"primitives":[{prim}]{name}}}"#));
     }
-    if let Some(t) = &mesh.uvs {
-        let d: Vec<f32> = t.iter().flat_map(|p| p.to_array()).collect();
-        let a = add(&mut bin, &d, 2, String::new(), 34962);
-        attributes.push(format!(r#""TEXCOORD_0":{a}"#));
-    }
-    let ioff = bin.len();
-    mesh.indices
-        .iter()
-        .flatten()
-        .for_each(|i| bin.extend(i.to_le_bytes()));
-    let iv = views.len();
-    views.push(format!(
-        r#"{{"buffer":0,"byteOffset":{ioff},"byteLength":{},"target":34963}}"#,
-        mesh.indices.len() * 12
-    ));
-    let ia = accessors.len();
-    accessors.push(format!(
-        r#"{{"bufferView":{iv},"componentType":5125,"count":{},"type":"SCALAR"}}"#,
-        mesh.indices.len() * 3
-    ));
+    let Buffers {
+        mut bin,
+        views,
+        accessors,
+    } = buf;
     let uri = if binary {
         String::new()
     } else {
@@ -76,9 +192,12 @@ pub fn write_gltf(w: &mut dyn Write, mesh: &TriangleMesh, binary: bool) -> io::R
             base64_encode(&bin)
         )
     };
+    let roots: Vec<String> = (0..nodes.len()).map(|i| i.to_string()).collect();
     let json = format!(
-        r#"{{"asset":{{"version":"2.0","generator":"raykit-io"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],"meshes":[{{"primitives":[{{"attributes":{{{}}},"indices":{ia},"mode":4}}]}}],"accessors":[{}],"bufferViews":[{}],"buffers":[{{"byteLength":{}{uri}}}]}}"#,
-        attributes.join(","),
+        r#"{{"asset":{{"version":"2.0","generator":"raykit-io"}},"scene":0,"scenes":[{{"nodes":[{}]}}],"nodes":[{}],"meshes":[{}],"accessors":[{}],"bufferViews":[{}],"buffers":[{{"byteLength":{}{uri}}}]}}"#,
+        roots.join(","),
+        nodes.join(","),
+        meshes.join(","),
         accessors.join(","),
         views.join(","),
         bin.len()
