@@ -35,6 +35,8 @@ enum Command {
     Bench(cmd::bench::BenchArgs),
     /// Find and remove T-junctions (vertices inside other triangles' edges), paper 002.
     Tjunctions(cmd::tjunctions::TJunctionsArgs),
+    /// Remove the hidden interior of a model: triangles or parts no outside viewpoint sees, paper 003.
+    Cull(cmd::cull::CullArgs),
     /// Reproduce the papers' tables and figures on this machine (CSV, Markdown, SVG).
     Experiment(cmd::experiment::ExperimentArgs),
     /// List the names accepted by --accel, --test and --scene.
@@ -49,6 +51,7 @@ fn main() -> ExitCode {
         Command::Trace(a) => cmd::trace::run(a),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Tjunctions(a) => cmd::tjunctions::run(a),
+        Command::Cull(a) => cmd::cull::run(a),
         Command::Experiment(a) => cmd::experiment::run(a),
         Command::Info(a) => cmd::info::run(a),
     };

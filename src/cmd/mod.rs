@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod bench;
+pub mod cull;
 pub mod experiment;
 pub mod info;
 pub mod rays;
