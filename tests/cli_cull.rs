@@ -1,0 +1,201 @@
+//! `raykit cull` as a user runs it, on a synthetic assembly with a known
+//! answer (a closed box with parts inside: only the box can be seen): the
+//! output file is read back and compared with the box by position, the
+//! report with the counts; bad arguments give a clear error.
+
+use raykit_core::{Aabb, Part, TriangleMesh, Vec3};
+use raykit_cull::synthetic::{assembly, closed_box, icosphere};
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn raykit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raykit"))
+        .args(args)
+        .output()
+        .expect("the raykit binary runs")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 temp path")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+type Corners = [[u32; 3]; 3];
+
+/// Every triangle's corners as exact f32 bit patterns (-0 folded into +0).
+fn triangle_set(m: &TriangleMesh) -> BTreeSet<Corners> {
+    (0..m.num_triangles())
+        .map(|t| {
+            m.triangle(t)
+                .map(|p| p.to_array().map(|x| (x + 0.0).to_bits()))
+        })
+        .collect()
+}
+
+const SPHERES: usize = 8;
+const SPHERE_TRIS: usize = 80;
+const BOX_TRIS: usize = 6 * 3 * 3 * 2;
+
+/// The box (3 × 3 squares per face, part "shell") and a 2 × 2 × 2 lattice of
+/// icospheres inside it (parts "ball0".."ball7"), with the box alone.
+fn boxed_balls() -> (TriangleMesh, TriangleMesh) {
+    let shell = closed_box(&Aabb::new(Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0)), 3);
+    let mut pieces = vec![shell.clone()];
+    for k in 0..SPHERES {
+        let c = Vec3::new(
+            0.5 + (k & 1) as f32,
+            0.3 + 0.4 * ((k >> 1) & 1) as f32,
+            0.3 + 0.4 * ((k >> 2) & 1) as f32,
+        );
+        pieces.push(icosphere(c, 0.15, 1));
+    }
+    let mut m = assembly(pieces);
+    m.parts = std::iter::once("shell".to_string())
+        .chain((0..SPHERES).map(|k| format!("ball{k}")))
+        .map(|name| Part { name, node: None })
+        .collect();
+    assert_eq!(shell.num_triangles(), BOX_TRIS);
+    assert_eq!(m.num_triangles(), BOX_TRIS + SPHERES * SPHERE_TRIS);
+    m.validate().unwrap();
+    (m, shell)
+}
+
+#[test]
+fn a_box_full_of_parts_comes_out_as_the_box_with_a_matching_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, shell) = boxed_balls();
+    let input = dir.path().join("assembly.glb");
+    raykit_io::save_mesh(&input, &model).unwrap();
+    let loaded = raykit_io::load_mesh(&input).unwrap();
+    assert_eq!(loaded.parts.len(), 1 + SPHERES);
+    let want = triangle_set(&shell);
+    for (by, out_name) in [("triangle", "out.glb"), ("part", "out.gltf")] {
+        let output = dir.path().join(out_name);
+        let report = dir.path().join(format!("{by}.json"));
+        let o = raykit(&[
+            "cull",
+            s(&input),
+            s(&output),
+            "--resolution",
+            "64",
+            "--by",
+            by,
+            "--report",
+            s(&report),
+        ]);
+        assert!(o.status.success(), "{by}: {}", text(&o.stderr));
+        let out = text(&o.stdout);
+        let total = BOX_TRIS + SPHERES * SPHERE_TRIS;
+        assert!(
+            out.contains(&format!("triangles: {total} -> {BOX_TRIS}")),
+            "{out}"
+        );
+        assert!(out.contains("parts: 9 -> 1 (8 removed"), "{out}");
+        assert!(out.contains("distance field"), "{out}");
+
+        let culled = raykit_io::load_mesh(&output).unwrap();
+        assert_eq!(culled.num_triangles(), BOX_TRIS, "{by}");
+        assert_eq!(triangle_set(&culled), want, "{by}: the box's triangles");
+        let names: Vec<&str> = culled.parts.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(names, ["shell"], "{by}: parts");
+
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        assert_eq!(r["by"], by, "{r}");
+        assert_eq!(r["mode"], "conservative", "{r}");
+        assert_eq!(r["resolution"], 64, "{r}");
+        assert_eq!(r["triangles_in"], total, "{r}");
+        assert_eq!(r["triangles_out"], BOX_TRIS, "{r}");
+        assert_eq!(r["triangles_removed"], SPHERES * SPHERE_TRIS, "{r}");
+        assert_eq!(r["parts_in"], 1 + SPHERES, "{r}");
+        assert_eq!(r["parts_out"], 1, "{r}");
+        assert_eq!(r["parts_removed"], SPHERES, "{r}");
+        let st = &r["stats"];
+        assert_eq!(st["triangles"], total, "{r}");
+        assert_eq!(st["triangles_removed"], SPHERES * SPHERE_TRIS, "{r}");
+        assert_eq!(st["parts"], 1 + SPHERES, "{r}");
+        assert_eq!(st["parts_removed"], SPHERES, "{r}");
+        assert_eq!(st["grid"][0], 64, "{r}");
+        for key in ["load_s", "cull_s", "save_s"] {
+            assert!(r[key].is_number(), "{key} missing: {r}");
+        }
+        for key in [
+            "distance_field_seconds",
+            "propagation_seconds",
+            "outside_points",
+        ] {
+            assert!(st[key].is_number(), "{key} missing: {r}");
+        }
+    }
+}
+
+#[test]
+fn json_on_stdout_and_paper_mode_on_an_obj() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, shell) = boxed_balls();
+    let input = dir.path().join("assembly.obj");
+    raykit_io::save_mesh(&input, &model).unwrap();
+    let output = dir.path().join("shell.ply");
+    let o = raykit(&[
+        "cull",
+        s(&input),
+        s(&output),
+        "--resolution",
+        "48",
+        "--paper",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["mode"], "paper", "{r}");
+    assert_eq!(r["triangles_out"], BOX_TRIS, "{r}");
+    assert_eq!(r["stats"]["kept_by_contact"], 0, "{r}");
+    let culled = raykit_io::load_mesh(&output).unwrap();
+    assert_eq!(triangle_set(&culled), triangle_set(&shell));
+}
+
+#[test]
+fn bad_arguments_fail_with_a_clear_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, _) = boxed_balls();
+    let input = dir.path().join("assembly.glb");
+    raykit_io::save_mesh(&input, &model).unwrap();
+    let bytes = std::fs::read(&input).unwrap();
+    let same = dir.path().join(".").join("assembly.glb");
+    let out = dir.path().join("out.glb");
+    let missing = dir.path().join("missing.glb");
+    for (args, want) in [
+        (vec![s(&input), s(&same)], "also an input"),
+        (vec![s(&input), "out.xyz"], "unknown mesh file extension"),
+        (vec![s(&missing), s(&out)], "missing.glb"),
+        (
+            vec![s(&input), s(&out), "--report", s(&input)],
+            "also an input",
+        ),
+        (vec![s(&input), s(&out), "--resolution", "2"], "resolution"),
+        (vec![s(&input), s(&out), "--by", "node"], "--by"),
+        (
+            vec![s(&input), s(&out), "--paper", "--confirm"],
+            "--confirm",
+        ),
+    ] {
+        let o = raykit(&[&["cull"], &args[..]].concat());
+        assert!(!o.status.success(), "{args:?}");
+        let err = text(&o.stderr);
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    assert!(!out.exists(), "no output is written on errors");
+    assert_eq!(
+        std::fs::read(&input).unwrap(),
+        bytes,
+        "the input is untouched"
+    );
+    let o = raykit(&["cull", "--help"]);
+    let help = text(&o.stdout);
+    assert!(help.contains("--resolution") && help.contains("What --resolution trades"));
+}
