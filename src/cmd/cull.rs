@@ -5,8 +5,13 @@ use crate::measure::timed;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::tri::TestKind;
 use raykit_core::{Part, TriangleMesh};
-use raykit_cull::{cull, CullOptions, CullStats, Grid, RayConfirm};
+use raykit_cull::{
+    compare, cull, evaluate, CullOptions, CullStats, EvalOptions, EvalReport, Grid, GroundTruth,
+    RayConfirm,
+};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -48,7 +53,13 @@ Prints triangles and parts before, after and removed, and the times; --report FI
 on stdout instead of the summary) writes a JSON report: input, output, by, mode, confirm,\n\
 resolution, triangles_in/out/removed, parts_in/out/removed, load_s, cull_s, save_s, and stats\n\
 (the library's CullStats: grid, spacing, points, outside_points, field_hits, the step times,\n\
-triangles_removed, parts_removed and what each conservative rule kept)."
+triangles_removed, parts_removed and what each conservative rule kept).\n\n\
+--evaluate also runs the ray-traced ground truth on the input (rays from sample points on every\n\
+triangle in random directions, and renders of triangle ids from 10,000+ viewpoints around the\n\
+model, sample counts doubled until the labels stop changing) and reports the removal fractions (by\n\
+triangles, area, parts), false removals (truly visible but removed) and missed removals (truly\n\
+hidden but kept); the JSON report gains `ground_truth` and `evaluation`. Exit status 2 when any\n\
+triangle the ground truth sees was removed."
 )]
 pub struct CullArgs {
     /// Input mesh (OBJ, PLY, PLY.GZ, STL, glTF/GLB, OFF).
@@ -78,6 +89,10 @@ pub struct CullArgs {
     /// Print the JSON report on stdout instead of the summary.
     #[arg(long)]
     json: bool,
+    /// Compare the result with the ray-traced ground truth (slow); exit
+    /// status 2 when a truly visible triangle was removed.
+    #[arg(long)]
+    evaluate: bool,
 }
 
 /// The JSON report: the run's figures and the library's statistics.
@@ -99,6 +114,10 @@ struct Report<'a> {
     cull_s: f64,
     save_s: f64,
     stats: &'a CullStats,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ground_truth: Option<GroundTruth>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    evaluation: Option<EvalReport>,
 }
 
 /// Load, cull, write, report.
@@ -156,6 +175,19 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
         );
     }
     let (saved, save_s) = timed(|| raykit_io::save_mesh(&args.output, &kept));
+    let (ground_truth, evaluation) = if args.evaluate {
+        let accel = build_accel(
+            AccelKind::Bvh2,
+            TestKind::Plucker,
+            &mesh,
+            &BuildOptions::default(),
+        );
+        let truth = evaluate(&mesh, accel.as_ref(), &EvalOptions::default());
+        let eval = compare(&truth, &keep, &mesh);
+        (Some(truth), Some(eval))
+    } else {
+        (None, None)
+    };
     saved.with_context(|| format!("cannot write {}", args.output.display()))?;
     let stats = &result.stats;
     let parts_out = kept.parts.len().max(1);
@@ -176,6 +208,8 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
         cull_s,
         save_s,
         stats,
+        ground_truth,
+        evaluation,
     };
     let json = serde_json::to_string_pretty(&report)?;
     if let Some(path) = &args.report {
@@ -190,7 +224,10 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
     } else {
         print_summary(&report, &args.output, args.report.as_deref());
     }
-    Ok(ExitCode::SUCCESS)
+    match &report.evaluation {
+        Some(e) if e.false_removals > 0 => Ok(ExitCode::from(2)),
+        _ => Ok(ExitCode::SUCCESS),
+    }
 }
 
 /// The triangles of `mesh` where `keep` is true, with only the vertices they
@@ -310,6 +347,41 @@ fn print_summary(r: &Report<'_>, output: &Path, report: Option<&Path>) {
         s.visible_seconds * 1e3,
         r.save_s * 1e3
     );
+    if let (Some(g), Some(e)) = (&r.ground_truth, &r.evaluation) {
+        println!(
+            "ground truth: {} of {} triangles visible ({} rounds, last added {}{}; {} points x {} \
+             directions per face, {} viewpoints of {}x{}; {} rays, {:.1} s)",
+            g.visible_count,
+            r.triangles_in,
+            g.rounds,
+            g.last_change,
+            if g.converged { "" } else { ", not converged" },
+            g.points,
+            g.directions,
+            g.viewpoints,
+            g.image,
+            g.image,
+            g.rays,
+            g.seconds
+        );
+        println!(
+            "evaluation: removed {:.1}% of triangles, {:.1}% of area, {:.1}% of parts; \
+             false removals {} (area {:.4e}{}), missed removals {} ({:.1}% of {} truly hidden)",
+            100.0 * e.removed_fraction_triangles,
+            100.0 * e.removed_fraction_area,
+            100.0 * e.removed_fraction_parts,
+            e.false_removals,
+            e.false_removal_area,
+            if e.false_removal_ids.is_empty() {
+                String::new()
+            } else {
+                format!(", first ids {:?}", e.false_removal_ids)
+            },
+            e.missed_removals,
+            100.0 * e.missed_fraction,
+            e.truly_hidden
+        );
+    }
     println!("wrote {}", output.display());
     if let Some(p) = report {
         println!("wrote the report to {}", p.display());

@@ -32,12 +32,14 @@
 //! evidence, not a proof.
 
 pub mod distance_field;
+pub mod evaluate;
 pub mod grid;
 pub mod propagate;
 pub mod synthetic;
 pub mod visible;
 
 pub use distance_field::{DirectedDistanceField, DirectedHit, Direction};
+pub use evaluate::{compare, evaluate, EvalOptions, EvalReport, GroundTruth};
 pub use grid::Grid;
 pub use propagate::{propagate, Classification, Tag};
 pub use visible::{confirm_by_rays, escapes, touches_outside, visible_from_outside, RayConfirm};

@@ -1,0 +1,200 @@
+//! The ground-truth evaluator (issue 6, point 4) on synthetic assemblies
+//! whose visibility is known from their geometry, and `compare` on
+//! hand-made kept masks.
+
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::tri::TestKind;
+use raykit_core::{Aabb, TriangleMesh, Vec3};
+use raykit_cull::evaluate::fibonacci;
+use raykit_cull::synthetic::{assembly, box_surface, closed_box, icosphere};
+use raykit_cull::{compare, evaluate, EvalOptions, GroundTruth};
+
+fn aabb(lo: f32, hi: f32) -> Aabb {
+    Aabb::new(Vec3::splat(lo), Vec3::splat(hi))
+}
+
+/// Small counts, so that the tests stay quick (the CLI uses the defaults).
+fn quick() -> EvalOptions {
+    EvalOptions {
+        points: 2,
+        directions: 8,
+        viewpoints: 200,
+        image: 24,
+        max_rounds: 4,
+        ..Default::default()
+    }
+}
+
+fn truth_of(mesh: &TriangleMesh, options: &EvalOptions) -> GroundTruth {
+    let accel = build_accel(
+        AccelKind::Bvh2,
+        TestKind::Plucker,
+        mesh,
+        &BuildOptions::default(),
+    );
+    evaluate(mesh, accel.as_ref(), options)
+}
+
+/// A closed unit box (part 0) with spheres and small boxes inside.
+fn box_with_parts() -> TriangleMesh {
+    assembly([
+        closed_box(&aabb(0.0, 1.0), 4),
+        icosphere(Vec3::splat(0.5), 0.2, 1),
+        icosphere(Vec3::new(0.25, 0.25, 0.7), 0.08, 1),
+        closed_box(
+            &Aabb::new(Vec3::new(0.6, 0.2, 0.2), Vec3::new(0.8, 0.35, 0.3)),
+            1,
+        ),
+    ])
+}
+
+#[test]
+fn closed_box_exactly_the_box_is_visible() {
+    let mesh = box_with_parts();
+    let truth = truth_of(&mesh, &quick());
+    let expected: Vec<bool> = (0..mesh.num_triangles())
+        .map(|t| mesh.part_of(t) == 0)
+        .collect();
+    assert_eq!(truth.visible, expected);
+    assert_eq!(truth.visible_count, 4 * 4 * 2 * 6);
+    assert!(truth.converged, "last change {}", truth.last_change);
+    assert_eq!(truth.degenerate, 0);
+}
+
+#[test]
+fn parts_in_line_with_a_hole_are_visible() {
+    // A square hole of 2/8 in the +x wall, a sphere right behind it, a
+    // sphere sealed in its own small box far from it.
+    let wall = box_surface(&aabb(0.0, 1.0), 8, |axis, max_side, i, j| {
+        axis == 0 && max_side && (3..5).contains(&i) && (3..5).contains(&j)
+    });
+    let behind = Vec3::new(0.8, 0.5, 0.5);
+    let mesh = assembly([
+        wall,
+        icosphere(behind, 0.1, 2),
+        closed_box(
+            &Aabb::new(Vec3::new(0.05, 0.05, 0.05), Vec3::new(0.25, 0.25, 0.25)),
+            1,
+        ),
+        icosphere(Vec3::splat(0.15), 0.05, 1),
+    ]);
+    let truth = truth_of(&mesh, &quick());
+    // Triangles seen through the hole at grazing angles keep turning up as
+    // the counts grow, so the quick settings need not converge here.
+    assert!(truth.rounds == 4 || truth.converged);
+    let m = &mesh;
+    let tris = |p: u32| (0..m.num_triangles()).filter(move |&t| m.part_of(t) == p);
+    let centroid = |t: usize| {
+        let [a, b, c] = mesh.triangle(t);
+        (a + b + c) / 3.0
+    };
+    // Every wall triangle is seen from outside.
+    assert!(tris(0).all(|t| truth.visible[t]));
+    // The sphere's cap facing the hole is seen, its far side is not.
+    for t in tris(1) {
+        let facing = (centroid(t) - behind).normalize();
+        if facing.x > 0.9 {
+            assert!(truth.visible[t], "sphere triangle {t} faces the hole");
+        }
+        if facing.x < -0.5 {
+            assert!(!truth.visible[t], "sphere triangle {t} faces away");
+        }
+    }
+    // The sealed sphere is hidden.
+    assert!(tris(3).all(|t| !truth.visible[t]));
+}
+
+#[test]
+fn doubling_terminates_and_doubles() {
+    let mesh = box_with_parts();
+    let options = quick();
+    let truth = truth_of(&mesh, &options);
+    assert!(truth.rounds >= 2 && truth.rounds <= options.max_rounds);
+    let scale = 1 << (truth.rounds - 1);
+    assert_eq!(truth.points, options.points * scale);
+    assert_eq!(truth.directions, options.directions * scale);
+    assert_eq!(truth.viewpoints, options.viewpoints * scale as usize);
+    assert_eq!(truth.last_change, 0);
+    assert!(truth.rays > 0 && truth.seconds >= 0.0);
+    // With a cap of two rounds it still stops, and reports the change.
+    let capped = truth_of(
+        &mesh,
+        &EvalOptions {
+            max_rounds: 2,
+            ..options
+        },
+    );
+    assert!(capped.rounds <= 2);
+    assert_eq!(capped.converged, capped.last_change == 0);
+    // No triangles: nothing to do.
+    let empty = truth_of(&TriangleMesh::default(), &options);
+    assert!(empty.visible.is_empty() && empty.converged);
+}
+
+#[test]
+fn fibonacci_points_are_unit_and_spread() {
+    let n = 1000;
+    let pts: Vec<Vec3> = (0..n).map(|i| fibonacci(i, n)).collect();
+    assert!(pts.iter().all(|p| (p.length() - 1.0).abs() < 1e-5));
+    let mean = pts.iter().copied().sum::<Vec3>() / n as f32;
+    assert!(mean.length() < 0.01, "{mean}");
+}
+
+#[test]
+fn compare_counts_false_and_missed_removals() {
+    let mesh = box_with_parts();
+    let n = mesh.num_triangles();
+    let box_tris = 4 * 4 * 2 * 6;
+    let visible: Vec<bool> = (0..n).map(|t| mesh.part_of(t) == 0).collect();
+    let truth = GroundTruth {
+        visible: visible.clone(),
+        ..Default::default()
+    };
+
+    // Perfect culling.
+    let r = compare(&truth, &visible, &mesh);
+    assert_eq!((r.false_removals, r.missed_removals), (0, 0));
+    assert_eq!(r.triangles, n);
+    assert_eq!(r.triangles_removed, n - box_tris);
+    assert_eq!((r.truly_visible, r.truly_hidden), (box_tris, n - box_tris));
+    assert_eq!((r.parts, r.parts_removed), (4, 3));
+    assert!((r.removed_fraction_parts - 0.75).abs() < 1e-12);
+    assert!((r.area - mesh.area()).abs() < 1e-9 * mesh.area());
+    assert!(
+        (r.area - r.area_removed - 6.0).abs() < 1e-4,
+        "box area is 6"
+    );
+
+    // Keep everything: every hidden triangle is a missed removal.
+    let r = compare(&truth, &vec![true; n], &mesh);
+    assert_eq!((r.false_removals, r.missed_removals), (0, n - box_tris));
+    assert_eq!(r.triangles_removed, 0);
+    assert_eq!(r.missed_fraction, 1.0);
+    assert_eq!(
+        r.missed_removal_ids.len(),
+        raykit_cull::evaluate::LISTED_IDS
+    );
+    assert_eq!(r.missed_removal_ids[0], box_tris);
+
+    // Remove two box triangles and keep three hidden ones.
+    let mut kept = visible.clone();
+    kept[3] = false;
+    kept[10] = false;
+    for t in [box_tris, box_tris + 1, n - 1] {
+        kept[t] = true;
+    }
+    let r = compare(&truth, &kept, &mesh);
+    assert_eq!(r.false_removals, 2);
+    assert_eq!(r.false_removal_ids, vec![3, 10]);
+    assert!((r.false_removal_area - 2.0 / 32.0).abs() < 1e-6);
+    assert_eq!(r.missed_removals, 3);
+    assert_eq!(r.missed_removal_ids, vec![box_tris, box_tris + 1, n - 1]);
+    assert_eq!(r.parts_removed, 1, "part 1 and 3 keep a triangle");
+    assert_eq!(r.triangles_removed, n - box_tris + 2 - 3);
+
+    // Remove everything: every visible triangle is a false removal.
+    let r = compare(&truth, &vec![false; n], &mesh);
+    assert_eq!((r.false_removals, r.missed_removals), (box_tris, 0));
+    assert_eq!(r.removed_fraction_triangles, 1.0);
+    assert!((r.removed_fraction_area - 1.0).abs() < 1e-12);
+}
