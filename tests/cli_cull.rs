@@ -6,23 +6,10 @@
 use raykit_core::{Aabb, Part, TriangleMesh, Vec3};
 use raykit_cull::synthetic::{assembly, closed_box, icosphere};
 use std::collections::BTreeSet;
-use std::path::Path;
-use std::process::{Command, Output};
 
-fn raykit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raykit"))
-        .args(args)
-        .output()
-        .expect("the raykit binary runs")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 temp path")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::{raykit, s, text};
 
 type Corners = [[u32; 3]; 3];
 

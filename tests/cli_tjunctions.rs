@@ -5,24 +5,11 @@
 #[path = "../crates/core/tests/tjunction_support/mod.rs"]
 mod tjunction_support;
 
-use std::path::Path;
-use std::process::{Command, Output};
 use tjunction_support::*;
 
-fn raykit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raykit"))
-        .args(args)
-        .output()
-        .expect("the raykit binary runs")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 temp path")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::{raykit, s, text};
 
 /// Two unit quads; the right one split at y = 0.5 with its own vertices:
 /// (1, 0.5) lies inside the left quad's edge x = 1.
