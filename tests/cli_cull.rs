@@ -186,3 +186,85 @@ fn bad_arguments_fail_with_a_clear_message() {
     let help = text(&o.stdout);
     assert!(help.contains("--resolution") && help.contains("What --resolution trades"));
 }
+
+#[test]
+fn evaluate_reports_the_ground_truth_and_exits_2_on_false_removals() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, _) = boxed_balls();
+    let input = dir.path().join("assembly.ply");
+    raykit_io::save_mesh(&input, &model).unwrap();
+    let output = dir.path().join("out.ply");
+    let report = dir.path().join("r.json");
+    let o = raykit(&[
+        "cull",
+        s(&input),
+        s(&output),
+        "--resolution",
+        "32",
+        "--evaluate",
+        "--eval-rounds",
+        "2",
+        "--report",
+        s(&report),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("false removals 0"),
+        "{}",
+        text(&o.stdout)
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    // The geometry's answer: the box is seen, the balls are not.
+    let g = &r["ground_truth"];
+    assert_eq!(g["visible_count"], BOX_TRIS, "{g}");
+    assert!(g["rounds"].as_u64().unwrap() <= 2);
+    let e = &r["evaluation"];
+    assert_eq!(e["truly_visible"], BOX_TRIS, "{e}");
+    assert_eq!(e["truly_hidden"], SPHERES * SPHERE_TRIS, "{e}");
+    assert_eq!(e["false_removals"], 0, "{e}");
+    assert_eq!(e["missed_removals"], 0, "{e}");
+
+    // Take the lid off: the balls are in plain view, and paper 003's rule
+    // on a coarse grid misses some of their small triangles.
+    let open = raykit_cull::synthetic::box_surface(
+        &Aabb::new(Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0)),
+        3,
+        |axis, max_side, _, _| axis == 2 && max_side,
+    );
+    let mut pieces = vec![open];
+    pieces.extend(model_balls(&model));
+    let lidless = assembly(pieces);
+    let input = dir.path().join("lidless.ply");
+    raykit_io::save_mesh(&input, &lidless).unwrap();
+    let o = raykit(&[
+        "cull",
+        s(&input),
+        s(&output),
+        "--paper",
+        "--resolution",
+        "6",
+        "--evaluate",
+        "--eval-rounds",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    let r: serde_json::Value = serde_json::from_str(&text(&o.stdout)).unwrap();
+    let e = &r["evaluation"];
+    assert!(e["false_removals"].as_u64().unwrap() > 0, "{e}");
+    assert!(e["false_removal_ids"].as_array().unwrap().len() <= 20);
+}
+
+/// The balls of [`boxed_balls`]' model, one mesh each.
+fn model_balls(model: &TriangleMesh) -> Vec<TriangleMesh> {
+    (1..=SPHERES as u32)
+        .map(|p| {
+            let tris: Vec<[u32; 3]> = (0..model.num_triangles())
+                .filter(|&t| model.part_of(t) == p)
+                .map(|t| model.indices[t])
+                .collect();
+            TriangleMesh::new(model.positions.clone(), tris)
+        })
+        .collect()
+}

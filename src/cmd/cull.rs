@@ -9,8 +9,8 @@ use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::{Part, TriangleMesh};
 use raykit_cull::{
-    compare, cull, evaluate, CullOptions, CullStats, EvalOptions, EvalReport, Grid, GroundTruth,
-    RayConfirm,
+    compare, cull, evaluate_with_progress, CullOptions, CullStats, EvalOptions, EvalReport, Grid,
+    GroundTruth,
 };
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -42,9 +42,10 @@ is closed to the front, and what is seen only through it looks hidden. Higher re
 smaller openings and remove more hidden triangles, at a time and memory cost growing with the cube\n\
 of the resolution (about two bytes per point plus the field's surface crossings). The default\n\
 conservative mode keeps what the evidence does not clearly hide: triangles within one spacing behind\n\
-a visible surface, and triangles in grid cells with an outside corner; --confirm also keeps every\n\
-remaining candidate that a few random rays from its surface show to escape the model (slow on models\n\
-with many hidden triangles). --paper applies the paper's rule alone (removes more, may remove\n\
+a visible surface, triangles in grid cells with an outside corner, and candidates next to kept\n\
+triangles that random rays (or escape directions shared by their neighbours) show to escape the\n\
+model; --confirm also tests every remaining candidate by rays (slow on models with many hidden\n\
+triangles). --paper applies the paper's rule alone (removes more, may remove\n\
 visible triangles near small openings).\n\n\
 Examples:\n  raykit cull engine.glb engine_outside.glb\n  \
 raykit cull assembly.obj shell.obj --resolution 256 --by part --report cull.json\n  \
@@ -93,6 +94,19 @@ pub struct CullArgs {
     /// status 2 when a truly visible triangle was removed.
     #[arg(long)]
     evaluate: bool,
+    /// Most rounds of the ground truth (each doubles the sample points per
+    /// triangle, the directions per point and the viewpoints; it stops
+    /// earlier when a round finds no new visible triangle).
+    #[arg(long, default_value_t = EvalOptions::default().max_rounds as u32,
+          value_parser = clap::value_parser!(u32).range(2..=10),
+          requires = "evaluate")]
+    eval_rounds: u32,
+    /// Narrowest opening the ground truth sees through, as a fraction of the
+    /// model's bounding-box diagonal (0: any ray). CAD tessellations leave
+    /// hairline cracks between faces; rays through them would make hidden
+    /// parts "visible".
+    #[arg(long, default_value_t = EvalOptions::default().min_opening, requires = "evaluate")]
+    eval_min_opening: f32,
 }
 
 /// The JSON report: the run's figures and the library's statistics.
@@ -136,7 +150,7 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
         CullOptions::paper(args.resolution as usize)
     } else {
         CullOptions {
-            confirm: args.confirm.then(RayConfirm::default),
+            confirm: args.confirm.then(EvalOptions::confirmation),
             ..CullOptions::conservative(args.resolution as usize)
         }
     };
@@ -182,7 +196,31 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
             &mesh,
             &BuildOptions::default(),
         );
-        let truth = evaluate(&mesh, accel.as_ref(), &EvalOptions::default());
+        let eval_options = EvalOptions {
+            max_rounds: args.eval_rounds as usize,
+            min_opening: args.eval_min_opening,
+            ..Default::default()
+        };
+        let bar = ProgressBar::new(1).with_style(
+            ProgressStyle::with_template(
+                "ground truth, round {msg} {bar:30} {pos}/{len} [{elapsed}, eta {eta}]",
+            )
+            .expect("valid template"),
+        );
+        let truth = evaluate_with_progress(&mesh, accel.as_ref(), &eval_options, &|p| {
+            if p.done == 1 {
+                bar.set_length(p.total);
+                bar.reset_eta();
+                bar.set_message(format!(
+                    "{} of {} ({} triangles visible so far; triangles, then viewpoints)",
+                    p.round + 1,
+                    eval_options.max_rounds,
+                    p.visible
+                ));
+            }
+            bar.set_position(p.done);
+        });
+        bar.finish_and_clear();
         let eval = compare(&truth, &keep, &mesh);
         (Some(truth), Some(eval))
     } else {
@@ -327,11 +365,13 @@ fn print_summary(r: &Report<'_>, output: &Path, report: Option<&Path>) {
     );
     if r.mode == "conservative" {
         println!(
-            "conservative mode kept {} triangles by dilation, {} by contact with outside cells{}",
+            "conservative mode kept {} triangles by dilation, {} by contact with outside cells, {} by \
+             escaping rays at the frontier{}",
             s.kept_by_dilation,
             s.kept_by_contact,
+            s.kept_by_frontier,
             if r.confirm {
-                format!(", {} by escaping rays", s.kept_by_rays)
+                format!(", {} by escaping rays elsewhere", s.kept_by_rays)
             } else {
                 String::new()
             }

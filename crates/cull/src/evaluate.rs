@@ -12,24 +12,32 @@
 //!   of primary rays covering the bounding sphere; every triangle hit is
 //!   visible.
 //!
-//! Sample counts (points, directions, viewpoints) are doubled each round
-//! with fresh random samples, and the labels of all rounds are united, until
-//! a round finds no new visible triangle (or the rounds run out). The result
-//! is evidence, not proof: a triangle seen only through a very small solid
-//! angle may be missed (then labelled hidden).
+//! Every escaping ray found is then shared with the neighbouring triangles
+//! ([`crate::shared_escapes`]), which finds what is seen through narrow
+//! openings far sooner than random sampling.
+//!
+//! Sample counts are doubled each round with fresh random samples — the rays
+//! per triangle (points and viewpoints on odd rounds, directions per point
+//! on even ones) — and the labels of all rounds are united, until a
+//! round finds no new visible triangle (or the rounds run out). Every
+//! visible label rests on a ray that met nothing; a hidden label is
+//! evidence, not proof: a triangle seen only through a very small solid
+//! angle may be missed.
 
-use raykit_core::rng::Pcg32;
+use crate::shared_escapes::{SharedEscapes, SHARING_CELLS};
+use crate::visible::{beam_escapes, escape_direction, off_surface, RayConfirm};
 use raykit_core::{Accel, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
 /// Settings of [`evaluate`]: the counts of the first round (each later
 /// round doubles them) and the cap on rounds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EvalOptions {
-    /// Sample points per triangle in the first round.
+    /// Sample points per triangle in the first round (the centroid and
+    /// uniform points).
     pub points: u32,
     /// Random directions per sample point and face in the first round.
     pub directions: u32,
@@ -41,6 +49,11 @@ pub struct EvalOptions {
     pub max_rounds: usize,
     /// Seed of the random samples.
     pub seed: u64,
+    /// Narrowest opening that counts, as a fraction of the model's bounding
+    /// box diagonal: an escape needs a beam this wide (see
+    /// [`crate::visible::beam_escapes`]), so cracks between independently
+    /// tessellated faces do not make hidden triangles visible. 0: any ray.
+    pub min_opening: f32,
 }
 
 impl Default for EvalOptions {
@@ -49,9 +62,23 @@ impl Default for EvalOptions {
             points: 4,
             directions: 16,
             viewpoints: 10_000,
-            image: 64,
-            max_rounds: 4,
+            image: 32,
+            max_rounds: 6,
             seed: 0x0006_e7a1,
+            min_opening: 1e-4,
+        }
+    }
+}
+
+impl EvalOptions {
+    /// The settings of [`crate::CullOptions::confirm`]: the ground truth's
+    /// search with its own seed, and any ray counts (no minimum opening), so
+    /// that it keeps rather than removes.
+    pub fn confirmation() -> Self {
+        EvalOptions {
+            seed: 0x0003_c011,
+            min_opening: 0.0,
+            ..Default::default()
         }
     }
 }
@@ -78,6 +105,8 @@ pub struct GroundTruth {
     pub viewpoints: usize,
     /// Side of the renders in pixels.
     pub image: usize,
+    /// Width of the beams that had to escape, in model units.
+    pub beam: f32,
     /// Rays cast, all rounds together.
     pub rays: u64,
     /// Triangles of zero area (no face to sample; labelled hidden unless a
@@ -85,15 +114,79 @@ pub struct GroundTruth {
     pub degenerate: usize,
     /// Seconds, all rounds together.
     pub seconds: f64,
+    /// What each round found.
+    pub round_log: Vec<RoundLog>,
+}
+
+/// What one round of [`evaluate`] found.
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct RoundLog {
+    /// Sample points per triangle.
+    pub points: u32,
+    /// Directions per point and face.
+    pub directions: u32,
+    /// Viewpoints of the renders.
+    pub viewpoints: usize,
+    /// Triangles newly found by random rays from their surface.
+    pub by_surface_rays: usize,
+    /// Triangles newly found by the renders (and not by surface rays).
+    pub by_renders: usize,
+    /// Triangles newly found by directions shared from neighbours.
+    pub by_sharing: usize,
+    /// Passes of sharing.
+    pub sharing_passes: usize,
+    /// Seconds of this round.
+    pub seconds: f64,
+}
+
+/// Where [`evaluate_with_progress`] stands: work items (candidate triangles,
+/// then viewpoints) of the current round.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EvalProgress {
+    /// Round, from 0.
+    pub round: usize,
+    /// Work items of this round done.
+    pub done: u64,
+    /// Work items of this round in all.
+    pub total: u64,
+    /// Triangles labelled visible before this round.
+    pub visible: usize,
 }
 
 /// The ground truth of `mesh`'s visibility from outside, by rays through
 /// `accel` (built on `mesh`).
 pub fn evaluate(mesh: &TriangleMesh, accel: &dyn Accel, options: &EvalOptions) -> GroundTruth {
+    evaluate_with_progress(mesh, accel, options, &|_| {})
+}
+
+/// [`evaluate`], calling `progress` as work items finish (from any thread).
+pub fn evaluate_with_progress(
+    mesh: &TriangleMesh,
+    accel: &dyn Accel,
+    options: &EvalOptions,
+    progress: &(dyn Fn(EvalProgress) + Sync),
+) -> GroundTruth {
+    let known = vec![false; mesh.num_triangles()];
+    evaluate_beyond(mesh, accel, options, known, progress)
+}
+
+/// [`evaluate_with_progress`] for the triangles not yet `known` visible:
+/// those start labelled visible and are not tested again (the confirmation
+/// by rays of [`crate::cull`] runs it over its candidates).
+/// `known.len()` must be the number of triangles.
+pub fn evaluate_beyond(
+    mesh: &TriangleMesh,
+    accel: &dyn Accel,
+    options: &EvalOptions,
+    known: Vec<bool>,
+    progress: &(dyn Fn(EvalProgress) + Sync),
+) -> GroundTruth {
     let clock = Instant::now();
     let n = mesh.num_triangles();
+    assert_eq!(known.len(), n, "one label per triangle");
     let mut truth = GroundTruth {
-        visible: vec![false; n],
+        visible_count: known.iter().filter(|&&k| k).count(),
+        visible: known,
         image: options.image,
         ..Default::default()
     };
@@ -101,75 +194,114 @@ pub fn evaluate(mesh: &TriangleMesh, accel: &dyn Accel, options: &EvalOptions) -
         truth.converged = true;
         return truth;
     }
-    truth.degenerate = (0..n)
-        .filter(|&t| mesh.face_normal(t).normalize_or_zero() == Vec3::ZERO)
-        .count();
+    let degenerate: Vec<bool> = (0..n).map(|t| is_degenerate(mesh, t)).collect();
+    truth.degenerate = degenerate.iter().filter(|&&d| d).count();
     let bounds = mesh.bounds();
     let centre = (bounds.min + bounds.max) * 0.5;
     let radius = ((bounds.max - bounds.min).length() * 0.5).max(1e-20);
     let max_rounds = options.max_rounds.max(2);
+    let beam = options.min_opening.max(0.0) * (bounds.max - bounds.min).length();
+    truth.beam = beam;
+    let mut shared = SharedEscapes::new(&bounds, SHARING_CELLS);
     for round in 0..max_rounds {
-        let scale = 1u32 << round;
-        let points = options.points.max(1).saturating_mul(scale);
-        let directions = options.directions.max(1).saturating_mul(scale);
-        let viewpoints = options.viewpoints.saturating_mul(scale as usize);
-        let seed = options.seed.wrapping_add(round as u64 * 0x9e37_79b9);
+        // Rays per triangle double each round: points on odd rounds,
+        // directions on even ones; viewpoints double with the points.
+        let samples = RayConfirm {
+            points: options.points.max(1).saturating_mul(1 << round.div_ceil(2)),
+            directions: options.directions.max(1).saturating_mul(1 << (round / 2)),
+            seed: options.seed.wrapping_add(round as u64 * 0x9e37_79b9),
+            beam,
+        };
+        let viewpoints = options.viewpoints.saturating_mul(1 << round.div_ceil(2));
+        let candidates: Vec<usize> = (0..n)
+            .filter(|&t| !truth.visible[t] && !degenerate[t])
+            .collect();
+        let total = (candidates.len() + viewpoints) as u64;
+        let done = AtomicU64::new(0);
+        let visible_before = truth.visible_count;
+        let tick = || {
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress(EvalProgress {
+                round,
+                done: d,
+                total,
+                visible: visible_before,
+            });
+        };
 
         // Rays from the surface, for the triangles not yet seen.
-        let from_surface: Vec<usize> = truth
-            .visible
+        let round_clock = Instant::now();
+        let mut found: Vec<(usize, Vec3)> = candidates
             .par_iter()
-            .enumerate()
-            .with_min_len(64)
-            .filter(|(t, v)| !**v && seen_from_surface(mesh, accel, *t, points, directions, seed))
-            .map(|(t, _)| t)
+            .with_min_len(16)
+            .filter_map(|&t| {
+                let d = escape_direction(mesh, accel, t, &samples);
+                tick();
+                d.map(|d| (t, d))
+            })
             .collect();
-        let unseen = truth.visible.iter().filter(|&&v| !v).count() as u64;
-        truth.rays += unseen * u64::from(points) * 2 * u64::from(directions);
+        truth.rays +=
+            candidates.len() as u64 * u64::from(samples.points) * 2 * u64::from(samples.directions);
 
         // Renders of triangle ids.
         let hit: Vec<AtomicBool> = (0..n).map(|_| AtomicBool::new(false)).collect();
-        (0..viewpoints)
+        let seen: Vec<Vec<(usize, Vec3)>> = (0..viewpoints)
             .into_par_iter()
             .with_min_len(4)
-            .for_each(|i| {
-                render(
-                    accel,
-                    centre,
-                    radius,
-                    fibonacci(i, viewpoints),
-                    options.image,
-                    &hit,
-                )
-            });
+            .map(|i| {
+                let v = fibonacci(i, viewpoints);
+                let seen = render(mesh, accel, centre, radius, v, options.image, beam, &hit);
+                tick();
+                seen
+            })
+            .collect();
+        let by_surface_rays = found.len();
+        found.extend(seen.into_iter().flatten());
         truth.rays += (viewpoints * options.image * options.image) as u64;
+        let mut log = RoundLog {
+            points: samples.points,
+            directions: samples.directions,
+            viewpoints,
+            by_surface_rays,
+            ..Default::default()
+        };
 
-        let mut change = 0;
-        for t in from_surface {
-            if !truth.visible[t] {
-                truth.visible[t] = true;
-                change += 1;
-            }
-        }
-        for (t, h) in hit.iter().enumerate() {
-            if h.load(Ordering::Relaxed) && !truth.visible[t] {
-                truth.visible[t] = true;
-                change += 1;
-            }
-        }
+        // Directions shared with neighbours, until they find nothing new.
+        let spread = shared.spread(
+            mesh,
+            accel,
+            &mut truth.visible,
+            &|t| degenerate[t],
+            found,
+            samples.points.min(4),
+            samples.seed,
+            beam,
+        );
+        truth.rays += spread.rays;
+        log.by_renders = spread.direct - by_surface_rays;
+        log.by_sharing = spread.by_sharing;
+        log.sharing_passes = spread.passes;
+        let change = spread.direct + spread.by_sharing;
+        log.seconds = round_clock.elapsed().as_secs_f64();
+        truth.round_log.push(log);
+        truth.visible_count += change;
         truth.rounds = round + 1;
         truth.last_change = change;
-        truth.points = points;
-        truth.directions = directions;
+        truth.points = samples.points;
+        truth.directions = samples.directions;
         truth.viewpoints = viewpoints;
         if round > 0 && change == 0 {
             truth.converged = true;
             break;
         }
     }
-    truth.visible_count = truth.visible.iter().filter(|&&v| v).count();
     truth.seconds = clock.elapsed().as_secs_f64();
     truth
+}
+
+/// True when triangle `t` of `mesh` has no area (no face to sample or see).
+pub fn is_degenerate(mesh: &TriangleMesh, t: usize) -> bool {
+    mesh.face_normal(t).normalize_or_zero() == Vec3::ZERO
 }
 
 /// Point `i` of the `n`-point Fibonacci sphere (unit vectors, evenly spread).
@@ -183,15 +315,21 @@ pub fn fibonacci(i: usize, n: usize) -> Vec3 {
 
 /// One render: from `centre + 2 radius · dir`, an `image × image` pinhole
 /// image looking at `centre` whose view cone just holds the bounding sphere;
-/// marks the triangles hit.
+/// marks the triangles hit and returns those it marked first, each with the
+/// direction back to the eye (it escapes: nothing lies between, and the eye
+/// is outside the bounding sphere).
+#[allow(clippy::too_many_arguments)]
 fn render(
+    mesh: &TriangleMesh,
     accel: &dyn Accel,
     centre: Vec3,
     radius: f32,
     dir: Vec3,
     image: usize,
+    beam: f32,
     hit: &[AtomicBool],
-) {
+) -> Vec<(usize, Vec3)> {
+    let mut first = Vec::new();
     let eye = centre + dir * (2.0 * radius);
     let forward = -dir;
     let helper = if forward.z.abs() < 0.9 {
@@ -211,73 +349,24 @@ fn render(
             let v = ((j as f32 + 0.5) / image as f32 * 2.0 - 1.0) * half;
             let d = (forward + u * right + v * up).normalize();
             if let Some(h) = accel.intersect(&Ray::new(eye, d)) {
-                if let Some(slot) = hit.get(h.prim as usize) {
-                    if !slot.load(Ordering::Relaxed) {
-                        slot.store(true, Ordering::Relaxed);
-                    }
+                let t = h.prim as usize;
+                let Some(slot) = hit.get(t) else { continue };
+                if slot.load(Ordering::Relaxed) {
+                    continue;
+                }
+                // Seen through an opening at least `beam` wide?
+                let n = mesh.face_normal(t).normalize_or_zero();
+                let face = if n.dot(d) < 0.0 { n } else { -n };
+                let origin = off_surface(mesh, t, eye + d * h.t, face);
+                if (beam <= 0.0 || beam_escapes(mesh, accel, t, origin, -d, beam))
+                    && !slot.swap(true, Ordering::Relaxed)
+                {
+                    first.push((t, -d));
                 }
             }
         }
     }
-}
-
-/// True when some of `points` sample points on triangle `t`, on either face,
-/// with `directions` random directions of that face's hemisphere, casts a
-/// ray that meets no other triangle.
-fn seen_from_surface(
-    mesh: &TriangleMesh,
-    accel: &dyn Accel,
-    t: usize,
-    points: u32,
-    directions: u32,
-    seed: u64,
-) -> bool {
-    let [a, b, c] = mesh.triangle(t);
-    let n = (b - a).cross(c - a).normalize_or_zero();
-    if n == Vec3::ZERO {
-        return false;
-    }
-    let scale = a.abs().max(b.abs()).max(c.abs()).max_element().max(1e-30);
-    let offset = scale * 1e-5;
-    let mut rng = Pcg32::with_stream(seed, t as u64);
-    for k in 0..points {
-        let (mut u, mut v) = if k == 0 {
-            (1.0 / 3.0, 1.0 / 3.0)
-        } else {
-            (rng.next_f32(), rng.next_f32())
-        };
-        if u + v > 1.0 {
-            (u, v) = (1.0 - u, 1.0 - v);
-        }
-        let p = a + u * (b - a) + v * (c - a);
-        for face in [n, -n] {
-            let o = p + face * offset;
-            for _ in 0..directions {
-                let mut d = rng.unit_vector();
-                if d.dot(face) < 0.0 {
-                    d = -d;
-                }
-                if escapes(accel, o, d, t as u32) {
-                    return true;
-                }
-            }
-        }
-    }
-    false
-}
-
-/// True when the ray meets no triangle but `own` (hits on `own`, from
-/// grazing directions, are stepped over).
-fn escapes(accel: &dyn Accel, o: Vec3, d: Vec3, own: u32) -> bool {
-    let mut tnear = 0.0f32;
-    for _ in 0..4 {
-        match accel.intersect(&Ray::segment(o, d, tnear, f32::INFINITY)) {
-            None => return true,
-            Some(h) if h.prim == own => tnear = h.t.next_up(),
-            Some(_) => return false,
-        }
-    }
-    false
+    first
 }
 
 /// Most triangle ids listed in [`EvalReport::false_removal_ids`] and
@@ -305,9 +394,12 @@ pub struct EvalReport {
     pub parts_removed: usize,
     /// Fraction of parts removed.
     pub removed_fraction_parts: f64,
-    /// Triangles the ground truth labels visible.
+    /// Triangles of zero area: counted in the removals above, but neither
+    /// visible nor hidden, so never a false or a missed removal.
+    pub degenerate: usize,
+    /// Triangles of positive area the ground truth labels visible.
     pub truly_visible: usize,
-    /// Triangles the ground truth labels hidden.
+    /// Triangles of positive area the ground truth labels hidden.
     pub truly_hidden: usize,
     /// False removals: truly visible but removed.
     pub false_removals: usize,
@@ -358,7 +450,9 @@ pub fn compare(truth: &GroundTruth, kept: &[bool], mesh: &TriangleMesh) -> EvalR
             r.triangles_removed += 1;
             r.area_removed += at;
         }
-        if truth.visible[t] {
+        if is_degenerate(mesh, t) {
+            r.degenerate += 1;
+        } else if truth.visible[t] {
             r.truly_visible += 1;
             if !kept[t] {
                 r.false_removals += 1;

@@ -20,29 +20,42 @@
 //! Time and memory grow with the cube of the resolution (lines × hits per
 //! line for the field, one byte per point for each of the free steps and the
 //! tags). The default *conservative* mode therefore keeps what the evidence
-//! does not clearly hide: triangles within [`CullOptions::depth_cells`]
-//! spacings behind a visible surface along an outside point's ray (a
-//! dilation), triangles in grid cells with an outside corner
-//! ([`visible::touches_outside`]), and, when asked for
-//! ([`CullOptions::confirm`]), every remaining candidate that a few random
-//! rays from its surface show to escape the model
-//! ([`visible::confirm_by_rays`]). Higher resolutions remove more hidden
-//! triangles; the conservative additions trade removals for safety: they
-//! make false removals rarer (none in the tests, at any resolution) but are
-//! evidence, not a proof.
+//! does not clearly hide:
+//! - triangles within [`CullOptions::depth_cells`] spacings behind a visible
+//!   surface along an outside point's ray (a dilation);
+//! - triangles in grid cells with an outside corner
+//!   ([`visible::touches_outside`]);
+//! - candidates next to kept triangles that rays show to escape the model:
+//!   random rays from their surface, and the escape directions found from
+//!   their neighbours ([`visible::confirm_frontier`], [`shared_escapes`]);
+//! - when asked for ([`CullOptions::confirm`]), every remaining candidate
+//!   the ground truth's own search finds visible
+//!   ([`evaluate::evaluate_beyond`]).
+//!
+//! Higher resolutions remove more hidden triangles; the conservative
+//! additions trade removals for safety. They make false removals rare, but
+//! are evidence, not a proof: `raykit experiment cull` counts them against
+//! the ray-traced ground truth.
 
 pub mod distance_field;
 pub mod evaluate;
 pub mod grid;
 pub mod propagate;
+pub mod shared_escapes;
 pub mod synthetic;
 pub mod visible;
 
 pub use distance_field::{DirectedDistanceField, DirectedHit, Direction};
-pub use evaluate::{compare, evaluate, EvalOptions, EvalReport, GroundTruth};
+pub use evaluate::{
+    compare, evaluate, evaluate_beyond, evaluate_with_progress, EvalOptions, EvalProgress,
+    EvalReport, GroundTruth, RoundLog,
+};
 pub use grid::Grid;
 pub use propagate::{propagate, Classification, Tag};
-pub use visible::{confirm_by_rays, escapes, touches_outside, visible_from_outside, RayConfirm};
+pub use visible::{
+    beam_escapes, confirm_frontier, escape_direction, touches_outside, visible_from_outside,
+    RayConfirm,
+};
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
@@ -61,11 +74,18 @@ pub struct CullOptions {
     /// Conservative mode: triangles within this many spacings behind the
     /// first surface on an outside point's ray are kept.
     pub depth_cells: f32,
-    /// Conservative mode: confirmation of candidates by rays (`None`, the
-    /// default: off — it costs about 115 s for 1.28M hidden triangles at the
-    /// default 4 points × 8 directions per face on 2 cores; see
-    /// [`visible::confirm_by_rays`]).
-    pub confirm: Option<RayConfirm>,
+    /// Conservative mode: keep triangles in grid cells with an outside corner
+    /// ([`visible::touches_outside`]).
+    pub contact: bool,
+    /// Conservative mode: confirmation by rays of the candidates next to
+    /// kept triangles, with escape directions shared between neighbours
+    /// (`Some`, the default; see [`visible::confirm_frontier`]).
+    pub frontier: Option<RayConfirm>,
+    /// Conservative mode: confirmation of every remaining candidate by the
+    /// ground truth's own search ([`evaluate::evaluate_beyond`]: rays from
+    /// the surface, renders, shared escape directions, doubled each round);
+    /// `None`, the default: off — its cost grows with the hidden triangles.
+    pub confirm: Option<EvalOptions>,
 }
 
 impl Default for CullOptions {
@@ -74,6 +94,8 @@ impl Default for CullOptions {
             resolution: 128,
             conservative: true,
             depth_cells: 1.0,
+            contact: true,
+            frontier: Some(RayConfirm::default()),
             confirm: None,
         }
     }
@@ -87,6 +109,8 @@ impl CullOptions {
             resolution,
             conservative: false,
             depth_cells: 0.0,
+            contact: false,
+            frontier: None,
             confirm: None,
         }
     }
@@ -129,7 +153,9 @@ pub struct CullStats {
     pub kept_by_dilation: usize,
     /// Triangles kept only by their contact with outside grid cells.
     pub kept_by_contact: usize,
-    /// Triangles kept only by the confirmation by rays.
+    /// Triangles kept only by the confirmation at the frontier.
+    pub kept_by_frontier: usize,
+    /// Triangles kept only by the confirmation by rays of every candidate.
     pub kept_by_rays: usize,
     /// Parts in the model.
     pub parts: usize,
@@ -186,9 +212,21 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
             visible = visible_from_outside(&field, &class, n, options.depth_cells);
         }
         stats.kept_by_dilation = visible.iter().filter(|&&v| v).count() - seen;
-        stats.kept_by_contact = touches_outside(mesh, &grid, &class, &mut visible);
+        if options.contact {
+            stats.kept_by_contact = touches_outside(mesh, &grid, &class, &mut visible);
+        }
+        if let Some(c) = &options.frontier {
+            stats.kept_by_frontier = confirm_frontier(mesh, accel.as_ref(), &mut visible, c);
+        }
         if let Some(c) = &options.confirm {
-            stats.kept_by_rays = confirm_by_rays(mesh, accel.as_ref(), &mut visible, c);
+            let before = visible.iter().filter(|&&v| v).count();
+            // Triangles without area have no face to judge: kept.
+            for (t, v) in visible.iter_mut().enumerate() {
+                *v |= evaluate::is_degenerate(mesh, t);
+            }
+            let truth = evaluate_beyond(mesh, accel.as_ref(), c, visible, &|_| {});
+            visible = truth.visible;
+            stats.kept_by_rays = truth.visible_count - before;
         }
     }
     stats.visible_seconds = clock.elapsed().as_secs_f64();

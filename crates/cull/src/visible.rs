@@ -3,9 +3,11 @@
 
 use crate::distance_field::DirectedDistanceField;
 use crate::propagate::Classification;
+use crate::shared_escapes::{SharedEscapes, SHARING_CELLS};
 use raykit_core::rng::Pcg32;
 use raykit_core::{Accel, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
+use std::collections::HashSet;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Triangles met by the directed rays of outside grid points (paper 003,
@@ -94,6 +96,9 @@ pub struct RayConfirm {
     /// Seed of the sample sequence (per triangle streams: results do not
     /// depend on the thread count).
     pub seed: u64,
+    /// Width of the beam that must escape, in model units (0: a single
+    /// ray). See [`beam_escapes`].
+    pub beam: f32,
 }
 
 impl Default for RayConfirm {
@@ -102,82 +107,179 @@ impl Default for RayConfirm {
             points: 4,
             directions: 8,
             seed: 0x0003_c011,
+            beam: 0.0,
         }
     }
 }
 
-/// True when some ray from a sample point on triangle `tri` (either face) in
-/// a random direction of that face's hemisphere meets no triangle: it leaves
-/// the model's bounding sphere, so the triangle is seen from outside.
-/// Triangles of zero area have no face to sample and count as escaping.
-pub fn escapes(mesh: &TriangleMesh, accel: &dyn Accel, tri: usize, c: &RayConfirm) -> bool {
-    let [a, b, cc] = mesh.triangle(tri);
-    let n = (b - a).cross(cc - a);
-    let n = n.normalize_or_zero();
-    if n == Vec3::ZERO {
-        // No area, no face to judge: keeping it costs nothing.
+/// True when the ray from `origin` (a hair off triangle `tri`'s surface)
+/// along `d` meets no triangle, and, for `beam > 0`, so do the four parallel
+/// rays from `origin ± beam · e` for two perpendicular directions `e` in the
+/// triangle's plane: openings narrower than about `beam` (the cracks between
+/// independently tessellated CAD faces, hairline seams) count as closed.
+pub fn beam_escapes(
+    mesh: &TriangleMesh,
+    accel: &dyn Accel,
+    tri: usize,
+    origin: Vec3,
+    d: Vec3,
+    beam: f32,
+) -> bool {
+    if accel.occluded(&Ray::new(origin, d)) {
+        return false;
+    }
+    if beam <= 0.0 {
         return true;
     }
-    let scale = a.abs().max(b.abs()).max(cc.abs()).max_element().max(1e-30);
-    // Start a hair off the surface so the triangle does not hit itself.
-    let offset = scale * 1e-5;
-    let mut rng = Pcg32::with_stream(c.seed, tri as u64);
-    for _ in 0..c.points {
-        let (mut u, mut v) = (rng.next_f32(), rng.next_f32());
+    let [a, b, c] = mesh.triangle(tri);
+    let n = (b - a).cross(c - a).normalize_or_zero();
+    let e1 = (b - a).normalize_or_zero();
+    let e2 = n.cross(e1);
+    [e1, -e1, e2, -e2]
+        .iter()
+        .all(|&e| !accel.occluded(&Ray::new(origin + e * beam, d)))
+}
+
+/// Smallest cosine between a sample direction and the face normal: steeper
+/// directions are drawn again. A ray leaving a face at least this steeply
+/// moves away from the triangle's own plane (and from coplanar duplicates),
+/// so it cannot meet them and an any-hit query answers the question.
+pub const MIN_FACE_COSINE: f32 = 1e-3;
+
+/// Sample points on triangle `tri`: the centroid, then uniform points; each
+/// calls `f(point, unit normal)` until it returns `Some`. `None` for a
+/// triangle of zero area.
+pub fn on_surface<T>(
+    mesh: &TriangleMesh,
+    tri: usize,
+    points: u32,
+    rng: &mut Pcg32,
+    mut f: impl FnMut(Vec3, Vec3, &mut Pcg32) -> Option<T>,
+) -> Option<T> {
+    let [a, b, c] = mesh.triangle(tri);
+    let n = (b - a).cross(c - a).normalize_or_zero();
+    if n == Vec3::ZERO {
+        return None;
+    }
+    for k in 0..points {
+        let (mut u, mut v) = if k == 0 {
+            (1.0 / 3.0, 1.0 / 3.0)
+        } else {
+            (rng.next_f32(), rng.next_f32())
+        };
         if u + v > 1.0 {
             (u, v) = (1.0 - u, 1.0 - v);
         }
-        let p = a + u * (b - a) + v * (cc - a);
-        for side in [1.0f32, -1.0] {
-            let face = n * side;
+        if let Some(x) = f(a + u * (b - a) + v * (c - a), n, rng) {
+            return Some(x);
+        }
+    }
+    None
+}
+
+/// The origin of escape rays from surface point `p` of triangle `tri` on
+/// the side of `face`: a hair off the surface, so the triangle does not hit
+/// itself.
+pub fn off_surface(mesh: &TriangleMesh, tri: usize, p: Vec3, face: Vec3) -> Vec3 {
+    let [a, b, c] = mesh.triangle(tri);
+    let scale = a.abs().max(b.abs()).max(c.abs()).max_element().max(1e-30);
+    p + face * (scale * 1e-5)
+}
+
+/// A direction in which a ray from triangle `tri` escapes the model, found by
+/// `c.points` sample points (the centroid first) × both faces ×
+/// `c.directions` uniform directions of that face's hemisphere, or `None`.
+pub fn escape_direction(
+    mesh: &TriangleMesh,
+    accel: &dyn Accel,
+    tri: usize,
+    c: &RayConfirm,
+) -> Option<Vec3> {
+    let mut rng = Pcg32::with_stream(c.seed, tri as u64);
+    on_surface(mesh, tri, c.points, &mut rng, |p, n, rng| {
+        for face in [n, -n] {
+            let origin = off_surface(mesh, tri, p, face);
             for _ in 0..c.directions {
-                let mut d = rng.unit_vector();
-                if d.dot(face) < 0.0 {
-                    d = -d;
-                }
-                if escapes_from(accel, p + face * offset, d, tri as u32) {
-                    return true;
+                let d = loop {
+                    let d = rng.unit_vector();
+                    let cos = d.dot(face);
+                    if cos.abs() >= MIN_FACE_COSINE {
+                        break if cos < 0.0 { -d } else { d };
+                    }
+                };
+                if beam_escapes(mesh, accel, tri, origin, d, c.beam) {
+                    return Some(d);
                 }
             }
         }
-    }
-    false
+        None
+    })
 }
 
-/// True when the ray from `origin` along `dir` meets no triangle other than
-/// `own` (hits on `own` itself, from grazing directions, are stepped over).
-fn escapes_from(accel: &dyn Accel, origin: Vec3, dir: Vec3, own: u32) -> bool {
-    let mut tnear = 0.0f32;
-    for _ in 0..4 {
-        match accel.intersect(&Ray::segment(origin, dir, tnear, f32::INFINITY)) {
-            None => return true,
-            Some(h) if h.prim == own => tnear = h.t.next_up(),
-            Some(_) => return false,
-        }
-    }
-    false
-}
-
-/// Conservative mode, confirmation by rays: every candidate (not `visible`)
-/// triangle is tested with [`escapes`]; those that escape are marked visible.
-/// Returns how many were kept this way. Parallel over triangles.
-pub fn confirm_by_rays(
+/// Conservative mode, confirmation at the frontier: the candidate (not
+/// `visible`) triangles next to kept ones — within one cell of the
+/// [`SharedEscapes`] grid of a kept triangle — are tested by `c`'s random
+/// rays, and every candidate may then try the escape directions found from
+/// its kept or newly kept neighbours ([`SharedEscapes::spread`]). This keeps
+/// what is seen through openings finer than the culling grid next to a
+/// visible surface (a bolt in its hole, a seam between parts) at a cost
+/// proportional to the frontier, not to the hidden interior. Returns how
+/// many were kept this way.
+pub fn confirm_frontier(
     mesh: &TriangleMesh,
     accel: &dyn Accel,
     visible: &mut [bool],
     c: &RayConfirm,
 ) -> usize {
-    let kept: Vec<usize> = visible
-        .par_iter()
-        .enumerate()
-        .with_min_len(64)
-        .filter(|(t, v)| !**v && escapes(mesh, accel, *t, c))
-        .map(|(t, _)| t)
-        .collect();
-    for &t in &kept {
-        visible[t] = true;
+    let n = visible.len();
+    let mut shared = SharedEscapes::new(&mesh.bounds(), SHARING_CELLS);
+    let cells = |keep: bool, visible: &[bool]| -> HashSet<[usize; 3]> {
+        (0..n)
+            .filter(|&t| visible[t] == keep)
+            .map(|t| shared.cell_of_triangle(mesh, t))
+            .collect()
+    };
+    let candidate_cells = cells(false, visible);
+    if candidate_cells.is_empty() {
+        return 0;
     }
-    kept.len()
+    // Kept triangles next to a candidate: their escapes seed the sharing.
+    let kept_near: Vec<usize> = (0..n)
+        .into_par_iter()
+        .filter(|&t| visible[t] && shared.near_any(mesh, t, &candidate_cells))
+        .collect();
+    let kept_cells: HashSet<[usize; 3]> = kept_near
+        .iter()
+        .map(|&t| shared.cell_of_triangle(mesh, t))
+        .collect();
+    let mut found: Vec<(usize, Vec3)> = kept_near
+        .par_iter()
+        .with_min_len(16)
+        .filter_map(|&t| escape_direction(mesh, accel, t, c).map(|d| (t, d)))
+        .collect();
+    // Candidates next to a kept triangle: random rays of their own.
+    let frontier: Vec<usize> = (0..n)
+        .into_par_iter()
+        .filter(|&t| !visible[t] && shared.near_any(mesh, t, &kept_cells))
+        .collect();
+    found.par_extend(
+        frontier
+            .par_iter()
+            .with_min_len(16)
+            .filter_map(|&t| escape_direction(mesh, accel, t, c).map(|d| (t, d))),
+    );
+    let degenerate = |t: usize| mesh.face_normal(t).normalize_or_zero() == Vec3::ZERO;
+    let s = shared.spread(
+        mesh,
+        accel,
+        visible,
+        &degenerate,
+        found,
+        c.points,
+        c.seed,
+        c.beam,
+    );
+    s.direct + s.by_sharing
 }
 
 /// Most grid points examined per triangle by [`touches_outside`]; a triangle

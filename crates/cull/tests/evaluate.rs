@@ -7,7 +7,7 @@ use raykit_core::tri::TestKind;
 use raykit_core::{Aabb, TriangleMesh, Vec3};
 use raykit_cull::evaluate::fibonacci;
 use raykit_cull::synthetic::{assembly, box_surface, closed_box, icosphere};
-use raykit_cull::{compare, evaluate, EvalOptions, GroundTruth};
+use raykit_cull::{compare, evaluate, evaluate_beyond, EvalOptions, GroundTruth};
 
 fn aabb(lo: f32, hi: f32) -> Aabb {
     Aabb::new(Vec3::splat(lo), Vec3::splat(hi))
@@ -110,10 +110,28 @@ fn doubling_terminates_and_doubles() {
     let options = quick();
     let truth = truth_of(&mesh, &options);
     assert!(truth.rounds >= 2 && truth.rounds <= options.max_rounds);
-    let scale = 1 << (truth.rounds - 1);
-    assert_eq!(truth.points, options.points * scale);
-    assert_eq!(truth.directions, options.directions * scale);
-    assert_eq!(truth.viewpoints, options.viewpoints * scale as usize);
+    // Rays per triangle double every round: points (with the viewpoints)
+    // on odd rounds, directions on even ones.
+    let last = truth.rounds as u32 - 1;
+    assert_eq!(truth.points, options.points << last.div_ceil(2));
+    assert_eq!(truth.directions, options.directions << (last / 2));
+    assert_eq!(
+        truth.viewpoints,
+        options.viewpoints << last.div_ceil(2) as usize
+    );
+    assert_eq!(truth.round_log.len(), truth.rounds);
+    for w in truth.round_log.windows(2) {
+        assert_eq!(
+            w[1].points * w[1].directions,
+            2 * w[0].points * w[0].directions
+        );
+    }
+    let found: usize = truth
+        .round_log
+        .iter()
+        .map(|r| r.by_surface_rays + r.by_renders + r.by_sharing)
+        .sum();
+    assert_eq!(found, truth.visible_count);
     assert_eq!(truth.last_change, 0);
     assert!(truth.rays > 0 && truth.seconds >= 0.0);
     // With a cap of two rounds it still stops, and reports the change.
@@ -197,4 +215,58 @@ fn compare_counts_false_and_missed_removals() {
     assert_eq!((r.false_removals, r.missed_removals), (box_tris, 0));
     assert_eq!(r.removed_fraction_triangles, 1.0);
     assert!((r.removed_fraction_area - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn evaluation_beyond_known_labels_keeps_them_and_finds_the_same_rest() {
+    let mesh = box_with_parts();
+    let options = quick();
+    let accel = build_accel(
+        AccelKind::Bvh2,
+        TestKind::Plucker,
+        &mesh,
+        &BuildOptions::default(),
+    );
+    let full = evaluate(&mesh, accel.as_ref(), &options);
+    // Claim the first sphere visible: it stays so, the rest is as before.
+    let known: Vec<bool> = (0..mesh.num_triangles())
+        .map(|t| mesh.part_of(t) == 1)
+        .collect();
+    let beyond = evaluate_beyond(&mesh, accel.as_ref(), &options, known.clone(), &|_| {});
+    for t in 0..mesh.num_triangles() {
+        assert_eq!(
+            beyond.visible[t],
+            known[t] || full.visible[t],
+            "triangle {t}"
+        );
+    }
+    assert_eq!(
+        beyond.visible_count,
+        beyond.visible.iter().filter(|&&v| v).count()
+    );
+}
+
+#[test]
+fn zero_area_triangles_are_neither_visible_nor_hidden() {
+    // The box with parts, plus a sliver (three collinear points) inside
+    // and one outside: removing or keeping them is never an error.
+    let mut mesh = box_with_parts();
+    let base = mesh.positions.len() as u32;
+    for p in [0.5f32, 0.6, 0.7, 3.0, 3.1, 3.2] {
+        mesh.positions.push(Vec3::splat(p));
+    }
+    mesh.indices.push([base, base + 1, base + 2]);
+    mesh.indices.push([base + 3, base + 4, base + 5]);
+    let n = mesh.num_triangles();
+    let truth = truth_of(&mesh, &quick());
+    assert_eq!(truth.degenerate, 2);
+    for kept in [vec![true; n], vec![false; n]] {
+        let r = compare(&truth, &kept, &mesh);
+        assert_eq!(r.degenerate, 2);
+        assert_eq!(r.truly_visible + r.truly_hidden, n - 2);
+        assert!(r.false_removal_ids.iter().all(|&t| t < n - 2));
+        assert!(r.missed_removal_ids.iter().all(|&t| t < n - 2));
+    }
+    let r = compare(&truth, &vec![true; n], &mesh);
+    assert_eq!(r.missed_removals, r.truly_hidden);
 }

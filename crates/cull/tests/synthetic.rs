@@ -101,7 +101,7 @@ fn conservative_mode_removes_no_visible_triangle_at_any_resolution() {
     let mut failures = Vec::new();
     for res in [5, 8, 12, 16, 24, 32, 48, 64] {
         let mut with_rays = CullOptions::conservative(res);
-        with_rays.confirm = Some(raykit_cull::RayConfirm::default());
+        with_rays.confirm = Some(raykit_cull::EvalOptions::confirmation());
         let r2 = cull(&mesh, &with_rays).unwrap();
         failures.push((res, false_removals(&reference, &r2.visible)));
         let r = cull(&mesh, &CullOptions::conservative(res)).unwrap();
@@ -199,7 +199,7 @@ fn empty_and_degenerate_input_never_panics() {
     for mesh in [point, line, flat, huge] {
         for res in [0, 1, 5, 33] {
             let mut with_rays = CullOptions::conservative(res);
-            with_rays.confirm = Some(raykit_cull::RayConfirm::default());
+            with_rays.confirm = Some(raykit_cull::EvalOptions::confirmation());
             let r2 = cull(&mesh, &with_rays).unwrap();
             assert_eq!(r2.stats.triangles_removed, 0, "{mesh:?} at {res}");
             let r = cull(&mesh, &CullOptions::conservative(res)).unwrap();

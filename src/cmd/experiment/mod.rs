@@ -1,6 +1,7 @@
 //! `raykit experiment`: the papers' tables and figures, measured on this
 //! machine, written as Markdown, CSV, JSON and SVG plots.
 
+pub mod cull;
 pub mod kdtree_traversal;
 pub mod split_heuristic;
 
@@ -25,6 +26,10 @@ enum Which {
     /// Paper 002: the split-plane weight H = 0..20 against split polygons,
     /// depth, build time, T-junction elimination time and query speed.
     SplitHeuristic(split_heuristic::SplitHeuristicArgs),
+    /// Paper 003: Table 5-1 — triangles and parts hidden, removal rate and
+    /// times per grid resolution, with false and missed removals against the
+    /// ray-traced ground truth.
+    Cull(cull::CullExperimentArgs),
 }
 
 /// Run the chosen experiment.
@@ -32,6 +37,7 @@ pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
     match args.which {
         Which::KdtreeTraversal(a) => kdtree_traversal::run(a),
         Which::SplitHeuristic(a) => split_heuristic::run(a),
+        Which::Cull(a) => cull::run(a),
     }
 }
 

@@ -1,0 +1,447 @@
+//! `raykit experiment cull`: paper 003's Table 5-1 measured on this machine
+//! (grid resolution, parts and triangles hidden, removal rate, distance-field
+//! and propagation times), for the paper's rule and our conservative mode,
+//! with false and missed removals against the ray-traced ground truth.
+
+use super::{shared_mesh, write_csv, write_text};
+use crate::measure::{median_min_max, timed};
+use crate::plot::{write_svg, LineChart, Series};
+use anyhow::{Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::tri::TestKind;
+use raykit_core::{Aabb, TriangleMesh, Vec3};
+use raykit_cull::synthetic::{assembly, box_of_spheres, closed_box};
+use raykit_cull::{compare, cull, evaluate_with_progress, CullOptions, CullResult, EvalOptions};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Where `scripts/fetch-assimp-testmodels.sh` unpacks Debian's
+/// assimp-testmodels.
+const ASSIMP_DIR: &str = "data-cache/assimp-testmodels/usr/share/assimp/models";
+
+/// The assemblies of assimp-testmodels this experiment reads (formats raykit
+/// loads; the rest of the package is single objects or other formats).
+const ASSIMP_MODELS: [&str; 3] = ["OBJ/spider.obj", "OBJ/regr01.obj", "STL/sphereWithHole.stl"];
+
+/// Arguments of `raykit experiment cull`.
+#[derive(Args)]
+#[command(
+    after_help = "Models: the shared 2CylinderEngine.glb and bearing.stl, three assemblies of\n\
+Debian's assimp-testmodels (run scripts/fetch-assimp-testmodels.sh first, else they are\n\
+reported as skipped), synthetic assemblies with known answers (a box of 64 spheres, nested\n\
+shells, a box of 1,000 spheres with 1,280,012 triangles) and the engine instanced 3 x 3\n\
+(1,093,464 triangles, no ground truth: too slow to evaluate).\n\
+Each model is culled at every resolution by paper 003's rule and by the conservative\n\
+default; times are medians of --reps runs. The ground truth is `raykit cull --evaluate`'s\n\
+(rays from the surface and renders from 10,000+ viewpoints, doubled until stable) or the\n\
+known answer. Writes results.csv, results.md and SVG plots into --out; exit status 1 when\n\
+the conservative mode removed a truly visible triangle."
+)]
+pub struct CullExperimentArgs {
+    /// Grid resolutions (points along the longest axis).
+    #[arg(long, value_delimiter = ',', default_value = "64,128,256")]
+    resolutions: Vec<usize>,
+    /// Repetitions of every timing (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    reps: usize,
+    /// Most rounds of the ground truth (see `raykit cull --eval-rounds`).
+    #[arg(long, default_value_t = EvalOptions::default().max_rounds)]
+    eval_rounds: usize,
+    /// Leave out the 1M-triangle assemblies (quick runs).
+    #[arg(long)]
+    small: bool,
+    /// Output folder.
+    #[arg(long, default_value = "experiments/cull")]
+    out: PathBuf,
+}
+
+/// What the removals are checked against.
+enum Truth {
+    /// Per triangle visible, with a note on how it was found.
+    Labels(Vec<bool>, String),
+    /// No ground truth, and why.
+    Missing(String),
+}
+
+/// One model of the table.
+struct Model {
+    name: String,
+    mesh: TriangleMesh,
+    /// Known per-triangle visibility, else evaluate by rays.
+    known: Option<Vec<bool>>,
+    /// Evaluate by rays when nothing is known (false: too big).
+    evaluate: bool,
+}
+
+/// One row of the table: a model at one resolution in one mode.
+#[derive(Serialize, Clone)]
+struct Row {
+    model: String,
+    triangles: usize,
+    parts: usize,
+    resolution: usize,
+    mode: &'static str,
+    grid: String,
+    distance_field_s: f64,
+    propagation_s: f64,
+    visible_s: f64,
+    total_s: f64,
+    total_min_s: f64,
+    total_max_s: f64,
+    triangles_removed: usize,
+    removed_triangles_pct: f64,
+    removed_area_pct: f64,
+    parts_removed: usize,
+    truly_hidden: Option<usize>,
+    false_removals: Option<usize>,
+    missed_removals_pct: Option<f64>,
+    truth: String,
+}
+
+/// Run the experiment.
+pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
+    let models = models(&args)?;
+    let mut rows = Vec::new();
+    let mut skipped = Vec::new();
+    for m in models {
+        let m = match m {
+            Ok(m) => m,
+            Err(why) => {
+                eprintln!("skipped: {why}");
+                skipped.push(why);
+                continue;
+            }
+        };
+        eprintln!(
+            "{}: {} triangles, {} parts",
+            m.name,
+            m.mesh.num_triangles(),
+            m.mesh.parts.len().max(1)
+        );
+        let truth = truth_of(&m, args.eval_rounds);
+        for &res in &args.resolutions {
+            for (mode, options) in [
+                ("paper", CullOptions::paper(res)),
+                ("conservative", CullOptions::conservative(res)),
+            ] {
+                rows.push(measure(&m, &truth, res, mode, &options, args.reps)?);
+            }
+        }
+    }
+    write_csv(&args.out, "results.csv", &rows)?;
+    let md = markdown(&rows, &skipped);
+    write_text(&args.out, "results.md", &md)?;
+    print!("{md}");
+    plots(&rows, &args.out)?;
+    eprintln!(
+        "wrote {}/results.csv, results.md, removal-*.svg, time.svg",
+        args.out.display()
+    );
+    let false_removals: usize = rows
+        .iter()
+        .filter(|r| r.mode == "conservative")
+        .filter_map(|r| r.false_removals)
+        .sum();
+    Ok(if false_removals == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+/// The models, in table order; `Err` names a model that could not be had.
+fn models(args: &CullExperimentArgs) -> Result<Vec<Result<Model, String>>> {
+    let mut out = Vec::new();
+    for name in ["2CylinderEngine.glb", "bearing.stl"] {
+        out.push(file_model(Path::new(&shared_mesh(name)), name));
+    }
+    let assimp = Path::new(env!("CARGO_MANIFEST_DIR")).join(ASSIMP_DIR);
+    for rel in ASSIMP_MODELS {
+        let path = assimp.join(rel);
+        out.push(if path.is_file() {
+            file_model(&path, &format!("assimp {rel}"))
+        } else {
+            Err(format!(
+                "assimp {rel}: {} is missing; run scripts/fetch-assimp-testmodels.sh",
+                path.display()
+            ))
+        });
+    }
+    let only_first = |mesh: &TriangleMesh| -> Vec<bool> {
+        (0..mesh.num_triangles())
+            .map(|t| mesh.part_of(t) == 0)
+            .collect()
+    };
+    let spheres = box_of_spheres(4, 4, 2);
+    out.push(Ok(Model {
+        name: "box of 64 spheres".into(),
+        known: Some(only_first(&spheres)),
+        mesh: spheres,
+        evaluate: false,
+    }));
+    let shells = assembly((0..4).map(|i| {
+        let r = 1.0 - 0.2 * i as f32;
+        closed_box(&Aabb::new(Vec3::splat(-r), Vec3::splat(r)), 8)
+    }));
+    out.push(Ok(Model {
+        name: "4 nested shells".into(),
+        known: Some(only_first(&shells)),
+        mesh: shells,
+        evaluate: false,
+    }));
+    if !args.small {
+        let big = box_of_spheres(4, 10, 3);
+        out.push(Ok(Model {
+            name: "box of 1,000 spheres".into(),
+            known: Some(only_first(&big)),
+            mesh: big,
+            evaluate: false,
+        }));
+        if let Ok(engine) = raykit_io::load_mesh(Path::new(&shared_mesh("2CylinderEngine.glb"))) {
+            out.push(Ok(Model {
+                name: "engine x 9 (instanced)".into(),
+                mesh: instanced(&engine, 3),
+                known: None,
+                evaluate: false,
+            }));
+        }
+    }
+    Ok(out)
+}
+
+fn file_model(path: &Path, name: &str) -> Result<Model, String> {
+    raykit_io::load_mesh(path)
+        .map(|mesh| Model {
+            name: name.to_string(),
+            mesh,
+            known: None,
+            evaluate: true,
+        })
+        .map_err(|e| format!("{name}: {e}"))
+}
+
+/// `k × k` copies of `mesh` side by side in x and y, a tenth of its size
+/// apart, each copy's parts its own.
+fn instanced(mesh: &TriangleMesh, k: usize) -> TriangleMesh {
+    let b = mesh.bounds();
+    let step = b.extent() * 1.1;
+    let mut out = TriangleMesh::default();
+    for j in 0..k {
+        for i in 0..k {
+            let mut copy = mesh.clone();
+            let shift = Vec3::new(step.x * i as f32, step.y * j as f32, 0.0);
+            for p in &mut copy.positions {
+                *p += shift;
+            }
+            out.append(&copy);
+        }
+    }
+    out
+}
+
+fn truth_of(m: &Model, rounds: usize) -> Truth {
+    if let Some(k) = &m.known {
+        return Truth::Labels(k.clone(), "known".into());
+    }
+    if !m.evaluate {
+        return Truth::Missing("none (too large to evaluate)".into());
+    }
+    let accel = build_accel(
+        AccelKind::Bvh2,
+        TestKind::Plucker,
+        &m.mesh,
+        &BuildOptions::default(),
+    );
+    let options = EvalOptions {
+        max_rounds: rounds,
+        ..Default::default()
+    };
+    let bar = ProgressBar::new(1).with_style(
+        ProgressStyle::with_template("ground truth, round {msg} {bar:30} {pos}/{len} [{elapsed}]")
+            .expect("valid template"),
+    );
+    let g = evaluate_with_progress(&m.mesh, accel.as_ref(), &options, &|p| {
+        if p.done == 1 {
+            bar.set_length(p.total);
+            bar.set_message(format!("{} of {rounds}", p.round + 1));
+        }
+        bar.set_position(p.done);
+    });
+    bar.finish_and_clear();
+    let note = format!(
+        "rays: {} rounds{}, {:.0} s",
+        g.rounds,
+        if g.converged {
+            ", converged".to_string()
+        } else {
+            format!(", last added {}", g.last_change)
+        },
+        g.seconds
+    );
+    eprintln!(
+        "  ground truth: {} of {} visible ({note})",
+        g.visible_count,
+        m.mesh.num_triangles()
+    );
+    Truth::Labels(g.visible, note)
+}
+
+fn measure(
+    m: &Model,
+    truth: &Truth,
+    resolution: usize,
+    mode: &'static str,
+    options: &CullOptions,
+    reps: usize,
+) -> Result<Row> {
+    let mut totals = Vec::new();
+    let mut result: Option<CullResult> = None;
+    for _ in 0..reps.max(1) {
+        let (r, s) = timed(|| cull(&m.mesh, options));
+        totals.push(s);
+        result = Some(r.with_context(|| m.name.clone())?);
+    }
+    let r = result.expect("at least one repetition");
+    let s = &r.stats;
+    let (total_s, total_min_s, total_max_s) = median_min_max(&totals);
+    let (truly_hidden, false_removals, missed, removed_area, note) = match truth {
+        Truth::Labels(labels, note) => {
+            let g = raykit_cull::GroundTruth {
+                visible: labels.clone(),
+                ..Default::default()
+            };
+            let e = compare(&g, &r.visible, &m.mesh);
+            (
+                Some(e.truly_hidden),
+                Some(e.false_removals),
+                Some(100.0 * e.missed_fraction),
+                100.0 * e.removed_fraction_area,
+                note.clone(),
+            )
+        }
+        Truth::Missing(why) => {
+            let total: f64 = (0..m.mesh.num_triangles()).map(|t| area(&m.mesh, t)).sum();
+            let removed: f64 = (0..m.mesh.num_triangles())
+                .filter(|&t| !r.visible[t])
+                .map(|t| area(&m.mesh, t))
+                .sum();
+            (
+                None,
+                None,
+                None,
+                100.0 * removed / total.max(1e-300),
+                why.clone(),
+            )
+        }
+    };
+    Ok(Row {
+        model: m.name.clone(),
+        triangles: s.triangles,
+        parts: s.parts,
+        resolution,
+        mode,
+        grid: format!("{}x{}x{}", s.grid[0], s.grid[1], s.grid[2]),
+        distance_field_s: s.distance_field_seconds,
+        propagation_s: s.propagation_seconds,
+        visible_s: s.visible_seconds,
+        total_s,
+        total_min_s,
+        total_max_s,
+        triangles_removed: s.triangles_removed,
+        removed_triangles_pct: 100.0 * s.triangles_removed as f64 / s.triangles.max(1) as f64,
+        removed_area_pct: removed_area,
+        parts_removed: s.parts_removed,
+        truly_hidden,
+        false_removals,
+        missed_removals_pct: missed,
+        truth: note,
+    })
+}
+
+fn area(mesh: &TriangleMesh, t: usize) -> f64 {
+    0.5 * f64::from(mesh.face_normal(t).length())
+}
+
+fn markdown(rows: &[Row], skipped: &[String]) -> String {
+    let opt = |v: Option<usize>| v.map_or("–".to_string(), |v| v.to_string());
+    let optf = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.1}"));
+    let mut md = String::from(
+        "| model | triangles | parts | resolution | grid | mode | distance field s | propagation s | \
+         visible set s | total s (median) | triangles removed | removed % (triangles / area) | \
+         parts removed | truly hidden | false removals | missed % of hidden | ground truth |\n\
+         |---|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
+    );
+    for r in rows {
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} ({:.3}–{:.3}) | {} | {:.1} / {:.1} | {} | {} | {} | {} | {} |\n",
+            r.model,
+            r.triangles,
+            r.parts,
+            r.resolution,
+            r.grid,
+            r.mode,
+            r.distance_field_s,
+            r.propagation_s,
+            r.visible_s,
+            r.total_s,
+            r.total_min_s,
+            r.total_max_s,
+            r.triangles_removed,
+            r.removed_triangles_pct,
+            r.removed_area_pct,
+            r.parts_removed,
+            opt(r.truly_hidden),
+            opt(r.false_removals),
+            optf(r.missed_removals_pct),
+            r.truth
+        );
+    }
+    for s in skipped {
+        md += &format!("\nSkipped: {s}\n");
+    }
+    md
+}
+
+fn plots(rows: &[Row], out: &Path) -> Result<()> {
+    let mut names: Vec<&str> = rows.iter().map(|r| r.model.as_str()).collect();
+    names.dedup();
+    let series = |mode: &str, y: &dyn Fn(&Row) -> f64| -> Vec<Series> {
+        names
+            .iter()
+            .map(|n| Series {
+                name: n.to_string(),
+                points: rows
+                    .iter()
+                    .filter(|r| r.model == *n && r.mode == mode)
+                    .map(|r| (r.resolution as f64, y(r)))
+                    .collect(),
+            })
+            .collect()
+    };
+    for mode in ["paper", "conservative"] {
+        write_svg(
+            &LineChart {
+                title: format!("Triangles removed, {mode} mode (paper 003, Table 5-1)"),
+                x_label: "grid resolution",
+                y_label: "% of triangles removed",
+                series: series(mode, &|r| r.removed_triangles_pct),
+                reference: Vec::new(),
+            },
+            &out.join(format!("removal-{mode}.svg")),
+        )?;
+    }
+    write_svg(
+        &LineChart {
+            title: "Culling time, conservative mode (distance field + propagation + visible set)"
+                .into(),
+            x_label: "grid resolution",
+            y_label: "seconds (median)",
+            series: series("conservative", &|r| r.total_s),
+            reference: Vec::new(),
+        },
+        &out.join("time.svg"),
+    )
+}
