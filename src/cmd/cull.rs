@@ -366,10 +366,15 @@ fn print_summary(r: &Report<'_>, output: &Path, report: Option<&Path>) {
     if r.mode == "conservative" {
         println!(
             "conservative mode kept {} triangles by dilation, {} by contact with outside cells, {} by \
-             escaping rays at the frontier{}",
+             escaping rays at the frontier{}{}",
             s.kept_by_dilation,
             s.kept_by_contact,
             s.kept_by_frontier,
+            if s.frontier_cut_short {
+                " (ray budget reached: a finer --resolution or --confirm searches more)"
+            } else {
+                ""
+            },
             if r.confirm {
                 format!(", {} by escaping rays elsewhere", s.kept_by_rays)
             } else {

@@ -276,6 +276,7 @@ pub fn evaluate_beyond(
             samples.points.min(4),
             samples.seed,
             beam,
+            None,
         );
         truth.rays += spread.rays;
         log.by_renders = spread.direct - by_surface_rays;

@@ -155,6 +155,9 @@ pub struct CullStats {
     pub kept_by_contact: usize,
     /// Triangles kept only by the confirmation at the frontier.
     pub kept_by_frontier: usize,
+    /// True when the frontier's ray budget
+    /// ([`visible::FRONTIER_RAY_BUDGET`]) cut its search short.
+    pub frontier_cut_short: bool,
     /// Triangles kept only by the confirmation by rays of every candidate.
     pub kept_by_rays: usize,
     /// Parts in the model.
@@ -216,7 +219,10 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
             stats.kept_by_contact = touches_outside(mesh, &grid, &class, &mut visible);
         }
         if let Some(c) = &options.frontier {
-            stats.kept_by_frontier = confirm_frontier(mesh, accel.as_ref(), &mut visible, c);
+            // Sharing cells of two grid spacings: the frontier's scale.
+            let cells = options.resolution.div_ceil(2).clamp(8, 512);
+            (stats.kept_by_frontier, stats.frontier_cut_short) =
+                confirm_frontier(mesh, accel.as_ref(), &mut visible, c, cells);
         }
         if let Some(c) = &options.confirm {
             let before = visible.iter().filter(|&&v| v).count();

@@ -36,6 +36,8 @@ pub struct Spread {
     pub passes: usize,
     /// Rays cast (at most; tries stop at the first escape).
     pub rays: u64,
+    /// True when the ray budget stopped it before nothing new was found.
+    pub cut_short: bool,
 }
 
 /// Most directions kept per cell.
@@ -192,8 +194,9 @@ impl SharedEscapes {
     /// (but those `skip` names) near a cell that received a direction try
     /// the directions near it ([`Self::try_near`] with up to `points` sample
     /// points and `beam`), file what escapes, and repeat until a pass finds
-    /// nothing (at most [`MAX_SHARING_PASSES`] passes). Parallel over
-    /// triangles.
+    /// nothing (at most [`MAX_SHARING_PASSES`] passes, and no pass that
+    /// would take the rays past `max_rays`; then [`Spread::cut_short`]).
+    /// Parallel over triangles.
     #[allow(clippy::too_many_arguments)]
     pub fn spread(
         &mut self,
@@ -205,6 +208,7 @@ impl SharedEscapes {
         points: u32,
         seed: u64,
         beam: f32,
+        max_rays: Option<u64>,
     ) -> Spread {
         let mut out = Spread::default();
         let points = points.clamp(1, SHARING_POINTS);
@@ -229,6 +233,11 @@ impl SharedEscapes {
             let near: Vec<usize> = (0..labels.len())
                 .filter(|&t| !labels[t] && !skip(t) && self.near_any(mesh, t, &cells))
                 .collect();
+            let cost = near.len() as u64 * u64::from(points) * DIRECTIONS_PER_TRIANGLE as u64;
+            if max_rays.is_some_and(|m| out.rays + cost > m) {
+                out.cut_short = true;
+                return out;
+            }
             let pass_seed = seed ^ ((out.passes as u64 + 1) << 32);
             let this = &*self;
             found = near
@@ -239,7 +248,7 @@ impl SharedEscapes {
                         .map(|d| (t, d))
                 })
                 .collect();
-            out.rays += near.len() as u64 * u64::from(points) * DIRECTIONS_PER_TRIANGLE as u64;
+            out.rays += cost;
             out.passes += 1;
         }
     }

@@ -83,7 +83,8 @@ pub fn assembly(pieces: impl IntoIterator<Item = TriangleMesh>) -> TriangleMesh 
 /// The unit box (`n × n` squares per face) holding a `k × k × k` lattice of
 /// icospheres with `subdivisions`, radius a third of their lattice cell; the
 /// box is part 0, the spheres parts 1…k³. Every sphere is hidden. With
-/// `k = 10, subdivisions = 3` it has 1,280,012 triangles.
+/// `k = 10, subdivisions = 3` it has 1,280,000 triangles of spheres (plus
+/// `12 n²` of the box).
 pub fn box_of_spheres(n: usize, k: usize, subdivisions: u32) -> TriangleMesh {
     let unit = Aabb::new(Vec3::ZERO, Vec3::ONE);
     let cell = 0.8 / k.max(1) as f32;

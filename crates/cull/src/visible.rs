@@ -3,11 +3,11 @@
 
 use crate::distance_field::DirectedDistanceField;
 use crate::propagate::Classification;
-use crate::shared_escapes::{SharedEscapes, SHARING_CELLS};
+use crate::shared_escapes::SharedEscapes;
 use raykit_core::rng::Pcg32;
 use raykit_core::{Accel, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Triangles met by the directed rays of outside grid points (paper 003,
@@ -216,6 +216,14 @@ pub fn escape_direction(
     })
 }
 
+/// Most rays [`confirm_frontier`] casts (about 3 s on 2 cores for a
+/// million-triangle model): a wide frontier (coarse grids on big
+/// assemblies) gets fewer rays per candidate.
+pub const FRONTIER_RAY_BUDGET: u64 = 1 << 23;
+
+/// Most kept triangles per cell whose escapes seed [`confirm_frontier`].
+pub const SEEDS_PER_CELL: usize = 8;
+
 /// Conservative mode, confirmation at the frontier: the candidate (not
 /// `visible`) triangles next to kept ones — within one cell of the
 /// [`SharedEscapes`] grid of a kept triangle — are tested by `c`'s random
@@ -223,16 +231,19 @@ pub fn escape_direction(
 /// its kept or newly kept neighbours ([`SharedEscapes::spread`]). This keeps
 /// what is seen through openings finer than the culling grid next to a
 /// visible surface (a bolt in its hole, a seam between parts) at a cost
-/// proportional to the frontier, not to the hidden interior. Returns how
-/// many were kept this way.
+/// proportional to the frontier, not to the hidden interior, and at most
+/// [`FRONTIER_RAY_BUDGET`] rays. Returns how many were kept this way, and
+/// whether the budget cut the search short (fewer rays per candidate than
+/// `c` asks, or sharing stopped early).
 pub fn confirm_frontier(
     mesh: &TriangleMesh,
     accel: &dyn Accel,
     visible: &mut [bool],
     c: &RayConfirm,
-) -> usize {
+    cells_per_axis: usize,
+) -> (usize, bool) {
     let n = visible.len();
-    let mut shared = SharedEscapes::new(&mesh.bounds(), SHARING_CELLS);
+    let mut shared = SharedEscapes::new(&mesh.bounds(), cells_per_axis);
     let cells = |keep: bool, visible: &[bool]| -> HashSet<[usize; 3]> {
         (0..n)
             .filter(|&t| visible[t] == keep)
@@ -241,12 +252,24 @@ pub fn confirm_frontier(
     };
     let candidate_cells = cells(false, visible);
     if candidate_cells.is_empty() {
-        return 0;
+        return (0, false);
     }
-    // Kept triangles next to a candidate: their escapes seed the sharing.
-    let kept_near: Vec<usize> = (0..n)
+    // Kept triangles next to a candidate, a few per cell: their escapes
+    // seed the sharing.
+    let near: Vec<usize> = (0..n)
         .into_par_iter()
         .filter(|&t| visible[t] && shared.near_any(mesh, t, &candidate_cells))
+        .collect();
+    let mut per_cell: HashMap<[usize; 3], usize> = HashMap::new();
+    let kept_near: Vec<usize> = near
+        .into_iter()
+        .filter(|&t| {
+            let k = per_cell
+                .entry(shared.cell_of_triangle(mesh, t))
+                .or_default();
+            *k += 1;
+            *k <= SEEDS_PER_CELL
+        })
         .collect();
     let kept_cells: HashSet<[usize; 3]> = kept_near
         .iter()
@@ -262,11 +285,22 @@ pub fn confirm_frontier(
         .into_par_iter()
         .filter(|&t| !visible[t] && shared.near_any(mesh, t, &kept_cells))
         .collect();
+    // Half the ray budget for the candidates' own random rays: fewer
+    // directions (then points) per candidate on a wide frontier.
+    let mut own = *c;
+    let per = |o: &RayConfirm| frontier.len() as u64 * 2 * u64::from(o.points * o.directions);
+    while per(&own) > FRONTIER_RAY_BUDGET / 2 && own.points * own.directions > 1 {
+        if own.directions > 1 {
+            own.directions /= 2;
+        } else {
+            own.points /= 2;
+        }
+    }
     found.par_extend(
         frontier
             .par_iter()
             .with_min_len(16)
-            .filter_map(|&t| escape_direction(mesh, accel, t, c).map(|d| (t, d))),
+            .filter_map(|&t| escape_direction(mesh, accel, t, &own).map(|d| (t, d))),
     );
     let degenerate = |t: usize| mesh.face_normal(t).normalize_or_zero() == Vec3::ZERO;
     let s = shared.spread(
@@ -278,8 +312,9 @@ pub fn confirm_frontier(
         c.points,
         c.seed,
         c.beam,
+        Some(FRONTIER_RAY_BUDGET / 2),
     );
-    s.direct + s.by_sharing
+    (s.direct + s.by_sharing, s.cut_short || own != *c)
 }
 
 /// Most grid points examined per triangle by [`touches_outside`]; a triangle

@@ -32,7 +32,7 @@ const ASSIMP_MODELS: [&str; 3] = ["OBJ/spider.obj", "OBJ/regr01.obj", "STL/spher
     after_help = "Models: the shared 2CylinderEngine.glb and bearing.stl, three assemblies of\n\
 Debian's assimp-testmodels (run scripts/fetch-assimp-testmodels.sh first, else they are\n\
 reported as skipped), synthetic assemblies with known answers (a box of 64 spheres, nested\n\
-shells, a box of 1,000 spheres with 1,280,012 triangles) and the engine instanced 3 x 3\n\
+shells, a box of 1,000 spheres with 1,280,192 triangles) and the engine instanced 3 x 3\n\
 (1,093,464 triangles, no ground truth: too slow to evaluate).\n\
 Each model is culled at every resolution by paper 003's rule and by the conservative\n\
 default; times are medians of --reps runs. The ground truth is `raykit cull --evaluate`'s\n\
@@ -123,10 +123,20 @@ pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
         );
         let truth = truth_of(&m, args.eval_rounds);
         for &res in &args.resolutions {
-            for (mode, options) in [
+            let mut modes = vec![
                 ("paper", CullOptions::paper(res)),
                 ("conservative", CullOptions::conservative(res)),
-            ] {
+            ];
+            if m.evaluate {
+                modes.push((
+                    "conservative + confirm",
+                    CullOptions {
+                        confirm: Some(EvalOptions::confirmation()),
+                        ..CullOptions::conservative(res)
+                    },
+                ));
+            }
+            for (mode, options) in modes {
                 rows.push(measure(&m, &truth, res, mode, &options, args.reps)?);
             }
         }
@@ -142,7 +152,7 @@ pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
     );
     let false_removals: usize = rows
         .iter()
-        .filter(|r| r.mode == "conservative")
+        .filter(|r| r.mode.starts_with("conservative"))
         .filter_map(|r| r.false_removals)
         .sum();
     Ok(if false_removals == 0 {
@@ -201,9 +211,15 @@ fn models(args: &CullExperimentArgs) -> Result<Vec<Result<Model, String>>> {
             evaluate: false,
         }));
         if let Ok(engine) = raykit_io::load_mesh(Path::new(&shared_mesh("2CylinderEngine.glb"))) {
+            let mesh = instanced(&engine, 3);
+            // Saved, so that `raykit cull` can be timed on it as a user runs it.
+            std::fs::create_dir_all(&args.out)?;
+            let path = args.out.join("engine-x9.glb");
+            raykit_io::save_mesh(&path, &mesh)
+                .with_context(|| format!("cannot write {}", path.display()))?;
             out.push(Ok(Model {
                 name: "engine x 9 (instanced)".into(),
-                mesh: instanced(&engine, 3),
+                mesh,
                 known: None,
                 evaluate: false,
             }));
