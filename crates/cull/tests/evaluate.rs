@@ -233,12 +233,8 @@ fn evaluation_beyond_known_labels_keeps_them_and_finds_the_same_rest() {
         .map(|t| mesh.part_of(t) == 1)
         .collect();
     let beyond = evaluate_beyond(&mesh, accel.as_ref(), &options, known.clone(), &|_| {});
-    for t in 0..mesh.num_triangles() {
-        assert_eq!(
-            beyond.visible[t],
-            known[t] || full.visible[t],
-            "triangle {t}"
-        );
+    for (t, &k) in known.iter().enumerate() {
+        assert_eq!(beyond.visible[t], k || full.visible[t], "triangle {t}");
     }
     assert_eq!(
         beyond.visible_count,
