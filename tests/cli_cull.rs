@@ -169,6 +169,21 @@ fn bad_arguments_fail_with_a_clear_message() {
             vec![s(&input), s(&out), "--paper", "--confirm"],
             "--confirm",
         ),
+        (vec![s(&input), s(&out), "--eval-rounds", "3"], "--evaluate"),
+        (
+            vec![s(&input), s(&out), "--evaluate", "--eval-rounds", "11"],
+            "--eval-rounds",
+        ),
+        (
+            vec![
+                s(&input),
+                s(&out),
+                "--evaluate",
+                "--eval-min-opening",
+                "inf",
+            ],
+            "outside 0..=0.1",
+        ),
     ] {
         let o = raykit(&[&["cull"], &args[..]].concat());
         assert!(!o.status.success(), "{args:?}");

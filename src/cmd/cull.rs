@@ -105,7 +105,8 @@ pub struct CullArgs {
     /// model's bounding-box diagonal (0: any ray). CAD tessellations leave
     /// hairline cracks between faces; rays through them would make hidden
     /// parts "visible".
-    #[arg(long, default_value_t = EvalOptions::default().min_opening, requires = "evaluate")]
+    #[arg(long, default_value_t = EvalOptions::default().min_opening, requires = "evaluate",
+          value_parser = parse_opening)]
     eval_min_opening: f32,
 }
 
@@ -430,5 +431,19 @@ fn print_summary(r: &Report<'_>, output: &Path, report: Option<&Path>) {
     println!("wrote {}", output.display());
     if let Some(p) = report {
         println!("wrote the report to {}", p.display());
+    }
+}
+
+/// `--eval-min-opening`: a fraction of the diagonal in [0, 0.1].
+fn parse_opening(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number; expected a fraction such as 0.0001"))?;
+    if (0.0..=0.1).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{s} is outside 0..=0.1 (a fraction of the bounding-box diagonal)"
+        ))
     }
 }
