@@ -171,7 +171,7 @@ fn bad_arguments_fail_with_a_clear_message() {
         ),
         (vec![s(&input), s(&out), "--eval-rounds", "3"], "--evaluate"),
         (
-            vec![s(&input), s(&out), "--evaluate", "--eval-rounds", "11"],
+            vec![s(&input), s(&out), "--evaluate", "--eval-rounds", "13"],
             "--eval-rounds",
         ),
         (

@@ -98,7 +98,7 @@ pub struct CullArgs {
     /// triangle, the directions per point and the viewpoints; it stops
     /// earlier when a round finds no new visible triangle).
     #[arg(long, default_value_t = EvalOptions::default().max_rounds as u32,
-          value_parser = clap::value_parser!(u32).range(2..=10),
+          value_parser = clap::value_parser!(u32).range(2..=raykit_cull::evaluate::MAX_ROUNDS as i64),
           requires = "evaluate")]
     eval_rounds: u32,
     /// Narrowest opening the ground truth sees through, as a fraction of the

@@ -29,7 +29,7 @@ use crate::visible::{beam_escapes, escape_direction, off_surface, RayConfirm};
 use raykit_core::{Accel, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 /// Settings of [`evaluate`]: the counts of the first round (each later
@@ -45,7 +45,7 @@ pub struct EvalOptions {
     pub viewpoints: usize,
     /// Side of each render in pixels.
     pub image: usize,
-    /// Most rounds (at least 2, so that two rounds can be compared).
+    /// Most rounds (2 to [`MAX_ROUNDS`], so that two rounds can be compared).
     pub max_rounds: usize,
     /// Seed of the random samples.
     pub seed: u64,
@@ -107,7 +107,8 @@ pub struct GroundTruth {
     pub image: usize,
     /// Width of the beams that had to escape, in model units.
     pub beam: f32,
-    /// Rays cast, all rounds together.
+    /// Rays cast, all rounds together (an upper bound: tries stop at the
+    /// first escape, and beam side rays are not counted).
     pub rays: u64,
     /// Triangles of zero area (no face to sample; labelled hidden unless a
     /// render hits them).
@@ -138,6 +139,10 @@ pub struct RoundLog {
     /// Seconds of this round.
     pub seconds: f64,
 }
+
+/// Most rounds of [`evaluate`] (more would overflow the sample counts
+/// long before they finish).
+pub const MAX_ROUNDS: usize = 12;
 
 /// Where [`evaluate_with_progress`] stands: work items (candidate triangles,
 /// then viewpoints) of the current round.
@@ -199,7 +204,7 @@ pub fn evaluate_beyond(
     let bounds = mesh.bounds();
     let centre = (bounds.min + bounds.max) * 0.5;
     let radius = ((bounds.max - bounds.min).length() * 0.5).max(1e-20);
-    let max_rounds = options.max_rounds.max(2);
+    let max_rounds = options.max_rounds.clamp(2, MAX_ROUNDS);
     let beam = options.min_opening.max(0.0) * (bounds.max - bounds.min).length();
     truth.beam = beam;
     let mut shared = SharedEscapes::new(&bounds, SHARING_CELLS);
@@ -243,20 +248,34 @@ pub fn evaluate_beyond(
         truth.rays +=
             candidates.len() as u64 * u64::from(samples.points) * 2 * u64::from(samples.directions);
 
-        // Renders of triangle ids.
-        let hit: Vec<AtomicBool> = (0..n).map(|_| AtomicBool::new(false)).collect();
-        let seen: Vec<Vec<(usize, Vec3)>> = (0..viewpoints)
-            .into_par_iter()
+        // Renders of triangle ids; each triangle seen keeps the direction
+        // back to the eye of its smallest (viewpoint, pixel) key (it escapes:
+        // nothing lies between, and the eye is outside the bounding sphere).
+        let keys: Vec<AtomicU64> = (0..n).map(|_| AtomicU64::new(u64::MAX)).collect();
+        let cameras: Vec<RenderCamera> = (0..viewpoints)
+            .map(|i| RenderCamera::new(centre, radius, fibonacci(i, viewpoints), options.image))
+            .collect();
+        cameras
+            .par_iter()
+            .enumerate()
             .with_min_len(4)
-            .map(|i| {
-                let v = fibonacci(i, viewpoints);
-                let seen = render(mesh, accel, centre, radius, v, options.image, beam, &hit);
+            .for_each(|(i, camera)| {
+                render(mesh, accel, camera, i, beam, &keys);
                 tick();
-                seen
+            });
+        let seen: Vec<(usize, Vec3)> = keys
+            .iter()
+            .enumerate()
+            .filter_map(|(t, k)| {
+                let k = k.load(Ordering::Relaxed);
+                (k != u64::MAX).then(|| {
+                    let camera = &cameras[(k >> 32) as usize];
+                    (t, -camera.pixel((k & 0xffff_ffff) as usize))
+                })
             })
             .collect();
         let by_surface_rays = found.len();
-        found.extend(seen.into_iter().flatten());
+        found.extend(seen);
         truth.rays += (viewpoints * options.image * options.image) as u64;
         let mut log = RoundLog {
             points: samples.points,
@@ -314,60 +333,80 @@ pub fn fibonacci(i: usize, n: usize) -> Vec3 {
     Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32)
 }
 
-/// One render: from `centre + 2 radius · dir`, an `image × image` pinhole
-/// image looking at `centre` whose view cone just holds the bounding sphere;
-/// marks the triangles hit and returns those it marked first, each with the
-/// direction back to the eye (it escapes: nothing lies between, and the eye
-/// is outside the bounding sphere).
+/// The pinhole camera of one render: from `centre + 2 radius · dir`, an
+/// `image × image` image looking at `centre` whose view cone just holds the
+/// bounding sphere.
+#[derive(Clone, Copy, Debug)]
+struct RenderCamera {
+    eye: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    image: usize,
+}
+
+impl RenderCamera {
+    fn new(centre: Vec3, radius: f32, dir: Vec3, image: usize) -> Self {
+        let forward = -dir;
+        let helper = if forward.z.abs() < 0.9 {
+            Vec3::Z
+        } else {
+            Vec3::X
+        };
+        let right = forward.cross(helper).normalize();
+        RenderCamera {
+            eye: centre + dir * (2.0 * radius),
+            forward,
+            right,
+            up: right.cross(forward),
+            image: image.max(1),
+        }
+    }
+
+    /// The primary ray direction of pixel `p` (row-major).
+    fn pixel(&self, p: usize) -> Vec3 {
+        // Half-angle asin(1/2) = 30°: the cone tangent to the bounding
+        // sphere; the square image holds the cone's disc.
+        let half = 30f32.to_radians().tan();
+        let n = self.image as f32;
+        let (i, j) = ((p % self.image) as f32, (p / self.image) as f32);
+        let u = ((i + 0.5) / n * 2.0 - 1.0) * half;
+        let v = ((j + 0.5) / n * 2.0 - 1.0) * half;
+        (self.forward + u * self.right + v * self.up).normalize()
+    }
+}
+
+/// One render, viewpoint `view` of `views`: every triangle hit (through an
+/// opening at least `beam` wide) gets the smallest (viewpoint, pixel) key
+/// that saw it in `keys`, so the result does not depend on thread timing.
 #[allow(clippy::too_many_arguments)]
 fn render(
     mesh: &TriangleMesh,
     accel: &dyn Accel,
-    centre: Vec3,
-    radius: f32,
-    dir: Vec3,
-    image: usize,
+    camera: &RenderCamera,
+    view: usize,
     beam: f32,
-    hit: &[AtomicBool],
-) -> Vec<(usize, Vec3)> {
-    let mut first = Vec::new();
-    let eye = centre + dir * (2.0 * radius);
-    let forward = -dir;
-    let helper = if forward.z.abs() < 0.9 {
-        Vec3::Z
-    } else {
-        Vec3::X
-    };
-    let right = forward.cross(helper).normalize();
-    let up = right.cross(forward);
-    // Half-angle asin(1/2) = 30°: the cone tangent to the bounding sphere;
-    // the square image holds the cone's disc.
-    let half = 30f32.to_radians().tan();
-    let image = image.max(1);
-    for j in 0..image {
-        for i in 0..image {
-            let u = ((i as f32 + 0.5) / image as f32 * 2.0 - 1.0) * half;
-            let v = ((j as f32 + 0.5) / image as f32 * 2.0 - 1.0) * half;
-            let d = (forward + u * right + v * up).normalize();
-            if let Some(h) = accel.intersect(&Ray::new(eye, d)) {
-                let t = h.prim as usize;
-                let Some(slot) = hit.get(t) else { continue };
-                if slot.load(Ordering::Relaxed) {
-                    continue;
-                }
-                // Seen through an opening at least `beam` wide?
-                let n = mesh.face_normal(t).normalize_or_zero();
-                let face = if n.dot(d) < 0.0 { n } else { -n };
-                let origin = off_surface(mesh, t, eye + d * h.t, face);
-                if (beam <= 0.0 || beam_escapes(mesh, accel, t, origin, -d, beam))
-                    && !slot.swap(true, Ordering::Relaxed)
-                {
-                    first.push((t, -d));
-                }
-            }
+    keys: &[AtomicU64],
+) {
+    for p in 0..camera.image * camera.image {
+        let d = camera.pixel(p);
+        let Some(h) = accel.intersect(&Ray::new(camera.eye, d)) else {
+            continue;
+        };
+        let t = h.prim as usize;
+        let Some(slot) = keys.get(t) else { continue };
+        let key = ((view as u64) << 32) | p as u64;
+        if slot.load(Ordering::Relaxed) < key {
+            continue; // a smaller key already saw it
+        }
+        // Seen through an opening at least `beam` wide?
+        let n = mesh.face_normal(t).normalize_or_zero();
+        let face = if n.dot(d) < 0.0 { n } else { -n };
+        let origin = off_surface(mesh, t, camera.eye + d * h.t, face);
+        if beam <= 0.0 || beam_escapes(accel, origin, -d, beam) {
+            slot.fetch_min(key, Ordering::Relaxed);
         }
     }
-    first
 }
 
 /// Most triangle ids listed in [`EvalReport::false_removal_ids`] and

@@ -225,11 +225,11 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
                 confirm_frontier(mesh, accel.as_ref(), &mut visible, c, cells);
         }
         if let Some(c) = &options.confirm {
-            let before = visible.iter().filter(|&&v| v).count();
             // Triangles without area have no face to judge: kept.
             for (t, v) in visible.iter_mut().enumerate() {
                 *v |= evaluate::is_degenerate(mesh, t);
             }
+            let before = visible.iter().filter(|&&v| v).count();
             let truth = evaluate_beyond(mesh, accel.as_ref(), c, visible, &|_| {});
             visible = truth.visible;
             stats.kept_by_rays = truth.visible_count - before;

@@ -5,9 +5,9 @@
 //! A triangle seen only through a slit (the clearance round a bolt, a seam
 //! between two parts) escapes along a small cone of directions that random
 //! sampling rarely meets. Its neighbours behind the same slit escape along
-//! nearly the same directions. So every escaping ray found (by random
-//! sampling or by a render) is filed under the coarse cell of its
-//! triangle's centroid, and the still-unseen triangles of that cell and the
+//! nearly the same directions. So escaping rays found (by random sampling
+//! or by a render) are filed under the coarse cell of their triangle's
+//! centroid (the first [`DIRECTIONS_PER_CELL`] distinct ones per cell), and the still-unseen triangles of that cell and the
 //! 26 around it try those directions; what they find is filed in turn,
 //! until nothing new is found. Each label still rests on one ray that met
 //! nothing, so this only finds visible triangles faster, never invents one.
@@ -179,7 +179,7 @@ impl SharedEscapes {
                 }
                 let face = if cos > 0.0 { n } else { -n };
                 let origin = off_surface(mesh, tri, p, face);
-                if beam_escapes(mesh, accel, tri, origin, d, beam) {
+                if beam_escapes(accel, origin, d, beam) {
                     return Some(d);
                 }
             }

@@ -114,30 +114,25 @@ impl Default for RayConfirm {
 
 /// True when the ray from `origin` (a hair off triangle `tri`'s surface)
 /// along `d` meets no triangle, and, for `beam > 0`, so do the four parallel
-/// rays from `origin ± beam · e` for two perpendicular directions `e` in the
-/// triangle's plane: openings narrower than about `beam` (the cracks between
-/// independently tessellated CAD faces, hairline seams) count as closed.
-pub fn beam_escapes(
-    mesh: &TriangleMesh,
-    accel: &dyn Accel,
-    tri: usize,
-    origin: Vec3,
-    d: Vec3,
-    beam: f32,
-) -> bool {
+/// rays from `origin + 2 beam · d ± beam · e` for two directions `e`
+/// perpendicular to `d` and to each other: openings narrower than about
+/// `beam` (the cracks between independently tessellated CAD faces, hairline
+/// seams) count as closed. The side rays start two beam widths out along
+/// the central ray, so that near an inside corner they do not start behind
+/// the neighbouring face.
+pub fn beam_escapes(accel: &dyn Accel, origin: Vec3, d: Vec3, beam: f32) -> bool {
     if accel.occluded(&Ray::new(origin, d)) {
         return false;
     }
     if beam <= 0.0 {
         return true;
     }
-    let [a, b, c] = mesh.triangle(tri);
-    let n = (b - a).cross(c - a).normalize_or_zero();
-    let e1 = (b - a).normalize_or_zero();
-    let e2 = n.cross(e1);
+    let e1 = d.any_orthonormal_vector();
+    let e2 = d.cross(e1);
+    let start = origin + d * (2.0 * beam);
     [e1, -e1, e2, -e2]
         .iter()
-        .all(|&e| !accel.occluded(&Ray::new(origin + e * beam, d)))
+        .all(|&e| !accel.occluded(&Ray::new(start + e * beam, d)))
 }
 
 /// Smallest cosine between a sample direction and the face normal: steeper
@@ -207,7 +202,7 @@ pub fn escape_direction(
                         break if cos < 0.0 { -d } else { d };
                     }
                 };
-                if beam_escapes(mesh, accel, tri, origin, d, c.beam) {
+                if beam_escapes(accel, origin, d, c.beam) {
                     return Some(d);
                 }
             }
@@ -216,9 +211,11 @@ pub fn escape_direction(
     })
 }
 
-/// Most rays [`confirm_frontier`] casts (about 3 s on 2 cores for a
-/// million-triangle model): a wide frontier (coarse grids on big
-/// assemblies) gets fewer rays per candidate.
+/// Ray budget of [`confirm_frontier`]'s candidates (about 3 s on 2 cores
+/// for a million-triangle model): a wide frontier (coarse grids on big
+/// assemblies) gets fewer rays per candidate, down to one per face, and
+/// sharing stops early. The seeds' rays (a few kept triangles per cell)
+/// come on top.
 pub const FRONTIER_RAY_BUDGET: u64 = 1 << 23;
 
 /// Most kept triangles per cell whose escapes seed [`confirm_frontier`].
@@ -288,8 +285,9 @@ pub fn confirm_frontier(
     // Half the ray budget for the candidates' own random rays: fewer
     // directions (then points) per candidate on a wide frontier.
     let mut own = *c;
-    let per = |o: &RayConfirm| frontier.len() as u64 * 2 * u64::from(o.points * o.directions);
-    while per(&own) > FRONTIER_RAY_BUDGET / 2 && own.points * own.directions > 1 {
+    let rays = |o: &RayConfirm| u64::from(o.points) * u64::from(o.directions);
+    let per = |o: &RayConfirm| frontier.len() as u64 * 2 * rays(o);
+    while per(&own) > FRONTIER_RAY_BUDGET / 2 && rays(&own) > 1 {
         if own.directions > 1 {
             own.directions /= 2;
         } else {

@@ -266,3 +266,34 @@ fn zero_area_triangles_are_neither_visible_nor_hidden() {
     let r = compare(&truth, &vec![true; n], &mesh);
     assert_eq!(r.missed_removals, r.truly_hidden);
 }
+
+#[test]
+fn the_ground_truth_does_not_depend_on_the_thread_count() {
+    // A box with a slot: what is seen through it comes from renders and
+    // shared directions, whose order between threads must not matter.
+    let wall = box_surface(&aabb(0.0, 1.0), 8, |axis, max_side, i, j| {
+        axis == 0 && max_side && i == 4 && (2..6).contains(&j)
+    });
+    let mesh = assembly([
+        wall,
+        icosphere(Vec3::new(0.7, 0.5, 0.5), 0.15, 2),
+        icosphere(Vec3::new(0.3, 0.4, 0.6), 0.1, 1),
+    ]);
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| truth_of(&mesh, &quick()))
+    };
+    let (one, two) = (run(1), run(2));
+    assert_eq!(one.visible, two.visible);
+    assert_eq!(one.round_log.len(), two.round_log.len());
+    for (a, b) in one.round_log.iter().zip(&two.round_log) {
+        assert_eq!(
+            (a.by_surface_rays, a.by_renders, a.by_sharing),
+            (b.by_surface_rays, b.by_renders, b.by_sharing)
+        );
+    }
+    assert!(one.visible_count > 0 && one.visible_count < mesh.num_triangles());
+}

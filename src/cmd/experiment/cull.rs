@@ -48,8 +48,9 @@ pub struct CullExperimentArgs {
     #[arg(long, default_value_t = 3)]
     reps: usize,
     /// Most rounds of the ground truth (see `raykit cull --eval-rounds`).
-    #[arg(long, default_value_t = EvalOptions::default().max_rounds)]
-    eval_rounds: usize,
+    #[arg(long, default_value_t = EvalOptions::default().max_rounds as u32,
+          value_parser = clap::value_parser!(u32).range(2..=raykit_cull::evaluate::MAX_ROUNDS as i64))]
+    eval_rounds: u32,
     /// Leave out the 1M-triangle assemblies (quick runs).
     #[arg(long)]
     small: bool,
@@ -121,7 +122,7 @@ pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
             m.mesh.num_triangles(),
             m.mesh.parts.len().max(1)
         );
-        let truth = truth_of(&m, args.eval_rounds);
+        let truth = truth_of(&m, args.eval_rounds as usize);
         for &res in &args.resolutions {
             let mut modes = vec![
                 ("paper", CullOptions::paper(res)),
