@@ -102,9 +102,10 @@ pub struct CullArgs {
           requires = "evaluate")]
     eval_rounds: u32,
     /// Narrowest opening the ground truth sees through, as a fraction of the
-    /// model's bounding-box diagonal (0: any ray). CAD tessellations leave
-    /// hairline cracks between faces; rays through them would make hidden
-    /// parts "visible".
+    /// model's bounding-box diagonal (0, the default: any single ray that
+    /// escapes shows its triangle). CAD tessellations leave hairline cracks
+    /// between faces; with a width here, an escape must pass as a beam that
+    /// wide, so rays through cracks do not make hidden parts "visible".
     #[arg(long, default_value_t = EvalOptions::default().min_opening, requires = "evaluate",
           value_parser = parse_opening)]
     eval_min_opening: f32,

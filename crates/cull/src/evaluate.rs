@@ -52,7 +52,8 @@ pub struct EvalOptions {
     /// Narrowest opening that counts, as a fraction of the model's bounding
     /// box diagonal: an escape needs a beam this wide (see
     /// [`crate::visible::beam_escapes`]), so cracks between independently
-    /// tessellated faces do not make hidden triangles visible. 0: any ray.
+    /// tessellated faces do not make hidden triangles visible. 0 (the
+    /// default, issue 6's definition): any single ray.
     pub min_opening: f32,
 }
 
@@ -65,15 +66,15 @@ impl Default for EvalOptions {
             image: 32,
             max_rounds: 6,
             seed: 0x0006_e7a1,
-            min_opening: 1e-4,
+            min_opening: 0.0,
         }
     }
 }
 
 impl EvalOptions {
     /// The settings of [`crate::CullOptions::confirm`]: the ground truth's
-    /// search with its own seed, and any ray counts (no minimum opening), so
-    /// that it keeps rather than removes.
+    /// search with its own seed (any single ray counts, as in the ground
+    /// truth's default).
     pub fn confirmation() -> Self {
         EvalOptions {
             seed: 0x0003_c011,
