@@ -380,7 +380,6 @@ impl RenderCamera {
 /// One render, viewpoint `view` of `views`: every triangle hit (through an
 /// opening at least `beam` wide) gets the smallest (viewpoint, pixel) key
 /// that saw it in `keys`, so the result does not depend on thread timing.
-#[allow(clippy::too_many_arguments)]
 fn render(
     mesh: &TriangleMesh,
     accel: &dyn Accel,

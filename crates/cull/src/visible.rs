@@ -300,7 +300,7 @@ pub fn confirm_frontier(
             .with_min_len(16)
             .filter_map(|&t| escape_direction(mesh, accel, t, &own).map(|d| (t, d))),
     );
-    let degenerate = |t: usize| mesh.face_normal(t).normalize_or_zero() == Vec3::ZERO;
+    let degenerate = |t: usize| crate::evaluate::is_degenerate(mesh, t);
     let s = shared.spread(
         mesh,
         accel,

@@ -324,35 +324,26 @@ fn measure(
     let r = result.expect("at least one repetition");
     let s = &r.stats;
     let (total_s, total_min_s, total_max_s) = median_min_max(&totals);
-    let (truly_hidden, false_removals, missed, removed_area, note) = match truth {
-        Truth::Labels(labels, note) => {
-            let g = raykit_cull::GroundTruth {
-                visible: labels.clone(),
-                ..Default::default()
-            };
-            let e = compare(&g, &r.visible, &m.mesh);
-            (
-                Some(e.truly_hidden),
-                Some(e.false_removals),
-                Some(100.0 * e.missed_fraction),
-                100.0 * e.removed_fraction_area,
-                note.clone(),
-            )
-        }
-        Truth::Missing(why) => {
-            let total: f64 = (0..m.mesh.num_triangles()).map(|t| area(&m.mesh, t)).sum();
-            let removed: f64 = (0..m.mesh.num_triangles())
-                .filter(|&t| !r.visible[t])
-                .map(|t| area(&m.mesh, t))
-                .sum();
-            (
-                None,
-                None,
-                None,
-                100.0 * removed / total.max(1e-300),
-                why.clone(),
-            )
-        }
+    // The removal fractions need no truth: without one, compare against
+    // "nothing visible" and keep only them.
+    let (labels, note, known) = match truth {
+        Truth::Labels(labels, note) => (labels.clone(), note.clone(), true),
+        Truth::Missing(why) => (vec![false; m.mesh.num_triangles()], why.clone(), false),
+    };
+    let g = raykit_cull::GroundTruth {
+        visible: labels,
+        ..Default::default()
+    };
+    let e = compare(&g, &r.visible, &m.mesh);
+    let removed_area = 100.0 * e.removed_fraction_area;
+    let (truly_hidden, false_removals, missed) = if known {
+        (
+            Some(e.truly_hidden),
+            Some(e.false_removals),
+            Some(100.0 * e.missed_fraction),
+        )
+    } else {
+        (None, None, None)
     };
     Ok(Row {
         model: m.name.clone(),
@@ -376,10 +367,6 @@ fn measure(
         missed_removals_pct: missed,
         truth: note,
     })
-}
-
-fn area(mesh: &TriangleMesh, t: usize) -> f64 {
-    0.5 * f64::from(mesh.face_normal(t).length())
 }
 
 fn markdown(rows: &[Row], skipped: &[String]) -> String {
