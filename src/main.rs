@@ -37,6 +37,8 @@ enum Command {
     Tjunctions(cmd::tjunctions::TJunctionsArgs),
     /// Remove the hidden interior of a model: triangles or parts no outside viewpoint sees, paper 003.
     Cull(cmd::cull::CullArgs),
+    /// Stream rendered frames to browsers over WebSocket (JPEG) or MJPEG, with interactive cameras.
+    Serve(cmd::serve::ServeArgs),
     /// Reproduce the papers' tables and figures on this machine (CSV, Markdown, SVG).
     Experiment(cmd::experiment::ExperimentArgs),
     /// List the names accepted by --accel, --test and --scene.
@@ -52,6 +54,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => cmd::bench::run(a),
         Command::Tjunctions(a) => cmd::tjunctions::run(a),
         Command::Cull(a) => cmd::cull::run(a),
+        Command::Serve(a) => cmd::serve::run(a),
         Command::Experiment(a) => cmd::experiment::run(a),
         Command::Info(a) => cmd::info::run(a),
     };

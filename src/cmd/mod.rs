@@ -6,5 +6,6 @@ pub mod experiment;
 pub mod info;
 pub mod rays;
 pub mod render;
+pub mod serve;
 pub mod tjunctions;
 pub mod trace;

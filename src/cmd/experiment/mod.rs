@@ -3,6 +3,7 @@
 
 pub mod cull;
 pub mod kdtree_traversal;
+pub mod serve;
 pub mod split_heuristic;
 
 use anyhow::{Context, Result};
@@ -30,6 +31,10 @@ enum Which {
     /// times per grid resolution, with false and missed removals against the
     /// ray-traced ground truth.
     Cull(cull::CullExperimentArgs),
+    /// Paper 001's remote rendering, today: `raykit serve` on loopback — one
+    /// client's fps and latency while moving and refinement when still, then
+    /// N clients for T seconds with frames, errors, latency and memory.
+    Serve(serve::ServeExperimentArgs),
 }
 
 /// Run the chosen experiment.
@@ -38,6 +43,7 @@ pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
         Which::KdtreeTraversal(a) => kdtree_traversal::run(a),
         Which::SplitHeuristic(a) => split_heuristic::run(a),
         Which::Cull(a) => cull::run(a),
+        Which::Serve(a) => serve::run(a),
     }
 }
 

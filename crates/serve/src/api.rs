@@ -1,0 +1,318 @@
+//! The HTTP API: the web client's files, status, scene loading, camera,
+//! lights and resolution, and the Prometheus metrics.
+
+use crate::app::{lock, AppState};
+use crate::protocol::CameraJson;
+use crate::session::ClientShared;
+use crate::stats::prometheus;
+use axum::body::Bytes;
+use axum::extract::{Query, State};
+use axum::http::{header, StatusCode};
+use axum::response::{IntoResponse, Response};
+use raykit_core::Vec3;
+use raykit_render::PointLight;
+use serde::Deserialize;
+use serde_json::json;
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// A JSON error response `{"error": message}`.
+pub fn error(status: StatusCode, message: impl Into<String>) -> Response {
+    (status, axum::Json(json!({"error": message.into()}))).into_response()
+}
+
+/// A failed request: status and message, answered by [`error`].
+pub struct ApiError(pub StatusCode, pub String);
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        error(self.0, self.1)
+    }
+}
+
+/// An optional unsigned integer query parameter.
+pub fn query_u32(q: &HashMap<String, String>, key: &str) -> Result<Option<u32>, String> {
+    q.get(key)
+        .map(|v| {
+            v.parse::<u32>()
+                .map_err(|_| format!("query parameter {key}='{v}' is not an unsigned integer"))
+        })
+        .transpose()
+}
+
+/// Parse a JSON body into `T`, naming what was wrong.
+fn body<T: for<'de> Deserialize<'de>>(bytes: &Bytes) -> Result<T, ApiError> {
+    serde_json::from_slice(bytes)
+        .map_err(|e| ApiError(StatusCode::BAD_REQUEST, format!("request body: {e}")))
+}
+
+/// The client named by `?client=ID`, `None` for the defaults, or a 400/404.
+fn target_client(
+    state: &AppState,
+    q: &HashMap<String, String>,
+) -> Result<Option<Arc<ClientShared>>, ApiError> {
+    match q.get("client") {
+        None => Ok(None),
+        Some(id) => {
+            let id: u64 = id.parse().map_err(|_| {
+                ApiError(
+                    StatusCode::BAD_REQUEST,
+                    format!("client='{id}' is not a client id"),
+                )
+            })?;
+            state.client(id).map(Some).ok_or_else(|| {
+                ApiError(
+                    StatusCode::NOT_FOUND,
+                    format!("no client {id} is connected"),
+                )
+            })
+        }
+    }
+}
+
+/// `GET /`.
+pub async fn index() -> Response {
+    (
+        [(header::CONTENT_TYPE, "text/html; charset=utf-8")],
+        include_str!("client/index.html"),
+    )
+        .into_response()
+}
+
+/// `GET /client.js`.
+pub async fn client_js() -> Response {
+    (
+        [(header::CONTENT_TYPE, "text/javascript; charset=utf-8")],
+        include_str!("client/client.js"),
+    )
+        .into_response()
+}
+
+/// `GET /api/status`.
+pub async fn status(State(state): State<Arc<AppState>>) -> Response {
+    let world = state.world();
+    let g = &world.geometry;
+    let now = std::time::Instant::now();
+    let clients: Vec<_> = state
+        .clients()
+        .iter()
+        .map(|c| {
+            let s = c.sample(now);
+            let v = lock(&c.view);
+            json!({"client": c.id, "kind": c.kind, "camera": CameraJson::from_camera(&v.camera),
+                "full": [v.full.0, v.full.1], "spp": v.spp, "quality": v.quality,
+                "frames": s.frames, "fps": s.fps, "latency_ms": s.latency_ms,
+                "bytes_per_second": s.bytes_per_second, "inputs": s.inputs, "errors": s.errors})
+        })
+        .collect();
+    let lights: Vec<_> = world
+        .lights
+        .iter()
+        .map(|l| json!({"position": l.position.to_array(), "intensity": l.intensity.to_array()}))
+        .collect();
+    let c = &state.config;
+    axum::Json(json!({
+        "scene": g.scene.name, "triangles": g.scene.mesh.num_triangles(),
+        "camera": CameraJson::from_camera(&world.camera), "full": [world.full.0, world.full.1],
+        "lights": lights, "clients": clients,
+        "limits": {"max_clients": c.max_clients, "max_width": c.max_size.0, "max_height": c.max_size.1,
+            "max_spp": c.max_spp, "max_message_bytes": c.max_message_bytes,
+            "max_inputs_per_second": c.max_inputs_per_second},
+    }))
+    .into_response()
+}
+
+#[derive(Deserialize)]
+struct SceneRequest {
+    scene: String,
+}
+
+/// Whether `spec` may be loaded: built-in scenes always, files only inside
+/// `--scene-dir`. Returns the spec to hand to the loader.
+fn allowed_scene(state: &AppState, spec: &str) -> Result<String, String> {
+    if spec.starts_with("builtin:") {
+        return Ok(spec.to_string());
+    }
+    let Some(dir) = &state.config.scene_dir else {
+        return Err("only builtin: scenes can be loaded; start the server with --scene-dir DIR to allow files in DIR".into());
+    };
+    let root = dir
+        .canonicalize()
+        .map_err(|e| format!("--scene-dir {}: {e}", dir.display()))?;
+    let path = root
+        .join(Path::new(spec))
+        .canonicalize()
+        .map_err(|e| format!("scene file '{spec}': {e}"))?;
+    if !path.starts_with(&root) {
+        return Err(format!("scene file '{spec}' is outside --scene-dir"));
+    }
+    Ok(path.to_string_lossy().into_owned())
+}
+
+/// `POST /api/scene` with `{"scene": SPEC}`.
+pub async fn load_scene(State(state): State<Arc<AppState>>, bytes: Bytes) -> Response {
+    let req: SceneRequest = match body(&bytes) {
+        Ok(r) => r,
+        Err(r) => return r.into_response(),
+    };
+    let spec = match allowed_scene(&state, &req.scene) {
+        Ok(s) => s,
+        Err(e) => return error(StatusCode::BAD_REQUEST, e),
+    };
+    let _one_at_a_time = state.load_lock.lock().await;
+    let loader = state.loader.clone();
+    let st = state.clone();
+    let loaded = tokio::task::spawn_blocking(move || {
+        let start = std::time::Instant::now();
+        loader(&spec).map(|scene| (st.set_scene(scene), start.elapsed()))
+    })
+    .await;
+    match loaded {
+        Ok(Ok((g, took))) => axum::Json(json!({
+            "scene": g.scene.name, "triangles": g.scene.mesh.num_triangles(),
+            "load_and_build_ms": took.as_secs_f64() * 1e3,
+        }))
+        .into_response(),
+        Ok(Err(e)) => error(StatusCode::BAD_REQUEST, format!("{e:#}")),
+        Err(e) => error(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            format!("scene loading failed: {e}"),
+        ),
+    }
+}
+
+/// `GET /api/camera[?client=ID]`.
+pub async fn get_camera(
+    State(state): State<Arc<AppState>>,
+    Query(q): Query<HashMap<String, String>>,
+) -> Response {
+    let camera = match target_client(&state, &q) {
+        Ok(Some(c)) => lock(&c.view).camera,
+        Ok(None) => state.world().camera,
+        Err(r) => return r.into_response(),
+    };
+    axum::Json(CameraJson::from_camera(&camera)).into_response()
+}
+
+/// `PUT /api/camera[?client=ID]` with a camera (fields optional).
+pub async fn put_camera(
+    State(state): State<Arc<AppState>>,
+    Query(q): Query<HashMap<String, String>>,
+    bytes: Bytes,
+) -> Response {
+    let json: CameraJson = match body(&bytes) {
+        Ok(j) => j,
+        Err(r) => return r.into_response(),
+    };
+    match target_client(&state, &q) {
+        Ok(Some(c)) => match c.set_camera(&json) {
+            Ok(cam) => axum::Json(CameraJson::from_camera(&cam)).into_response(),
+            Err(e) => error(StatusCode::BAD_REQUEST, e),
+        },
+        Ok(None) => {
+            let camera = json.apply(&state.world().camera);
+            if let Some(p) = crate::camera_control::camera_problem(&camera) {
+                return error(StatusCode::BAD_REQUEST, p);
+            }
+            state.update_world(|w| w.camera = camera);
+            axum::Json(CameraJson::from_camera(&camera)).into_response()
+        }
+        Err(r) => r.into_response(),
+    }
+}
+
+#[derive(Deserialize)]
+struct LightJson {
+    position: [f32; 3],
+    #[serde(default = "white")]
+    color: [f32; 3],
+}
+
+fn white() -> [f32; 3] {
+    [1.0; 3]
+}
+
+#[derive(Deserialize)]
+struct LightsRequest {
+    lights: Vec<LightJson>,
+}
+
+/// Most lights the API accepts.
+pub const MAX_LIGHTS: usize = 64;
+
+/// `PUT /api/lights` with `{"lights": [{"position": [..], "color": [..]}]}`.
+pub async fn put_lights(State(state): State<Arc<AppState>>, bytes: Bytes) -> Response {
+    let req: LightsRequest = match body(&bytes) {
+        Ok(r) => r,
+        Err(r) => return r.into_response(),
+    };
+    if req.lights.len() > MAX_LIGHTS {
+        return error(
+            StatusCode::BAD_REQUEST,
+            format!("at most {MAX_LIGHTS} lights"),
+        );
+    }
+    let center = state.world().geometry.bounds.center();
+    let mut lights = Vec::new();
+    for (i, l) in req.lights.iter().enumerate() {
+        let (p, c) = (Vec3::from_array(l.position), Vec3::from_array(l.color));
+        if !p.is_finite() || !c.is_finite() || c.min_element() < 0.0 || c.max_element() > 1e6 {
+            return error(
+                StatusCode::BAD_REQUEST,
+                format!("lights[{i}]: position must be finite and color within 0..=1e6"),
+            );
+        }
+        let d = p.distance(center).max(1e-6);
+        lights.push(PointLight::with_irradiance_at(p, c, d));
+    }
+    let n = lights.len();
+    state.update_world(|w| w.lights = lights);
+    axum::Json(json!({"lights": n})).into_response()
+}
+
+#[derive(Deserialize)]
+struct ResolutionRequest {
+    width: u32,
+    height: u32,
+}
+
+/// `PUT /api/resolution[?client=ID]` with `{"width": W, "height": H}`.
+pub async fn put_resolution(
+    State(state): State<Arc<AppState>>,
+    Query(q): Query<HashMap<String, String>>,
+    bytes: Bytes,
+) -> Response {
+    let req: ResolutionRequest = match body(&bytes) {
+        Ok(r) => r,
+        Err(r) => return r.into_response(),
+    };
+    if let Some(p) = state.config.size_problem(req.width, req.height) {
+        return error(StatusCode::BAD_REQUEST, p);
+    }
+    let full = (req.width, req.height);
+    match target_client(&state, &q) {
+        Ok(Some(c)) => c.set_full(full),
+        Ok(None) => state.update_world(|w| w.full = full),
+        Err(r) => return r.into_response(),
+    }
+    axum::Json(json!({"width": full.0, "height": full.1})).into_response()
+}
+
+/// `GET /metrics` in the Prometheus text format.
+pub async fn metrics(State(state): State<Arc<AppState>>) -> Response {
+    let totals = *lock(&state.totals);
+    let text = prometheus(
+        &state.samples(),
+        &totals,
+        state.world().geometry.scene.mesh.num_triangles(),
+    );
+    (
+        [(
+            header::CONTENT_TYPE,
+            "text/plain; version=0.0.4; charset=utf-8",
+        )],
+        text,
+    )
+        .into_response()
+}

@@ -1,0 +1,181 @@
+//! The server's shared state: settings, the world every client renders, the
+//! client registry with its limit, totals and the shutdown signal.
+
+use crate::config::ServeConfig;
+use crate::frame::RenderQueue;
+use crate::session::ClientShared;
+use crate::stats::{ClientSample, Totals};
+use crate::world::{Geometry, World};
+use raykit_scene::Scene;
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, RwLock};
+use std::time::Instant;
+use tokio::sync::watch;
+
+/// Loads a scene from a specification (`builtin:NAME[:k=v,...]` or a file
+/// path); supplied by the caller so the server does not depend on the file
+/// formats.
+pub type SceneLoader = Arc<dyn Fn(&str) -> anyhow::Result<Scene> + Send + Sync>;
+
+/// Lock a mutex, recovering the data if a panicking thread poisoned it (the
+/// state stays consistent: every critical section only assigns fields).
+pub fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Everything the handlers share.
+pub struct AppState {
+    /// Settings and limits.
+    pub config: ServeConfig,
+    /// Scene loading for `POST /api/scene`.
+    pub loader: SceneLoader,
+    world: RwLock<Arc<World>>,
+    world_tx: watch::Sender<u64>,
+    clients: Mutex<BTreeMap<u64, Arc<ClientShared>>>,
+    next_id: AtomicU64,
+    generation: AtomicU64,
+    /// Server-wide counters.
+    pub totals: Mutex<Totals>,
+    shutdown: watch::Sender<bool>,
+    /// Held while a scene loads, so only one loads at a time.
+    pub load_lock: tokio::sync::Mutex<()>,
+    /// Where every frame is rendered, in turn.
+    pub renderer: RenderQueue,
+}
+
+impl AppState {
+    /// State around an already prepared first scene.
+    pub fn new(config: ServeConfig, loader: SceneLoader, scene: Scene) -> Arc<AppState> {
+        let geometry = Arc::new(Geometry::new(scene, 1));
+        let aspect = config.full.0 as f32 / config.full.1 as f32;
+        let world = World {
+            lights: geometry.default_lights(),
+            camera: geometry.default_camera(aspect),
+            full: config.full,
+            geometry,
+            version: 1,
+        };
+        Arc::new(AppState {
+            config,
+            loader,
+            world: RwLock::new(Arc::new(world)),
+            world_tx: watch::channel(1).0,
+            clients: Mutex::new(BTreeMap::new()),
+            next_id: AtomicU64::new(1),
+            generation: AtomicU64::new(1),
+            totals: Mutex::new(Totals::default()),
+            shutdown: watch::channel(false).0,
+            load_lock: tokio::sync::Mutex::new(()),
+            // Two renders at a time overlap one's JPEG encoding (one
+            // thread) with the other's tracing (all threads).
+            renderer: RenderQueue::new(2),
+        })
+    }
+
+    /// The current world.
+    pub fn world(&self) -> Arc<World> {
+        self.world.read().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+
+    /// Change the world with `f` (on a copy), bump its version and wake
+    /// every client.
+    pub fn update_world(&self, f: impl FnOnce(&mut World)) {
+        let version = {
+            let mut guard = self.world.write().unwrap_or_else(|e| e.into_inner());
+            let mut w = (**guard).clone();
+            f(&mut w);
+            w.version = guard.version + 1;
+            let v = w.version;
+            *guard = Arc::new(w);
+            v
+        };
+        self.world_tx.send_replace(version);
+    }
+
+    /// Replace the scene with `scene` (already loaded): new BVH, the scene's
+    /// lights and camera.
+    pub fn set_scene(&self, scene: Scene) -> Arc<Geometry> {
+        let generation = self.generation.fetch_add(1, Ordering::Relaxed) + 1;
+        let geometry = Arc::new(Geometry::new(scene, generation));
+        let g = geometry.clone();
+        self.update_world(move |w| {
+            let aspect = w.full.0 as f32 / w.full.1 as f32;
+            w.lights = g.default_lights();
+            w.camera = g.default_camera(aspect);
+            w.geometry = g;
+        });
+        lock(&self.totals).scenes_loaded += 1;
+        geometry
+    }
+
+    /// Count a frame of `bytes` that took `seconds` to render and encode.
+    pub fn count_frame(&self, bytes: usize, seconds: f64) {
+        let mut t = lock(&self.totals);
+        t.frames += 1;
+        t.bytes += bytes as u64;
+        t.render_seconds += seconds;
+    }
+
+    /// A receiver that changes whenever the world does.
+    pub fn watch_world(&self) -> watch::Receiver<u64> {
+        self.world_tx.subscribe()
+    }
+
+    /// A receiver that turns `true` when the server shuts down.
+    pub fn watch_shutdown(&self) -> watch::Receiver<bool> {
+        self.shutdown.subscribe()
+    }
+
+    /// Ask every session to close.
+    pub fn begin_shutdown(&self) {
+        self.shutdown.send_replace(true);
+    }
+
+    /// Register a new client of `kind` unless the client limit is reached.
+    pub fn register(self: &Arc<Self>, kind: &'static str) -> Option<ClientGuard> {
+        let mut clients = lock(&self.clients);
+        if clients.len() >= self.config.max_clients {
+            drop(clients);
+            lock(&self.totals).rejected += 1;
+            return None;
+        }
+        let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+        let world = self.world();
+        let client = Arc::new(ClientShared::new(id, kind, &world, &self.config));
+        clients.insert(id, client.clone());
+        Some(ClientGuard {
+            state: self.clone(),
+            client,
+        })
+    }
+
+    /// The client with `id`, if connected.
+    pub fn client(&self, id: u64) -> Option<Arc<ClientShared>> {
+        lock(&self.clients).get(&id).cloned()
+    }
+
+    /// Every connected client.
+    pub fn clients(&self) -> Vec<Arc<ClientShared>> {
+        lock(&self.clients).values().cloned().collect()
+    }
+
+    /// A snapshot of every client's stats.
+    pub fn samples(&self) -> Vec<ClientSample> {
+        let now = Instant::now();
+        self.clients().iter().map(|c| c.sample(now)).collect()
+    }
+}
+
+/// A registered client; leaving the registry when dropped.
+pub struct ClientGuard {
+    state: Arc<AppState>,
+    /// The client's shared state.
+    pub client: Arc<ClientShared>,
+}
+
+impl Drop for ClientGuard {
+    fn drop(&mut self) {
+        lock(&self.state.clients).remove(&self.client.id);
+    }
+}

@@ -1,0 +1,96 @@
+//! Server settings and the limits a client may ask up to.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// How the server runs and what it allows.
+#[derive(Clone, Debug)]
+pub struct ServeConfig {
+    /// Address to listen on.
+    pub addr: SocketAddr,
+    /// When set, every request needs `?token=` or `Authorization: Bearer`.
+    pub token: Option<String>,
+    /// Most clients (WebSocket and MJPEG together).
+    pub max_clients: usize,
+    /// Default full resolution of new clients.
+    pub full: (u32, u32),
+    /// Largest width and height a client may ask for.
+    pub max_size: (u32, u32),
+    /// Default samples per pixel of the refined stage.
+    pub spp: u32,
+    /// Largest samples per pixel a client may ask for.
+    pub max_spp: u32,
+    /// Default JPEG quality (1..=100).
+    pub quality: u8,
+    /// How long the camera must stay still before full resolution.
+    pub settle: Duration,
+    /// Largest WebSocket message or HTTP body a client may send, bytes.
+    pub max_message_bytes: usize,
+    /// Inputs per second a client may send; more are dropped with an error.
+    pub max_inputs_per_second: u32,
+    /// Directory scene files may be loaded from through the API (`None`:
+    /// built-in scenes only).
+    pub scene_dir: Option<PathBuf>,
+}
+
+impl Default for ServeConfig {
+    /// 127.0.0.1:8080, no token, 16 clients, 1280×720 refined with 4
+    /// samples, 3840×2160 and 16 samples at most, quality 80, 150 ms settle,
+    /// 16 KiB messages, 240 inputs/s.
+    fn default() -> Self {
+        ServeConfig {
+            addr: SocketAddr::from(([127, 0, 0, 1], 8080)),
+            token: None,
+            max_clients: 16,
+            full: (1280, 720),
+            max_size: (3840, 2160),
+            spp: 4,
+            max_spp: 16,
+            quality: 80,
+            settle: Duration::from_millis(150),
+            max_message_bytes: 16 * 1024,
+            max_inputs_per_second: 240,
+            scene_dir: None,
+        }
+    }
+}
+
+impl ServeConfig {
+    /// Why a requested full resolution is not allowed, if it is not.
+    pub fn size_problem(&self, width: u32, height: u32) -> Option<String> {
+        let (mw, mh) = self.max_size;
+        (!(16..=mw).contains(&width) || !(16..=mh).contains(&height))
+            .then(|| format!("resolution {width}x{height} outside 16x16..={mw}x{mh}"))
+    }
+
+    /// Why the settings themselves are unusable, if they are.
+    pub fn problem(&self) -> Option<String> {
+        if let Some(p) = self.size_problem(self.full.0, self.full.1) {
+            return Some(format!("default {p}"));
+        }
+        if self.max_size.0 > 16384 || self.max_size.1 > 16384 {
+            return Some("the largest resolution is 16384x16384".into());
+        }
+        if !(1..=self.max_spp).contains(&self.spp) || self.max_spp > 4096 {
+            return Some(format!(
+                "spp {} outside 1..={} (at most 4096)",
+                self.spp, self.max_spp
+            ));
+        }
+        if !(1..=100).contains(&self.quality) {
+            return Some(format!("JPEG quality {} outside 1..=100", self.quality));
+        }
+        if self.max_clients == 0 || self.max_message_bytes < 256 || self.max_inputs_per_second == 0
+        {
+            return Some("max clients, inputs per second must be positive and message size at least 256 bytes".into());
+        }
+        None
+    }
+
+    /// The preview size for a full resolution: half in each direction, at
+    /// least 16.
+    pub fn preview_size(full: (u32, u32)) -> (u32, u32) {
+        ((full.0 / 2).max(16), (full.1 / 2).max(16))
+    }
+}

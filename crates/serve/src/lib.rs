@@ -1,0 +1,136 @@
+//! raykit remote rendering server: the arrangement of paper 001 (render on
+//! a PC, stream the frames to a tracked handheld) for today's clients.
+//!
+//! [`start`] binds an axum server that renders the loaded scene with
+//! [`raykit_render`] for every client through its own camera, sharing the
+//! scene and its BVH. Browsers get a small web client (orbit, pan, zoom, WASD
+//! fly, phone orientation); frames go over a WebSocket as JPEG, one
+//! unacknowledged frame per client at most (so a slow client builds no
+//! backlog and costs the others nothing), from a half-size preview while the
+//! camera moves to full size and more samples once it stops. `GET /mjpeg`
+//! serves clients without JavaScript, `/api/*` loads scenes and sets
+//! cameras, lights and resolution, `/metrics` reports per-client fps,
+//! input-to-frame latency and bytes/s. See `PROTOCOL.md` for the wire
+//! format.
+//!
+//! ```no_run
+//! # async fn run() -> anyhow::Result<()> {
+//! use raykit_serve::{start, ServeConfig};
+//! use std::sync::Arc;
+//!
+//! let loader = Arc::new(|spec: &str| {
+//!     let name = spec.strip_prefix("builtin:").unwrap_or(spec);
+//!     Ok(raykit_scene::builtin(name)?)
+//! });
+//! let server = start(ServeConfig::default(), loader, "builtin:cornell").await?;
+//! println!("open http://{}/", server.addr());
+//! server.shutdown().await?;
+//! # Ok(()) }
+//! ```
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod api;
+mod app;
+mod auth;
+pub mod camera_control;
+mod config;
+mod frame;
+pub mod load;
+mod mjpeg;
+pub mod protocol;
+mod session;
+pub mod stats;
+mod world;
+mod ws;
+
+pub use app::{AppState, SceneLoader};
+pub use config::ServeConfig;
+pub use frame::encode_jpeg;
+pub use mjpeg::BOUNDARY;
+pub use ws::{CLOSE_GOING_AWAY, CLOSE_TOO_BIG};
+
+use anyhow::{bail, Context, Result};
+use axum::extract::DefaultBodyLimit;
+use axum::routing::{get, post};
+use axum::Router;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use tokio::task::JoinHandle;
+
+/// The routes over `state`, behind the token check.
+pub fn router(state: Arc<AppState>) -> Router {
+    Router::new()
+        .route("/", get(api::index))
+        .route("/client.js", get(api::client_js))
+        .route("/ws", get(ws::handler))
+        .route("/mjpeg", get(mjpeg::handler))
+        .route("/api/status", get(api::status))
+        .route("/api/scene", post(api::load_scene))
+        .route("/api/camera", get(api::get_camera).put(api::put_camera))
+        .route("/api/lights", axum::routing::put(api::put_lights))
+        .route("/api/resolution", axum::routing::put(api::put_resolution))
+        .route("/metrics", get(api::metrics))
+        .layer(DefaultBodyLimit::max(state.config.max_message_bytes))
+        .layer(axum::middleware::from_fn_with_state(
+            state.clone(),
+            auth::require_token,
+        ))
+        .with_state(state)
+}
+
+/// A running server.
+pub struct Server {
+    addr: SocketAddr,
+    state: Arc<AppState>,
+    task: JoinHandle<std::io::Result<()>>,
+}
+
+impl Server {
+    /// The address it listens on (the real port when 0 was asked for).
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// The shared state (scene, clients, totals).
+    pub fn state(&self) -> &Arc<AppState> {
+        &self.state
+    }
+
+    /// Close every session (WebSocket clients get close code 1001, MJPEG
+    /// streams end), stop accepting, and wait for the open requests to end.
+    pub async fn shutdown(self) -> Result<()> {
+        self.state.begin_shutdown();
+        self.task.await.context("server task")?.context("server")
+    }
+}
+
+/// Load `scene` with `loader`, build its BVH, bind `config.addr` and serve
+/// until [`Server::shutdown`].
+pub async fn start(config: ServeConfig, loader: SceneLoader, scene: &str) -> Result<Server> {
+    if let Some(p) = config.problem() {
+        bail!("server settings: {p}");
+    }
+    let l = loader.clone();
+    let spec = scene.to_string();
+    let scene = tokio::task::spawn_blocking(move || l(&spec))
+        .await
+        .context("loading the scene")??;
+    let addr = config.addr;
+    let state = AppState::new(config, loader, scene);
+    let listener = tokio::net::TcpListener::bind(addr)
+        .await
+        .with_context(|| format!("cannot listen on {addr}"))?;
+    let addr = listener.local_addr()?;
+    let app = router(state.clone());
+    let mut stop = state.watch_shutdown();
+    let task = tokio::spawn(async move {
+        axum::serve(listener, app)
+            .with_graceful_shutdown(async move {
+                let _ = stop.wait_for(|s| *s).await;
+            })
+            .await
+    });
+    Ok(Server { addr, state, task })
+}

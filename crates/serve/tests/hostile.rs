@@ -1,0 +1,232 @@
+//! Bad and hostile input: malformed, out-of-range, binary, flooding and
+//! oversized messages get errors (or, for oversize, a 1009 close) and never
+//! stop the server or the other clients; client limits, token checks.
+
+mod support;
+
+use futures_util::SinkExt;
+use raykit_serve::{CLOSE_GOING_AWAY, CLOSE_TOO_BIG};
+use std::time::Duration;
+use support::*;
+use tokio_tungstenite::tungstenite::Message;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn malformed_messages_get_errors_and_the_connection_keeps_working() {
+    let server = server(config()).await;
+    let (mut ws, _) = connect(&server, "").await;
+    let (h, _) = next_frame(&mut ws).await;
+    ack(&mut ws, &h).await;
+    let bad = [
+        "not json",
+        r#"{"type":"warp"}"#,
+        r#"{"no":"type"}"#,
+        r#"{"type":"zoom","factor":1e9}"#,
+        r#"{"type":"zoom","factor":"big"}"#,
+        r#"{"type":"orbit","yaw":1e30}"#,
+        r#"{"type":"camera","eye":[1e39,0,0]}"#,
+        r#"{"type":"camera","eye":[0,5,0],"target":[0,5,0]}"#,
+        r#"{"type":"camera","fov":0}"#,
+        r#"{"type":"settings","width":100000}"#,
+        r#"{"type":"settings","quality":0}"#,
+        r#"{"type":"settings","spp":100000}"#,
+        r#"{"type":"ack","frame":999}"#,
+        "[1,2,3]",
+        "",
+    ];
+    for b in bad {
+        send(&mut ws, b).await;
+        let e = next_text(&mut ws).await;
+        assert_eq!(e["type"], "error", "for {b}: {e}");
+        assert!(!e["message"].as_str().unwrap().is_empty());
+    }
+    ws.send(Message::binary(vec![1u8, 2, 3])).await.unwrap();
+    let e = next_text(&mut ws).await;
+    assert!(e["message"].as_str().unwrap().contains("binary"), "{e}");
+    // Still served: a valid input gives a frame showing it.
+    send(&mut ws, r#"{"type":"orbit","yaw":0.2,"seq":5}"#).await;
+    loop {
+        let (h, _) = next_frame(&mut ws).await;
+        ack(&mut ws, &h).await;
+        if h.input_seq == 5 {
+            break;
+        }
+    }
+    let errors = server.state().samples()[0].errors;
+    assert_eq!(errors, bad.len() as u64 + 1);
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn floods_are_rate_limited_and_oversized_messages_close_only_that_connection() {
+    let mut c = config();
+    c.max_inputs_per_second = 50;
+    c.max_message_bytes = 1024;
+    let server = server(c).await;
+    let (mut flood, _) = connect(&server, "").await;
+    let (mut calm, _) = connect(&server, "").await;
+    for seq in 1..=400 {
+        send(
+            &mut flood,
+            &format!(r#"{{"type":"orbit","yaw":0.001,"seq":{seq}}}"#),
+        )
+        .await;
+    }
+    let mut rate_error = false;
+    for _ in 0..50 {
+        match next_message(&mut flood).await {
+            Message::Text(t) if t.contains("per second") => {
+                rate_error = true;
+                break;
+            }
+            _ => {}
+        }
+    }
+    assert!(rate_error, "no rate-limit error after 400 inputs at once");
+    let applied = server
+        .state()
+        .samples()
+        .iter()
+        .map(|s| s.inputs)
+        .max()
+        .unwrap();
+    assert!(
+        (50..=60).contains(&applied),
+        "{applied} inputs applied, the burst allows 50"
+    );
+
+    // An oversized message ends that connection with 1009 …
+    flood.send(Message::text("x".repeat(4096))).await.unwrap();
+    let closed = loop {
+        match tokio::time::timeout(
+            Duration::from_secs(10),
+            futures_util::StreamExt::next(&mut flood),
+        )
+        .await
+        {
+            Ok(Some(Ok(Message::Close(f)))) => break f.map(|f| u16::from(f.code)),
+            Ok(Some(Ok(_))) => continue,
+            Ok(_) => break None,
+            Err(_) => panic!("the oversized message did not end the connection"),
+        }
+    };
+    assert!(
+        closed.is_none() || closed == Some(CLOSE_TOO_BIG),
+        "{closed:?}"
+    );
+    // … while the other client and the HTTP API carry on.
+    let (h, _) = next_frame(&mut calm).await;
+    ack(&mut calm, &h).await;
+    send(&mut calm, r#"{"type":"orbit","yaw":0.3,"seq":1}"#).await;
+    loop {
+        let (h, _) = next_frame(&mut calm).await;
+        ack(&mut calm, &h).await;
+        if h.input_seq == 1 {
+            break;
+        }
+    }
+    let (status, _, _) = http(&server, "GET", "/api/status", "", "").await;
+    assert_eq!(status, 200);
+    // A body over the limit is refused with 413.
+    let big = format!(r#"{{"scene":"builtin:{}"}}"#, "a".repeat(2000));
+    let (status, _, _) = http(&server, "POST", "/api/scene", "", &big).await;
+    assert_eq!(status, 413);
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_client_limit_is_kept() {
+    let mut c = config();
+    c.max_clients = 2;
+    let server = server(c).await;
+    let (a, _) = connect(&server, "").await;
+    let (_b, _) = connect(&server, "").await;
+    let url = format!("ws://{}/ws", server.addr());
+    let refused = tokio_tungstenite::connect_async(url.as_str()).await;
+    match refused {
+        Err(tokio_tungstenite::tungstenite::Error::Http(r)) => assert_eq!(r.status(), 503),
+        other => panic!("third client not refused: {:?}", other.map(|_| ())),
+    }
+    let (status, _, _) = http(&server, "GET", "/mjpeg", "", "").await;
+    assert_eq!(status, 503);
+    drop(a);
+    // The slot frees once the first client's session has ended.
+    let mut ok = false;
+    for _ in 0..50 {
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        if tokio_tungstenite::connect_async(url.as_str()).await.is_ok() {
+            ok = true;
+            break;
+        }
+    }
+    assert!(ok, "the freed slot was not reusable");
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_token_is_required_when_set() {
+    let mut c = config();
+    c.token = Some("s3cr3t".into());
+    let server = server(c).await;
+    let (status, _, body) = http(&server, "GET", "/api/status", "", "").await;
+    assert_eq!(status, 401);
+    assert!(json_body(&body)["error"]
+        .as_str()
+        .unwrap()
+        .contains("token"));
+    assert_eq!(
+        http(&server, "GET", "/api/status?token=wrong", "", "")
+            .await
+            .0,
+        401
+    );
+    assert_eq!(
+        http(&server, "GET", "/api/status?token=s3cr3t", "", "")
+            .await
+            .0,
+        200
+    );
+    assert_eq!(
+        http(
+            &server,
+            "GET",
+            "/metrics",
+            "Authorization: Bearer s3cr3t\r\n",
+            ""
+        )
+        .await
+        .0,
+        200
+    );
+    let url = format!("ws://{}/ws", server.addr());
+    assert!(tokio_tungstenite::connect_async(url.as_str())
+        .await
+        .is_err());
+    let (mut ws, _) = connect(&server, "?token=s3cr3t").await;
+    next_frame(&mut ws).await;
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn shutdown_closes_sessions_with_going_away() {
+    let server = server(config()).await;
+    let (mut ws, _) = connect(&server, "").await;
+    next_frame(&mut ws).await;
+    let addr = server.addr();
+    let stop = tokio::spawn(server.shutdown());
+    let code = loop {
+        match next_message(&mut ws).await {
+            Message::Close(f) => break f.map(|f| u16::from(f.code)),
+            _ => continue,
+        }
+    };
+    assert_eq!(code, Some(CLOSE_GOING_AWAY));
+    tokio::time::timeout(Duration::from_secs(10), stop)
+        .await
+        .expect("shutdown within 10 s")
+        .unwrap()
+        .unwrap();
+    assert!(
+        tokio::net::TcpStream::connect(addr).await.is_err(),
+        "still listening"
+    );
+}
