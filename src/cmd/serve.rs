@@ -67,6 +67,9 @@ pub struct ServeArgs {
     /// Inputs per second per client; more are dropped with an error.
     #[arg(long, default_value_t = 240)]
     max_inputs_per_second: u32,
+    /// Largest scene `POST /api/scene` may load, in triangles.
+    #[arg(long, default_value_t = 20_000_000)]
+    max_scene_triangles: usize,
     /// Allow `POST /api/scene` to load mesh files from this directory (otherwise builtin: only).
     #[arg(long)]
     scene_dir: Option<PathBuf>,
@@ -92,6 +95,7 @@ impl ServeArgs {
             settle: Duration::from_millis(self.settle_ms),
             max_message_bytes: self.max_message_bytes,
             max_inputs_per_second: self.max_inputs_per_second,
+            max_scene_triangles: self.max_scene_triangles,
             scene_dir: self.scene_dir.clone(),
         }
     }
@@ -120,8 +124,8 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
             .context("cannot start the thread pool")?;
     }
     if let Some(s) = args.seconds {
-        if !(s.is_finite() && s >= 0.0) {
-            anyhow::bail!("--seconds must be a finite number of seconds >= 0, got {s}");
+        if !(s.is_finite() && (0.0..=1e7).contains(&s)) {
+            anyhow::bail!("--seconds must be a number of seconds in 0..=1e7, got {s}");
         }
     }
     let config = args.config();

@@ -61,6 +61,12 @@ fn target_client(
                     format!("client='{id}' is not a client id"),
                 )
             })?;
+            if state.client(id).is_some_and(|c| c.kind != "ws") {
+                return Err(ApiError(
+                    StatusCode::BAD_REQUEST,
+                    format!("client {id} is an MJPEG stream, which shows the default camera; leave out ?client="),
+                ));
+            }
             state.client(id).map(Some).ok_or_else(|| {
                 ApiError(
                     StatusCode::NOT_FOUND,
@@ -69,6 +75,32 @@ fn target_client(
             })
         }
     }
+}
+
+/// Middleware: requests with a body (POST, PUT) must say
+/// `Content-Type: application/json` (415 otherwise), which also keeps other
+/// web pages from sending them without a CORS preflight.
+pub async fn require_json(req: axum::extract::Request, next: axum::middleware::Next) -> Response {
+    let needs = matches!(
+        *req.method(),
+        axum::http::Method::POST | axum::http::Method::PUT
+    );
+    let is_json = req
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| {
+            v.split(';')
+                .next()
+                .is_some_and(|t| t.trim().eq_ignore_ascii_case("application/json"))
+        });
+    if needs && !is_json {
+        return error(
+            StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            "send the request body as JSON with Content-Type: application/json",
+        );
+    }
+    next.run(req).await
 }
 
 /// `GET /`.
@@ -109,7 +141,12 @@ pub async fn status(State(state): State<Arc<AppState>>) -> Response {
     let lights: Vec<_> = world
         .lights
         .iter()
-        .map(|l| json!({"position": l.position.to_array(), "intensity": l.intensity.to_array()}))
+        .map(|l| {
+            // `color` as PUT /api/lights takes it: irradiance at the centre.
+            let color = l.irradiance_at(g.bounds.center());
+            json!({"position": l.position.to_array(), "color": color.to_array(),
+                "intensity": l.intensity.to_array()})
+        })
         .collect();
     let c = &state.config;
     axum::Json(json!({
@@ -160,12 +197,23 @@ pub async fn load_scene(State(state): State<Arc<AppState>>, bytes: Bytes) -> Res
         Ok(s) => s,
         Err(e) => return error(StatusCode::BAD_REQUEST, e),
     };
-    let _one_at_a_time = state.load_lock.lock().await;
+    // The guard moves into the blocking work, so a client that hangs up
+    // cannot start a second load while the first still runs.
+    let one_at_a_time = state.load_lock.clone().lock_owned().await;
     let loader = state.loader.clone();
     let st = state.clone();
     let loaded = tokio::task::spawn_blocking(move || {
+        let _held = one_at_a_time;
         let start = std::time::Instant::now();
-        loader(&spec).map(|scene| (st.set_scene(scene), start.elapsed()))
+        let scene = loader(&spec)?;
+        let n = scene.mesh.num_triangles();
+        let max = st.config.max_scene_triangles;
+        if n > max {
+            anyhow::bail!(
+                "the scene has {n} triangles, more than this server's --max-scene-triangles {max}"
+            );
+        }
+        Ok((st.set_scene(scene), start.elapsed()))
     })
     .await;
     match loaded {
@@ -211,12 +259,22 @@ pub async fn put_camera(
             Err(e) => error(StatusCode::BAD_REQUEST, e),
         },
         Ok(None) => {
-            let camera = json.apply(&state.world().camera);
-            if let Some(p) = crate::camera_control::camera_problem(&camera) {
-                return error(StatusCode::BAD_REQUEST, p);
+            // Applied to the default inside the world's lock, so two partial
+            // updates at once both take effect.
+            let result = state.try_update_world(|w| {
+                let camera = json.apply(&w.camera);
+                match crate::camera_control::camera_problem(&camera) {
+                    Some(p) => Err(p.to_string()),
+                    None => {
+                        w.camera = camera;
+                        Ok(camera)
+                    }
+                }
+            });
+            match result {
+                Ok(camera) => axum::Json(CameraJson::from_camera(&camera)).into_response(),
+                Err(p) => error(StatusCode::BAD_REQUEST, p),
             }
-            state.update_world(|w| w.camera = camera);
-            axum::Json(CameraJson::from_camera(&camera)).into_response()
         }
         Err(r) => r.into_response(),
     }

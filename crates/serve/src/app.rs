@@ -39,7 +39,7 @@ pub struct AppState {
     pub totals: Mutex<Totals>,
     shutdown: watch::Sender<bool>,
     /// Held while a scene loads, so only one loads at a time.
-    pub load_lock: tokio::sync::Mutex<()>,
+    pub load_lock: Arc<tokio::sync::Mutex<()>>,
     /// Where every frame is rendered, in turn.
     pub renderer: RenderQueue,
 }
@@ -55,6 +55,7 @@ impl AppState {
             full: config.full,
             geometry,
             version: 1,
+            look_version: 1,
         };
         Arc::new(AppState {
             config,
@@ -66,7 +67,7 @@ impl AppState {
             generation: AtomicU64::new(1),
             totals: Mutex::new(Totals::default()),
             shutdown: watch::channel(false).0,
-            load_lock: tokio::sync::Mutex::new(()),
+            load_lock: Arc::new(tokio::sync::Mutex::new(())),
             // Two renders at a time overlap one's JPEG encoding (one
             // thread) with the other's tracing (all threads).
             renderer: RenderQueue::new(2),
@@ -81,16 +82,33 @@ impl AppState {
     /// Change the world with `f` (on a copy), bump its version and wake
     /// every client.
     pub fn update_world(&self, f: impl FnOnce(&mut World)) {
-        let version = {
+        let _ = self.try_update_world(|w| {
+            f(w);
+            Ok::<(), ()>(())
+        });
+    }
+
+    /// [`AppState::update_world`] with a change that may be refused: when
+    /// `f` returns an error the world stays as it was. `f` runs under the
+    /// world's write lock: keep it short.
+    pub fn try_update_world<T, E>(
+        &self,
+        f: impl FnOnce(&mut World) -> Result<T, E>,
+    ) -> Result<T, E> {
+        let (version, out) = {
             let mut guard = self.world.write().unwrap_or_else(|e| e.into_inner());
             let mut w = (**guard).clone();
-            f(&mut w);
+            let out = f(&mut w)?;
             w.version = guard.version + 1;
+            if !Arc::ptr_eq(&w.geometry, &guard.geometry) || w.lights != guard.lights {
+                w.look_version = guard.look_version + 1;
+            }
             let v = w.version;
             *guard = Arc::new(w);
-            v
+            (v, out)
         };
         self.world_tx.send_replace(version);
+        Ok(out)
     }
 
     /// Replace the scene with `scene` (already loaded): new BVH, the scene's
@@ -98,11 +116,14 @@ impl AppState {
     pub fn set_scene(&self, scene: Scene) -> Arc<Geometry> {
         let generation = self.generation.fetch_add(1, Ordering::Relaxed) + 1;
         let geometry = Arc::new(Geometry::new(scene, generation));
+        // Fitting the camera reads every vertex: do it before taking the lock.
+        let full = self.world().full;
+        let lights = geometry.default_lights();
+        let camera = geometry.default_camera(full.0 as f32 / full.1 as f32);
         let g = geometry.clone();
         self.update_world(move |w| {
-            let aspect = w.full.0 as f32 / w.full.1 as f32;
-            w.lights = g.default_lights();
-            w.camera = g.default_camera(aspect);
+            w.lights = lights;
+            w.camera = camera;
             w.geometry = g;
         });
         lock(&self.totals).scenes_loaded += 1;

@@ -14,19 +14,21 @@ fn same(a: &[u8], b: &[u8]) -> bool {
     a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
 }
 
-/// The token a request carries, if any.
-fn presented(req: &Request) -> Option<String> {
-    if let Some(v) = req.headers().get(header::AUTHORIZATION) {
-        if let Some(t) = v.to_str().ok().and_then(|s| s.strip_prefix("Bearer ")) {
-            return Some(t.trim().to_string());
-        }
-    }
-    req.uri().query().and_then(|q| {
+/// The tokens a request carries: the bearer header and `?token=`.
+fn presented(req: &Request) -> Vec<String> {
+    let bearer = req
+        .headers()
+        .get(header::AUTHORIZATION)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|s| s.strip_prefix("Bearer "))
+        .map(|t| t.trim().to_string());
+    let query = req.uri().query().and_then(|q| {
         q.split('&')
             .filter_map(|kv| kv.split_once('='))
             .find(|(k, _)| *k == "token")
             .map(|(_, v)| percent_decode(v))
-    })
+    });
+    bearer.into_iter().chain(query).collect()
 }
 
 /// Decode `%XX` escapes and `+` of a query value.
@@ -64,7 +66,9 @@ pub async fn require_token(
     next: Next,
 ) -> Response {
     if let Some(token) = &state.config.token {
-        let ok = presented(&req).is_some_and(|t| same(t.as_bytes(), token.as_bytes()));
+        let ok = presented(&req)
+            .iter()
+            .any(|t| same(t.as_bytes(), token.as_bytes()));
         if !ok {
             lock(&state.totals).rejected += 1;
             return error(

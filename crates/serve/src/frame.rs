@@ -87,7 +87,8 @@ impl RenderQueue {
     }
 
     /// [`render_jpeg`] in turn, awaited without blocking an async worker;
-    /// `None` if the render panicked.
+    /// `None` if the render panicked (the thread survives it). Dropping the
+    /// future before the turn comes cancels the render.
     pub async fn render(
         &self,
         world: std::sync::Arc<World>,
@@ -98,7 +99,16 @@ impl RenderQueue {
     ) -> Option<EncodedFrame> {
         let (tx, rx) = tokio::sync::oneshot::channel();
         let job: Job = Box::new(move || {
-            let _ = tx.send(render_jpeg(&world, &camera, size, spp, quality));
+            // Whoever asked has gone (session ended, stream dropped): skip.
+            if tx.is_closed() {
+                return;
+            }
+            let frame = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                render_jpeg(&world, &camera, size, spp, quality)
+            }));
+            if let Ok(frame) = frame {
+                let _ = tx.send(frame);
+            }
         });
         self.jobs.send(job).ok()?;
         rx.await.ok()

@@ -59,11 +59,11 @@ use std::net::SocketAddr;
 use std::sync::Arc;
 use tokio::task::JoinHandle;
 
-/// The routes over `state`, behind the token check.
+/// The routes over `state`. The page and its script are public (they hold
+/// no data; the page forwards its `?token=` to the WebSocket); everything
+/// else is behind the token check, and API writes must be JSON.
 pub fn router(state: Arc<AppState>) -> Router {
-    Router::new()
-        .route("/", get(api::index))
-        .route("/client.js", get(api::client_js))
+    let protected = Router::new()
         .route("/ws", get(ws::handler))
         .route("/mjpeg", get(mjpeg::handler))
         .route("/api/status", get(api::status))
@@ -73,12 +73,20 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/api/resolution", axum::routing::put(api::put_resolution))
         .route("/metrics", get(api::metrics))
         .layer(DefaultBodyLimit::max(state.config.max_message_bytes))
+        .layer(axum::middleware::from_fn(api::require_json))
         .layer(axum::middleware::from_fn_with_state(
             state.clone(),
             auth::require_token,
-        ))
+        ));
+    Router::new()
+        .route("/", get(api::index))
+        .route("/client.js", get(api::client_js))
+        .merge(protected)
         .with_state(state)
 }
+
+/// Longest [`Server::shutdown`] waits for sessions to close.
+pub const SHUTDOWN_GRACE: std::time::Duration = std::time::Duration::from_secs(5);
 
 /// A running server.
 pub struct Server {
@@ -99,10 +107,24 @@ impl Server {
     }
 
     /// Close every session (WebSocket clients get close code 1001, MJPEG
-    /// streams end), stop accepting, and wait for the open requests to end.
+    /// streams end), stop accepting, and wait for the sessions and open
+    /// requests to end — at most [`SHUTDOWN_GRACE`], after which the rest
+    /// (say, a stream whose client stopped reading) are dropped.
     pub async fn shutdown(self) -> Result<()> {
         self.state.begin_shutdown();
-        self.task.await.context("server task")?.context("server")
+        let deadline = tokio::time::Instant::now() + SHUTDOWN_GRACE;
+        // WebSocket sessions are not requests any more: wait for them here.
+        while !self.state.clients().is_empty() && tokio::time::Instant::now() < deadline {
+            tokio::time::sleep(std::time::Duration::from_millis(10)).await;
+        }
+        let abort = self.task.abort_handle();
+        match tokio::time::timeout_at(deadline, self.task).await {
+            Ok(joined) => joined.context("server task")?.context("server"),
+            Err(_) => {
+                abort.abort();
+                Ok(())
+            }
+        }
     }
 }
 

@@ -15,7 +15,8 @@ use std::time::{Duration, Instant};
 /// Boundary between the parts.
 pub const BOUNDARY: &str = "raykitframe";
 
-/// A part is re-sent at least this often, so proxies keep the stream open.
+/// The last part is repeated at least this often (without rendering again),
+/// so proxies keep the stream open.
 pub const KEEPALIVE: Duration = Duration::from_secs(2);
 
 struct Stream {
@@ -26,6 +27,7 @@ struct Stream {
     spp: u32,
     last_version: Option<u64>,
     last_sent: Instant,
+    last_part: Option<Bytes>,
 }
 
 /// `GET /mjpeg?width=W&height=H&quality=Q&spp=S`.
@@ -74,6 +76,7 @@ pub async fn handler(
         spp,
         last_version: None,
         last_sent: Instant::now(),
+        last_part: None,
     };
     let body = futures_util::stream::unfold(stream, next_part);
     Response::builder()
@@ -99,8 +102,14 @@ async fn next_part(mut s: Stream) -> Option<(Result<Bytes, std::io::Error>, Stre
         let due = s.last_sent + KEEPALIVE;
         tokio::select! {
             _ = world_rx.changed() => {}
-            _ = shutdown.changed() => return None,
-            _ = tokio::time::sleep_until(due.into()) => {}
+            _ = shutdown.wait_for(|s| *s) => return None,
+            _ = tokio::time::sleep_until(due.into()) => {
+                // Nothing changed: repeat the last part instead of rendering.
+                if let Some(part) = &s.last_part {
+                    s.last_sent = Instant::now();
+                    return Some((Ok(part.clone()), s));
+                }
+            }
         }
     }
     let world = s.state.world();
@@ -127,5 +136,7 @@ async fn next_part(mut s: Stream) -> Option<(Result<Bytes, std::io::Error>, Stre
     .into_bytes();
     part.extend_from_slice(&encoded.jpeg);
     part.extend_from_slice(b"\r\n");
-    Some((Ok(Bytes::from(part)), s))
+    let part = Bytes::from(part);
+    s.last_part = Some(part.clone());
+    Some((Ok(part), s))
 }

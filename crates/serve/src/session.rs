@@ -26,6 +26,8 @@ pub enum Outgoing {
     Text(String),
     /// A frame: header and JPEG (see [`encode_frame`]).
     Frame(Vec<u8>),
+    /// A WebSocket ping (liveness check).
+    Ping,
 }
 
 /// A client's camera and settings and what was last sent.
@@ -49,7 +51,7 @@ pub struct View {
     pub pending: Vec<Instant>,
     /// The sent frame not yet acknowledged.
     pub in_flight: Option<u64>,
-    /// (view version, world version, stage) of the last frame sent.
+    /// (view version, world look version, stage) of the last frame sent.
     pub rendered: Option<(u64, u64, Stage)>,
     /// Scene generation the camera belongs to.
     pub generation: u64,
@@ -260,7 +262,7 @@ fn next_step(v: &View, world: &World, settle: std::time::Duration, now: Instant)
     }
     match v.rendered {
         Some((view_version, world_version, stage))
-            if view_version == v.version && world_version == world.version =>
+            if view_version == v.version && world_version == world.look_version =>
         {
             match stage.next(v.spp) {
                 None => Next::Wait(None),
@@ -356,7 +358,7 @@ pub async fn render_loop(
                     let mut v = lock(&client.view);
                     v.frames += 1;
                     v.in_flight = Some(v.frames);
-                    v.rendered = Some((snapshot.version, world.version, stage));
+                    v.rendered = Some((snapshot.version, world.look_version, stage));
                     v.frames
                 };
                 let (fps, latency_ms, bytes_per_second) = {
@@ -408,6 +410,7 @@ mod tests {
             full: (64, 36),
             geometry: g,
             version: 1,
+            look_version: 1,
         }
     }
 
@@ -424,7 +427,7 @@ mod tests {
             next_step(&v, &w, settle, t0),
             Next::Render(Stage::Preview)
         ));
-        v.rendered = Some((v.version, w.version, Stage::Preview));
+        v.rendered = Some((v.version, w.look_version, Stage::Preview));
         v.in_flight = Some(1);
         assert!(matches!(next_step(&v, &w, settle, t0), Next::Wait(None)));
         v.in_flight = None;
@@ -437,12 +440,12 @@ mod tests {
             next_step(&v, &w, settle, t0 + settle),
             Next::Render(Stage::Full)
         ));
-        v.rendered = Some((v.version, w.version, Stage::Full));
+        v.rendered = Some((v.version, w.look_version, Stage::Full));
         assert!(matches!(
             next_step(&v, &w, settle, t0 + settle),
             Next::Render(Stage::Refined)
         ));
-        v.rendered = Some((v.version, w.version, Stage::Refined));
+        v.rendered = Some((v.version, w.look_version, Stage::Refined));
         assert!(matches!(
             next_step(&v, &w, settle, t0 + settle),
             Next::Wait(None)

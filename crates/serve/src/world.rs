@@ -89,4 +89,8 @@ pub struct World {
     pub full: (u32, u32),
     /// Incremented on every change.
     pub version: u64,
+    /// Incremented when what every client sees changes (scene, lights); not
+    /// for the defaults (camera, resolution) that only new clients and MJPEG
+    /// streams use.
+    pub look_version: u64,
 }

@@ -2,7 +2,7 @@
 //! one way and validated, rate-limited client messages the other.
 
 use crate::app::{lock, AppState, ClientGuard};
-use crate::protocol::{CameraJson, Envelope};
+use crate::protocol::{CameraJson, ClientMessage, Envelope};
 use crate::session::{render_loop, Outgoing};
 use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
 use axum::extract::State;
@@ -15,8 +15,15 @@ use tokio::sync::mpsc;
 
 /// Close code for a message over the size limit (RFC 6455 §7.4.1).
 pub const CLOSE_TOO_BIG: u16 = 1009;
-/// Close code when the server shuts down.
+/// Close code when the server shuts down or the client went silent.
 pub const CLOSE_GOING_AWAY: u16 = 1001;
+/// Close code when the server cannot render.
+pub const CLOSE_INTERNAL: u16 = 1011;
+
+/// How often the server pings each client.
+pub const PING_EVERY: std::time::Duration = std::time::Duration::from_secs(20);
+/// A client silent this long (no message, no pong) is disconnected.
+pub const IDLE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(65);
 
 /// `GET /ws`: upgrade unless the client limit is reached (503).
 pub async fn handler(State(state): State<Arc<AppState>>, upgrade: WebSocketUpgrade) -> Response {
@@ -80,7 +87,9 @@ impl RateLimit {
 async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
     let client = guard.client.clone();
     let (mut sink, mut stream) = socket.split();
-    let (tx, mut rx) = mpsc::channel::<Outgoing>(16);
+    // Small: at most one frame is unacknowledged, so the queue holds little
+    // more than replies; errors are dropped when it is full.
+    let (tx, mut rx) = mpsc::channel::<Outgoing>(4);
     let mut shutdown = state.watch_shutdown();
 
     let world = state.world();
@@ -115,6 +124,7 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
             let msg = match out {
                 Outgoing::Text(s) => Message::Text(s.into()),
                 Outgoing::Frame(b) => Message::Binary(b.into()),
+                Outgoing::Ping => Message::Ping(Vec::new().into()),
             };
             if sink.send(msg).await.is_err() {
                 return None;
@@ -122,15 +132,35 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
         }
         Some(sink)
     });
-    let renderer = tokio::spawn(render_loop(state.clone(), client.clone(), tx.clone()));
+    let mut renderer = tokio::spawn(render_loop(state.clone(), client.clone(), tx.clone()));
 
     let mut limit = RateLimit::new(state.config.max_inputs_per_second);
     let mut close: Option<(u16, &str)> = None;
+    let mut ping = tokio::time::interval(PING_EVERY);
+    let mut last_heard = Instant::now();
     loop {
         let msg = tokio::select! {
             m = stream.next() => m,
-            _ = shutdown.changed() => { close = Some((CLOSE_GOING_AWAY, "server shutting down")); break; }
+            _ = shutdown.wait_for(|s| *s) => { close = Some((CLOSE_GOING_AWAY, "server shutting down")); break; }
+            // The render loop ends only when the server cannot render.
+            _ = &mut renderer => {
+                close = Some(if *state.watch_shutdown().borrow() {
+                    (CLOSE_GOING_AWAY, "server shutting down")
+                } else {
+                    (CLOSE_INTERNAL, "rendering failed")
+                });
+                break;
+            }
+            _ = ping.tick() => {
+                if last_heard.elapsed() > IDLE_TIMEOUT {
+                    close = Some((CLOSE_GOING_AWAY, "no message or pong for too long"));
+                    break;
+                }
+                let _ = tx.try_send(Outgoing::Ping);
+                continue;
+            }
         };
+        last_heard = Instant::now();
         let text = match msg {
             None => break,
             Some(Err(e)) => {
@@ -156,7 +186,11 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
             }
         };
         let now = Instant::now();
-        if !limit.allow(now) {
+        let parsed = serde_json::from_str::<Envelope>(text.as_str());
+        // Acknowledgements are never dropped: a lost ack would stop the
+        // stream for good.
+        let is_ack = matches!(&parsed, Ok(e) if matches!(e.message, ClientMessage::Ack { .. }));
+        if !is_ack && !limit.allow(now) {
             if limit.report(now) {
                 let m = format!(
                     "more than {} messages per second: some were dropped",
@@ -168,7 +202,7 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
             }
             continue;
         }
-        let result = serde_json::from_str::<Envelope>(text.as_str())
+        let result = parsed
             .map_err(|e| format!("bad message ({e}); see PROTOCOL.md"))
             .and_then(|env| {
                 client.apply(env.seq, &env.message, &state.world(), &state.config, now)

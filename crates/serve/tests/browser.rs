@@ -96,7 +96,10 @@ async fn dragging_in_headless_chromium_changes_the_view() {
         }
         panic!("this test needs headless Chromium and chromedriver: apt-get install -y chromium chromium-driver (or set RAYKIT_SKIP_BROWSER_TEST=1 to skip it, reported)");
     };
-    let server = server(config()).await;
+    // With a token, as a LAN deployment would run: the page must pass it on.
+    let mut c = config();
+    c.token = Some("browser-test".into());
+    let server = server(c).await;
 
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .unwrap()
@@ -132,7 +135,7 @@ async fn dragging_in_headless_chromium_changes_the_view() {
             .to_string(),
     };
 
-    let url = format!("http://{}/", server.addr());
+    let url = format!("http://{}/?token=browser-test", server.addr());
     driver.call("POST", "/url", json!({"url": url})).await;
     let wait_for = async |driver: &Driver, what: &str, js: &str| {
         let start = Instant::now();

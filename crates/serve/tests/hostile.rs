@@ -72,16 +72,33 @@ async fn floods_are_rate_limited_and_oversized_messages_close_only_that_connecti
         .await;
     }
     let mut rate_error = false;
+    let mut first = None;
     for _ in 0..50 {
         match next_message(&mut flood).await {
             Message::Text(t) if t.contains("per second") => {
                 rate_error = true;
                 break;
             }
+            Message::Binary(b) => first = Some(raykit_serve::protocol::decode_frame(&b).unwrap().0),
             _ => {}
         }
     }
     assert!(rate_error, "no rate-limit error after 400 inputs at once");
+    // Acknowledgements still get through while inputs are being dropped.
+    let first = match first {
+        Some(h) => h,
+        None => next_frame(&mut flood).await.0,
+    };
+    for seq in 401..=500 {
+        send(
+            &mut flood,
+            &format!(r#"{{"type":"orbit","yaw":0.001,"seq":{seq}}}"#),
+        )
+        .await;
+    }
+    ack(&mut flood, &first).await;
+    let (second, _) = next_frame(&mut flood).await;
+    assert_eq!(second.frame, first.frame + 1);
     let applied = server
         .state()
         .samples()
@@ -207,10 +224,42 @@ async fn a_token_is_required_when_set() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn api_writes_must_be_json() {
+    let server = server(config()).await;
+    let (status, _, body) = http(
+        &server,
+        "POST",
+        "/api/scene",
+        "Content-Type: text/plain\r\n",
+        r#"{"scene":"builtin:shirley6"}"#,
+    )
+    .await;
+    assert_eq!(status, 415);
+    assert!(json_body(&body)["error"]
+        .as_str()
+        .unwrap()
+        .contains("application/json"));
+    assert_eq!(server.state().world().geometry.scene.name, "cornell");
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn shutdown_closes_sessions_with_going_away() {
     let server = server(config()).await;
     let (mut ws, _) = connect(&server, "").await;
     next_frame(&mut ws).await;
+    // An MJPEG client that never reads its stream does not hold shutdown up
+    // for longer than the grace period.
+    let mut mjpeg = tokio::net::TcpStream::connect(server.addr()).await.unwrap();
+    tokio::io::AsyncWriteExt::write_all(
+        &mut mjpeg,
+        b"GET /mjpeg?width=1920&height=1080 HTTP/1.1\r\nHost: x\r\n\r\n",
+    )
+    .await
+    .unwrap();
+    while server.state().clients().len() < 2 {
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
     let addr = server.addr();
     let stop = tokio::spawn(server.shutdown());
     let code = loop {
@@ -220,9 +269,9 @@ async fn shutdown_closes_sessions_with_going_away() {
         }
     };
     assert_eq!(code, Some(CLOSE_GOING_AWAY));
-    tokio::time::timeout(Duration::from_secs(10), stop)
+    tokio::time::timeout(raykit_serve::SHUTDOWN_GRACE + Duration::from_secs(2), stop)
         .await
-        .expect("shutdown within 10 s")
+        .expect("shutdown within the grace period")
         .unwrap()
         .unwrap();
     assert!(

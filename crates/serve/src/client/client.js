@@ -62,7 +62,11 @@
         const [w, h] = o.value.split('x').map(Number);
         o.disabled = (limits.max_width && w > limits.max_width) || (limits.max_height && h > limits.max_height);
       }
-      if (m.full) res.value = m.full[0] + 'x' + m.full[1];
+      if (m.full) {
+        const v = m.full[0] + 'x' + m.full[1];
+        if (![...res.options].some((o) => o.value === v)) res.add(new Option(v, v));
+        res.value = v;
+      }
     } else if (m.type === 'scene') {
       sceneName = m.scene; triangles = m.triangles;
     } else if (m.type === 'error') {

@@ -190,7 +190,8 @@ pub async fn http_to(
 ) -> (u16, String, Vec<u8>) {
     let mut s = TcpStream::connect(addr).await.unwrap();
     let req = format!(
-        "{method} {path} HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\nContent-Type: application/json\r\n{headers}Content-Length: {}\r\n\r\n{body}",
+        "{method} {path} HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\n{}{headers}Content-Length: {}\r\n\r\n{body}",
+        if headers.contains("Content-Type") { "" } else { "Content-Type: application/json\r\n" },
         body.len()
     );
     s.write_all(req.as_bytes()).await.unwrap();
