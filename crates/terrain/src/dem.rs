@@ -1,0 +1,111 @@
+//! A digital elevation model: heights on a regular grid with the
+//! georeferencing needed to write results back in the same place.
+
+/// Where the grid lies on the earth, as GeoTIFF describes it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GeoRef {
+    /// Map x of the top-left corner of the top-left pixel (GDAL's
+    /// "pixel is area" origin).
+    pub origin_x: f64,
+    /// Map y of that corner.
+    pub origin_y: f64,
+    /// Pixel width in map units (positive: columns go east).
+    pub pixel_width: f64,
+    /// Pixel height in map units (negative for north-up rasters: rows go
+    /// south).
+    pub pixel_height: f64,
+    /// Whether map units are degrees of longitude/latitude (SRTM, EPSG:4326)
+    /// rather than metres.
+    pub geographic: bool,
+    /// GeoTIFF GeoKeyDirectory (tag 34735) as read, written back unchanged.
+    pub geo_keys: Vec<u16>,
+    /// GeoTIFF GeoDoubleParams (tag 34736) as read.
+    pub geo_doubles: Vec<f64>,
+    /// GeoTIFF GeoAsciiParams (tag 34737) as read.
+    pub geo_ascii: String,
+}
+
+/// Heights on a `width` × `height` grid, row-major from the top (north)
+/// row. Sample (col, row) sits at the centre of its pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dem {
+    /// Samples per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Heights in metres (NaN where the source had no data).
+    pub heights: Vec<f32>,
+    /// The source's nodata value, if it declared one (kept for output).
+    pub nodata: Option<f64>,
+    /// Georeferencing (identity with 1 m pixels when the source has none).
+    pub georef: GeoRef,
+}
+
+impl Dem {
+    /// A DEM from heights with 1 m pixels and no georeferencing.
+    pub fn from_heights(width: usize, height: usize, heights: Vec<f32>) -> Dem {
+        assert_eq!(
+            heights.len(),
+            width * height,
+            "heights must be width × height"
+        );
+        Dem {
+            width,
+            height,
+            heights,
+            nodata: None,
+            georef: GeoRef {
+                pixel_width: 1.0,
+                pixel_height: -1.0,
+                ..GeoRef::default()
+            },
+        }
+    }
+
+    /// Height at (`col`, `row`).
+    pub fn at(&self, col: usize, row: usize) -> f32 {
+        self.heights[row * self.width + col]
+    }
+
+    /// Size of a cell in metres along columns and rows: the pixel size, or
+    /// for geographic rasters the pixel size in degrees converted at the
+    /// raster's middle latitude (equirectangular: 111,320 m per degree of
+    /// latitude, times cos(latitude) per degree of longitude).
+    pub fn cell_size_m(&self) -> (f64, f64) {
+        let g = &self.georef;
+        if g.geographic {
+            let mid_lat = g.origin_y + g.pixel_height * self.height as f64 * 0.5;
+            let m_per_deg = 111_320.0;
+            (
+                g.pixel_width.abs() * m_per_deg * mid_lat.to_radians().cos(),
+                g.pixel_height.abs() * m_per_deg,
+            )
+        } else {
+            (g.pixel_width.abs(), g.pixel_height.abs())
+        }
+    }
+
+    /// Lowest and highest height, ignoring NaN (`None` when all are NaN).
+    pub fn range(&self) -> Option<(f32, f32)> {
+        self.heights
+            .iter()
+            .filter(|h| !h.is_nan())
+            .fold(None, |acc, &h| match acc {
+                None => Some((h, h)),
+                Some((lo, hi)) => Some((lo.min(h), hi.max(h))),
+            })
+    }
+
+    /// Replace no-data samples (NaN) by `value` (e.g. the lowest height),
+    /// so the surface is defined everywhere; returns how many were filled.
+    pub fn fill_nodata(&mut self, value: f32) -> usize {
+        let mut n = 0;
+        for h in &mut self.heights {
+            if h.is_nan() {
+                *h = value;
+                n += 1;
+            }
+        }
+        n
+    }
+}

@@ -1,0 +1,257 @@
+//! The declared surface: the one every terrain ray caster, shadow mask and
+//! renderer here intersects, so that "exact" has a meaning.
+//!
+//! **Surface model.** Heights sit on the grid points. Each cell between four
+//! neighbouring points is two triangles split along the diagonal from its
+//! top-left point (col, row) to its bottom-right point (col+1, row+1):
+//! the triangle above the diagonal ((c, r), (c+1, r), (c+1, r+1)) and the
+//! one below it ((c, r), (c+1, r+1), (c, r+1)). The surface is continuous and
+//! piecewise planar, the same as the triangle mesh `raykit` builds from the
+//! DEM, so mesh ray casting is an independent reference for it.
+//!
+//! **Coordinates.** World space is metres with x east, y north, z up: grid
+//! point (col, row) is at (col · sx, −row · sy, height). Rays are converted
+//! once to grid units (x / sx, −y / sy, z); the ray parameter `t` is the same
+//! in both, so distances need no conversion back. All intersection
+//! arithmetic is in f64.
+
+use crate::dem::Dem;
+
+/// A ray in grid units (see the module documentation), f64.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridRay {
+    /// Origin: column, row, height.
+    pub o: [f64; 3],
+    /// Direction per unit `t`.
+    pub d: [f64; 3],
+}
+
+impl GridRay {
+    /// The point at parameter `t`.
+    pub fn at(&self, t: f64) -> [f64; 3] {
+        [
+            self.o[0] + t * self.d[0],
+            self.o[1] + t * self.d[1],
+            self.o[2] + t * self.d[2],
+        ]
+    }
+}
+
+/// A hit: ray parameter, cell, and the work it took.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TerrainHit {
+    /// Ray parameter of the hit (world distance when the ray direction was a
+    /// unit vector in metres).
+    pub t: f64,
+    /// Column of the hit cell.
+    pub col: u32,
+    /// Row of the hit cell.
+    pub row: u32,
+}
+
+/// Cell tests and node visits of one ray, for the "steps per ray" heat maps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Steps {
+    /// Cells whose two triangles were tested.
+    pub cells: u32,
+    /// Quadtree nodes or boxes visited.
+    pub nodes: u32,
+}
+
+/// Tolerance of the inside-triangle test in cell units.
+const INSIDE_EPS: f64 = 1e-9;
+
+/// A height field ready for ray casting: heights (no-data filled), grid
+/// size, cell size in metres.
+#[derive(Clone, Debug)]
+pub struct HeightField {
+    /// Grid points per row.
+    pub width: usize,
+    /// Rows of grid points.
+    pub height: usize,
+    /// Heights in metres, row-major from the north row.
+    pub heights: Vec<f32>,
+    /// Cell size along x (columns), metres.
+    pub sx: f64,
+    /// Cell size along y (rows), metres.
+    pub sy: f64,
+    /// Lowest and highest height.
+    pub zmin: f32,
+    /// Highest height.
+    pub zmax: f32,
+}
+
+impl HeightField {
+    /// The surface of `dem`; no-data samples become the lowest height.
+    /// Needs at least 2 × 2 grid points with at least one valid height.
+    pub fn new(dem: &Dem) -> Result<HeightField, String> {
+        if dem.width < 2 || dem.height < 2 {
+            return Err(format!(
+                "a height field needs at least 2x2 samples, got {}x{}",
+                dem.width, dem.height
+            ));
+        }
+        let (zmin, zmax) = dem
+            .range()
+            .ok_or("the DEM has no valid height (every sample is no-data)")?;
+        let mut heights = dem.heights.clone();
+        for h in &mut heights {
+            if h.is_nan() {
+                *h = zmin;
+            }
+        }
+        let (sx, sy) = dem.cell_size_m();
+        if !(sx > 0.0 && sy > 0.0 && sx.is_finite() && sy.is_finite()) {
+            return Err(format!("cell size must be positive, got {sx} x {sy}"));
+        }
+        Ok(HeightField {
+            width: dem.width,
+            height: dem.height,
+            heights,
+            sx,
+            sy,
+            zmin,
+            zmax,
+        })
+    }
+
+    /// Cells along x and y.
+    pub fn cells(&self) -> (usize, usize) {
+        (self.width - 1, self.height - 1)
+    }
+
+    /// Height at grid point (`col`, `row`).
+    pub fn at(&self, col: usize, row: usize) -> f32 {
+        self.heights[row * self.width + col]
+    }
+
+    /// World position (metres, x east, y north, z up) of grid point
+    /// (`col`, `row`).
+    pub fn point(&self, col: usize, row: usize) -> [f64; 3] {
+        [
+            col as f64 * self.sx,
+            -(row as f64) * self.sy,
+            self.at(col, row) as f64,
+        ]
+    }
+
+    /// A world-space ray in grid units.
+    pub fn grid_ray(&self, origin: [f64; 3], dir: [f64; 3]) -> GridRay {
+        GridRay {
+            o: [origin[0] / self.sx, -origin[1] / self.sy, origin[2]],
+            d: [dir[0] / self.sx, -dir[1] / self.sy, dir[2]],
+        }
+    }
+
+    /// The ray's parameter interval inside the grid's bounding box (x in
+    /// `[0, width−1]`, y in `[0, height−1]`, z in `[zmin, zmax]`),
+    /// intersected with `[tmin, tmax]`; `None` when empty.
+    pub fn clip(&self, ray: &GridRay, tmin: f64, tmax: f64) -> Option<(f64, f64)> {
+        let lo = [0.0, 0.0, self.zmin as f64];
+        let hi = [
+            (self.width - 1) as f64,
+            (self.height - 1) as f64,
+            self.zmax as f64,
+        ];
+        slab(ray, lo, hi, tmin, tmax)
+    }
+
+    /// The nearest hit with `t` in `[tmin, tmax]` on the two triangles of
+    /// cell (`col`, `row`), if any. Rays parallel to a triangle's plane do
+    /// not hit it.
+    pub fn hit_cell(
+        &self,
+        col: usize,
+        row: usize,
+        ray: &GridRay,
+        tmin: f64,
+        tmax: f64,
+    ) -> Option<f64> {
+        let h00 = self.at(col, row) as f64;
+        let h10 = self.at(col + 1, row) as f64;
+        let h01 = self.at(col, row + 1) as f64;
+        let h11 = self.at(col + 1, row + 1) as f64;
+        let u0 = ray.o[0] - col as f64;
+        let v0 = ray.o[1] - row as f64;
+        let [du, dv, dz] = ray.d;
+        let oz = ray.o[2];
+        let mut best: Option<f64> = None;
+        // Upper triangle (u >= v): z = h00 + (h10 − h00) u + (h11 − h10) v.
+        // Lower triangle (u <= v): z = h00 + (h11 − h01) u + (h01 − h00) v.
+        for (b, c, upper) in [(h10 - h00, h11 - h10, true), (h11 - h01, h01 - h00, false)] {
+            let denom = dz - b * du - c * dv;
+            if denom == 0.0 || !denom.is_finite() {
+                continue;
+            }
+            let t = -(oz - h00 - b * u0 - c * v0) / denom;
+            if !(t >= tmin && t <= tmax) || best.is_some_and(|bt| bt <= t) {
+                continue;
+            }
+            let (u, v) = (u0 + t * du, v0 + t * dv);
+            let inside = if upper {
+                v >= -INSIDE_EPS && u <= 1.0 + INSIDE_EPS && v <= u + INSIDE_EPS
+            } else {
+                u >= -INSIDE_EPS && v <= 1.0 + INSIDE_EPS && u <= v + INSIDE_EPS
+            };
+            if inside {
+                best = Some(t);
+            }
+        }
+        best
+    }
+
+    /// The surface as a triangle mesh in world coordinates (two triangles
+    /// per cell, split as declared), for mesh ray casting and rendering.
+    pub fn to_mesh(&self) -> raykit_core::TriangleMesh {
+        use raykit_core::Vec3;
+        let positions: Vec<Vec3> = (0..self.height)
+            .flat_map(|r| (0..self.width).map(move |c| (c, r)))
+            .map(|(c, r)| {
+                let p = self.point(c, r);
+                Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
+            })
+            .collect();
+        let w = self.width as u32;
+        let (cw, ch) = self.cells();
+        let mut indices = Vec::with_capacity(cw * ch * 2);
+        for r in 0..ch as u32 {
+            for c in 0..cw as u32 {
+                let (p00, p10, p01, p11) = (
+                    r * w + c,
+                    r * w + c + 1,
+                    (r + 1) * w + c,
+                    (r + 1) * w + c + 1,
+                );
+                // Counter-clockwise seen from above (x east, y north).
+                indices.push([p00, p11, p10]);
+                indices.push([p00, p01, p11]);
+            }
+        }
+        raykit_core::TriangleMesh::new(positions, indices)
+    }
+}
+
+/// Slab test of `ray` against the box `[lo, hi]` within `[tmin, tmax]`.
+pub fn slab(ray: &GridRay, lo: [f64; 3], hi: [f64; 3], tmin: f64, tmax: f64) -> Option<(f64, f64)> {
+    let (mut t0, mut t1) = (tmin, tmax);
+    for a in 0..3 {
+        let d = ray.d[a];
+        if d == 0.0 {
+            if ray.o[a] < lo[a] || ray.o[a] > hi[a] {
+                return None;
+            }
+            continue;
+        }
+        let inv = 1.0 / d;
+        let (mut ta, mut tb) = ((lo[a] - ray.o[a]) * inv, (hi[a] - ray.o[a]) * inv);
+        if ta > tb {
+            std::mem::swap(&mut ta, &mut tb);
+        }
+        t0 = t0.max(ta);
+        t1 = t1.min(tb);
+        if t0 > t1 {
+            return None;
+        }
+    }
+    Some((t0, t1))
+}

@@ -1,0 +1,420 @@
+//! GeoTIFF input: one band of 8/16/32-bit integer or 32/64-bit float
+//! samples, striped or tiled (the `tiff` crate handles layout and
+//! compression), with ModelPixelScale + ModelTiepoint or
+//! ModelTransformation georeferencing and GDAL's nodata tag.
+
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::path::Path;
+
+use tiff::decoder::{ifd::Value, Decoder, DecodingResult, Limits};
+use tiff::tags::Tag;
+
+use super::geokeys::{geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
+use super::limits::{check_dimensions, MAX_SAMPLES};
+use super::nodata::nodata_as_f32;
+use super::DemError;
+use crate::dem::{Dem, GeoRef};
+
+/// TIFF tag ModelPixelScale.
+pub const TAG_MODEL_PIXEL_SCALE: u16 = 33550;
+/// TIFF tag ModelTiepoint.
+pub const TAG_MODEL_TIEPOINT: u16 = 33922;
+/// TIFF tag ModelTransformation.
+pub const TAG_MODEL_TRANSFORMATION: u16 = 34264;
+/// TIFF tag GeoKeyDirectory.
+pub const TAG_GEO_KEY_DIRECTORY: u16 = 34735;
+/// TIFF tag GeoDoubleParams.
+pub const TAG_GEO_DOUBLE_PARAMS: u16 = 34736;
+/// TIFF tag GeoAsciiParams.
+pub const TAG_GEO_ASCII_PARAMS: u16 = 34737;
+/// TIFF tag GDAL_NODATA (ASCII).
+pub const TAG_GDAL_NODATA: u16 = 42113;
+
+/// Reads a single-band GeoTIFF as a DEM.
+///
+/// Samples may be unsigned or signed 8/16/32-bit integers or 32/64-bit
+/// floats, striped or tiled. Georeferencing, in order of preference:
+/// ModelTransformation (34264; rotation or shear is refused), else
+/// ModelPixelScale (33550) with a single ModelTiepoint (33922), else none
+/// (1 m pixels at the origin). When the GeoKeyDirectory's GTRasterTypeGeoKey
+/// (1025) is PixelIsPoint (2), the tiepoint is a pixel centre and the origin
+/// is moved half a pixel up and left to the pixel-corner convention of
+/// [`GeoRef`], as GDAL does. GeoKeyDirectory, GeoDoubleParams and
+/// GeoAsciiParams are kept raw; `geographic` is GTModelTypeGeoKey (1024) ==
+/// 2. GDAL_NODATA (42113) sets `nodata` and those samples become NaN (a
+/// nodata within 1e-6 of ±f32::MAX, as GDAL writes it in text, matches
+/// ±f32::MAX in float32 data).
+pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
+    let path = path.as_ref();
+    let mut file = File::open(path).map_err(|e| DemError::open(path, &e))?;
+    let ifd_at = check_header(path, &mut file)?;
+    file.seek(SeekFrom::Start(0))
+        .map_err(|e| DemError::at_byte(path, 0, format!("seek failed: {e}")))?;
+    let limits = {
+        let mut l = Limits::default();
+        l.decoding_buffer_size = MAX_SAMPLES * 8;
+        l.ifd_value_size = 16 << 20;
+        l
+    };
+    let mut dec = Decoder::new(BufReader::new(file))
+        .map_err(|e| DemError::at_byte(path, ifd_at, format!("unreadable first IFD: {e}")))?
+        .with_limits(limits);
+
+    let (w, h) = dec
+        .dimensions()
+        .map_err(|e| DemError::new(path, "tag 256", format!("no usable image size: {e}")))?;
+    let (width, height) = (w as usize, h as usize);
+    check_dimensions(path, "tag 256", width, height)?;
+    let spp = unsigned(path, &mut dec, Tag::SamplesPerPixel)?.unwrap_or(1);
+    if spp != 1 {
+        return Err(DemError::new(
+            path,
+            "tag 277",
+            format!("{spp} samples per pixel; expected a single band"),
+        ));
+    }
+    let bits = unsigned(path, &mut dec, Tag::BitsPerSample)?.unwrap_or(1);
+    let format = unsigned(path, &mut dec, Tag::SampleFormat)?.unwrap_or(1);
+    let supported = match format {
+        1 | 2 => matches!(bits, 8 | 16 | 32),
+        3 => matches!(bits, 32 | 64),
+        _ => false,
+    };
+    if !supported {
+        let kind = match format {
+            1 => "unsigned integer",
+            2 => "signed integer",
+            3 => "float",
+            _ => "unknown",
+        };
+        return Err(DemError::new(
+            path,
+            "tag 339",
+            format!(
+                "{bits}-bit {kind} samples (SampleFormat {format}); expected 8/16/32-bit \
+                 unsigned or signed integers or 32/64-bit floats"
+            ),
+        ));
+    }
+
+    let georef = read_georef(path, &mut dec)?;
+    let nodata = match find(path, &mut dec, TAG_GDAL_NODATA)? {
+        None => None,
+        Some(v) => {
+            let s = v
+                .into_string()
+                .map_err(|e| tag_err(path, TAG_GDAL_NODATA, e))?;
+            let t = s.trim_matches(|c: char| c.is_whitespace() || c == '\0');
+            Some(t.parse::<f64>().map_err(|_| {
+                DemError::new(
+                    path,
+                    format!("tag {TAG_GDAL_NODATA}"),
+                    format!("GDAL_NODATA is {s:?}; expected a number"),
+                )
+            })?)
+        }
+    };
+
+    let data = dec
+        .read_image()
+        .map_err(|e| DemError::new(path, "image data", format!("cannot decode samples: {e}")))?;
+    let heights = to_heights(data, nodata);
+    if heights.len() != width * height {
+        return Err(DemError::new(
+            path,
+            "image data",
+            format!(
+                "decoded {} samples; expected {width}×{height}",
+                heights.len()
+            ),
+        ));
+    }
+    Ok(Dem {
+        width,
+        height,
+        heights,
+        nodata,
+        georef,
+    })
+}
+
+/// Checks the 8-byte TIFF header and returns the first IFD's offset.
+fn check_header(path: &Path, file: &mut File) -> Result<u64, DemError> {
+    let mut head = [0u8; 16];
+    let mut n = 0;
+    while n < head.len() {
+        match file.read(&mut head[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => {
+                return Err(DemError::at_byte(
+                    path,
+                    n as u64,
+                    format!("read failed: {e}"),
+                ))
+            }
+        }
+    }
+    let u16_at = |i: usize, le: bool| {
+        let b = [head[i], head[i + 1]];
+        if le {
+            u16::from_le_bytes(b)
+        } else {
+            u16::from_be_bytes(b)
+        }
+    };
+    let le = match &head[..2.min(n)] {
+        b"II" => true,
+        b"MM" => false,
+        _ => {
+            return Err(DemError::at_byte(
+                path,
+                0,
+                format!(
+                    "not a TIFF: expected \"II\" or \"MM\", found {:?}",
+                    String::from_utf8_lossy(&head[..2.min(n)])
+                ),
+            ))
+        }
+    };
+    let need = if n >= 4 && u16_at(2, le) == 43 { 16 } else { 8 };
+    if n < need {
+        return Err(DemError::at_byte(
+            path,
+            n as u64,
+            "file ends inside the TIFF header",
+        ));
+    }
+    match u16_at(2, le) {
+        42 => {
+            let b = [head[4], head[5], head[6], head[7]];
+            Ok(if le {
+                u32::from_le_bytes(b)
+            } else {
+                u32::from_be_bytes(b)
+            } as u64)
+        }
+        43 => {
+            let b: [u8; 8] = head[8..16].try_into().unwrap_or_default();
+            Ok(if le {
+                u64::from_le_bytes(b)
+            } else {
+                u64::from_be_bytes(b)
+            })
+        }
+        v => Err(DemError::at_byte(
+            path,
+            2,
+            format!("TIFF version {v}; expected 42 (TIFF) or 43 (BigTIFF)"),
+        )),
+    }
+}
+
+fn tag_err(path: &Path, tag: u16, e: impl std::fmt::Display) -> DemError {
+    DemError::new(path, format!("tag {tag}"), format!("unreadable value: {e}"))
+}
+
+fn find<R: Read + std::io::Seek>(
+    path: &Path,
+    dec: &mut Decoder<R>,
+    tag: u16,
+) -> Result<Option<Value>, DemError> {
+    dec.find_tag(Tag::from_u16_exhaustive(tag))
+        .map_err(|e| tag_err(path, tag, e))
+}
+
+/// First value of an unsigned tag (BitsPerSample may repeat per sample).
+fn unsigned<R: Read + std::io::Seek>(
+    path: &Path,
+    dec: &mut Decoder<R>,
+    tag: Tag,
+) -> Result<Option<u64>, DemError> {
+    let id = tag.to_u16();
+    match dec.find_tag(tag).map_err(|e| tag_err(path, id, e))? {
+        None => Ok(None),
+        Some(v) => {
+            let v = v.into_u64_vec().map_err(|e| tag_err(path, id, e))?;
+            Ok(v.first().copied())
+        }
+    }
+}
+
+fn f64s<R: Read + std::io::Seek>(
+    path: &Path,
+    dec: &mut Decoder<R>,
+    tag: u16,
+) -> Result<Option<Vec<f64>>, DemError> {
+    match find(path, dec, tag)? {
+        None => Ok(None),
+        Some(v) => Ok(Some(v.into_f64_vec().map_err(|e| tag_err(path, tag, e))?)),
+    }
+}
+
+fn read_georef<R: Read + std::io::Seek>(
+    path: &Path,
+    dec: &mut Decoder<R>,
+) -> Result<GeoRef, DemError> {
+    let geo_keys = match find(path, dec, TAG_GEO_KEY_DIRECTORY)? {
+        None => Vec::new(),
+        Some(v) => v
+            .into_u16_vec()
+            .map_err(|e| tag_err(path, TAG_GEO_KEY_DIRECTORY, e))?,
+    };
+    validate_geo_keys(&geo_keys)
+        .map_err(|m| DemError::new(path, format!("tag {TAG_GEO_KEY_DIRECTORY}"), m))?;
+    let geo_doubles = f64s(path, dec, TAG_GEO_DOUBLE_PARAMS)?.unwrap_or_default();
+    let geo_ascii = match find(path, dec, TAG_GEO_ASCII_PARAMS)? {
+        None => String::new(),
+        Some(v) => v
+            .into_string()
+            .map_err(|e| tag_err(path, TAG_GEO_ASCII_PARAMS, e))?,
+    };
+    let scale = f64s(path, dec, TAG_MODEL_PIXEL_SCALE)?;
+    let tie = f64s(path, dec, TAG_MODEL_TIEPOINT)?;
+    let transform = f64s(path, dec, TAG_MODEL_TRANSFORMATION)?;
+    let bad = |tag: u16, m: String| DemError::new(path, format!("tag {tag}"), m);
+
+    let placed = if let Some(m) = transform {
+        let t = TAG_MODEL_TRANSFORMATION;
+        if m.len() != 16 {
+            return Err(bad(
+                t,
+                format!("{} values; expected a 4×4 matrix (16)", m.len()),
+            ));
+        }
+        if m[1] != 0.0 || m[4] != 0.0 {
+            return Err(bad(
+                t,
+                format!(
+                    "rotated or sheared raster (terms {} and {}); expected a north-up \
+                     transformation with zero rotation terms",
+                    m[1], m[4]
+                ),
+            ));
+        }
+        Some((m[3], m[7], m[0], m[5], t))
+    } else {
+        match (scale, tie) {
+            (Some(s), Some(t)) => {
+                if s.len() < 2 {
+                    return Err(bad(
+                        TAG_MODEL_PIXEL_SCALE,
+                        format!("{} values; expected 3 (x, y, z scale)", s.len()),
+                    ));
+                }
+                if t.len() != 6 {
+                    return Err(bad(
+                        TAG_MODEL_TIEPOINT,
+                        format!(
+                            "{} values; expected one tiepoint (6 values) with ModelPixelScale \
+                             (several tiepoints, i.e. ground control points, are not supported)",
+                            t.len()
+                        ),
+                    ));
+                }
+                Some((
+                    t[3] - t[0] * s[0],
+                    t[4] + t[1] * s[1],
+                    s[0],
+                    -s[1],
+                    TAG_MODEL_PIXEL_SCALE,
+                ))
+            }
+            (Some(_), None) => {
+                return Err(bad(
+                    TAG_MODEL_PIXEL_SCALE,
+                    "ModelPixelScale without ModelTiepoint; expected both".into(),
+                ))
+            }
+            (None, Some(_)) => {
+                return Err(bad(
+                    TAG_MODEL_TIEPOINT,
+                    "ModelTiepoint without ModelPixelScale (ground control points are not \
+                     supported); expected both, or ModelTransformation"
+                        .into(),
+                ))
+            }
+            (None, None) => None,
+        }
+    };
+    let (mut ox, mut oy, pw, ph) = match placed {
+        None => (0.0, 0.0, 1.0, -1.0),
+        Some((ox, oy, pw, ph, tag)) => {
+            let all = [ox, oy, pw, ph];
+            if all.iter().any(|v| !v.is_finite()) || pw == 0.0 || ph == 0.0 {
+                return Err(bad(
+                    tag,
+                    format!(
+                        "origin ({ox}, {oy}), pixel size ({pw}, {ph}); expected finite values \
+                         and a nonzero pixel size"
+                    ),
+                ));
+            }
+            (ox, oy, pw, ph)
+        }
+    };
+    if placed.is_some() && geo_key_short(&geo_keys, KEY_RASTER_TYPE) == Some(2) {
+        // PixelIsPoint: the model point is the pixel centre.
+        ox -= 0.5 * pw;
+        oy -= 0.5 * ph;
+    }
+    Ok(GeoRef {
+        origin_x: ox,
+        origin_y: oy,
+        pixel_width: pw,
+        pixel_height: ph,
+        geographic: geo_key_short(&geo_keys, KEY_MODEL_TYPE) == Some(2),
+        geo_keys,
+        geo_doubles,
+        geo_ascii,
+    })
+}
+
+/// Converts decoded samples to heights, nodata samples to NaN.
+fn to_heights(data: DecodingResult, nodata: Option<f64>) -> Vec<f32> {
+    fn ints<T: Copy + Into<f64>>(v: Vec<T>, nodata: Option<f64>) -> Vec<f32> {
+        v.into_iter()
+            .map(|s| {
+                let x: f64 = s.into();
+                if Some(x) == nodata {
+                    f32::NAN
+                } else {
+                    x as f32
+                }
+            })
+            .collect()
+    }
+    match data {
+        DecodingResult::F32(mut v) => {
+            if let Some(nd) = nodata.filter(|nd| !nd.is_nan()) {
+                let nd32 = nodata_as_f32(nd);
+                for s in &mut v {
+                    if *s == nd32 {
+                        *s = f32::NAN;
+                    }
+                }
+            }
+            v
+        }
+        DecodingResult::F64(v) => v
+            .into_iter()
+            .map(|s| {
+                if Some(s) == nodata {
+                    f32::NAN
+                } else {
+                    s as f32
+                }
+            })
+            .collect(),
+        DecodingResult::U8(v) => ints(v, nodata),
+        DecodingResult::U16(v) => ints(v, nodata),
+        DecodingResult::U32(v) => ints(v, nodata),
+        DecodingResult::I8(v) => ints(v, nodata),
+        DecodingResult::I16(v) => ints(v, nodata),
+        DecodingResult::I32(v) => ints(v, nodata),
+        // Excluded by the SampleFormat/BitsPerSample check before decoding.
+        _ => Vec::new(),
+    }
+}

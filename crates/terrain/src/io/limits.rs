@@ -1,0 +1,48 @@
+//! Size limits every reader checks before allocating, so that a corrupt or
+//! hostile header cannot ask for terabytes.
+
+use std::path::Path;
+
+use super::DemError;
+
+/// Largest accepted width or height, in samples.
+pub const MAX_SIDE: usize = 65_536;
+
+/// Largest accepted number of samples (width × height): 2³¹, i.e. 8 GiB of
+/// `f32` heights.
+pub const MAX_SAMPLES: usize = 1 << 31;
+
+/// Checks `width` × `height` against [`MAX_SIDE`] and [`MAX_SAMPLES`] (and
+/// that neither is zero); `at` names where the dimensions were read.
+pub fn check_dimensions(
+    path: &Path,
+    at: &str,
+    width: usize,
+    height: usize,
+) -> Result<(), DemError> {
+    if width == 0 || height == 0 {
+        return Err(DemError::new(
+            path,
+            at,
+            format!("raster is {width}×{height}; expected at least 1×1 samples"),
+        ));
+    }
+    if width > MAX_SIDE || height > MAX_SIDE {
+        return Err(DemError::new(
+            path,
+            at,
+            format!("raster is {width}×{height}; expected at most {MAX_SIDE} samples per side"),
+        ));
+    }
+    if width * height > MAX_SAMPLES {
+        return Err(DemError::new(
+            path,
+            at,
+            format!(
+                "raster is {width}×{height} = {} samples; expected at most {MAX_SAMPLES}",
+                width * height
+            ),
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,34 @@
+//! Reading and writing DEM files: GeoTIFF (read and write), SRTM `.hgt`,
+//! Terragen `.ter`, grayscale PNG and raw grids, with [`load_dem`] choosing
+//! by extension. Every failure is a [`DemError`] naming the file, the
+//! position in it and what was expected; no input makes a reader panic.
+
+mod atomic;
+mod error;
+mod geokeys;
+mod geotiff_read;
+mod geotiff_write;
+mod hgt;
+mod limits;
+mod load;
+mod nodata;
+mod png;
+mod raw;
+mod samples;
+mod terragen;
+
+pub use atomic::write_atomic;
+pub use error::DemError;
+pub use geokeys::{geo_key_short, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
+pub use geotiff_read::{
+    read_geotiff, TAG_GDAL_NODATA, TAG_GEO_ASCII_PARAMS, TAG_GEO_DOUBLE_PARAMS,
+    TAG_GEO_KEY_DIRECTORY, TAG_MODEL_PIXEL_SCALE, TAG_MODEL_TIEPOINT, TAG_MODEL_TRANSFORMATION,
+};
+pub use geotiff_write::{write_dem_geotiff, write_geotiff_f32, write_geotiff_u8};
+pub use hgt::{parse_hgt_name, read_hgt, HGT_VOID};
+pub use limits::{check_dimensions, MAX_SAMPLES, MAX_SIDE};
+pub use load::{load_dem, LoadOptions, RawSpec, SUPPORTED_EXTENSIONS};
+pub use nodata::{nodata_as_f32, nodata_text};
+pub use png::read_png;
+pub use raw::{read_raw, RawType};
+pub use terragen::read_ter;

@@ -1,0 +1,26 @@
+//! raykit terrain: digital elevation models and exact height-field ray
+//! casting (papers 003 and 004).
+//!
+//! The surface every caster intersects is declared in [`heightfield`]: two
+//! triangles per grid cell, split along the cell's top-left to bottom-right
+//! diagonal. Three casters give the same first hit on it:
+//! - [`march::march`]: a 2D DDA over the cells, the reference;
+//! - [`maxmip::trace`]: per-ray maximum-mipmap traversal (Tevs et al. 2008);
+//! - [`boxes`]: paper 004's method, one quadtree traversal per frame with
+//!   view-distance LOD and frustum culling, boxes giving each pixel's ray its
+//!   start, then a march from there.
+
+pub mod boxes;
+pub mod dem;
+pub mod fractal;
+pub mod heightfield;
+pub mod io;
+pub mod march;
+pub mod maxmip;
+pub mod pyramid;
+pub mod view;
+
+pub use dem::{Dem, GeoRef};
+pub use heightfield::{GridRay, HeightField, Steps, TerrainHit};
+pub use pyramid::MaxMipmap;
+pub use view::TerrainCamera;
