@@ -37,6 +37,8 @@ enum Command {
     Tjunctions(cmd::tjunctions::TJunctionsArgs),
     /// Remove the hidden interior of a model: triangles or parts no outside viewpoint sees, paper 003.
     Cull(cmd::cull::CullArgs),
+    /// DEMs: height-field ray casting (paper 004) and shadow masks (paper 003).
+    Terrain(cmd::terrain::TerrainArgs),
     /// Stream rendered frames to browsers over WebSocket (JPEG) or MJPEG, with interactive cameras.
     Serve(cmd::serve::ServeArgs),
     /// Reproduce the papers' tables and figures on this machine (CSV, Markdown, SVG).
@@ -55,6 +57,7 @@ fn main() -> ExitCode {
         Command::Tjunctions(a) => cmd::tjunctions::run(a),
         Command::Cull(a) => cmd::cull::run(a),
         Command::Serve(a) => cmd::serve::run(a),
+        Command::Terrain(a) => cmd::terrain::run(a),
         Command::Experiment(a) => cmd::experiment::run(a),
         Command::Info(a) => cmd::info::run(a),
     };

@@ -7,5 +7,6 @@ pub mod info;
 pub mod rays;
 pub mod render;
 pub mod serve;
+pub mod terrain;
 pub mod tjunctions;
 pub mod trace;

@@ -85,6 +85,25 @@ impl Dem {
         }
     }
 
+    /// Grid position (fractional column, row) of map coordinates (`x`, `y`)
+    /// in the raster's own units; sample (c, r) sits at its pixel centre.
+    pub fn map_to_grid(&self, x: f64, y: f64) -> (f64, f64) {
+        let g = &self.georef;
+        (
+            (x - g.origin_x) / g.pixel_width - 0.5,
+            (y - g.origin_y) / g.pixel_height - 0.5,
+        )
+    }
+
+    /// Map coordinates of grid position (`col`, `row`).
+    pub fn grid_to_map(&self, col: f64, row: f64) -> (f64, f64) {
+        let g = &self.georef;
+        (
+            g.origin_x + (col + 0.5) * g.pixel_width,
+            g.origin_y + (row + 0.5) * g.pixel_height,
+        )
+    }
+
     /// Lowest and highest height, ignoring NaN (`None` when all are NaN).
     pub fn range(&self) -> Option<(f32, f32)> {
         self.heights

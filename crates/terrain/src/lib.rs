@@ -18,6 +18,8 @@ pub mod io;
 pub mod march;
 pub mod maxmip;
 pub mod pyramid;
+pub mod shadow;
+pub mod sun;
 pub mod view;
 
 pub use dem::{Dem, GeoRef};

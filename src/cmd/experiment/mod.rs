@@ -5,6 +5,7 @@ pub mod cull;
 pub mod kdtree_traversal;
 pub mod serve;
 pub mod split_heuristic;
+pub mod terrain;
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
@@ -35,6 +36,10 @@ enum Which {
     /// client's fps and latency while moving and refinement when still, then
     /// N clients for T seconds with frames, errors, latency and memory.
     Serve(serve::ServeExperimentArgs),
+    /// Papers 004 and 003 on DEMs: the box method against per-cell and
+    /// max-mipmap ray casting for τ = 4..4096, shadow-mask times brute force
+    /// against fast, and gdal_viewshed on the same DEM and light.
+    Terrain(terrain::TerrainExperimentArgs),
 }
 
 /// Run the chosen experiment.
@@ -44,6 +49,7 @@ pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
         Which::SplitHeuristic(a) => split_heuristic::run(a),
         Which::Cull(a) => cull::run(a),
         Which::Serve(a) => serve::run(a),
+        Which::Terrain(a) => terrain::run(a),
     }
 }
 

@@ -1,0 +1,293 @@
+//! Terrain shadow masks (paper 003): for every grid point, is the light
+//! visible from the surface point there? One segment per grid point to the
+//! light, tested against the declared surface ([`crate::heightfield`]).
+//!
+//! Two exact algorithms give identical masks:
+//! - [`ShadowMethod::BruteForce`]: paper 003's method, each segment marched
+//!   cell by cell;
+//! - [`ShadowMethod::Fast`]: each segment through the min/max quadtree
+//!   ([`crate::pyramid`]), walked from the segment's own cell upwards,
+//!   skipping nodes the segment passes above and stopping at the first node
+//!   the segment passes wholly *below* (it must then cross the surface,
+//!   since both of its ends are on or above it).
+
+use crate::heightfield::{GridRay, HeightField, Steps};
+use crate::march::march;
+use crate::pyramid::MaxMipmap;
+use rayon::prelude::*;
+
+/// Where the light is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Light {
+    /// A point light at world position (metres: x east, y north, z up).
+    Point([f64; 3]),
+    /// A directional light (the sun): azimuth clockwise from north and
+    /// elevation above the horizon, degrees.
+    Sun {
+        /// Degrees clockwise from north (90 = east).
+        azimuth_deg: f64,
+        /// Degrees above the horizon.
+        elevation_deg: f64,
+    },
+}
+
+impl Light {
+    /// Unit world direction towards the sun.
+    pub fn sun_direction(azimuth_deg: f64, elevation_deg: f64) -> [f64; 3] {
+        let (a, e) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+        [a.sin() * e.cos(), a.cos() * e.cos(), e.sin()]
+    }
+}
+
+/// Which algorithm computes the mask.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowMethod {
+    /// One segment per grid point marched cell by cell (paper 003).
+    BruteForce,
+    /// One segment per grid point through the min/max quadtree.
+    Fast,
+}
+
+/// Segment parameters closer than this to the grid point or to the light
+/// are ignored (the point itself, and a light lying on the surface).
+const END_EPS: f64 = 1e-9;
+
+/// Margin by which a segment must pass below a node's minimum before the
+/// fast method concludes it crosses the surface, metres.
+const BELOW_EPS: f64 = 1e-7;
+
+/// The segment from grid point (`col`, `row`) towards `light`, in grid
+/// units with `t` in `[0, tmax]`, and whether its far end is on or above
+/// the surface (which the fast method's early exit needs).
+fn segment(field: &HeightField, light: &Light, col: usize, row: usize) -> (GridRay, f64) {
+    let p = [col as f64, row as f64, field.at(col, row) as f64];
+    match *light {
+        Light::Point(w) => {
+            let l = [w[0] / field.sx, -w[1] / field.sy, w[2]];
+            (
+                GridRay {
+                    o: p,
+                    d: [l[0] - p[0], l[1] - p[1], l[2] - p[2]],
+                },
+                1.0 - END_EPS,
+            )
+        }
+        Light::Sun {
+            azimuth_deg,
+            elevation_deg,
+        } => {
+            let d = Light::sun_direction(azimuth_deg, elevation_deg);
+            (
+                GridRay {
+                    o: p,
+                    d: [d[0] / field.sx, -d[1] / field.sy, d[2]],
+                },
+                f64::INFINITY,
+            )
+        }
+    }
+}
+
+/// Surface height at grid-unit position (`x`, `y`) inside the grid (the
+/// declared two-triangle surface).
+pub fn surface_height(field: &HeightField, x: f64, y: f64) -> f64 {
+    let (cw, ch) = field.cells();
+    let c = (x.floor().max(0.0) as usize).min(cw - 1);
+    let r = (y.floor().max(0.0) as usize).min(ch - 1);
+    let (u, v) = (x - c as f64, y - r as f64);
+    let h00 = field.at(c, r) as f64;
+    let h10 = field.at(c + 1, r) as f64;
+    let h01 = field.at(c, r + 1) as f64;
+    let h11 = field.at(c + 1, r + 1) as f64;
+    if u >= v {
+        h00 + (h10 - h00) * u + (h11 - h10) * v
+    } else {
+        h00 + (h11 - h01) * u + (h01 - h00) * v
+    }
+}
+
+/// Whether the segment from grid point (`col`, `row`) to the light meets
+/// the surface, by `method`; `steps` counts the work.
+pub fn occluded(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    light: &Light,
+    col: usize,
+    row: usize,
+    method: ShadowMethod,
+    steps: &mut Steps,
+) -> bool {
+    let (ray, tmax) = segment(field, light, col, row);
+    match method {
+        ShadowMethod::BruteForce => march(field, &ray, END_EPS, tmax, steps).is_some(),
+        ShadowMethod::Fast => {
+            let Some((t0, t1)) = field.clip(&ray, END_EPS, tmax) else {
+                return false;
+            };
+            // The early exit needs the far end on or above the surface.
+            let end = ray.at(t1);
+            let end_above = end[2] >= surface_height(field, end[0], end[1]);
+            bottom_up(field, pyramid, &ray, col, row, t0, t1, end_above, steps)
+        }
+    }
+}
+
+/// The index of the cell (or node, at `scale` cells per node) that a ray
+/// at coordinate `x` moving with direction `d` is in: the floor, except on a
+/// boundary, where the direction decides.
+fn index_along(x: f64, d: f64, scale: f64) -> i64 {
+    let q = x / scale;
+    let f = q.floor();
+    if q == f && d < 0.0 {
+        f as i64 - 1
+    } else {
+        f as i64
+    }
+}
+
+/// The fast test: a stackless walk of the min/max quadtree that starts in
+/// the grid point's own cell at level 0 and moves along the segment,
+/// climbing a level after every node it leaves and descending where the
+/// segment is not clear above a node (the walk of Tevs et al. 2008, started
+/// at the segment's origin instead of the root, since every shadow segment
+/// starts on the surface). The current cell is kept as integers and only
+/// moves forward, so the walk always ends.
+#[allow(clippy::too_many_arguments)]
+fn bottom_up(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    ray: &GridRay,
+    col: usize,
+    row: usize,
+    t0: f64,
+    t1: f64,
+    early_exit: bool,
+    steps: &mut Steps,
+) -> bool {
+    let [dx, dy, dz] = ray.d;
+    let (cw, ch) = field.cells();
+    let (cw, ch) = (cw as i64, ch as i64);
+    // The cell the segment enters from its grid point.
+    let mut ci = index_along(col as f64, dx, 1.0).clamp(0, cw - 1);
+    let mut cj = index_along(row as f64, dy, 1.0).clamp(0, ch - 1);
+    let mut level = 0u32;
+    let mut t = t0;
+    let top = pyramid.top() as u32;
+    loop {
+        steps.nodes += 1;
+        let lv = &pyramid.levels[level as usize];
+        let (i, j) = (ci >> level, cj >> level);
+        let k = j as usize * lv.width + i as usize;
+        let size = (1i64 << level) as f64;
+        // Where the segment leaves this node's footprint.
+        let exit_x = if dx > 0.0 {
+            ((i + 1) as f64 * size - ray.o[0]) / dx
+        } else if dx < 0.0 {
+            (i as f64 * size - ray.o[0]) / dx
+        } else {
+            f64::INFINITY
+        };
+        let exit_y = if dy > 0.0 {
+            ((j + 1) as f64 * size - ray.o[1]) / dy
+        } else if dy < 0.0 {
+            (j as f64 * size - ray.o[1]) / dy
+        } else {
+            f64::INFINITY
+        };
+        let exit = exit_x.min(exit_y).min(t1).max(t);
+        let (za, zb) = (ray.o[2] + t * dz, ray.o[2] + exit * dz);
+        if za.min(zb) <= lv.max[k] as f64 + 1e-9 {
+            if early_exit && za.max(zb) < lv.min[k] as f64 - BELOW_EPS {
+                return true;
+            }
+            if level > 0 {
+                level -= 1;
+                continue;
+            }
+            steps.cells += 1;
+            if field
+                .hit_cell(ci as usize, cj as usize, ray, t0, t1)
+                .is_some()
+            {
+                return true;
+            }
+        }
+        // Leave the node across the side the segment crosses first; the new
+        // current cell is the one just across, along the other axis where
+        // the segment is at the exit (kept inside the node's span).
+        if exit >= t1 {
+            return false;
+        }
+        t = exit;
+        let p = ray.at(exit);
+        let span = |n: i64| (n << level, ((n + 1) << level) - 1);
+        if exit_x <= exit_y {
+            ci = if dx > 0.0 {
+                (i + 1) << level
+            } else {
+                (i << level) - 1
+            };
+            let (lo, hi) = span(j);
+            cj = index_along(p[1], dy, 1.0).clamp(lo, hi.min(ch - 1));
+        } else {
+            cj = if dy > 0.0 {
+                (j + 1) << level
+            } else {
+                (j << level) - 1
+            };
+            let (lo, hi) = span(i);
+            ci = index_along(p[0], dx, 1.0).clamp(lo, hi.min(cw - 1));
+        }
+        if ci < 0 || cj < 0 || ci >= cw || cj >= ch {
+            return false;
+        }
+        if level < top {
+            level += 1;
+        }
+    }
+}
+
+/// The mask: per grid point (row-major from the north row) 1 where the
+/// light is visible, 0 in shadow (parallel over rows).
+pub fn shadow_mask(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    light: &Light,
+    method: ShadowMethod,
+) -> Vec<u8> {
+    shadow_mask_with_progress(field, pyramid, light, method, &|_| {})
+}
+
+/// [`shadow_mask`], calling `progress` with each finished row's length.
+pub fn shadow_mask_with_progress(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    light: &Light,
+    method: ShadowMethod,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Vec<u8> {
+    let w = field.width;
+    let mut mask = vec![0u8; w * field.height];
+    mask.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
+        let mut steps = Steps::default();
+        for (col, m) in line.iter_mut().enumerate() {
+            *m = u8::from(!occluded(
+                field, pyramid, light, col, row, method, &mut steps,
+            ));
+        }
+        progress(w);
+    });
+    mask
+}
+
+/// The world position of a point light `height` metres above the ground at
+/// map position (`x`, `y`) in world metres (gdal_viewshed's `-ox -oy -oz`),
+/// or `None` when (x, y) is outside the grid.
+pub fn light_above_ground(field: &HeightField, x: f64, y: f64, height: f64) -> Option<[f64; 3]> {
+    let (gx, gy) = (x / field.sx, -y / field.sy);
+    let (w, h) = ((field.width - 1) as f64, (field.height - 1) as f64);
+    if !(0.0..=w).contains(&gx) || !(0.0..=h).contains(&gy) {
+        return None;
+    }
+    Some([x, y, surface_height(field, gx, gy) + height])
+}
