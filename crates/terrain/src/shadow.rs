@@ -117,18 +117,105 @@ pub fn occluded(
     method: ShadowMethod,
     steps: &mut Steps,
 ) -> bool {
+    occluded_with_hint(field, pyramid, light, col, row, method, &mut None, steps)
+}
+
+/// Why a segment is known to be blocked: it meets a cell's triangles
+/// (`level` 0, `below` false) or passes wholly below a node's lowest point
+/// (`below` true). Neighbouring grid points are usually blocked by the same
+/// thing, so the fast method tries the last certificate first; a
+/// certificate is a proof, so trying it never changes an answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Blocker {
+    /// Pyramid level.
+    pub level: u32,
+    /// Node column at that level.
+    pub i: i64,
+    /// Node row at that level.
+    pub j: i64,
+    /// Passes below the node's minimum (else: meets the cell's triangles).
+    pub below: bool,
+}
+
+/// [`occluded`], trying `hint` (the blocker of a neighbouring grid point)
+/// first with the fast method, and leaving this point's blocker in it.
+#[allow(clippy::too_many_arguments)]
+pub fn occluded_with_hint(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    light: &Light,
+    col: usize,
+    row: usize,
+    method: ShadowMethod,
+    hint: &mut Option<Blocker>,
+    steps: &mut Steps,
+) -> bool {
     let (ray, tmax) = segment(field, light, col, row);
     match method {
         ShadowMethod::BruteForce => march(field, &ray, END_EPS, tmax, steps).is_some(),
         ShadowMethod::Fast => {
-            let Some((t0, t1)) = field.clip(&ray, END_EPS, tmax) else {
+            // A point light over the grid needs no clipping: the segment
+            // stays over the grid, and above the highest point nothing is hit.
+            let over_grid = matches!(light, Light::Point(_)) && {
+                let l = ray.at(1.0);
+                let (w, h) = ((field.width - 1) as f64, (field.height - 1) as f64);
+                (0.0..=w).contains(&l[0]) && (0.0..=h).contains(&l[1])
+            };
+            let clipped = if over_grid {
+                Some((END_EPS, tmax))
+            } else {
+                field.clip(&ray, END_EPS, tmax)
+            };
+            let Some((t0, t1)) = clipped else {
                 return false;
             };
             // The early exit needs the far end on or above the surface.
             let end = ray.at(t1);
             let end_above = end[2] >= surface_height(field, end[0], end[1]);
-            bottom_up(field, pyramid, &ray, col, row, t0, t1, end_above, steps)
+            if let Some(b) = *hint {
+                if proves(field, pyramid, &ray, t0, t1, end_above, &b, steps) {
+                    return true;
+                }
+            }
+            *hint = bottom_up(field, pyramid, &ray, col, row, t0, t1, end_above, steps);
+            hint.is_some()
         }
+    }
+}
+
+/// Whether blocker `b` blocks this segment too.
+#[allow(clippy::too_many_arguments)]
+fn proves(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    ray: &GridRay,
+    t0: f64,
+    t1: f64,
+    end_above: bool,
+    b: &Blocker,
+    steps: &mut Steps,
+) -> bool {
+    steps.nodes += 1;
+    if !b.below {
+        steps.cells += 1;
+        return field
+            .hit_cell(b.i as usize, b.j as usize, ray, t0, t1)
+            .is_some();
+    }
+    if !end_above {
+        return false;
+    }
+    let (x0, x1, y0, y1) = pyramid.extent(b.level as usize, b.i as usize, b.j as usize);
+    let lv = &pyramid.levels[b.level as usize];
+    let zmin = lv.min[b.j as usize * lv.width + b.i as usize] as f64;
+    let lo = [x0 as f64, y0 as f64, f64::NEG_INFINITY];
+    let hi = [x1 as f64, y1 as f64, f64::INFINITY];
+    match crate::heightfield::slab(ray, lo, hi, t0, t1) {
+        Some((ta, tb)) => {
+            let (za, zb) = (ray.o[2] + ta * ray.d[2], ray.o[2] + tb * ray.d[2]);
+            za.max(zb) < zmin - BELOW_EPS
+        }
+        None => false,
     }
 }
 
@@ -163,7 +250,7 @@ fn bottom_up(
     t1: f64,
     early_exit: bool,
     steps: &mut Steps,
-) -> bool {
+) -> Option<Blocker> {
     let [dx, dy, dz] = ray.d;
     let (cw, ch) = field.cells();
     let (cw, ch) = (cw as i64, ch as i64);
@@ -173,6 +260,23 @@ fn bottom_up(
     let mut level = 0u32;
     let mut t = t0;
     let top = pyramid.top() as u32;
+    // Per-axis constants: which node side the segment leaves by, and the
+    // inverse direction (infinite exits for axis-parallel segments).
+    let (step_x, inv_x) = (
+        i64::from(dx > 0.0),
+        if dx != 0.0 { 1.0 / dx } else { f64::INFINITY },
+    );
+    let (step_y, inv_y) = (
+        i64::from(dy > 0.0),
+        if dy != 0.0 { 1.0 / dy } else { f64::INFINITY },
+    );
+    let exit_along = |n: i64, step: i64, size: f64, o: f64, inv: f64| -> f64 {
+        if inv.is_infinite() {
+            f64::INFINITY
+        } else {
+            ((n + step) as f64 * size - o) * inv
+        }
+    };
     loop {
         steps.nodes += 1;
         let lv = &pyramid.levels[level as usize];
@@ -180,25 +284,18 @@ fn bottom_up(
         let k = j as usize * lv.width + i as usize;
         let size = (1i64 << level) as f64;
         // Where the segment leaves this node's footprint.
-        let exit_x = if dx > 0.0 {
-            ((i + 1) as f64 * size - ray.o[0]) / dx
-        } else if dx < 0.0 {
-            (i as f64 * size - ray.o[0]) / dx
-        } else {
-            f64::INFINITY
-        };
-        let exit_y = if dy > 0.0 {
-            ((j + 1) as f64 * size - ray.o[1]) / dy
-        } else if dy < 0.0 {
-            (j as f64 * size - ray.o[1]) / dy
-        } else {
-            f64::INFINITY
-        };
+        let exit_x = exit_along(i, step_x, size, ray.o[0], inv_x);
+        let exit_y = exit_along(j, step_y, size, ray.o[1], inv_y);
         let exit = exit_x.min(exit_y).min(t1).max(t);
         let (za, zb) = (ray.o[2] + t * dz, ray.o[2] + exit * dz);
         if za.min(zb) <= lv.max[k] as f64 + 1e-9 {
             if early_exit && za.max(zb) < lv.min[k] as f64 - BELOW_EPS {
-                return true;
+                return Some(Blocker {
+                    level,
+                    i,
+                    j,
+                    below: true,
+                });
             }
             if level > 0 {
                 level -= 1;
@@ -209,17 +306,21 @@ fn bottom_up(
                 .hit_cell(ci as usize, cj as usize, ray, t0, t1)
                 .is_some()
             {
-                return true;
+                return Some(Blocker {
+                    level: 0,
+                    i: ci,
+                    j: cj,
+                    below: false,
+                });
             }
         }
         // Leave the node across the side the segment crosses first; the new
         // current cell is the one just across, along the other axis where
         // the segment is at the exit (kept inside the node's span).
         if exit >= t1 {
-            return false;
+            return None;
         }
         t = exit;
-        let p = ray.at(exit);
         let span = |n: i64| (n << level, ((n + 1) << level) - 1);
         if exit_x <= exit_y {
             ci = if dx > 0.0 {
@@ -228,7 +329,7 @@ fn bottom_up(
                 (i << level) - 1
             };
             let (lo, hi) = span(j);
-            cj = index_along(p[1], dy, 1.0).clamp(lo, hi.min(ch - 1));
+            cj = index_along(ray.o[1] + exit * dy, dy, 1.0).clamp(lo, hi.min(ch - 1));
         } else {
             cj = if dy > 0.0 {
                 (j + 1) << level
@@ -236,10 +337,10 @@ fn bottom_up(
                 (j << level) - 1
             };
             let (lo, hi) = span(i);
-            ci = index_along(p[0], dx, 1.0).clamp(lo, hi.min(cw - 1));
+            ci = index_along(ray.o[0] + exit * dx, dx, 1.0).clamp(lo, hi.min(cw - 1));
         }
         if ci < 0 || cj < 0 || ci >= cw || cj >= ch {
-            return false;
+            return None;
         }
         if level < top {
             level += 1;

@@ -225,3 +225,59 @@ fn the_three_casters_agree_on_every_pixel() {
         }
     }
 }
+
+#[test]
+fn the_three_casters_agree_on_views_of_the_shared_dems() {
+    use raykit_terrain::io::{load_dem, LoadOptions};
+    let root = std::env::var_os("RAYKIT_SHARED_DATA")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
+        });
+    for name in [
+        "RealisticTerrain_Large.ter",
+        "lidar_dem_400.tif",
+        "N57E011.hgt",
+    ] {
+        let path = root.join("terrain").join(name);
+        assert!(
+            path.is_file(),
+            "{} is missing: the tests need the shared data folder (set RAYKIT_SHARED_DATA)",
+            path.display()
+        );
+        let dem = load_dem(&path, &LoadOptions::default()).unwrap();
+        let field = HeightField::new(&dem).unwrap();
+        let pyramid = MaxMipmap::new(&field);
+        for (v, cam) in views(&field).iter().enumerate() {
+            let reference = cast_image(&field, &pyramid, cam, Caster::March);
+            assert!(
+                reference.hits.iter().any(|h| h.is_some()),
+                "{name} view {v} sees no terrain"
+            );
+            for caster in [
+                Caster::MaxMipmap,
+                Caster::Boxes { tau: 4.0 },
+                Caster::Boxes { tau: 16.0 },
+            ] {
+                let img = cast_image(&field, &pyramid, cam, caster);
+                for (k, (a, b)) in reference.hits.iter().zip(&img.hits).enumerate() {
+                    match (a, b) {
+                        (Some(a), Some(b)) => {
+                            assert_eq!(
+                                (a.col, a.row),
+                                (b.col, b.row),
+                                "{name} {caster:?} view {v} pixel {k}"
+                            );
+                            assert!(
+                                (a.t - b.t).abs() <= 1e-9 * a.t,
+                                "{name} {caster:?} view {v} pixel {k}"
+                            );
+                        }
+                        (None, None) => {}
+                        _ => panic!("{name} {caster:?} view {v} pixel {k}: {a:?} vs {b:?}"),
+                    }
+                }
+            }
+        }
+    }
+}

@@ -60,7 +60,7 @@ pub struct TerrainExperimentArgs {
     )]
     taus: Vec<f64>,
     /// DEM sides of part (b).
-    #[arg(long, value_delimiter = ',', default_value = "256,512,1024,4096")]
+    #[arg(long, value_delimiter = ',', default_value = "256,512,1024,2048,4096")]
     shadow_sizes: Vec<usize>,
     /// Repetitions (medians are reported); the brute-force shadow masks of
     /// DEMs above 1024² run once.
