@@ -103,23 +103,15 @@ pub fn select_boxes(
     while let Some((level, i, j)) = stack.pop() {
         let lv = &pyramid.levels[level];
         let (x0, x1, y0, y1) = pyramid.extent(level, i, j);
-        let lo = [x0 as f64, y0 as f64, lv.min[j * lv.width + i] as f64];
-        let hi = [x1 as f64, y1 as f64, lv.max[j * lv.width + i] as f64];
+        let lo = [x0 as f64, y0 as f64, lv.min(j * lv.width + i) as f64];
+        let hi = [x1 as f64, y1 as f64, lv.max(j * lv.width + i) as f64];
         let Some(rect) = project(field, &frame, lo, hi) else {
             continue;
         };
         let area = (rect[2] - rect[0]) as f64 * (rect[3] - rect[1]) as f64;
         if level > 0 && area >= threshold {
-            let child = &pyramid.levels[level - 1];
-            for (ci, cj) in [
-                (2 * i, 2 * j),
-                (2 * i + 1, 2 * j),
-                (2 * i, 2 * j + 1),
-                (2 * i + 1, 2 * j + 1),
-            ] {
-                if ci < child.width && cj < child.height {
-                    stack.push((level - 1, ci, cj));
-                }
+            for (ci, cj) in pyramid.levels[level - 1].children(i, j) {
+                stack.push((level - 1, ci, cj));
             }
         } else {
             out.push(NodeBox {

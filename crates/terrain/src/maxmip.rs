@@ -43,7 +43,7 @@ fn node(
 ) -> Option<TerrainHit> {
     steps.nodes += 1;
     let lv = &pyramid.levels[level];
-    let zmax = lv.max[j * lv.width + i] as f64;
+    let zmax = lv.max(j * lv.width + i) as f64;
     let (za, zb) = (ray.o[2] + ta * ray.d[2], ray.o[2] + tb * ray.d[2]);
     if za.min(zb) > zmax + ABOVE_EPS {
         return None;

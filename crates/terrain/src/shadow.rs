@@ -207,7 +207,7 @@ fn proves(
     }
     let (x0, x1, y0, y1) = pyramid.extent(b.level as usize, b.i as usize, b.j as usize);
     let lv = &pyramid.levels[b.level as usize];
-    let zmin = lv.min[b.j as usize * lv.width + b.i as usize] as f64;
+    let zmin = lv.min(b.j as usize * lv.width + b.i as usize) as f64;
     let lo = [x0 as f64, y0 as f64, f64::NEG_INFINITY];
     let hi = [x1 as f64, y1 as f64, f64::INFINITY];
     match crate::heightfield::slab(ray, lo, hi, t0, t1) {
@@ -288,8 +288,11 @@ fn bottom_up(
         let exit_y = exit_along(j, step_y, size, ray.o[1], inv_y);
         let exit = exit_x.min(exit_y).min(t1).max(t);
         let (za, zb) = (ray.o[2] + t * dz, ray.o[2] + exit * dz);
-        if za.min(zb) <= lv.max[k] as f64 + 1e-9 {
-            if early_exit && za.max(zb) < lv.min[k] as f64 - BELOW_EPS {
+        let [zmax, zmin] = lv.max_min[k];
+        // Plain comparisons: no NaN can occur here.
+        let (lo, hi) = if za < zb { (za, zb) } else { (zb, za) };
+        if lo <= zmax as f64 + 1e-9 {
+            if early_exit && hi < zmin as f64 - BELOW_EPS {
                 return Some(Blocker {
                     level,
                     i,
