@@ -391,11 +391,17 @@ fn part_c(args: &TerrainExperimentArgs, dem: &Dem) -> Result<GdalRow> {
                 .args(["-tz", "0", "-cc", "0", "-vv", "1", "-iv", "0", "-ov", "0"])
                 .arg(&input)
                 .arg(&output)
-                .status()
+                .output()
         });
-        let status = status.context("running gdal_viewshed")?;
-        if !status.success() {
-            bail!("gdal_viewshed failed with {status}");
+        // gdal complains on stderr that the generated DEM has no CRS; only a
+        // failure is worth showing.
+        let ran = status.context("running gdal_viewshed")?;
+        if !ran.status.success() {
+            bail!(
+                "gdal_viewshed failed with {}: {}",
+                ran.status,
+                String::from_utf8_lossy(&ran.stderr)
+            );
         }
         gt.push(s);
     }

@@ -87,6 +87,9 @@ pub struct TerrainRenderArgs {
     /// Point looked at, X,Y,Z in map coordinates (default: the surface at the DEM's centre).
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_xyz, allow_hyphen_values = true, conflicts_with = "path")]
     target: Option<[f64; 3]>,
+    /// Camera EYE:TARGET as X,Y,Z:X,Y,Z in map coordinates (the same as --eye and --target).
+    #[arg(long, value_name = "X,Y,Z:X,Y,Z", value_parser = parse_camera, allow_hyphen_values = true, conflicts_with_all = ["eye", "target", "path"])]
+    camera: Option<([f64; 3], [f64; 3])>,
     /// Ray caster.
     #[arg(long, value_enum, default_value_t = CasterArg::Boxes)]
     caster: CasterArg,
@@ -126,6 +129,14 @@ pub struct TerrainRenderArgs {
 /// Parse `x,y,z`.
 fn parse_xyz(s: &str) -> Result<[f64; 3], String> {
     parse_numbers::<3>(s, "X,Y,Z")
+}
+
+/// Parse `X,Y,Z:X,Y,Z` (eye, then target).
+fn parse_camera(s: &str) -> Result<([f64; 3], [f64; 3]), String> {
+    let (e, t) = s
+        .split_once(':')
+        .ok_or_else(|| format!("expected EYE:TARGET as X,Y,Z:X,Y,Z, got '{s}'"))?;
+    Ok((parse_xyz(e)?, parse_xyz(t)?))
 }
 
 /// Parse `a,b`.
@@ -543,13 +554,17 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
         }
         None => {
             let (def_eye, def_target) = default_camera(&field);
-            let eye = match args.eye {
+            let (cam_eye, cam_target) = match args.camera {
+                Some((e, t)) => (Some(e), Some(t)),
+                None => (args.eye, args.target),
+            };
+            let eye = match cam_eye {
                 Some(e) => geo.check("--eye", e, true)?,
                 None => def_eye,
             };
-            let target = match args.target {
+            let target = match cam_target {
                 Some(t) => geo.check("--target", t, false)?,
-                None if args.eye.is_some() => centre(&field),
+                None if cam_eye.is_some() => centre(&field),
                 None => def_target,
             };
             let d = [target[0] - eye[0], target[1] - eye[1], target[2] - eye[2]];
