@@ -7,18 +7,22 @@
 #[path = "support/cli.rs"]
 mod cli;
 
+use cli::{raykit, s, text};
 use raykit_terrain::io::{load_dem, read_geotiff, LoadOptions};
 use raykit_terrain::shadow::{shadow_mask, Light, ShadowMethod};
 use raykit_terrain::{HeightField, MaxMipmap};
 use std::path::PathBuf;
-use cli::{raykit, s, text};
 
 fn ter() -> PathBuf {
     let root = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
     let p = root.join("terrain/lidar_dem_400.tif");
-    assert!(p.is_file(), "{} is missing: the tests need the shared data folder", p.display());
+    assert!(
+        p.is_file(),
+        "{} is missing: the tests need the shared data folder",
+        p.display()
+    );
     p
 }
 
@@ -30,9 +34,22 @@ fn point_light_mask_keeps_the_georeferencing_and_equals_brute_force() {
     // A light 3 m above the ground at the centre of the DEM, in map units.
     let (mx, my) = dem.grid_to_map(200.0, 200.0);
     let light = format!("{mx},{my},3");
-    let o = raykit(&["terrain", "shadow", s(&ter()), "--light", &light, "--out", s(&out), "--compare"]);
+    let o = raykit(&[
+        "terrain",
+        "shadow",
+        s(&ter()),
+        "--light",
+        &light,
+        "--out",
+        s(&out),
+        "--compare",
+    ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
-    assert!(text(&o.stderr).contains("cells that differ: 0 of 160000"), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("cells that differ: 0 of 160000"),
+        "{}",
+        text(&o.stderr)
+    );
     assert!(dir.path().join("mask.png").is_file());
     let mask = read_geotiff(&out).unwrap();
     assert_eq!((mask.width, mask.height), (dem.width, dem.height));
@@ -45,7 +62,12 @@ fn point_light_mask_keeps_the_georeferencing_and_equals_brute_force() {
     let field = HeightField::new(&dem).unwrap();
     let pyramid = MaxMipmap::new(&field);
     let ground = raykit_terrain::shadow::surface_height(&field, 200.0, 200.0);
-    let reference = shadow_mask(&field, &pyramid, &Light::Point([200.0 * field.sx, -200.0 * field.sy, ground + 3.0]), ShadowMethod::BruteForce);
+    let reference = shadow_mask(
+        &field,
+        &pyramid,
+        &Light::Point([200.0 * field.sx, -200.0 * field.sy, ground + 3.0]),
+        ShadowMethod::BruteForce,
+    );
     let got: Vec<u8> = mask.heights.iter().map(|&v| v as u8).collect();
     assert_eq!(got, reference);
     let lit = reference.iter().filter(|&&m| m == 1).count();
@@ -57,17 +79,34 @@ fn sun_path_on_a_flat_dem_gives_every_cell_the_whole_day() {
     let dir = tempfile::tempdir().unwrap();
     // A flat 16-bit PNG DEM: no shadows anywhere.
     let png = dir.path().join("flat.png");
-    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_pixel(20, 20, image::Luma([100u16])).save(&png).unwrap();
+    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_pixel(20, 20, image::Luma([100u16]))
+        .save(&png)
+        .unwrap();
     let out = dir.path().join("hours.tif");
-    let o = raykit(&["terrain", "shadow", s(&png), "--sun-path", "2026-06-21,59.3,18.0", "--step-minutes", "10", "--out", s(&out)]);
+    let o = raykit(&[
+        "terrain",
+        "shadow",
+        s(&png),
+        "--sun-path",
+        "2026-06-21,59.3,18.0",
+        "--step-minutes",
+        "10",
+        "--out",
+        s(&out),
+    ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let hours = read_geotiff(&out).unwrap();
     // Independent count: 10-minute steps (at their midpoints) with the sun up.
     let up = (0..144)
-        .filter(|k| raykit_terrain::sun::sun_position(172, (*k as f64 + 0.5) / 6.0, 59.3, 18.0).1 > 0.0)
+        .filter(|k| {
+            raykit_terrain::sun::sun_position(172, (*k as f64 + 0.5) / 6.0, 59.3, 18.0).1 > 0.0
+        })
         .count() as f32;
     let want = up / 6.0;
-    assert!(want > 17.0 && want < 19.5, "Stockholm midsummer daylight {want} h");
+    assert!(
+        want > 17.0 && want < 19.5,
+        "Stockholm midsummer daylight {want} h"
+    );
     for &h in &hours.heights {
         assert!((h - want).abs() < 1e-3, "{h} vs {want}");
     }
@@ -84,18 +123,45 @@ fn bad_arguments_name_the_flag() {
         (vec!["--sun", "135,120"], "--sun"),
         (vec!["--sun", "135,20", "--light", "1,2,3"], "exactly one"),
         (vec!["--sun-path", "2026-02-30,10,10"], "not a date"),
-        (vec!["--light-elevation", "--sun", "10,10"], "--light-elevation"),
+        (
+            vec!["--light-elevation", "--sun", "10,10"],
+            "--light-elevation",
+        ),
     ] {
         let mut a = vec!["terrain", "shadow", s(&dem)];
         a.extend(args.iter().copied());
         a.extend(["--out", s(&out)]);
         let o = raykit(&a);
         assert!(!o.status.success(), "{args:?} succeeded");
-        assert!(text(&o.stderr).contains(needle), "{args:?}: {}", text(&o.stderr));
+        assert!(
+            text(&o.stderr).contains(needle),
+            "{args:?}: {}",
+            text(&o.stderr)
+        );
     }
-    let o = raykit(&["terrain", "shadow", "/no/such/dem.tif", "--sun", "1,1", "--out", s(&out)]);
-    assert!(!o.status.success() && text(&o.stderr).contains("/no/such/dem.tif"), "{}", text(&o.stderr));
+    let o = raykit(&[
+        "terrain",
+        "shadow",
+        "/no/such/dem.tif",
+        "--sun",
+        "1,1",
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        !o.status.success() && text(&o.stderr).contains("/no/such/dem.tif"),
+        "{}",
+        text(&o.stderr)
+    );
     // The output never replaces the input.
-    let o = raykit(&["terrain", "shadow", s(&dem), "--sun", "1,1", "--out", s(&dem)]);
+    let o = raykit(&[
+        "terrain",
+        "shadow",
+        s(&dem),
+        "--sun",
+        "1,1",
+        "--out",
+        s(&dem),
+    ]);
     assert!(!o.status.success());
 }

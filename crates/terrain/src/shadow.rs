@@ -172,6 +172,13 @@ pub fn occluded_with_hint(
             // The early exit needs the far end on or above the surface.
             let end = ray.at(t1);
             let end_above = end[2] >= surface_height(field, end[0], end[1]);
+            // The segment sinks into the ground at its grid point and ends
+            // strictly above the surface: it must come back up through it.
+            let end_clear = end[2] > surface_height(field, end[0], end[1]) + BELOW_EPS;
+            if end_clear && dips_below(field, &ray, col, row) {
+                steps.cells += 1;
+                return true;
+            }
             if let Some(b) = *hint {
                 if proves(field, pyramid, &ray, t0, t1, end_above, &b, steps) {
                     return true;
@@ -181,6 +188,43 @@ pub fn occluded_with_hint(
             hint.is_some()
         }
     }
+}
+
+/// Whether the segment from grid point (`col`, `row`) starts *into* the
+/// ground: in the triangle it leaves through, the surface rises faster
+/// along the segment than the segment does. Ambiguous starts (along a cell
+/// edge or diagonal, or straight up) answer false.
+fn dips_below(field: &HeightField, ray: &GridRay, col: usize, row: usize) -> bool {
+    let [dx, dy, dz] = ray.d;
+    if dx == 0.0 || dy == 0.0 || dx == dy {
+        return false;
+    }
+    let (cw, ch) = field.cells();
+    let (ci, cj) = (
+        index_along(col as f64, dx, 1.0),
+        index_along(row as f64, dy, 1.0),
+    );
+    if ci < 0 || cj < 0 || ci >= cw as i64 || cj >= ch as i64 {
+        return false;
+    }
+    let (c, r) = (ci as usize, cj as usize);
+    // The grid point is this corner of the cell; the upper triangle is
+    // u >= v (see heightfield.rs).
+    let upper = match (col - c, row - r) {
+        (0, 0) | (1, 1) => dy < dx,
+        (1, 0) => true,
+        _ => false,
+    };
+    let h00 = field.at(c, r) as f64;
+    let h10 = field.at(c + 1, r) as f64;
+    let h01 = field.at(c, r + 1) as f64;
+    let h11 = field.at(c + 1, r + 1) as f64;
+    let rise = if upper {
+        (h10 - h00) * dx + (h11 - h10) * dy
+    } else {
+        (h11 - h01) * dx + (h01 - h00) * dy
+    };
+    dz < rise - 1e-9 * (dz.abs() + rise.abs()) - 1e-12
 }
 
 /// Whether blocker `b` blocks this segment too.
