@@ -31,11 +31,27 @@ pub fn write_atomic<F>(path: &Path, write: F) -> io::Result<()>
 where
     F: FnOnce(&mut dyn Write) -> io::Result<()>,
 {
+    write_atomic_file(
+        path,
+        |w| write(w).map_err(|e| with_path(e, path)),
+        |e| with_path(e, path),
+    )
+}
+
+/// [`write_atomic`] for writers that must also seek (TIFF encoders, say):
+/// `write` gets the buffered temporary file itself and may fail with its own
+/// error type `E`; the I/O errors of opening, syncing and renaming are turned
+/// into `E` by `io_error`.
+pub fn write_atomic_file<E>(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> Result<(), E>,
+    io_error: impl Fn(io::Error) -> E,
+) -> Result<(), E> {
     let name = path.file_name().ok_or_else(|| {
-        io::Error::new(
+        io_error(io::Error::new(
             io::ErrorKind::InvalidInput,
             format!("{}: not a file path", path.display()),
-        )
+        ))
     })?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
@@ -50,21 +66,19 @@ where
         match OpenOptions::new().write(true).create_new(true).open(&tmp) {
             Ok(f) => break (f, tmp),
             Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
-            Err(e) => return Err(with_path(e, path)),
+            Err(e) => return Err(io_error(e)),
         }
     };
     let mut guard = TempGuard {
         path: tmp,
         armed: true,
     };
-    let mut w = BufWriter::with_capacity(1 << 16, file);
-    write(&mut w).map_err(|e| with_path(e, path))?;
-    let file: File = w
-        .into_inner()
-        .map_err(|e| with_path(e.into_error(), path))?;
-    file.sync_all().map_err(|e| with_path(e, path))?;
+    let mut w = BufWriter::with_capacity(1 << 20, file);
+    write(&mut w)?;
+    let file: File = w.into_inner().map_err(|e| io_error(e.into_error()))?;
+    file.sync_all().map_err(&io_error)?;
     drop(file);
-    fs::rename(&guard.path, path).map_err(|e| with_path(e, path))?;
+    fs::rename(&guard.path, path).map_err(&io_error)?;
     guard.armed = false;
     Ok(())
 }

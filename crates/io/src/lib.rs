@@ -36,7 +36,7 @@ mod uri;
 mod validate;
 mod write;
 
-pub use atomic::write_atomic;
+pub use atomic::{write_atomic, write_atomic_file};
 pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
 pub use load::{load, load_mesh, parse_mesh, LoadedMesh};

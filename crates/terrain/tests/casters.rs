@@ -9,7 +9,7 @@ use raykit_core::tri::TestKind;
 use raykit_core::{Ray, Vec3};
 use raykit_terrain::march::march;
 use raykit_terrain::maxmip::trace;
-use raykit_terrain::view::{cast_image, Caster};
+use raykit_terrain::view::{cast_image, CastImage, Caster};
 use raykit_terrain::{Dem, HeightField, MaxMipmap, Steps, TerrainCamera};
 
 /// Rolling hills plus noise, with cliffs (step edges) and a flat plateau
@@ -150,6 +150,25 @@ fn march_agrees_with_mesh_ray_casting_of_the_same_surface() {
     );
 }
 
+/// Same hit cell and distance (within 1e-9 relative) on every pixel.
+fn same_hits(reference: &CastImage, img: &CastImage, what: &str) {
+    for (k, (a, b)) in reference.hits.iter().zip(&img.hits).enumerate() {
+        match (a, b) {
+            (Some(a), Some(b)) => {
+                assert_eq!((a.col, a.row), (b.col, b.row), "{what} pixel {k}");
+                assert!(
+                    (a.t - b.t).abs() <= 1e-9 * a.t,
+                    "{what} pixel {k}: {} vs {}",
+                    a.t,
+                    b.t
+                );
+            }
+            (None, None) => {}
+            _ => panic!("{what} pixel {k}: {a:?} vs {b:?}"),
+        }
+    }
+}
+
 fn views(field: &HeightField) -> Vec<TerrainCamera> {
     let (wx, wy) = (
         (field.width - 1) as f64 * field.sx,
@@ -202,25 +221,7 @@ fn the_three_casters_agree_on_every_pixel() {
                 Caster::Boxes { tau: 1e6 },
             ] {
                 let img = cast_image(&field, &pyramid, cam, caster);
-                for (k, (a, b)) in reference.hits.iter().zip(&img.hits).enumerate() {
-                    match (a, b) {
-                        (Some(a), Some(b)) => {
-                            assert_eq!(
-                                (a.col, a.row),
-                                (b.col, b.row),
-                                "{caster:?} view {v} pixel {k}"
-                            );
-                            assert!(
-                                (a.t - b.t).abs() <= 1e-9 * a.t,
-                                "{caster:?} view {v} pixel {k}: {} vs {}",
-                                a.t,
-                                b.t
-                            );
-                        }
-                        (None, None) => {}
-                        _ => panic!("{caster:?} view {v} pixel {k}: {a:?} vs {b:?}"),
-                    }
-                }
+                same_hits(&reference, &img, &format!("{w}x{h} {caster:?} view {v}"));
             }
         }
     }
@@ -260,23 +261,7 @@ fn the_three_casters_agree_on_views_of_the_shared_dems() {
                 Caster::Boxes { tau: 16.0 },
             ] {
                 let img = cast_image(&field, &pyramid, cam, caster);
-                for (k, (a, b)) in reference.hits.iter().zip(&img.hits).enumerate() {
-                    match (a, b) {
-                        (Some(a), Some(b)) => {
-                            assert_eq!(
-                                (a.col, a.row),
-                                (b.col, b.row),
-                                "{name} {caster:?} view {v} pixel {k}"
-                            );
-                            assert!(
-                                (a.t - b.t).abs() <= 1e-9 * a.t,
-                                "{name} {caster:?} view {v} pixel {k}"
-                            );
-                        }
-                        (None, None) => {}
-                        _ => panic!("{name} {caster:?} view {v} pixel {k}: {a:?} vs {b:?}"),
-                    }
-                }
+                same_hits(&reference, &img, &format!("{name} {caster:?} view {v}"));
             }
         }
     }

@@ -10,7 +10,6 @@ use tiff::encoder::colortype::{ColorType, Gray32Float, Gray8};
 use tiff::encoder::{TiffEncoder, TiffKind, TiffKindBig, TiffKindStandard, TiffValue};
 use tiff::tags::Tag;
 
-use super::atomic::write_atomic;
 use super::geokeys::{set_geo_key_short, validate_geo_keys, KEY_RASTER_TYPE};
 use super::geotiff_read::{
     TAG_GDAL_NODATA, TAG_GEO_ASCII_PARAMS, TAG_GEO_DOUBLE_PARAMS, TAG_GEO_KEY_DIRECTORY,
@@ -173,13 +172,17 @@ where
         nodata: nodata.map(nodata_text),
     };
     let bytes = data.len() as u64 * std::mem::size_of::<C::Inner>() as u64;
-    write_atomic(path, |w| {
-        if bytes > BIG_TIFF_BYTES {
-            encode::<C, TiffKindBig>(path, w, width, height, data, &tags, &fix)
-        } else {
-            encode::<C, TiffKindStandard>(path, w, width, height, data, &tags, &fix)
-        }
-    })
+    raykit_io::write_atomic_file(
+        path,
+        |w| {
+            if bytes > BIG_TIFF_BYTES {
+                encode::<C, TiffKindBig>(path, w, width, height, data, &tags, &fix)
+            } else {
+                encode::<C, TiffKindStandard>(path, w, width, height, data, &tags, &fix)
+            }
+        },
+        |e| DemError::new(path, "write", e.to_string()),
+    )
 }
 
 /// The georeferencing tags to write.

@@ -3,7 +3,6 @@
 //! by extension. Every failure is a [`DemError`] naming the file, the
 //! position in it and what was expected; no input makes a reader panic.
 
-mod atomic;
 mod error;
 mod geokeys;
 mod geotiff_read;
@@ -17,7 +16,6 @@ mod raw;
 mod samples;
 mod terragen;
 
-pub use atomic::write_atomic;
 pub use error::DemError;
 pub use geokeys::{geo_key_short, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
 pub use geotiff_read::{
