@@ -97,6 +97,7 @@ impl ServeArgs {
             max_inputs_per_second: self.max_inputs_per_second,
             max_scene_triangles: self.max_scene_triangles,
             scene_dir: self.scene_dir.clone(),
+            ..ServeConfig::default()
         }
     }
 }

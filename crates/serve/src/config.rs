@@ -29,6 +29,11 @@ pub struct ServeConfig {
     pub max_message_bytes: usize,
     /// Inputs per second a client may send; more are dropped with an error.
     pub max_inputs_per_second: u32,
+    /// How often each WebSocket client is pinged.
+    pub ping_every: Duration,
+    /// A WebSocket client silent this long (no message, no pong) is
+    /// disconnected.
+    pub idle_timeout: Duration,
     /// Largest scene `POST /api/scene` may load, triangles.
     pub max_scene_triangles: usize,
     /// Directory scene files may be loaded from through the API (`None`:
@@ -39,7 +44,8 @@ pub struct ServeConfig {
 impl Default for ServeConfig {
     /// 127.0.0.1:8080, no token, 16 clients, 1280×720 refined with 4
     /// samples, 3840×2160 and 16 samples at most, quality 80, 150 ms settle,
-    /// 16 KiB messages, 240 inputs/s, scenes up to 20M triangles.
+    /// 16 KiB messages, 240 inputs/s, scenes up to 20M triangles, a ping every
+    /// 20 s and 65 s of silence allowed.
     fn default() -> Self {
         ServeConfig {
             addr: SocketAddr::from(([127, 0, 0, 1], 8080)),
@@ -54,6 +60,8 @@ impl Default for ServeConfig {
             max_message_bytes: 16 * 1024,
             max_inputs_per_second: 240,
             max_scene_triangles: 20_000_000,
+            ping_every: Duration::from_secs(20),
+            idle_timeout: Duration::from_secs(65),
             scene_dir: None,
         }
     }
@@ -87,6 +95,9 @@ impl ServeConfig {
         if self.max_clients == 0 || self.max_message_bytes < 256 || self.max_inputs_per_second == 0
         {
             return Some("max clients, inputs per second must be positive and message size at least 256 bytes".into());
+        }
+        if self.ping_every.is_zero() || self.idle_timeout <= self.ping_every {
+            return Some("the idle timeout must exceed the (non-zero) ping period".into());
         }
         if self.settle > Duration::from_secs(60) {
             return Some("the settle time is at most 60 s".into());

@@ -20,11 +20,6 @@ pub const CLOSE_GOING_AWAY: u16 = 1001;
 /// Close code when the server cannot render.
 pub const CLOSE_INTERNAL: u16 = 1011;
 
-/// How often the server pings each client.
-pub const PING_EVERY: std::time::Duration = std::time::Duration::from_secs(20);
-/// A client silent this long (no message, no pong) is disconnected.
-pub const IDLE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(65);
-
 /// `GET /ws`: upgrade unless the client limit is reached (503).
 pub async fn handler(State(state): State<Arc<AppState>>, upgrade: WebSocketUpgrade) -> Response {
     let Some(guard) = state.register("ws") else {
@@ -136,7 +131,10 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
 
     let mut limit = RateLimit::new(state.config.max_inputs_per_second);
     let mut close: Option<(u16, &str)> = None;
-    let mut ping = tokio::time::interval(PING_EVERY);
+    // The first ping after one period, not at once (interval's first tick
+    // is immediate).
+    let every = state.config.ping_every;
+    let mut ping = tokio::time::interval_at(tokio::time::Instant::now() + every, every);
     let mut last_heard = Instant::now();
     loop {
         let msg = tokio::select! {
@@ -152,7 +150,7 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
                 break;
             }
             _ = ping.tick() => {
-                if last_heard.elapsed() > IDLE_TIMEOUT {
+                if last_heard.elapsed() > state.config.idle_timeout {
                     close = Some((CLOSE_GOING_AWAY, "no message or pong for too long"));
                     break;
                 }

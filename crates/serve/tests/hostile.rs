@@ -224,6 +224,35 @@ async fn a_token_is_required_when_set() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn silent_clients_are_disconnected_and_answering_ones_stay() {
+    let mut c = config();
+    c.ping_every = Duration::from_millis(100);
+    c.idle_timeout = Duration::from_millis(400);
+    let server = server(c).await;
+    // This one never reads, so it never answers a ping.
+    let url = format!("ws://{}/ws", server.addr());
+    let (_silent, _) = tokio_tungstenite::connect_async(url.as_str())
+        .await
+        .unwrap();
+    // This one reads (tungstenite answers pings while reading) and acks.
+    let (mut live, hello) = connect(&server, "").await;
+    let live_id = hello["client"].as_u64().unwrap();
+    let start = std::time::Instant::now();
+    while start.elapsed() < Duration::from_millis(1500) {
+        if let Some(h) = frame_within(&mut live, Duration::from_millis(50)).await {
+            ack(&mut live, &h).await;
+        }
+    }
+    let ids: Vec<u64> = server.state().samples().iter().map(|s| s.id).collect();
+    assert_eq!(
+        ids,
+        vec![live_id],
+        "the silent client should be gone, the live one kept"
+    );
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn api_writes_must_be_json() {
     let server = server(config()).await;
     let (status, _, body) = http(

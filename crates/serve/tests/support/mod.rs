@@ -56,13 +56,19 @@ pub async fn connect(server: &Server, query: &str) -> (Ws, Value) {
     (ws, hello)
 }
 
-/// The next message within 10 s.
+/// The next message within 10 s, skipping pings and pongs (tungstenite
+/// answers pings by itself).
 pub async fn next_message(ws: &mut Ws) -> Message {
-    tokio::time::timeout(Duration::from_secs(10), ws.next())
-        .await
-        .expect("a message within 10 s")
-        .expect("connection open")
-        .expect("message ok")
+    loop {
+        let m = tokio::time::timeout(Duration::from_secs(10), ws.next())
+            .await
+            .expect("a message within 10 s")
+            .expect("connection open")
+            .expect("message ok");
+        if !matches!(m, Message::Ping(_) | Message::Pong(_)) {
+            return m;
+        }
+    }
 }
 
 pub async fn next_text(ws: &mut Ws) -> Value {
