@@ -61,7 +61,7 @@ fn point_light_mask_keeps_the_georeferencing_and_equals_brute_force() {
     // The same light through the library's brute force.
     let field = HeightField::new(&dem).unwrap();
     let pyramid = MaxMipmap::new(&field);
-    let ground = raykit_terrain::shadow::surface_height(&field, 200.0, 200.0);
+    let ground = field.height_at(200.0, 200.0);
     let reference = shadow_mask(
         &field,
         &pyramid,

@@ -58,6 +58,25 @@ pub struct Steps {
     pub nodes: u32,
 }
 
+/// One of a cell's two triangles as a plane in cell coordinates `(u, v)`
+/// in `[0, 1]²`: `z = z0 + du · u + dv · v`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellPlane {
+    /// Height at the cell's (col, row) corner, u = v = 0.
+    pub z0: f64,
+    /// Rise per cell along u (columns).
+    pub du: f64,
+    /// Rise per cell along v (rows).
+    pub dv: f64,
+}
+
+impl CellPlane {
+    /// Height at (`u`, `v`).
+    pub fn height(&self, u: f64, v: f64) -> f64 {
+        self.z0 + self.du * u + self.dv * v
+    }
+}
+
 /// Tolerance of the inside-triangle test in cell units.
 const INSIDE_EPS: f64 = 1e-9;
 
@@ -125,6 +144,41 @@ impl HeightField {
         self.heights[row * self.width + col]
     }
 
+    /// The plane of cell (`col`, `row`)'s upper triangle ((c, r), (c+1, r),
+    /// (c+1, r+1), where u ≥ v) or lower one ((c, r), (c+1, r+1), (c, r+1)):
+    /// the one definition of the declared surface that every caster, mask
+    /// and shader uses.
+    #[inline]
+    pub fn cell_plane(&self, col: usize, row: usize, upper: bool) -> CellPlane {
+        let h00 = self.at(col, row) as f64;
+        let h10 = self.at(col + 1, row) as f64;
+        let h01 = self.at(col, row + 1) as f64;
+        let h11 = self.at(col + 1, row + 1) as f64;
+        if upper {
+            CellPlane {
+                z0: h00,
+                du: h10 - h00,
+                dv: h11 - h10,
+            }
+        } else {
+            CellPlane {
+                z0: h00,
+                du: h11 - h01,
+                dv: h01 - h00,
+            }
+        }
+    }
+
+    /// Surface height at grid-unit position (`x`, `y`), clamped into the
+    /// grid.
+    pub fn height_at(&self, x: f64, y: f64) -> f64 {
+        let (cw, ch) = self.cells();
+        let c = (x.floor().max(0.0) as usize).min(cw - 1);
+        let r = (y.floor().max(0.0) as usize).min(ch - 1);
+        let (u, v) = (x - c as f64, y - r as f64);
+        self.cell_plane(c, r, u >= v).height(u, v)
+    }
+
     /// World position (metres, x east, y north, z up) of grid point
     /// (`col`, `row`).
     pub fn point(&self, col: usize, row: usize) -> [f64; 3] {
@@ -167,18 +221,17 @@ impl HeightField {
         tmin: f64,
         tmax: f64,
     ) -> Option<f64> {
-        let h00 = self.at(col, row) as f64;
-        let h10 = self.at(col + 1, row) as f64;
-        let h01 = self.at(col, row + 1) as f64;
-        let h11 = self.at(col + 1, row + 1) as f64;
         let u0 = ray.o[0] - col as f64;
         let v0 = ray.o[1] - row as f64;
         let [du, dv, dz] = ray.d;
         let oz = ray.o[2];
         let mut best: Option<f64> = None;
-        // Upper triangle (u >= v): z = h00 + (h10 − h00) u + (h11 − h10) v.
-        // Lower triangle (u <= v): z = h00 + (h11 − h01) u + (h01 − h00) v.
-        for (b, c, upper) in [(h10 - h00, h11 - h10, true), (h11 - h01, h01 - h00, false)] {
+        for upper in [true, false] {
+            let CellPlane {
+                z0: h00,
+                du: b,
+                dv: c,
+            } = self.cell_plane(col, row, upper);
             let denom = dz - b * du - c * dv;
             if denom == 0.0 || !denom.is_finite() {
                 continue;

@@ -88,24 +88,6 @@ fn segment(field: &HeightField, light: &Light, col: usize, row: usize) -> (GridR
     }
 }
 
-/// Surface height at grid-unit position (`x`, `y`) inside the grid (the
-/// declared two-triangle surface).
-pub fn surface_height(field: &HeightField, x: f64, y: f64) -> f64 {
-    let (cw, ch) = field.cells();
-    let c = (x.floor().max(0.0) as usize).min(cw - 1);
-    let r = (y.floor().max(0.0) as usize).min(ch - 1);
-    let (u, v) = (x - c as f64, y - r as f64);
-    let h00 = field.at(c, r) as f64;
-    let h10 = field.at(c + 1, r) as f64;
-    let h01 = field.at(c, r + 1) as f64;
-    let h11 = field.at(c + 1, r + 1) as f64;
-    if u >= v {
-        h00 + (h10 - h00) * u + (h11 - h10) * v
-    } else {
-        h00 + (h11 - h01) * u + (h01 - h00) * v
-    }
-}
-
 /// Whether the segment from grid point (`col`, `row`) to the light meets
 /// the surface, by `method`; `steps` counts the work.
 pub fn occluded(
@@ -171,10 +153,10 @@ pub fn occluded_with_hint(
             };
             // The early exit needs the far end on or above the surface.
             let end = ray.at(t1);
-            let end_above = end[2] >= surface_height(field, end[0], end[1]);
+            let end_above = end[2] >= field.height_at(end[0], end[1]);
             // The segment sinks into the ground at its grid point and ends
             // strictly above the surface: it must come back up through it.
-            let end_clear = end[2] > surface_height(field, end[0], end[1]) + BELOW_EPS;
+            let end_clear = end[2] > field.height_at(end[0], end[1]) + BELOW_EPS;
             if end_clear && dips_below(field, &ray, col, row) {
                 steps.cells += 1;
                 return true;
@@ -215,15 +197,8 @@ fn dips_below(field: &HeightField, ray: &GridRay, col: usize, row: usize) -> boo
         (1, 0) => true,
         _ => false,
     };
-    let h00 = field.at(c, r) as f64;
-    let h10 = field.at(c + 1, r) as f64;
-    let h01 = field.at(c, r + 1) as f64;
-    let h11 = field.at(c + 1, r + 1) as f64;
-    let rise = if upper {
-        (h10 - h00) * dx + (h11 - h10) * dy
-    } else {
-        (h11 - h01) * dx + (h01 - h00) * dy
-    };
+    let plane = field.cell_plane(c, r, upper);
+    let rise = plane.du * dx + plane.dv * dy;
     dz < rise - 1e-9 * (dz.abs() + rise.abs()) - 1e-12
 }
 
@@ -437,5 +412,5 @@ pub fn light_above_ground(field: &HeightField, x: f64, y: f64, height: f64) -> O
     if !(0.0..=w).contains(&gx) || !(0.0..=h).contains(&gy) {
         return None;
     }
-    Some([x, y, surface_height(field, gx, gy) + height])
+    Some([x, y, field.height_at(gx, gy) + height])
 }

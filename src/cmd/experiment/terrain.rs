@@ -146,30 +146,10 @@ fn differing(a: &CastImage, b: &CastImage) -> usize {
         .count()
 }
 
-/// Steps per ray as a colour heat map (black → blue → red → yellow → white,
-/// linear up to `max`).
+/// Steps per ray as the heat map of `raykit terrain render --heatmap`, on
+/// the common scale `max`.
 fn write_heatmap(path: &Path, img: &CastImage, width: u32, height: u32, max: f64) -> Result<()> {
-    let ramp = |f: f64| -> [u8; 3] {
-        let stops = [
-            [0.0, 0.0, 0.0],
-            [0.1, 0.2, 0.8],
-            [0.85, 0.1, 0.1],
-            [1.0, 0.85, 0.1],
-            [1.0, 1.0, 1.0],
-        ];
-        let x = f.clamp(0.0, 1.0) * 4.0;
-        let i = (x.floor() as usize).min(3);
-        let t = x - i as f64;
-        let c: Vec<u8> = (0..3)
-            .map(|k| ((stops[i][k] * (1.0 - t) + stops[i + 1][k] * t) * 255.0) as u8)
-            .collect();
-        [c[0], c[1], c[2]]
-    };
-    let rgb: Vec<u8> = img
-        .steps
-        .iter()
-        .flat_map(|s| ramp((s.cells + s.nodes) as f64 / max.max(1.0)))
-        .collect();
+    let rgb = crate::cmd::terrain::render::shade::heatmap_scaled(&img.steps, max as u32);
     raykit_io::write_png(path, width, height, &rgb)
         .with_context(|| format!("writing {}", path.display()))
 }

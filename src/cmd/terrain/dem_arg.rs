@@ -29,18 +29,28 @@ pub fn load(spec: &str) -> Result<Dem> {
     Ok(load_dem(spec, &LoadOptions::default())?)
 }
 
-/// Parse `a,b,c` numbers for `flag`.
-pub fn numbers<const N: usize>(flag: &str, s: &str) -> Result<[f64; N]> {
+/// Parse `N` comma-separated finite numbers; `what` (e.g. "X,Y,Z", or
+/// empty) names them in the error.
+pub fn parse_numbers<const N: usize>(s: &str, what: &str) -> Result<[f64; N], String> {
+    let named = if what.is_empty() {
+        String::new()
+    } else {
+        format!(" {what}")
+    };
+    let err = || format!("expected {N} comma-separated numbers{named}, got '{s}'");
     let v: Vec<f64> = s
         .split(',')
         .map(|c| c.trim().parse::<f64>())
         .collect::<Result<_, _>>()
-        .map_err(|_| anyhow::anyhow!("{flag} '{s}': expected {N} comma-separated numbers"))?;
-    let arr: [f64; N] = v
-        .try_into()
-        .map_err(|_| anyhow::anyhow!("{flag} '{s}': expected {N} comma-separated numbers"))?;
+        .map_err(|_| err())?;
+    let arr: [f64; N] = v.try_into().map_err(|_| err())?;
     if arr.iter().any(|x| !x.is_finite()) {
-        bail!("{flag} '{s}': numbers must be finite");
+        return Err(format!("numbers must be finite, got '{s}'"));
     }
     Ok(arr)
+}
+
+/// [`parse_numbers`] for `flag`, its error naming the flag.
+pub fn numbers<const N: usize>(flag: &str, s: &str) -> Result<[f64; N]> {
+    parse_numbers::<N>(s, "").map_err(|e| anyhow::anyhow!("{flag}: {e}"))
 }

@@ -4,7 +4,7 @@
 //! to a PNG; optionally a steps-per-ray heat map and fly-throughs.
 
 #[path = "render_shade.rs"]
-mod shade;
+pub mod shade;
 
 use super::dem_arg;
 use crate::measure::{median_min_max, pool, timed};
@@ -12,9 +12,7 @@ use crate::paths::ensure_not_input;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use raykit_terrain::shadow::{
-    light_above_ground, shadow_mask, surface_height, Light, ShadowMethod,
-};
+use raykit_terrain::shadow::{light_above_ground, shadow_mask, Light, ShadowMethod};
 use raykit_terrain::view::{cast_image, Caster};
 use raykit_terrain::{Dem, HeightField, MaxMipmap, TerrainCamera};
 use shade::{Albedo, Drape, Shading};
@@ -128,7 +126,7 @@ pub struct TerrainRenderArgs {
 
 /// Parse `x,y,z`.
 fn parse_xyz(s: &str) -> Result<[f64; 3], String> {
-    parse_numbers::<3>(s, "X,Y,Z")
+    dem_arg::parse_numbers::<3>(s, "X,Y,Z")
 }
 
 /// Parse `X,Y,Z:X,Y,Z` (eye, then target).
@@ -141,21 +139,7 @@ fn parse_camera(s: &str) -> Result<([f64; 3], [f64; 3]), String> {
 
 /// Parse `a,b`.
 fn parse_pair(s: &str) -> Result<[f64; 2], String> {
-    parse_numbers::<2>(s, "AZ,EL")
-}
-
-fn parse_numbers<const N: usize>(s: &str, what: &str) -> Result<[f64; N], String> {
-    let err = || format!("expected {N} comma-separated numbers {what}, got '{s}'");
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|c| c.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| err())?;
-    let arr: [f64; N] = v.try_into().map_err(|_| err())?;
-    if arr.iter().any(|x| !x.is_finite()) {
-        return Err(format!("numbers must be finite, got '{s}'"));
-    }
-    Ok(arr)
+    dem_arg::parse_numbers::<2>(s, "AZ,EL")
 }
 
 /// Parse `x,y,z:x,y,z:...`.
@@ -262,7 +246,7 @@ impl Georef<'_> {
         let (gx, gy) = (w[0] / f.sx, -w[1] / f.sy);
         let (gw, gh) = ((f.width - 1) as f64, (f.height - 1) as f64);
         if above && (0.0..=gw).contains(&gx) && (0.0..=gh).contains(&gy) {
-            let ground = surface_height(f, gx, gy);
+            let ground = f.height_at(gx, gy);
             if w[2] <= ground {
                 bail!(
                     "{flag} {shown}: below the terrain surface there ({ground:.1} m); \
@@ -290,7 +274,7 @@ fn centre(field: &HeightField) -> [f64; 3] {
         (field.width - 1) as f64 * 0.5,
         (field.height - 1) as f64 * 0.5,
     );
-    [gx * field.sx, -gy * field.sy, surface_height(field, gx, gy)]
+    [gx * field.sx, -gy * field.sy, field.height_at(gx, gy)]
 }
 
 /// The default camera (world metres): see the command's help.

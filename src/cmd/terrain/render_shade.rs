@@ -202,17 +202,9 @@ pub fn sky(d: Rgb) -> Rgb {
 /// (c+1, r+1)) where u ≥ v, the lower one ((c, r), (c+1, r+1), (c, r+1))
 /// otherwise, as `heightfield.rs` declares them.
 pub fn triangle_normal(field: &HeightField, col: usize, row: usize, u: f64, v: f64) -> Rgb {
-    let h00 = field.at(col, row) as f64;
-    let h10 = field.at(col + 1, row) as f64;
-    let h01 = field.at(col, row + 1) as f64;
-    let h11 = field.at(col + 1, row + 1) as f64;
-    // z = h00 + a u + b v with u = x / sx, v = −y / sy.
-    let (a, b) = if u >= v {
-        (h10 - h00, h11 - h10)
-    } else {
-        (h11 - h01, h01 - h00)
-    };
-    let (dzdx, dzdy) = (a / field.sx, -b / field.sy);
+    // z = z0 + du·u + dv·v with u = x / sx, v = −y / sy.
+    let p = field.cell_plane(col, row, u >= v);
+    let (dzdx, dzdy) = (p.du / field.sx, -p.dv / field.sy);
     normalize([-dzdx, -dzdy, 1.0])
 }
 
@@ -310,7 +302,13 @@ impl Shading<'_> {
 /// largest; returns the 8-bit RGB pixels and that largest count.
 pub fn heatmap(steps: &[Steps]) -> (Vec<u8>, u32) {
     let max = steps.iter().map(|s| s.cells + s.nodes).max().unwrap_or(0);
-    let rgb = steps
+    (heatmap_scaled(steps, max), max)
+}
+
+/// Steps per ray as a heat map, linear from 0 to `max` (so several maps can
+/// share one scale); 8-bit RGB pixels.
+pub fn heatmap_scaled(steps: &[Steps], max: u32) -> Vec<u8> {
+    steps
         .par_iter()
         .flat_map_iter(|s| {
             let t = if max > 0 {
@@ -320,8 +318,7 @@ pub fn heatmap(steps: &[Steps]) -> (Vec<u8>, u32) {
             };
             ramp(&HEAT, t).map(|c| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u8)
         })
-        .collect();
-    (rgb, max)
+        .collect()
 }
 
 #[cfg(test)]

@@ -149,7 +149,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
             if h < 0.0 {
                 bail!("--light '{s}': the height above the ground must be >= 0 (use --light-elevation for an absolute elevation)");
             }
-            raykit_terrain::shadow::surface_height(&field, wx / field.sx, -wy / field.sy) + h
+            field.height_at(wx / field.sx, -wy / field.sy) + h
         };
         Light::Point([wx, wy, z])
     } else {
