@@ -123,19 +123,20 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     }
     let mut lights = Vec::new();
     for spec in &args.light {
-        lights
-            .push(parse_light(spec, bounds.center()).with_context(|| format!("--light '{spec}'"))?);
+        lights.push(
+            parse_light(spec, bounds.center())
+                .with_context(|| format!("--light '{spec}'"))?
+                .into(),
+        );
     }
     if lights.is_empty() {
         lights = scene.lights.clone();
     }
     if lights.is_empty() {
         let p = standard_light(&bounds);
-        lights.push(PointLight::with_irradiance_at(
-            p,
-            Vec3::splat(1.0),
-            p.distance(bounds.center()),
-        ));
+        lights.push(
+            PointLight::with_irradiance_at(p, Vec3::splat(1.0), p.distance(bounds.center())).into(),
+        );
     }
     let (accel, build_s) =
         pool.install(|| timed(|| build_accel(kind, test, &scene.mesh, &args.build.options())));

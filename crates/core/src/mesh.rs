@@ -2,8 +2,10 @@
 //! texture coordinates, materials and parts (scene-graph nodes) per triangle.
 
 use crate::aabb::Aabb;
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use std::fmt;
+use std::sync::Arc;
 
 /// A surface material as read from MTL or glTF, kept for the renderers.
 #[derive(Clone, Debug, PartialEq)]
@@ -26,6 +28,9 @@ pub struct Material {
     pub emission: [f32; 3],
     /// Diffuse texture path or URI, if any.
     pub diffuse_texture: Option<String>,
+    /// The decoded base-colour texture (linear), multiplied into `diffuse`
+    /// at the hit's texture coordinates, when the loader could read it.
+    pub base_texture: Option<Arc<Texture>>,
 }
 
 impl Default for Material {
@@ -40,6 +45,7 @@ impl Default for Material {
             ior: 1.5,
             emission: [0.0; 3],
             diffuse_texture: None,
+            base_texture: None,
         }
     }
 }

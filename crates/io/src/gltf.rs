@@ -444,5 +444,6 @@ fn convert_material(doc: &Document, m: &::gltf::Material<'_>, index: usize) -> M
         ior: m.ior().unwrap_or(1.5),
         emission: m.emissive_factor(),
         diffuse_texture: texture,
+        base_texture: None,
     }
 }

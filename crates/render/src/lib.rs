@@ -20,11 +20,14 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod env;
 mod image;
 mod options;
 mod primary;
+pub mod raster;
 mod render;
 pub mod shade;
+pub mod shadowmap;
 pub mod sky;
 mod surface;
 mod tiles;
@@ -32,7 +35,7 @@ mod tiles;
 pub use image::{Encoding, Image};
 pub use options::RenderOptions;
 pub use primary::primary_hits;
-pub use raykit_scene::PointLight;
+pub use raykit_scene::{Light, LightSample, PointLight};
 pub use render::render;
 pub use shade::{shadow_bias, Shader, Surface};
 pub use tiles::{tiles, Tile, TILE_SIZE};

@@ -7,7 +7,6 @@ use crate::tiles::{tiles, TILE_SIZE};
 use raykit_core::glam::Vec3;
 use raykit_core::rng::Pcg32;
 use raykit_core::{Accel, Camera, TriangleMesh};
-use raykit_scene::PointLight;
 use rayon::prelude::*;
 
 /// Render `mesh` (with `accel` built on it) lit by `lights` through `camera`.
@@ -19,7 +18,7 @@ use rayon::prelude::*;
 /// The result does not depend on the number of threads.
 pub fn render(
     mesh: &TriangleMesh,
-    lights: &[PointLight],
+    lights: &[raykit_core::Light],
     accel: &dyn Accel,
     camera: &Camera,
     opts: &RenderOptions,

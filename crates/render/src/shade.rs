@@ -17,7 +17,7 @@ use crate::sky::sky;
 pub use crate::surface::Surface;
 use raykit_core::glam::Vec3;
 use raykit_core::{Accel, Hit, Material, Ray, TriangleMesh};
-use raykit_scene::PointLight;
+use raykit_core::{Light, LightSample};
 
 /// Offset of shadow-ray origins along the geometric normal for `mesh`:
 /// `1e-5` times the larger of the bounding-box diagonal and the largest
@@ -34,7 +34,7 @@ pub fn shadow_bias(mesh: &TriangleMesh) -> f32 {
 /// Shades rays against one mesh, its accel and its lights.
 pub struct Shader<'a> {
     mesh: &'a TriangleMesh,
-    lights: &'a [PointLight],
+    lights: &'a [Light],
     accel: &'a dyn Accel,
     ambient: Vec3,
     shadows: bool,
@@ -47,7 +47,7 @@ impl<'a> Shader<'a> {
     /// ambient term and shadow switch of `opts`.
     pub fn new(
         mesh: &'a TriangleMesh,
-        lights: &'a [PointLight],
+        lights: &'a [Light],
         accel: &'a dyn Accel,
         opts: &RenderOptions,
     ) -> Self {
@@ -78,28 +78,27 @@ impl<'a> Shader<'a> {
         let view = -ray.dir.normalize_or_zero();
         let mut out = kd * self.ambient;
         for light in self.lights {
-            let to_light = light.position - s.point;
-            let dist2 = to_light.length_squared();
-            let l = to_light.normalize_or_zero();
+            let ls = light.toward(s.point);
+            let l = ls.to_light;
             let ndl = s.shading_normal.dot(l);
-            if ndl <= 0.0 || s.geometric_normal.dot(l) <= 0.0 || !self.visible(&s, light) {
+            if ndl <= 0.0 || s.geometric_normal.dot(l) <= 0.0 || !self.visible(&s, &ls) {
                 continue;
             }
             let h = (l + view).normalize_or_zero();
             let spec = s.shading_normal.dot(h).max(0.0).powf(m.shininess);
-            out += light.intensity / dist2 * (kd * ndl + ks * spec);
+            out += ls.irradiance * (kd * ndl + ks * spec);
         }
         out
     }
 
     /// True when shadows are off or no triangle lies between the surface
     /// point (offset along the geometric normal) and the light.
-    fn visible(&self, s: &Surface, light: &PointLight) -> bool {
+    fn visible(&self, s: &Surface, light: &LightSample) -> bool {
         if !self.shadows {
             return true;
         }
         let origin = s.point + s.geometric_normal * self.bias;
-        let ray = Ray::segment(origin, light.position - origin, 0.0, 1.0 - 1e-4);
+        let ray = Ray::segment(origin, light.to_light, 0.0, light.distance * (1.0 - 1e-4));
         !self.accel.occluded(&ray)
     }
 }

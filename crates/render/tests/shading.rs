@@ -139,7 +139,8 @@ fn draw(mesh: &TriangleMesh, lights: &[PointLight], cam: &Camera, o: &RenderOpti
         mesh,
         &BuildOptions::default(),
     );
-    render(mesh, lights, accel.as_ref(), cam, o, &|_| {})
+    let lights: Vec<raykit_scene::Light> = lights.iter().map(|&l| l.into()).collect();
+    render(mesh, &lights, accel.as_ref(), cam, o, &|_| {})
 }
 
 #[test]

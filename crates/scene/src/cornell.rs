@@ -108,11 +108,9 @@ pub fn cornell(seed: u64) -> Scene {
     Scene {
         name: "cornell".into(),
         mesh: b.finish(),
-        lights: vec![PointLight::with_irradiance_at(
-            light_at,
-            v(1.0, 0.92, 0.8) * 0.6,
-            light_at.y,
-        )],
+        lights: vec![
+            PointLight::with_irradiance_at(light_at, v(1.0, 0.92, 0.8) * 0.6, light_at.y).into(),
+        ],
         camera: Some(Camera {
             eye: v(0.0, h, 3.9 * h),
             target: v(0.0, h, 0.0),

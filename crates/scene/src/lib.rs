@@ -16,7 +16,6 @@
 mod builder;
 pub mod cornell;
 mod error;
-mod light;
 pub mod noise;
 pub mod scatter;
 pub mod shirley6;
@@ -26,8 +25,8 @@ pub mod terrain;
 pub use builder::{material, MeshBuilder};
 pub use cornell::cornell;
 pub use error::SceneError;
-pub use light::PointLight;
 pub use raykit_core::Icosphere;
+pub use raykit_core::{Light, LightSample, PointLight};
 pub use scatter::scatter;
 pub use shirley6::shirley6;
 pub use spec::{
@@ -44,8 +43,8 @@ pub struct Scene {
     pub name: String,
     /// All geometry, with normals, materials and parts.
     pub mesh: TriangleMesh,
-    /// Point lights.
-    pub lights: Vec<PointLight>,
+    /// Lights (point, spot, directional).
+    pub lights: Vec<Light>,
     /// The scene's own camera, if it has one.
     pub camera: Option<Camera>,
 }

@@ -129,11 +129,9 @@ pub fn scatter(seed: u64, triangles: usize) -> Scene {
             parts,
             tri_part,
         },
-        lights: vec![PointLight::with_irradiance_at(
-            light_at,
-            Vec3::splat(1.6),
-            light_at.length(),
-        )],
+        lights: vec![
+            PointLight::with_irradiance_at(light_at, Vec3::splat(1.6), light_at.length()).into(),
+        ],
         camera: Some(camera),
     }
 }

@@ -75,11 +75,9 @@ pub fn shirley6(seed: u64) -> Scene {
     Scene {
         name: "shirley6".into(),
         mesh: b.finish(),
-        lights: vec![PointLight::with_irradiance_at(
-            light_at,
-            Vec3::splat(1.0),
-            light_at.length(),
-        )],
+        lights: vec![
+            PointLight::with_irradiance_at(light_at, Vec3::splat(1.0), light_at.length()).into(),
+        ],
         camera: Some(Camera {
             eye: v(0.0, 5.0, 15.0),
             target: v(0.0, 1.0, -1.0),

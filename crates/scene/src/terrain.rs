@@ -127,7 +127,8 @@ pub fn terrain(seed: u64, triangles: usize) -> Scene {
             sun_dir * sun_distance,
             Vec3::new(1.0, 0.95, 0.85) * 1.0,
             sun_distance,
-        )],
+        )
+        .into()],
         camera: Some(Camera {
             eye: Vec3::new(0.0, 0.6 * SIZE, 0.8 * SIZE),
             target: Vec3::new(0.0, -0.1 * SIZE, -0.05 * SIZE),

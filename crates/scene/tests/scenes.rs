@@ -214,7 +214,7 @@ fn camera_sees_the_scene_and_lights_are_outside_objects() {
                 let r = rays.pixel(x, y);
                 accel.intersect(&r).is_some_and(|h| {
                     let p = r.at(h.t * 0.999);
-                    let d = s.lights[0].position - p;
+                    let d = s.lights[0].position().expect("a point light") - p;
                     !accel.occluded(&raykit_core::Ray::segment(p, d, 1e-4, 0.999))
                 })
             });

@@ -143,9 +143,10 @@ pub async fn status(State(state): State<Arc<AppState>>) -> Response {
         .iter()
         .map(|l| {
             // `color` as PUT /api/lights takes it: irradiance at the centre.
-            let color = l.irradiance_at(g.bounds.center());
-            json!({"position": l.position.to_array(), "color": color.to_array(),
-                "intensity": l.intensity.to_array()})
+            let at = l.toward(g.bounds.center());
+            json!({"kind": l.kind_name(), "position": l.position().map(|p| p.to_array()),
+                "direction": (-at.to_light).to_array(), "color": at.irradiance.to_array(),
+                "intensity": (at.irradiance * at.distance * at.distance).to_array()})
         })
         .collect();
     let c = &state.config;
@@ -322,7 +323,7 @@ pub async fn put_lights(State(state): State<Arc<AppState>>, bytes: Bytes) -> Res
             );
         }
         let d = p.distance(center).max(1e-6);
-        lights.push(PointLight::with_irradiance_at(p, c, d));
+        lights.push(PointLight::with_irradiance_at(p, c, d).into());
     }
     let n = lights.len();
     state.update_world(|w| w.lights = lights);

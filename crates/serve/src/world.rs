@@ -5,7 +5,7 @@ use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::raysets::standard_light;
 use raykit_core::tri::TestKind;
 use raykit_core::{Aabb, Accel, Camera, Vec3};
-use raykit_render::PointLight;
+use raykit_render::{Light, PointLight};
 use raykit_scene::Scene;
 use std::sync::Arc;
 
@@ -45,16 +45,12 @@ impl Geometry {
 
     /// The scene's lights, or one white light above the mesh as `raykit
     /// render` uses.
-    pub fn default_lights(&self) -> Vec<PointLight> {
+    pub fn default_lights(&self) -> Vec<Light> {
         if !self.scene.lights.is_empty() {
             return self.scene.lights.clone();
         }
         let p = standard_light(&self.bounds);
-        vec![PointLight::with_irradiance_at(
-            p,
-            Vec3::ONE,
-            p.distance(self.bounds.center()),
-        )]
+        vec![PointLight::with_irradiance_at(p, Vec3::ONE, p.distance(self.bounds.center())).into()]
     }
 
     /// The scene's camera, or one fitting the mesh for `aspect`.
@@ -82,7 +78,7 @@ pub struct World {
     /// The loaded scene.
     pub geometry: Arc<Geometry>,
     /// Lights used for every client.
-    pub lights: Vec<PointLight>,
+    pub lights: Vec<Light>,
     /// Camera of new clients and of MJPEG streams.
     pub camera: Camera,
     /// Full resolution of new clients and of MJPEG streams.

@@ -128,7 +128,7 @@ pub fn run(args: KdTraversalArgs) -> Result<ExitCode> {
         let camera = raysets::standard_camera(mesh);
         let light = raysets::standard_light(&mesh.bounds());
         let lights = if scene.lights.is_empty() {
-            vec![PointLight::new(light, raykit_core::Vec3::splat(1.0))]
+            vec![PointLight::new(light, raykit_core::Vec3::splat(1.0)).into()]
         } else {
             scene.lights.clone()
         };
@@ -237,7 +237,7 @@ pub fn run(args: KdTraversalArgs) -> Result<ExitCode> {
 fn measure(
     accel: &dyn Accel,
     mesh: &raykit_core::TriangleMesh,
-    lights: &[PointLight],
+    lights: &[raykit_scene::Light],
     camera: &raykit_core::Camera,
     size: u32,
     shadow: &[Ray],

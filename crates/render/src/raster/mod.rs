@@ -1,0 +1,1 @@
+//! CPU rasterization of primary visibility (paper 001): filled in by the rasterizer work.
