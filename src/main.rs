@@ -25,7 +25,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene to a PNG with Phong shading and shadow rays.
+    /// Render a scene with the Whitted ray tracer: mirrors, glass, lights, shadows, HDR environments.
     Render(cmd::render::RenderArgs),
     /// Generate a standard ray set (primary, shadow, incoherent) as a binary ray file.
     Rays(cmd::rays::RaysArgs),
@@ -43,6 +43,8 @@ enum Command {
     Serve(cmd::serve::ServeArgs),
     /// Reproduce the papers' tables and figures on this machine (CSV, Markdown, SVG).
     Experiment(cmd::experiment::ExperimentArgs),
+    /// Write a scene (built-in or file) as glTF with its materials, camera and lights.
+    Export(cmd::export::ExportArgs),
     /// List the names accepted by --accel, --test and --scene.
     Info(cmd::info::InfoArgs),
 }
@@ -59,6 +61,7 @@ fn main() -> ExitCode {
         Command::Serve(a) => cmd::serve::run(a),
         Command::Terrain(a) => cmd::terrain::run(a),
         Command::Experiment(a) => cmd::experiment::run(a),
+        Command::Export(a) => cmd::export::run(a),
         Command::Info(a) => cmd::info::run(a),
     };
     match result {

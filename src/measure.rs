@@ -31,6 +31,13 @@ pub fn median_min_max(samples: &[f64]) -> (f64, f64, f64) {
     (median, s[0], s[n - 1])
 }
 
+/// Median of `samples` (seconds) in milliseconds, and the noise: the spread
+/// (max − min) relative to the median.
+pub fn median_ms(samples: &[f64]) -> (f64, f64) {
+    let (m, lo, hi) = median_min_max(samples);
+    (m * 1e3, if m > 0.0 { (hi - lo) / m } else { 0.0 })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

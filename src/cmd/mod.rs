@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod cull;
 pub mod experiment;
+pub mod export;
 pub mod info;
 pub mod rays;
 pub mod render;

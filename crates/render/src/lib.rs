@@ -20,8 +20,10 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod aov;
 pub mod env;
 mod image;
+pub mod lighting;
 mod options;
 mod primary;
 pub mod raster;
@@ -31,6 +33,7 @@ pub mod shadowmap;
 pub mod sky;
 mod surface;
 mod tiles;
+pub mod whitted;
 
 pub use image::{Encoding, Image};
 pub use options::RenderOptions;

@@ -1,17 +1,8 @@
-//! Blinn-Phong shading with point lights and hard shadows.
-//!
-//! For a hit with diffuse colour `kd`, specular colour `ks`, exponent `s`,
-//! shading normal `n` (see [`Surface`]), unit direction to the viewer `v`:
-//!
-//! ```text
-//! L = kd · ambient + Σ_lights  I / d² · (kd · (n·l) + ks · (n·h)^s)
-//! ```
-//!
-//! over the lights with `n·l > 0` and `n_g·l > 0` (the light is in front of
-//! the triangle) that a shadow ray does not find occluded, where `l` is the
-//! unit direction and `d` the distance to the light, `h = normalize(l + v)`.
-//! This is Phong's model as used in paper 000, with Blinn's half vector.
+//! The quick renderer's shading: Blinn-Phong direct lighting
+//! ([`crate::lighting`]) with hard shadows from shadow rays, the sky gradient
+//! behind.
 
+use crate::lighting::blinn_phong;
 use crate::options::RenderOptions;
 use crate::sky::sky;
 pub use crate::surface::Surface;
@@ -73,22 +64,14 @@ impl<'a> Shader<'a> {
     /// Linear radiance leaving the hit `hit` of `ray` towards the ray origin.
     pub fn shade(&self, ray: &Ray, hit: &Hit) -> Vec3 {
         let s = Surface::at(self.mesh, ray, hit, &self.fallback);
-        let m = s.material;
-        let (kd, ks) = (Vec3::from(m.diffuse), Vec3::from(m.specular));
         let view = -ray.dir.normalize_or_zero();
-        let mut out = kd * self.ambient;
-        for light in self.lights {
-            let ls = light.toward(s.point);
-            let l = ls.to_light;
-            let ndl = s.shading_normal.dot(l);
-            if ndl <= 0.0 || s.geometric_normal.dot(l) <= 0.0 || !self.visible(&s, &ls) {
-                continue;
+        blinn_phong(&s, view, self.lights, self.ambient, &mut |_, ls| {
+            if self.visible(&s, ls) {
+                1.0
+            } else {
+                0.0
             }
-            let h = (l + view).normalize_or_zero();
-            let spec = s.shading_normal.dot(h).max(0.0).powf(m.shininess);
-            out += ls.irradiance * (kd * ndl + ks * spec);
-        }
-        out
+        })
     }
 
     /// True when shadows are off or no triangle lies between the surface

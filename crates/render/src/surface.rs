@@ -1,6 +1,6 @@
 //! The surface at a ray hit: point, normals and material.
 
-use raykit_core::glam::Vec3;
+use raykit_core::glam::{Vec2, Vec3};
 use raykit_core::{Hit, Material, Ray, TriangleMesh};
 
 /// What the shading needs to know about a hit.
@@ -17,6 +17,13 @@ pub struct Surface<'a> {
     pub shading_normal: Vec3,
     /// The triangle's material.
     pub material: &'a Material,
+    /// True when the ray arrived at the front side (the side the
+    /// counter-clockwise winding faces): it enters a closed object there.
+    pub front_face: bool,
+    /// Interpolated texture coordinates (zero when the mesh has none).
+    pub uv: Vec2,
+    /// Diffuse colour: the material's, times its base-colour texture at `uv`.
+    pub diffuse: Vec3,
 }
 
 impl<'a> Surface<'a> {
@@ -29,7 +36,8 @@ impl<'a> Surface<'a> {
         let w = 1.0 - u - v;
         let point = a * w + b * u + c * v;
         let mut ng = (b - a).cross(c - a).normalize_or_zero();
-        if ng.dot(ray.dir) > 0.0 {
+        let front_face = ng.dot(ray.dir) <= 0.0;
+        if !front_face {
             ng = -ng;
         }
         let mut ns = match &mesh.normals {
@@ -46,11 +54,25 @@ impl<'a> Surface<'a> {
             .materials
             .get(mesh.material_of(prim) as usize)
             .unwrap_or(fallback);
+        let uv = match &mesh.uvs {
+            Some(t) => {
+                let [i, j, k] = mesh.indices[prim].map(|i| i as usize);
+                t[i] * w + t[j] * u + t[k] * v
+            }
+            None => Vec2::ZERO,
+        };
+        let mut diffuse = Vec3::from(material.diffuse);
+        if let Some(tex) = &material.base_texture {
+            diffuse *= tex.sample(uv).truncate();
+        }
         Surface {
             point,
             geometric_normal: ng,
             shading_normal: ns,
             material,
+            front_face,
+            uv,
+            diffuse,
         }
     }
 }

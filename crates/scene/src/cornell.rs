@@ -6,8 +6,8 @@ use crate::builder::{material, MeshBuilder};
 use crate::{PointLight, Scene};
 use raykit_core::glam::{Affine3A, Quat, Vec3};
 use raykit_core::rng::Pcg32;
-use raykit_core::Camera;
 use raykit_core::Icosphere;
+use raykit_core::{Camera, Material};
 
 /// Half the side of the room (the room is `[-5, 5] × [0, 10] × [-5, 5]`,
 /// open towards `+z`).
@@ -23,6 +23,19 @@ pub const TRIANGLES: usize = 10 + 24 + 20 * 4usize.pow(SPHERE_SUBDIVISIONS);
 /// (±0.25); parts are named `floor`, `ceiling`, `back wall`, `left wall`,
 /// `right wall`, `tall box`, `short box` and `sphere` (the last three closed).
 pub fn cornell(seed: u64) -> Scene {
+    build(seed, false)
+}
+
+/// The Cornell box of [`cornell`] with Whitted's materials (papers 000 and
+/// 001 render such scenes): the tall box a silver mirror and the sphere
+/// clear glass (index of refraction 1.5), for reflections and refractions.
+pub fn whitted(seed: u64) -> Scene {
+    let mut scene = build(seed, true);
+    scene.name = "whitted".into();
+    scene
+}
+
+fn build(seed: u64, whitted: bool) -> Scene {
     let mut rng = Pcg32::new(seed);
     let mut jitter = |s: f32| rng.range_f32(-s, s);
     let mut b = MeshBuilder::new();
@@ -30,7 +43,21 @@ pub fn cornell(seed: u64) -> Scene {
     let red = b.add_material(material("red", [0.63, 0.06, 0.05], 0.0, 1.0));
     let green = b.add_material(material("green", [0.12, 0.45, 0.15], 0.0, 1.0));
     let boxes = b.add_material(material("box", [0.73, 0.71, 0.68], 0.05, 16.0));
-    let blue = b.add_material(material("sphere", [0.15, 0.25, 0.65], 0.5, 64.0));
+    let (tall, sphere) = if whitted {
+        let mirror = Material {
+            reflectivity: 1.0,
+            ..material("mirror", [0.0; 3], 0.95, 256.0)
+        };
+        let glass = Material {
+            transmission: 1.0,
+            ior: 1.5,
+            ..material("glass", [1.0; 3], 1.0, 256.0)
+        };
+        (b.add_material(mirror), b.add_material(glass))
+    } else {
+        let blue = material("sphere", [0.15, 0.25, 0.65], 0.5, 64.0);
+        (boxes, b.add_material(blue))
+    };
 
     let h = HALF;
     let top = 2.0 * h;
@@ -77,7 +104,7 @@ pub fn cornell(seed: u64) -> Scene {
             Quat::from_rotation_y(tall_angle),
             tall_at,
         ),
-        boxes,
+        tall,
     );
 
     let short_angle = (-17.0 + jitter(4.0)).to_radians();
@@ -101,7 +128,7 @@ pub fn cornell(seed: u64) -> Scene {
             Quat::IDENTITY,
             short_at + v(0.0, 1.5 + radius, 0.0),
         ),
-        blue,
+        sphere,
     );
 
     let light_at = v(0.0, top - 0.7, 1.0);

@@ -1,7 +1,8 @@
 //! raykit built-in scenes, each deterministic from a seed (every random
 //! number comes from [`raykit_core::rng::Pcg32`]):
 //!
-//! - [`cornell()`]: a Cornell box with two boxes and a sphere;
+//! - [`cornell()`]: a Cornell box with two boxes and a sphere, and
+//!   [`whitted()`], the same box with a mirror and a glass sphere;
 //! - [`shirley6()`]: after Peter Shirley's test scene 6, used in paper 000;
 //! - [`terrain()`]: an fBm noise height field of configurable size;
 //! - [`scatter()`]: many stretched, rotated icospheres in a box.
@@ -23,7 +24,7 @@ mod spec;
 pub mod terrain;
 
 pub use builder::{material, MeshBuilder};
-pub use cornell::cornell;
+pub use cornell::{cornell, whitted};
 pub use error::SceneError;
 pub use raykit_core::Icosphere;
 pub use raykit_core::{Light, LightSample, PointLight};

@@ -22,13 +22,18 @@ pub struct BuiltinInfo {
 }
 
 /// Names of the built-in scenes, in the order of [`BUILTINS`].
-pub const BUILTIN_NAMES: &[&str] = &["cornell", "shirley6", "terrain", "scatter"];
+pub const BUILTIN_NAMES: &[&str] = &["cornell", "whitted", "shirley6", "terrain", "scatter"];
 
 /// The built-in scenes with their descriptions and keys.
 pub const BUILTINS: &[BuiltinInfo] = &[
     BuiltinInfo {
         name: "cornell",
         description: "Cornell box with a tall box, a short box and a smooth sphere, one light (1314 triangles)",
+        keys: &["seed"],
+    },
+    BuiltinInfo {
+        name: "whitted",
+        description: "the Cornell box with a mirror tall box and a glass sphere (1314 triangles)",
         keys: &["seed"],
     },
     BuiltinInfo {
@@ -112,6 +117,7 @@ pub fn builtin(spec: &str) -> Result<Scene, SceneError> {
     };
     Ok(match info.name {
         "cornell" => cornell::cornell(seed),
+        "whitted" => cornell::whitted(seed),
         "shirley6" => shirley6::shirley6(seed),
         "terrain" => terrain::terrain(
             seed,

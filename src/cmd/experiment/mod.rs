@@ -6,6 +6,7 @@ pub mod kdtree_traversal;
 pub mod serve;
 pub mod split_heuristic;
 pub mod terrain;
+pub mod whitted;
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
@@ -40,6 +41,10 @@ enum Which {
     /// max-mipmap ray casting for τ = 4..4096, shadow-mask times brute force
     /// against fast, and gdal_viewshed on the same DEM and light.
     Terrain(terrain::TerrainExperimentArgs),
+    /// Paper 001's Table 2: frame times of traced against rasterized
+    /// primaries × shadow rays against shadow maps × recursive against
+    /// wavefront, at 1 and 2 passes, with the image differences.
+    Whitted(whitted::WhittedExperimentArgs),
 }
 
 /// Run the chosen experiment.
@@ -50,6 +55,7 @@ pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
         Which::Cull(a) => cull::run(a),
         Which::Serve(a) => serve::run(a),
         Which::Terrain(a) => terrain::run(a),
+        Which::Whitted(a) => whitted::run(a),
     }
 }
 

@@ -7,7 +7,7 @@
 //! differ.
 
 use super::{write_csv, write_text};
-use crate::measure::{median_min_max, timed};
+use crate::measure::{median_min_max, median_ms, timed};
 use crate::plot::{write_svg, LineChart, Series};
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -109,11 +109,6 @@ struct GdalRow {
     lit_by_us_shadowed_by_gdal: Option<usize>,
     shadowed_by_us_lit_by_gdal: Option<usize>,
     note: String,
-}
-
-fn median_ms(samples: &[f64]) -> (f64, f64) {
-    let (m, lo, hi) = median_min_max(samples);
-    (m * 1e3, if m > 0.0 { (hi - lo) / m } else { 0.0 })
 }
 
 /// A camera flying over the DEM from the south-west, like paper 004's views.

@@ -2,14 +2,17 @@
 //! mesh that has triangles (parts with none are dropped), each node and mesh
 //! named after its part, each mesh one triangle primitive (positions, normals
 //! and texture coordinates when present, u32 indices) holding only its part's
-//! vertices. A mesh with a single part is written with its vertex arrays
-//! unchanged. Materials are not written.
+//! vertices, one primitive per run of triangles with the same material. A
+//! mesh with a single part is written with its vertex arrays unchanged.
+//! Materials, a camera and lights are written as [`write_gltf_scene`]'s
+//! module `gltf_scene` describes.
 //!
 //! [`Part`]: raykit_core::Part
 
 use super::check;
+use super::gltf_scene::scene_extras;
 use crate::uri::base64_encode;
-use raykit_core::{TriangleMesh, Vec2, Vec3};
+use raykit_core::{Camera, Light, TriangleMesh, Vec2, Vec3};
 use std::io::{self, Write};
 
 /// The buffer, buffer views and accessors being written.
@@ -47,14 +50,16 @@ impl Buffers {
         })
     }
 
-    /// One triangle primitive over the given vertex arrays and triangles;
-    /// returns its JSON.
+    /// Triangle primitives over the given vertex arrays and triangles, one
+    /// per material run (`runs`: material and range of `tris`), sharing the
+    /// vertex accessors; returns their JSON, comma-separated.
     fn primitive(
         &mut self,
         positions: &[Vec3],
         normals: Option<&[Vec3]>,
         uvs: Option<&[Vec2]>,
         tris: &[[u32; 3]],
+        runs: Vec<(Option<usize>, std::ops::Range<usize>)>,
     ) -> String {
         let (lo, hi) = positions
             .iter()
@@ -78,20 +83,48 @@ impl Buffers {
             let d: Vec<f32> = t.iter().flat_map(|p| p.to_array()).collect();
             attributes.push(format!(r#""TEXCOORD_0":{}"#, self.add_floats(&d, 2, "")));
         }
-        let bytes: Vec<u8> = tris
-            .iter()
-            .flatten()
-            .flat_map(|i| i.to_le_bytes())
-            .collect();
-        let count = tris.len() * 3;
-        let ia = self.add(&bytes, 34963, |v| {
-            format!(r#"{{"bufferView":{v},"componentType":5125,"count":{count},"type":"SCALAR"}}"#)
-        });
-        format!(
-            r#"{{"attributes":{{{}}},"indices":{ia},"mode":4}}"#,
-            attributes.join(",")
-        )
+        let attributes = attributes.join(",");
+        let mut prims = Vec::new();
+        for (material, run) in runs {
+            let bytes: Vec<u8> = tris[run.clone()]
+                .iter()
+                .flatten()
+                .flat_map(|i| i.to_le_bytes())
+                .collect();
+            let count = run.len() * 3;
+            let ia = self.add(&bytes, 34963, |v| {
+                format!(
+                    r#"{{"bufferView":{v},"componentType":5125,"count":{count},"type":"SCALAR"}}"#
+                )
+            });
+            let m = material
+                .map(|m| format!(r#","material":{m}"#))
+                .unwrap_or_default();
+            prims.push(format!(
+                r#"{{"attributes":{{{attributes}}},"indices":{ia},"mode":4{m}}}"#
+            ));
+        }
+        prims.join(",")
     }
+}
+
+/// Runs of consecutive triangles (indices into `tris` of one part) with the
+/// same material, and that material's index (`None` when the mesh has no
+/// materials).
+fn material_runs(
+    mesh: &TriangleMesh,
+    tris: &[usize],
+) -> Vec<(Option<usize>, std::ops::Range<usize>)> {
+    let mut runs: Vec<(Option<usize>, std::ops::Range<usize>)> = Vec::new();
+    for (k, &t) in tris.iter().enumerate() {
+        let m = (!mesh.materials.is_empty())
+            .then(|| (mesh.material_of(t) as usize).min(mesh.materials.len() - 1));
+        match runs.last_mut() {
+            Some((last, r)) if *last == m => r.end = k + 1,
+            _ => runs.push((m, k..k + 1)),
+        }
+    }
+    runs
 }
 
 /// The triangles of each part that has any, in part order (triangles in mesh
@@ -114,7 +147,7 @@ fn part_triangles(mesh: &TriangleMesh) -> Vec<(usize, Vec<usize>)> {
 }
 
 /// `s` as a JSON string literal.
-fn json_string(s: &str) -> String {
+pub(super) fn json_string(s: &str) -> String {
     let mut out = String::with_capacity(s.len() + 2);
     out.push('"');
     for c in s.chars() {
@@ -132,6 +165,18 @@ fn json_string(s: &str) -> String {
 /// Write `mesh` as GLB (`binary`) or as `.gltf` JSON with the buffer embedded
 /// as a base64 data URI.
 pub fn write_gltf(w: &mut dyn Write, mesh: &TriangleMesh, binary: bool) -> io::Result<()> {
+    write_gltf_scene(w, mesh, None, &[], binary)
+}
+
+/// Write `mesh` with a camera and lights (`KHR_lights_punctual`) as GLB
+/// (`binary`) or `.gltf`: what `raykit render` reads back as a whole scene.
+pub fn write_gltf_scene(
+    w: &mut dyn Write,
+    mesh: &TriangleMesh,
+    camera: Option<&Camera>,
+    lights: &[Light],
+    binary: bool,
+) -> io::Result<()> {
     check(mesh)?;
     let mut buf = Buffers::default();
     let groups = part_triangles(mesh);
@@ -147,6 +192,7 @@ pub fn write_gltf(w: &mut dyn Write, mesh: &TriangleMesh, binary: bool) -> io::R
                 mesh.normals.as_deref(),
                 mesh.uvs.as_deref(),
                 &mesh.indices,
+                material_runs(mesh, tris),
             )
         } else {
             let mut used: Vec<u32> = tris.iter().flat_map(|&t| mesh.indices[t]).collect();
@@ -167,7 +213,14 @@ pub fn write_gltf(w: &mut dyn Write, mesh: &TriangleMesh, binary: bool) -> io::R
                 .iter()
                 .map(|&t| mesh.indices[t].map(|v| local[v as usize]))
                 .collect();
-            buf.primitive(&positions, normals.as_deref(), uvs.as_deref(), &local_tris)
+            let runs = material_runs(mesh, tris);
+            buf.primitive(
+                &positions,
+                normals.as_deref(),
+                uvs.as_deref(),
+                &local_tris,
+                runs,
+            )
         };
         let name = mesh
             .parts
@@ -192,9 +245,11 @@ pub fn write_gltf(w: &mut dyn Write, mesh: &TriangleMesh, binary: bool) -> io::R
             base64_encode(&bin)
         )
     };
+    let extras = scene_extras(mesh, camera, lights, &mut nodes);
     let roots: Vec<String> = (0..nodes.len()).map(|i| i.to_string()).collect();
     let json = format!(
-        r#"{{"asset":{{"version":"2.0","generator":"raykit-io"}},"scene":0,"scenes":[{{"nodes":[{}]}}],"nodes":[{}],"meshes":[{}],"accessors":[{}],"bufferViews":[{}],"buffers":[{{"byteLength":{}{uri}}}]}}"#,
+        r#"{{"asset":{{"version":"2.0","generator":"raykit-io"}}{}"scene":0,"scenes":[{{"nodes":[{}]}}],"nodes":[{}],"meshes":[{}],"accessors":[{}],"bufferViews":[{}],"buffers":[{{"byteLength":{}{uri}}}]}}"#,
+        extras,
         roots.join(","),
         nodes.join(","),
         meshes.join(","),

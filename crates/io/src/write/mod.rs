@@ -3,12 +3,13 @@
 //! through [`write_atomic`](crate::write_atomic).
 
 mod gltf;
+mod gltf_scene;
 mod obj;
 mod off;
 mod ply;
 mod stl;
 
-pub use self::gltf::write_gltf;
+pub use self::gltf::{write_gltf, write_gltf_scene};
 pub use obj::{write_mtl, write_obj};
 pub use off::write_off;
 pub use ply::write_ply;

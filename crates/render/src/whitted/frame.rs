@@ -1,0 +1,233 @@
+//! Rendering a frame with either integrator, with traced or rasterized
+//! primaries (paper 001's hybrid renderer).
+
+use super::options::{IntegratorKind, PrimaryMode, ShadowMode, WhittedOptions};
+use super::samples::sample_position;
+use super::tracer::{ShadowSource, Tracer};
+use super::wavefront::wavefront_pass;
+use crate::env::Environment;
+use crate::image::Image;
+use crate::raster;
+use crate::shadowmap::ShadowMaps;
+use crate::tiles::{tiles, TILE_SIZE};
+use raykit_core::camera::PrimaryRays;
+use raykit_core::glam::Vec3;
+use raykit_core::tri::TestKind;
+use raykit_core::{Accel, Camera, Hit, Light, Ray, TriangleMesh};
+use rayon::prelude::*;
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+/// The scene a frame is rendered from.
+#[derive(Clone, Copy)]
+pub struct WhittedScene<'a> {
+    /// Geometry with materials.
+    pub mesh: &'a TriangleMesh,
+    /// An accel built on `mesh`.
+    pub accel: &'a dyn Accel,
+    /// The ray/triangle test `accel` uses: the rasterizer computes its
+    /// barycentrics with the same test, so rasterized and traced first hits
+    /// agree bit for bit.
+    pub test: TestKind,
+    /// Lights.
+    pub lights: &'a [Light],
+    /// What rays leaving the scene see.
+    pub environment: &'a Environment,
+    /// Shadow maps of `lights`, needed when the options ask for them.
+    pub shadow_maps: Option<&'a ShadowMaps>,
+}
+
+/// Where the time of a frame went and how many rays it traced.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// Camera rays traced through the accel.
+    pub primary_rays: u64,
+    /// Shadow rays traced.
+    pub shadow_rays: u64,
+    /// Reflection and refraction rays traced.
+    pub secondary_rays: u64,
+    /// Seconds spent rasterizing visibility buffers.
+    pub raster_seconds: f64,
+    /// Seconds for the whole frame (rasterization included).
+    pub seconds: f64,
+    /// Paths that ended in the environment (paper 001's state −2).
+    pub environment_hits: u64,
+}
+
+impl FrameStats {
+    /// All rays traced.
+    pub fn rays(&self) -> u64 {
+        self.primary_rays + self.shadow_rays + self.secondary_rays
+    }
+}
+
+/// A rendered frame.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// The image (linear radiance times exposure, and its encoding).
+    pub image: Image,
+    /// First hit of each pixel's first sample, row-major (for AOVs).
+    pub first_hits: Vec<Option<Hit>>,
+    /// Counts and times.
+    pub stats: FrameStats,
+}
+
+/// Error of [`render_whitted`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FrameError {
+    /// Shadow maps were asked for but the scene has none.
+    NoShadowMaps,
+}
+
+impl std::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameError::NoShadowMaps => {
+                write!(
+                    f,
+                    "shadow maps were asked for, but none were built for the scene"
+                )
+            }
+        }
+    }
+}
+
+impl std::error::Error for FrameError {}
+
+/// Render `scene` through `camera` with the Whitted integrator chosen in
+/// `opts`. `progress` is called with a number of pixel samples as they
+/// finish. Sample positions come from [`sample_position`], so the recursive
+/// and wavefront integrators and the traced and rasterized primaries all
+/// see the same camera rays; the result does not depend on the thread count.
+pub fn render_whitted(
+    scene: &WhittedScene,
+    camera: &Camera,
+    opts: &WhittedOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Frame, FrameError> {
+    let start = Instant::now();
+    let shadows = match opts.shadows {
+        ShadowMode::Off => ShadowSource::Off,
+        ShadowMode::Rays => ShadowSource::Rays,
+        ShadowMode::Maps => ShadowSource::Maps(scene.shadow_maps.ok_or(FrameError::NoShadowMaps)?),
+    };
+    let tracer = Tracer::new(
+        scene.mesh,
+        scene.accel,
+        scene.lights,
+        scene.environment,
+        shadows,
+        opts.ambient,
+        opts.max_depth,
+    );
+    let (width, height) = (opts.width, opts.height);
+    let n = width as usize * height as usize;
+    let spp = opts.samples_per_pixel.max(1);
+    let rays = camera.rays(width, height);
+    let mut sum = vec![Vec3::ZERO; n];
+    let mut first_hits = Vec::new();
+    let mut raster_seconds = 0.0;
+    for sample in 0..spp {
+        let ray_of = |x: u32, y: u32| {
+            let (fx, fy) = sample_position(opts.seed, width, spp, x, y, sample);
+            rays.ray(fx, fy)
+        };
+        let primary = match opts.primary {
+            PrimaryMode::Traced => None,
+            PrimaryMode::Rasterized => {
+                let t = Instant::now();
+                let vis =
+                    raster::visibility(scene.mesh, scene.test, camera, width, height, &ray_of);
+                raster_seconds += t.elapsed().as_secs_f64();
+                Some(vis)
+            }
+        };
+        let hits = match opts.integrator {
+            IntegratorKind::Recursive => recursive_pass(
+                &tracer,
+                &rays,
+                opts,
+                sample,
+                primary.as_deref(),
+                &mut sum,
+                progress,
+            ),
+            IntegratorKind::Wavefront => {
+                let hits = wavefront_pass(&tracer, width, height, &ray_of, primary, &mut sum);
+                progress(n as u64);
+                hits
+            }
+        };
+        if sample == 0 {
+            first_hits = hits;
+        }
+    }
+    let scale = opts.exposure / spp as f32;
+    let linear: Vec<Vec3> = sum.into_iter().map(|c| c * scale).collect();
+    let image = Image::from_linear(width, height, linear, opts.encoding);
+    let c = &tracer.counts;
+    let stats = FrameStats {
+        primary_rays: c.primary.load(Ordering::Relaxed),
+        shadow_rays: c.shadow.load(Ordering::Relaxed),
+        secondary_rays: c.secondary.load(Ordering::Relaxed),
+        raster_seconds,
+        seconds: start.elapsed().as_secs_f64(),
+        environment_hits: c.environment.load(Ordering::Relaxed),
+    };
+    Ok(Frame {
+        image,
+        first_hits,
+        stats,
+    })
+}
+
+/// One sample of every pixel, depth-first per path, tile-parallel; adds the
+/// radiance to `sum` and returns the first hits.
+fn recursive_pass(
+    tracer: &Tracer,
+    rays: &PrimaryRays,
+    opts: &WhittedOptions,
+    sample: u32,
+    primary: Option<&[Option<Hit>]>,
+    sum: &mut [Vec3],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Vec<Option<Hit>> {
+    let (width, height) = (opts.width, opts.height);
+    let spp = opts.samples_per_pixel.max(1);
+    let tiles = tiles(width, height, TILE_SIZE);
+    let rendered: Vec<Vec<(Vec3, Option<Hit>)>> = tiles
+        .par_iter()
+        .map(|tile| {
+            let out = tile
+                .coords()
+                .map(|(x, y)| {
+                    let (fx, fy) = sample_position(opts.seed, width, spp, x, y, sample);
+                    let ray: Ray = rays.ray(fx, fy);
+                    let hit = match primary {
+                        Some(p) => p[y as usize * width as usize + x as usize],
+                        None => {
+                            tracer.counts.primary.fetch_add(1, Ordering::Relaxed);
+                            tracer.accel.intersect(&ray)
+                        }
+                    };
+                    let l = match &hit {
+                        Some(h) => tracer.shade_recursive(&ray, h, 1),
+                        None => tracer.miss(&ray),
+                    };
+                    (l, hit)
+                })
+                .collect();
+            progress(tile.pixels());
+            out
+        })
+        .collect();
+    let mut hits = vec![None; width as usize * height as usize];
+    for (tile, pixels) in tiles.iter().zip(rendered) {
+        for ((x, y), (c, h)) in tile.coords().zip(pixels) {
+            let i = y as usize * width as usize + x as usize;
+            sum[i] += c;
+            hits[i] = h;
+        }
+    }
+    hits
+}

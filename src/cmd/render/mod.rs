@@ -1,0 +1,289 @@
+//! `raykit render`: the Whitted ray tracer of papers 000 and 001 — glTF, OBJ
+//! and other scenes, point/spot/directional lights, shadow rays or shadow
+//! maps, mirrors and glass, HDR environments (optionally paper 001's
+//! environment box), traced or rasterized primaries, recursive or wavefront
+//! integration — written to PNG or EXR, with optional AOVs.
+
+pub mod lights_arg;
+mod output;
+pub mod setup;
+
+use crate::cmd::trace::parse_names;
+use crate::measure::{pool, timed};
+use anyhow::{bail, Result};
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use raykit_core::accel::build_accel;
+use raykit_render::aov::AovKind;
+use raykit_render::shadowmap::{ShadowMapOptions, ShadowMaps};
+use raykit_render::whitted::{
+    render_whitted, IntegratorKind, PrimaryMode, ShadowMode, WhittedOptions, WhittedScene,
+    DEFAULT_MAX_DEPTH,
+};
+use raykit_render::Encoding;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+pub use lights_arg::parse_vec3;
+
+/// Shadow test on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ShadowArg {
+    /// Shadow rays: one occlusion query per light and hit.
+    Rays,
+    /// Shadow maps rendered from each light, box-filtered (paper 001).
+    Maps,
+    /// No shadows.
+    Off,
+}
+
+/// First-hit source on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PrimaryArg {
+    /// Trace camera rays.
+    Traced,
+    /// Rasterize a visibility buffer (paper 001's hybrid renderer).
+    Raster,
+}
+
+/// Ray organisation on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorArg {
+    /// Depth-first recursion per camera sample.
+    Recursive,
+    /// Paper 001's stream: stages over ray queues.
+    Wavefront,
+}
+
+impl From<ShadowArg> for ShadowMode {
+    fn from(a: ShadowArg) -> ShadowMode {
+        match a {
+            ShadowArg::Rays => ShadowMode::Rays,
+            ShadowArg::Maps => ShadowMode::Maps,
+            ShadowArg::Off => ShadowMode::Off,
+        }
+    }
+}
+
+impl From<PrimaryArg> for PrimaryMode {
+    fn from(a: PrimaryArg) -> PrimaryMode {
+        match a {
+            PrimaryArg::Traced => PrimaryMode::Traced,
+            PrimaryArg::Raster => PrimaryMode::Rasterized,
+        }
+    }
+}
+
+impl From<IntegratorArg> for IntegratorKind {
+    fn from(a: IntegratorArg) -> IntegratorKind {
+        match a {
+            IntegratorArg::Recursive => IntegratorKind::Recursive,
+            IntegratorArg::Wavefront => IntegratorKind::Wavefront,
+        }
+    }
+}
+
+/// Arguments of `raykit render`.
+#[derive(Args)]
+#[command(
+    after_help = "Examples:\n  raykit render                                   # builtin:whitted (mirror + glass Cornell box) to render.png\n  \
+raykit render --scene examples/cornell-glass.gltf         # a glTF scene with its own camera and lights\n  \
+raykit render --scene dragon.ply.gz --material glass --env ../shared/data/envmaps/courtyard.exr --env-box\n  \
+raykit render --shadows maps --pcf 5 --primary raster --integrator wavefront --out frame.exr --aov depth,normal,id\n  \
+raykit render --scene bunny.obj --light dir:-1,-2,-1 --light spot:0,3,2:0,0,0:25:1,0.8,0.6\n\n\
+Without --eye the scene's own camera is used, or one framing the whole mesh.\n\
+Without --light the scene's lights are used, or one point light above the mesh.\n\
+--depth counts rays per path: 1 is direct light only, 2 adds one reflection/refraction bounce."
+)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    scene: setup::SceneArgs,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 800)]
+    width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 600)]
+    height: u32,
+    /// Samples per pixel (jittered anti-aliasing).
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    /// Longest path in rays (1 = direct light only).
+    #[arg(long, default_value_t = DEFAULT_MAX_DEPTH)]
+    depth: u32,
+    /// Shadow test.
+    #[arg(long, value_enum, default_value_t = ShadowArg::Rays)]
+    shadows: ShadowArg,
+    /// Disable shadows (same as --shadows off).
+    #[arg(long)]
+    no_shadows: bool,
+    /// Shadow-map resolution in texels per side (per cube face for point lights).
+    #[arg(long, default_value_t = ShadowMapOptions::default().resolution)]
+    shadow_map_size: u32,
+    /// Shadow-map box filter (percentage-closer filtering) width in texels; 1 = unfiltered.
+    #[arg(long, default_value_t = ShadowMapOptions::default().pcf)]
+    pcf: u32,
+    /// Shadow-map depth bias, constant part, as a fraction of the scene diagonal
+    /// (default: automatic).
+    #[arg(long)]
+    shadow_bias: Option<f32>,
+    /// Shadow-map depth bias, slope-scaled part, in texels (default: automatic).
+    #[arg(long)]
+    shadow_slope_bias: Option<f32>,
+    /// First-hit source.
+    #[arg(long, value_enum, default_value_t = PrimaryArg::Traced)]
+    primary: PrimaryArg,
+    /// Ray organisation.
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Recursive)]
+    integrator: IntegratorArg,
+    /// Factor on the linear radiance before encoding.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// Ambient radiance, times each surface's diffuse colour.
+    #[arg(long, default_value_t = 0.03)]
+    ambient: f32,
+    /// Also write AOVs of the first hit: any of depth,normal,id (EXR next to
+    /// the output, plus PNG previews).
+    #[arg(long, value_delimiter = ',')]
+    aov: Vec<String>,
+    /// Acceleration structure (`raykit info accels`).
+    #[arg(long, default_value = "bvh2")]
+    accel: String,
+    /// Ray/triangle test (`raykit info tests`).
+    #[arg(long, default_value = "moller")]
+    test: String,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Output image: `.png` (8-bit sRGB) or `.exr` (linear float).
+    #[arg(long, default_value = "render.png")]
+    out: PathBuf,
+    #[command(flatten)]
+    build: crate::build_args::BuildArgs,
+}
+
+/// Render and write the image.
+pub fn run(args: RenderArgs) -> Result<ExitCode> {
+    if args.width == 0 || args.height == 0 || args.width > 16384 || args.height > 16384 {
+        bail!("--width and --height must be between 1 and 16384");
+    }
+    if args.spp == 0 || args.spp > 4096 {
+        bail!("--spp must be between 1 and 4096");
+    }
+    if args.depth == 0 || args.depth > 64 {
+        bail!("--depth must be between 1 and 64");
+    }
+    if !(args.exposure.is_finite() && args.exposure >= 0.0)
+        || !(args.ambient.is_finite() && args.ambient >= 0.0)
+    {
+        bail!("--exposure and --ambient must be finite and ≥ 0");
+    }
+    let aovs: Vec<AovKind> = args
+        .aov
+        .iter()
+        .map(|a| {
+            AovKind::parse(a)
+                .ok_or_else(|| anyhow::anyhow!("unknown --aov '{a}': expected depth, normal or id"))
+        })
+        .collect::<Result<_>>()?;
+    let format = output::Format::of(&args.out)?;
+    let (kind, test) = parse_names(&args.accel, &args.test)?;
+    crate::paths::ensure_not_input(&args.out, &[std::path::Path::new(&args.scene.scene)])?;
+    let pool = pool(args.threads)?;
+    let aspect = args.width as f32 / args.height as f32;
+    let (setup, load_s) = timed(|| setup::setup(&args.scene, aspect));
+    let setup = setup?;
+    let mesh = &setup.scene.mesh;
+    let (accel, build_s) =
+        pool.install(|| timed(|| build_accel(kind, test, mesh, &args.build.options())));
+    let shadows: ShadowMode = if args.no_shadows {
+        ShadowMode::Off
+    } else {
+        args.shadows.into()
+    };
+    let (maps, maps_s) = if shadows == ShadowMode::Maps {
+        let mut o = ShadowMapOptions::for_mesh(mesh);
+        o.resolution = args.shadow_map_size.clamp(16, 16384);
+        o.pcf = args.pcf.clamp(1, 15);
+        let diag = mesh.bounds().diagonal();
+        if let Some(b) = args.shadow_bias {
+            o.bias_constant = b * diag;
+        }
+        if let Some(b) = args.shadow_slope_bias {
+            o.bias_slope = b;
+        }
+        let (m, s) = pool.install(|| timed(|| ShadowMaps::build(mesh, &setup.lights, &o)));
+        (Some(m), s)
+    } else {
+        (None, 0.0)
+    };
+    let opts = WhittedOptions {
+        width: args.width,
+        height: args.height,
+        samples_per_pixel: args.spp,
+        max_depth: args.depth,
+        ambient: raykit_core::Vec3::splat(args.ambient),
+        shadows,
+        primary: args.primary.into(),
+        integrator: args.integrator.into(),
+        exposure: args.exposure,
+        encoding: Encoding::Srgb,
+        ..WhittedOptions::default()
+    };
+    let scene = WhittedScene {
+        mesh,
+        accel: accel.as_ref(),
+        test,
+        lights: &setup.lights,
+        environment: &setup.environment,
+        shadow_maps: maps.as_ref(),
+    };
+    let samples = args.width as u64 * args.height as u64 * args.spp as u64;
+    let bar = ProgressBar::new(samples).with_style(
+        ProgressStyle::with_template("{bar:30} {percent:>3}% {msg} [{elapsed}<{eta}]")
+            .expect("valid template"),
+    );
+    let done = AtomicU64::new(0);
+    let start = std::time::Instant::now();
+    let progress = |n: u64| {
+        let d = done.fetch_add(n, Ordering::Relaxed) + n;
+        bar.set_position(d);
+        let secs = start.elapsed().as_secs_f64().max(1e-9);
+        bar.set_message(format!("{:.2} Msamples/s", d as f64 / secs / 1e6));
+    };
+    let frame = pool.install(|| render_whitted(&scene, &setup.camera, &opts, &progress))?;
+    bar.finish_and_clear();
+    output::write_image(&args.out, format, &frame.image)?;
+    for kind in &aovs {
+        output::write_aov(&args.out, *kind, mesh, &setup.camera, &frame)?;
+    }
+    let st = &frame.stats;
+    eprintln!(
+        "{}: {} triangles, {} lights, env {}; load {:.0} ms, build {:.0} ms ({}, {}){}, render {:.0} ms \
+         ({}×{}, {} spp, depth {}, {:?} shadows, {:?} primaries, {:?}; {:.2} Mrays: {} primary, {} shadow, {} secondary; {:.2} Mrays/s) -> {}",
+        setup.scene.name,
+        mesh.num_triangles(),
+        setup.lights.len(),
+        setup.environment.describe(),
+        load_s * 1e3,
+        build_s * 1e3,
+        kind.name(),
+        test.name(),
+        if maps.is_some() { format!(", shadow maps {:.0} ms", maps_s * 1e3) } else { String::new() },
+        st.seconds * 1e3,
+        args.width,
+        args.height,
+        args.spp,
+        args.depth,
+        shadows,
+        opts.primary,
+        opts.integrator,
+        st.rays() as f64 / 1e6,
+        st.primary_rays,
+        st.shadow_rays,
+        st.secondary_rays,
+        st.rays() as f64 / st.seconds.max(1e-9) / 1e6,
+        args.out.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}

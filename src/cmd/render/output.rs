@@ -1,0 +1,80 @@
+//! Writing `raykit render`'s images: PNG or EXR, and AOV files next to them.
+
+use anyhow::{bail, Result};
+use raykit_core::Camera;
+use raykit_core::TriangleMesh;
+use raykit_render::aov::{AovKind, Aovs};
+use raykit_render::whitted::Frame;
+use raykit_render::Image;
+use std::path::{Path, PathBuf};
+
+/// Output image format, from the file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// 8-bit sRGB PNG.
+    Png,
+    /// Linear float OpenEXR.
+    Exr,
+}
+
+impl Format {
+    /// The format of `path` by its extension.
+    pub fn of(path: &Path) -> Result<Format> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("png") => Ok(Format::Png),
+            Some("exr") => Ok(Format::Exr),
+            _ => bail!("{}: the output must end in .png or .exr", path.display()),
+        }
+    }
+}
+
+/// Write `image` to `path` (atomically).
+pub fn write_image(path: &Path, format: Format, image: &Image) -> Result<()> {
+    match format {
+        Format::Png => raykit_io::write_png(path, image.width, image.height, &image.rgb)?,
+        Format::Exr => {
+            let rgb: Vec<[f32; 3]> = image.linear.iter().map(|c| c.to_array()).collect();
+            raykit_io::write_exr_rgb(path, image.width, image.height, &rgb)?
+        }
+    }
+    Ok(())
+}
+
+/// `out` with `.KIND.EXT` in place of its extension.
+fn sibling(out: &Path, kind: AovKind, ext: &str) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    out.with_file_name(format!("{stem}.{}.{ext}", kind.name()))
+}
+
+/// Write AOV `kind` of `frame` as EXR and a PNG preview next to `out`.
+pub fn write_aov(
+    out: &Path,
+    kind: AovKind,
+    mesh: &TriangleMesh,
+    camera: &Camera,
+    frame: &Frame,
+) -> Result<()> {
+    let (w, h) = (frame.image.width, frame.image.height);
+    let aovs = Aovs::from_hits(mesh, camera, w, h, &frame.first_hits);
+    let channels = aovs.channels(kind);
+    let refs: Vec<(&str, &[f32])> = channels.iter().map(|(n, c)| (*n, c.as_slice())).collect();
+    let exr = sibling(out, kind, "exr");
+    raykit_io::write_exr_channels(&exr, w, h, &refs)?;
+    let png = sibling(out, kind, "png");
+    raykit_io::write_png(&png, w, h, &aovs.preview(kind))?;
+    eprintln!(
+        "{} AOV -> {} and {}",
+        kind.name(),
+        exr.display(),
+        png.display()
+    );
+    Ok(())
+}
