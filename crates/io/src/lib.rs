@@ -46,6 +46,6 @@ pub use rays::{
     RAY_RECORD_SIZE,
 };
 pub use write::{
-    save_mesh, save_mesh_as, write_gltf, write_gltf_scene, write_mesh, write_mtl, write_obj,
-    write_off, write_ply, write_stl,
+    save_mesh, save_mesh_as, write_exr_channels, write_exr_rgb, write_gltf, write_gltf_scene,
+    write_mesh, write_mtl, write_obj, write_off, write_ply, write_stl,
 };

@@ -1,7 +1,10 @@
 //! Mesh writers for every loadable format, so tools can write results (for
-//! example culled meshes) in the format they read. All file output goes
-//! through [`write_atomic`](crate::write_atomic).
+//! example culled meshes) in the format they read, and OpenEXR writers for
+//! float images. All file output goes through
+//! [`write_atomic`](crate::write_atomic) or
+//! [`write_atomic_file`](crate::write_atomic_file).
 
+mod exr;
 mod gltf;
 mod gltf_scene;
 mod obj;
@@ -9,6 +12,7 @@ mod off;
 mod ply;
 mod stl;
 
+pub use self::exr::{write_exr_channels, write_exr_rgb};
 pub use self::gltf::{write_gltf, write_gltf_scene};
 pub use obj::{write_mtl, write_obj};
 pub use off::write_off;
