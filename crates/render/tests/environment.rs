@@ -95,18 +95,24 @@ fn directions(rng: &mut Pcg32, n: usize) -> Vec<Vec3> {
 
 // ----------------------------------------------------------- the shared maps
 
+/// The eight shared maps: `$RAYKIT_SHARED_DATA/envmaps`, or the shared data
+/// folder next to the project. Missing maps fail the tests.
 fn shared_maps() -> Vec<PathBuf> {
-    let dir = std::env::var_os("RAYKIT_ENVMAPS")
+    let root = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/work/shared/data/envmaps"));
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
+    let dir = root.join("envmaps");
     let mut maps: Vec<PathBuf> = std::fs::read_dir(&dir)
         .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
         .unwrap_or_default();
     maps.retain(|p| p.extension().is_some_and(|e| e == "exr"));
     maps.sort();
-    if maps.is_empty() {
-        eprintln!("no shared maps in {}: skipped", dir.display());
-    }
+    assert_eq!(
+        maps.len(),
+        8,
+        "{}: the tests need the 8 shared environment maps (set RAYKIT_SHARED_DATA)",
+        dir.display()
+    );
     maps
 }
 

@@ -25,7 +25,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-pub use lights_arg::parse_vec3;
 
 /// Shadow test on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

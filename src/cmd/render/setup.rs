@@ -135,10 +135,10 @@ pub fn environment(args: &SceneArgs, bounds: &raykit_core::Aabb) -> Result<Envir
     }
     let map = raykit_render::env::EquirectMap::load(std::path::Path::new(&args.env))
         .with_context(|| format!("--env {}", args.env))?
-        .with_rotation(args.env_rotate)
+        .with_rotation_deg(args.env_rotate)
         .with_intensity(args.env_intensity);
     Ok(if args.env_box {
-        Environment::env_box(map, bounds, args.env_box_scale)
+        Environment::env_box(map, *bounds, args.env_box_scale)
     } else {
         Environment::map(map)
     })
