@@ -1,17 +1,27 @@
-//! CPU rasterization of primary visibility (paper 001). Placeholder until
-//! the rasterizer lands: traces the sample rays by brute force.
+//! CPU rasterization of primary visibility, after paper 001's hybrid
+//! renderer: the first hit of every pixel is found by rasterizing the mesh
+//! with a projection matched to the ray camera, and rays are traced only
+//! from there on.
+//!
+//! - [`RasterView`]: the projection, perspective (a camera, a spot light, a
+//!   cube-map face) or orthographic (a directional light).
+//! - [`visibility`] / [`primary_visibility`]: the visibility buffer, per
+//!   pixel the same `Option<Hit>` as tracing the pixel's ray through an
+//!   accelerator, up to ties; [`rasterize`] for any view.
+//!
+//! The rasterizer is conservative: triangle setup computes edge functions of
+//! the projected triangle (homogeneous, so triangles crossing the eye plane
+//! need no clipping) widened by half a pixel, a band of barycentric
+//! tolerance and rounding slack, and for every candidate pixel the ray of
+//! that pixel is intersected with the triangle by the very test and
+//! precomputed data the accelerators use. The depth test on that `t`
+//! therefore keeps exactly the hit the accelerator would report, except at
+//! ties.
 
-use raykit_core::tri::TestKind;
-use raykit_core::{Camera, Hit, Ray, TriangleMesh};
+mod bins;
+mod setup;
+mod view;
+mod visibility;
 
-/// First hit of every sample ray.
-pub fn visibility(
-    _mesh: &TriangleMesh,
-    _test: TestKind,
-    _camera: &Camera,
-    width: u32,
-    height: u32,
-    _sample: &(dyn Fn(u32, u32) -> Ray + Sync),
-) -> Vec<Option<Hit>> {
-    vec![None; width as usize * height as usize]
-}
+pub use view::RasterView;
+pub use visibility::{primary_visibility, rasterize, visibility};
