@@ -139,7 +139,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
     /// Ambient radiance, times each surface's diffuse colour.
-    #[arg(long, default_value_t = 0.03)]
+    #[arg(long, default_value_t = 0.06)]
     ambient: f32,
     /// Also write AOVs of the first hit: any of depth,normal,id (EXR next to
     /// the output, plus PNG previews).

@@ -67,7 +67,7 @@ pub struct WhittedOptions {
 pub const DEFAULT_MAX_DEPTH: u32 = 5;
 
 impl Default for WhittedOptions {
-    /// 800 × 600, 1 sample, depth 5, ambient 0.03, shadow rays, traced
+    /// 800 × 600, 1 sample, depth 5, ambient 0.06, shadow rays, traced
     /// primaries, recursive, exposure 1, sRGB.
     fn default() -> Self {
         WhittedOptions {
@@ -76,7 +76,7 @@ impl Default for WhittedOptions {
             samples_per_pixel: 1,
             seed: 0,
             max_depth: DEFAULT_MAX_DEPTH,
-            ambient: Vec3::splat(0.03),
+            ambient: Vec3::splat(0.06),
             shadows: ShadowMode::Rays,
             primary: PrimaryMode::Traced,
             integrator: IntegratorKind::Recursive,
