@@ -428,7 +428,14 @@ fn rasterized_primaries_give_the_traced_image() {
             let ray = if spp == 1 {
                 ray
             } else {
-                let (fx, fy) = raykit_render::whitted::sample_position(0, w, spp, i as u32 % w, i as u32 / w, 0);
+                let (fx, fy) = raykit_render::whitted::sample_position(
+                    0,
+                    w,
+                    spp,
+                    i as u32 % w,
+                    i as u32 / w,
+                    0,
+                );
                 rays.ray(fx, fy)
             };
             assert!(

@@ -25,7 +25,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-
 /// Shadow test on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ShadowArg {
@@ -172,9 +171,8 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     if args.depth == 0 || args.depth > 64 {
         bail!("--depth must be between 1 and 64");
     }
-    if !(args.exposure.is_finite() && args.exposure >= 0.0)
-        || !(args.ambient.is_finite() && args.ambient >= 0.0)
-    {
+    let non_negative = |x: f32| x.is_finite() && x >= 0.0;
+    if !non_negative(args.exposure) || !non_negative(args.ambient) {
         bail!("--exposure and --ambient must be finite and ≥ 0");
     }
     let aovs: Vec<AovKind> = args
