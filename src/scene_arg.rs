@@ -7,21 +7,26 @@ use std::path::Path;
 /// Prefix that selects a built-in scene.
 pub const BUILTIN: &str = "builtin:";
 
-/// Load the scene named by `spec`: a built-in scene or a mesh file (a file
-/// gives a scene with no lights and no camera; the commands add defaults).
+/// Load the scene named by `spec`: a built-in scene or a mesh file. A glTF
+/// file brings its own lights and camera (other formats give none; the
+/// commands add defaults). Load warnings are printed to stderr as
+/// `warning: FILE: message`.
 pub fn load(spec: &str) -> Result<Scene> {
     if let Some(rest) = spec.strip_prefix(BUILTIN) {
         return raykit_scene::builtin(rest).with_context(|| format!("scene '{spec}'"));
     }
     let path = Path::new(spec);
-    let mesh = raykit_io::load_mesh(path)?;
+    let loaded = raykit_io::load(path)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
     Ok(Scene {
         name: path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|| spec.to_string()),
-        mesh,
-        lights: Vec::new(),
-        camera: None,
+        mesh: loaded.mesh,
+        lights: loaded.lights,
+        camera: loaded.camera,
     })
 }

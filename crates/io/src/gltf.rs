@@ -6,27 +6,45 @@
 //! normals. Every node with a mesh becomes a [`Part`] (`node: Some(index)`).
 //! Primitives of mode TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN are loaded;
 //! others are skipped with a warning. Materials take the base colour factor,
-//! metallic/roughness, emission, transmission, IOR and the base-colour
-//! texture URI (embedded images have no URI and give `None`).
+//! metallic/roughness, emission (times `KHR_materials_emissive_strength`),
+//! transmission, IOR, the base-colour texture URI in `diffuse_texture`
+//! (embedded images have no URI and give `None`) and the decoded image in
+//! `base_texture` ([`crate::gltf_image`]). Cameras and `KHR_lights_punctual`
+//! lights on the walked nodes are collected ([`crate::gltf_scene`]), and
+//! unsupported features are named in warnings ([`crate::gltf_support`]).
 
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::gltf_accessor::{read_floats, read_indices};
 use crate::gltf_glb::{is_glb, split_glb};
-use crate::uri::{base64_decode, percent_decode};
+use crate::gltf_image::ImageCache;
+use crate::gltf_scene::{check_scene_indices, SceneCollector};
+use crate::gltf_support::{check_required, unsupported_warnings};
+use crate::uri::{data_uri_payload, percent_decode};
 use crate::validate::finish;
 use ::gltf::mesh::Mode;
 use ::gltf::{Document, Semantic};
 use raykit_core::glam::{Mat3, Mat4};
-use raykit_core::{Material, Part, TriangleMesh, Vec2, Vec3};
+use raykit_core::{Camera, Light, Material, Part, Texture, TriangleMesh, Vec2, Vec3};
 use std::borrow::Cow;
 use std::path::Path;
+use std::sync::Arc;
 
-/// Parse the glTF or GLB file `data` read from `path`: mesh, warnings, and
-/// whether it was GLB.
-pub(crate) fn parse_gltf(
-    path: &Path,
-    data: &[u8],
-) -> Result<(TriangleMesh, Vec<String>, bool), LoadError> {
+/// What a glTF file gives: geometry, lights, camera and warnings.
+pub(crate) struct GltfScene {
+    /// All mesh instances in world space.
+    pub mesh: TriangleMesh,
+    /// Lights of the walked nodes, in traversal order.
+    pub lights: Vec<Light>,
+    /// The first perspective camera.
+    pub camera: Option<Camera>,
+    /// Things skipped or approximated.
+    pub warnings: Vec<String>,
+    /// Whether the file was GLB.
+    pub glb: bool,
+}
+
+/// Parse the glTF or GLB file `data` read from `path`.
+pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadError> {
     let glb = is_glb(data);
     let (json, bin, mut warnings) = if glb {
         let (g, w) = split_glb(path, data)?;
@@ -35,6 +53,7 @@ pub(crate) fn parse_gltf(
         (data, None, Vec::new())
     };
     let doc = parse_document(path, json, glb)?;
+    warnings.extend(unsupported_warnings(doc.as_json()));
     let buffers = load_buffers(path, &doc, bin)?;
     let mut b = Builder {
         path,
@@ -47,21 +66,33 @@ pub(crate) fn parse_gltf(
         all_normals: true,
         all_uvs: true,
         material_of: vec![None; doc.materials().len() + 1],
+        images: ImageCache::new(doc.images().len()),
+        scene: SceneCollector::default(),
         warnings: &mut warnings,
     };
     b.walk()?;
-    let mesh = b.finish();
+    let (mesh, scene) = b.finish();
+    warnings.extend(scene.warnings());
     let mesh = finish(path, mesh, Location::Json("scene".into()))?;
-    Ok((mesh, warnings, glb))
+    Ok(GltfScene {
+        mesh,
+        lights: scene.lights,
+        camera: scene.camera,
+        warnings,
+        glb,
+    })
 }
 
 /// Deserialize and validate the JSON. The `gltf` crate's validation indexes
 /// the POSITION accessor without a bounds check, so that index is checked
-/// first; any other panic inside the crate's validation is turned into an
-/// error as a last line of defence.
+/// first, as are unsupported required extensions and camera and light
+/// indices (for clearer messages); any other panic inside the crate's
+/// validation is turned into an error as a last line of defence.
 fn parse_document(path: &Path, json: &[u8], glb: bool) -> Result<Document, LoadError> {
     let root = ::gltf::json::Root::from_slice(json)
         .map_err(|e| json_error(path, ::gltf::Error::Deserialize(e), glb))?;
+    check_required(path, &root)?;
+    check_scene_indices(path, &root)?;
     let positions = ::gltf::json::validation::Checked::Valid(Semantic::Positions);
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
@@ -153,18 +184,14 @@ fn load_buffers<'a>(
                 )
             })?),
             ::gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                let (head, payload) = uri.split_once(',').unwrap_or((uri, ""));
-                if head.ends_with(";base64") {
-                    Cow::Owned(base64_decode(payload.as_bytes()).map_err(|at| {
-                        LoadError::at_json(
-                            path,
-                            format!("buffers[{i}].uri"),
-                            format!("invalid base64 at character {} of the data", at),
-                        )
-                    })?)
-                } else {
-                    Cow::Owned(percent_decode(payload).into_bytes())
-                }
+                let payload = data_uri_payload(uri).unwrap_or(Ok(Vec::new()));
+                Cow::Owned(payload.map_err(|at| {
+                    LoadError::at_json(
+                        path,
+                        format!("buffers[{i}].uri"),
+                        format!("invalid base64 at character {} of the data", at),
+                    )
+                })?)
             }
             ::gltf::buffer::Source::Uri(uri) => {
                 let file = dir.join(percent_decode(uri));
@@ -206,6 +233,10 @@ struct Builder<'a, 'b> {
     all_uvs: bool,
     /// Our material index per glTF material (last entry: the default material).
     material_of: Vec<Option<u32>>,
+    /// Decoded base-colour images.
+    images: ImageCache,
+    /// Lights and camera met on the walk.
+    scene: SceneCollector,
     warnings: &'a mut Vec<String>,
 }
 
@@ -240,6 +271,7 @@ impl Builder<'_, '_> {
                 ));
             }
             let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            self.scene.visit(doc.as_json(), node.index(), &world);
             if let Some(mesh) = node.mesh() {
                 self.add_instance(&node, &mesh, &world)?;
             }
@@ -396,25 +428,46 @@ impl Builder<'_, '_> {
         let i = self.mesh.materials.len() as u32;
         let mat = match m.index() {
             None => Material::default(),
-            Some(k) => convert_material(self.doc, m, k),
+            Some(k) => {
+                let texture = self.base_texture(m);
+                convert_material(self.doc, m, k, texture)
+            }
         };
         self.mesh.materials.push(mat);
         self.material_of[slot] = Some(i);
         i
     }
 
-    fn finish(mut self) -> TriangleMesh {
+    /// The decoded base-colour texture of `m`, if it has one using texture
+    /// coordinate set 0 and its image can be read.
+    fn base_texture(&mut self, m: &::gltf::Material<'_>) -> Option<Arc<Texture>> {
+        let info = m.pbr_metallic_roughness().base_color_texture()?;
+        if info.tex_coord() != 0 {
+            return None; // Named in the unsupported-feature warnings.
+        }
+        let json = self.doc.as_json();
+        let image = json.textures.get(info.texture().index())?.source.value();
+        self.images
+            .get(self.path, json, self.buffers, image, self.warnings)
+    }
+
+    fn finish(mut self) -> (TriangleMesh, SceneCollector) {
         if self.all_normals && !self.mesh.positions.is_empty() {
             self.mesh.normals = Some(self.normals);
         }
         if self.all_uvs && !self.mesh.positions.is_empty() {
             self.mesh.uvs = Some(self.uvs);
         }
-        self.mesh
+        (self.mesh, self.scene)
     }
 }
 
-fn convert_material(doc: &Document, m: &::gltf::Material<'_>, index: usize) -> Material {
+fn convert_material(
+    doc: &Document,
+    m: &::gltf::Material<'_>,
+    index: usize,
+    base_texture: Option<Arc<Texture>>,
+) -> Material {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
@@ -422,6 +475,12 @@ fn convert_material(doc: &Document, m: &::gltf::Material<'_>, index: usize) -> M
     let lerp = |c: f32| 0.04 + (c - 0.04) * metallic;
     // Blinn-Phong exponent with the same lobe width as GGX roughness.
     let a2 = (rough * rough * rough * rough).max(1e-4);
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    let strength = if strength.is_finite() {
+        strength.max(0.0)
+    } else {
+        1.0
+    };
     let json = doc.as_json();
     let texture = pbr
         .base_color_texture()
@@ -442,8 +501,8 @@ fn convert_material(doc: &Document, m: &::gltf::Material<'_>, index: usize) -> M
             .map(|t| t.transmission_factor())
             .unwrap_or(0.0),
         ior: m.ior().unwrap_or(1.5),
-        emission: m.emissive_factor(),
+        emission: m.emissive_factor().map(|e| e * strength),
         diffuse_texture: texture,
-        base_texture: None,
+        base_texture,
     }
 }

@@ -3,7 +3,12 @@
 //! * Meshes: [`load_mesh`] (or [`load`], which also returns warnings and the
 //!   detected encoding) reads OBJ (+MTL), PLY (ASCII and binary, also `.ply.gz`),
 //!   STL (ASCII and binary), glTF/GLB and OFF into a validated
-//!   [`TriangleMesh`](raykit_core::TriangleMesh); [`save_mesh`] writes OBJ, PLY,
+//!   [`TriangleMesh`](raykit_core::TriangleMesh), with decoded base-colour
+//!   textures (glTF images, MTL `map_Kd`); a glTF file also gives its
+//!   `KHR_lights_punctual` lights and first perspective camera
+//!   ([`LoadedMesh::lights`], [`LoadedMesh::camera`]), and features it uses
+//!   that are not supported are named in [`LoadedMesh::warnings`];
+//!   [`save_mesh`] writes OBJ, PLY,
 //!   STL, OFF, glTF and GLB. Every loader error is a [`LoadError`] naming the
 //!   file and the line, byte or JSON element where the problem is.
 //! * Ray, hit and occlusion files in the project's fixed binary layouts
@@ -20,6 +25,9 @@ mod format;
 mod gltf;
 mod gltf_accessor;
 mod gltf_glb;
+mod gltf_image;
+mod gltf_scene;
+mod gltf_support;
 mod hashing;
 mod input;
 mod load;
@@ -32,6 +40,7 @@ mod png;
 mod rays;
 mod stl;
 mod text;
+mod texture_image;
 mod uri;
 mod validate;
 mod write;

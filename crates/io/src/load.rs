@@ -3,7 +3,7 @@
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::format::{is_gzip_path, MeshFormat};
 use crate::input::{gunzip, read_file};
-use raykit_core::TriangleMesh;
+use raykit_core::{Camera, Light, TriangleMesh};
 use std::path::Path;
 
 /// A loaded mesh with what the loader noticed along the way.
@@ -19,6 +19,12 @@ pub struct LoadedMesh {
     pub format: MeshFormat,
     /// True when the file was gzip-compressed.
     pub gzip: bool,
+    /// Lights the file defines (glTF `KHR_lights_punctual`); empty for other
+    /// formats.
+    pub lights: Vec<Light>,
+    /// The camera the file defines (glTF: the first perspective camera);
+    /// `None` for other formats.
+    pub camera: Option<Camera>,
 }
 
 /// Load the triangle mesh in `path`, choosing the format by the extension
@@ -64,6 +70,8 @@ fn format_of(path: &Path) -> Result<MeshFormat, LoadError> {
 }
 
 fn parse_plain(path: &Path, data: &[u8], format: MeshFormat) -> Result<LoadedMesh, LoadError> {
+    let mut lights = Vec::new();
+    let mut camera = None;
     let (mesh, warnings, format) = match format {
         MeshFormat::Obj => {
             let (m, w) = crate::obj::parse_obj(path, data)?;
@@ -82,13 +90,15 @@ fn parse_plain(path: &Path, data: &[u8], format: MeshFormat) -> Result<LoadedMes
             (m, w, MeshFormat::Off)
         }
         MeshFormat::Gltf | MeshFormat::Glb => {
-            let (m, w, glb) = crate::gltf::parse_gltf(path, data)?;
-            let f = if glb {
+            let g = crate::gltf::parse_gltf(path, data)?;
+            let f = if g.glb {
                 MeshFormat::Glb
             } else {
                 MeshFormat::Gltf
             };
-            (m, w, f)
+            lights = g.lights;
+            camera = g.camera;
+            (g.mesh, g.warnings, f)
         }
     };
     Ok(LoadedMesh {
@@ -96,5 +106,7 @@ fn parse_plain(path: &Path, data: &[u8], format: MeshFormat) -> Result<LoadedMes
         warnings,
         format,
         gzip: false,
+        lights,
+        camera,
     })
 }

@@ -7,14 +7,30 @@
 //! reflective illumination models 3 to 7 and 0 otherwise. `map_Kd` options
 //! (`-o`, `-s`, `-bm`, …) are skipped and the texture path is resolved against
 //! the MTL file's folder.
+//!
+//! The `map_Kd` image (PNG or JPEG) is decoded into `base_texture`, once per
+//! file name and shared between the materials naming it; an image that
+//! cannot be read or decoded gives a warning. OBJ texture coordinates have
+//! `v = 0` at the bottom of the image while [`raykit_core::Texture`] puts
+//! `v = 0` in its first row, so the decoded rows are stored bottom first:
+//! the file's texture coordinates are kept as they are and sample the image
+//! the right way up.
 
 use crate::error::{show, LoadError};
 use crate::text::{parse_f32, parse_i64, Lines, Tokens};
-use raykit_core::Material;
+use crate::texture_image::{decode_texture, Rows};
+use raykit_core::{Material, Texture};
+use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
 
-/// Parse the MTL library `data` read from `path`.
-pub(crate) fn parse_mtl(path: &Path, data: &[u8]) -> Result<Vec<Material>, LoadError> {
+/// Parse the MTL library `data` read from `path`: materials and warnings.
+pub(crate) fn parse_mtl(
+    path: &Path,
+    data: &[u8],
+) -> Result<(Vec<Material>, Vec<String>), LoadError> {
+    let mut warnings = Vec::new();
+    let mut textures: HashMap<String, Option<Arc<Texture>>> = HashMap::new();
     let mut out: Vec<Material> = Vec::new();
     let mut illum: i64 = 2;
     let dir = path.parent().unwrap_or(Path::new(""));
@@ -109,14 +125,36 @@ pub(crate) fn parse_mtl(path: &Path, data: &[u8]) -> Result<Vec<Material>, LoadE
                     ));
                 }
                 let file = String::from_utf8_lossy(file).into_owned();
-                m.diffuse_texture = Some(dir.join(file).to_string_lossy().into_owned());
+                let full = dir.join(file).to_string_lossy().into_owned();
+                m.base_texture = textures
+                    .entry(full.clone())
+                    .or_insert_with(|| match load_texture(&full) {
+                        Ok(t) => Some(Arc::new(t)),
+                        Err(why) => {
+                            warnings.push(format!(
+                                "{}:{line}: map_Kd texture not loaded: {why}",
+                                path.display()
+                            ));
+                            None
+                        }
+                    })
+                    .clone();
+                m.diffuse_texture = Some(full);
             }
         }
     }
     if let Some(m) = out.last_mut() {
         apply_illum(m, illum);
     }
-    Ok(out)
+    Ok((out, warnings))
+}
+
+/// Read and decode the texture file `file` (rows bottom first, see the
+/// module documentation).
+fn load_texture(file: &str) -> Result<Texture, String> {
+    let bytes = std::fs::read(file).map_err(|e| format!("cannot read {file}: {e}"))?;
+    decode_texture(file, &bytes, Rows::BottomFirst)
+        .map_err(|e| format!("cannot decode {file}: {e}"))
 }
 
 fn apply_illum(m: &mut Material, illum: i64) {
@@ -170,7 +208,14 @@ mod tests {
         let src = b"# lib\nnewmtl red\nKd 1 0 0\nKs 0.5 0.5 0.5\nNs 10\nNi 1.33\nd 0.25\n\
 illum 3\nKe 0 0 2\nmap_Kd -o 0.1 0.2 -bm 1.0 tex/red wood.png\n\
 newmtl gray\nKd 0.3\nTr 0.5\n";
-        let m = parse_mtl(Path::new("dir/a.mtl"), src).unwrap();
+        let (m, w) = parse_mtl(Path::new("dir/a.mtl"), src).unwrap();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with(
+                "dir/a.mtl:10: map_Kd texture not loaded: cannot read dir/tex/red wood.png"
+            ),
+            "{w:?}"
+        );
         assert_eq!(m.len(), 2);
         assert_eq!(m[0].name, "red");
         assert_eq!(m[0].diffuse, [1.0, 0.0, 0.0]);

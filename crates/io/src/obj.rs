@@ -61,6 +61,8 @@ struct ObjState<'p> {
     part_pending: bool,
     used_parts: bool,
     tri_part: Vec<u32>,
+    /// Warnings from the MTL libraries.
+    warnings: Vec<String>,
 }
 
 impl<'p> ObjState<'p> {
@@ -90,6 +92,7 @@ impl<'p> ObjState<'p> {
             part_pending: false,
             used_parts: false,
             tri_part: Vec::new(),
+            warnings: Vec::new(),
         }
     }
 
@@ -328,7 +331,9 @@ impl<'p> ObjState<'p> {
             let Ok(bytes) = std::fs::read(&file) else {
                 continue;
             };
-            for m in parse_mtl(&file, &bytes)? {
+            let (materials, warnings) = parse_mtl(&file, &bytes)?;
+            self.warnings.extend(warnings);
+            for m in materials {
                 match self.mat_index.get(&m.name) {
                     Some(&i) if self.placeholder[i as usize] => {
                         self.placeholder[i as usize] = false;
@@ -348,7 +353,7 @@ impl<'p> ObjState<'p> {
     }
 
     fn finish(mut self, last_line: usize) -> Result<(TriangleMesh, Vec<String>), LoadError> {
-        let mut warnings = Vec::new();
+        let mut warnings = std::mem::take(&mut self.warnings);
         let keep_uv = self.any_vt && self.all_vt;
         let keep_n = self.any_vn && self.all_vn;
         if self.any_vt && !keep_uv {

@@ -36,6 +36,22 @@ pub(crate) fn base64_decode(s: &[u8]) -> Result<Vec<u8>, usize> {
     Ok(out)
 }
 
+/// The payload of a `data:` URI: base64-decoded when the header ends in
+/// `;base64`, percent-decoded otherwise. `None` when `uri` is not a data URI;
+/// `Some(Err(at))` gives the offset of the first invalid base64 character
+/// within the payload.
+pub(crate) fn data_uri_payload(uri: &str) -> Option<Result<Vec<u8>, usize>> {
+    if !uri.starts_with("data:") {
+        return None;
+    }
+    let (head, payload) = uri.split_once(',').unwrap_or((uri, ""));
+    Some(if head.ends_with(";base64") {
+        base64_decode(payload.as_bytes())
+    } else {
+        Ok(percent_decode(payload).into_bytes())
+    })
+}
+
 /// Encode as standard base64 with padding.
 pub(crate) fn base64_encode(data: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -91,6 +107,20 @@ mod tests {
         assert_eq!(base64_decode(b"TWE").unwrap(), b"Ma");
         assert_eq!(base64_decode(b"TW!u"), Err(2));
         assert_eq!(base64_decode(b"TW=u"), Err(3));
+    }
+
+    #[test]
+    fn data_uris() {
+        assert_eq!(data_uri_payload("a.bin"), None);
+        assert_eq!(
+            data_uri_payload("data:application/octet-stream;base64,TWFu"),
+            Some(Ok(b"Man".to_vec()))
+        );
+        assert_eq!(
+            data_uri_payload("data:text/plain,a%20b"),
+            Some(Ok(b"a b".to_vec()))
+        );
+        assert_eq!(data_uri_payload("data:x;base64,TW!u"), Some(Err(2)));
     }
 
     #[test]

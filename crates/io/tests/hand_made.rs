@@ -74,10 +74,14 @@ fn gltf_node_transforms_match_hand_computation() {
         ]
     );
     assert_eq!(m.tri_part, vec![0, 1, 1, 2]);
-    // The LINES primitive is skipped with a warning naming it.
-    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
-    assert!(loaded.warnings[0].contains("meshes[1].primitives[1]"));
-    assert!(loaded.warnings[0].contains("Lines"));
+    // The LINES primitive is skipped with a warning naming it, and the
+    // texture image (which is not there) with one naming the image.
+    assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
+    assert!(loaded.warnings[0].contains("images[0] (uri \"checker.png\")"));
+    assert!(loaded.warnings[0].contains("checker.png"));
+    assert!(loaded.warnings[1].contains("meshes[1].primitives[1]"));
+    assert!(loaded.warnings[1].contains("Lines"));
+    assert!(m.materials[0].base_texture.is_none());
     // Normals are dropped because the strip has none.
     assert!(m.normals.is_none());
     // Materials: the tinted one, then the default for the strip.
