@@ -487,7 +487,7 @@ fn convert_material(
         .and_then(|info| json.textures.get(info.texture().index()))
         .and_then(|t| json.images.get(t.source.value()))
         .and_then(|img| img.uri.clone());
-    Material {
+    let mut out = Material {
         name: m
             .name()
             .map(str::to_string)
@@ -504,5 +504,54 @@ fn convert_material(
         emission: m.emissive_factor().map(|e| e * strength),
         diffuse_texture: texture,
         base_texture,
+    };
+    apply_phong_extras(&mut out, m);
+    out
+}
+
+/// Name of the material `extras` member in which raykit keeps its exact
+/// Phong parameters, so that its own glTF output reads back unchanged.
+pub(crate) const PHONG_EXTRAS: &str = "raykit_phong";
+
+/// Override the metallic-roughness conversion with the exact Phong
+/// parameters `extras.raykit_phong` holds (written by raykit's glTF writer):
+/// `diffuse` and `specular` as 3 numbers, `shininess` and `reflectivity`.
+/// Missing or malformed members keep the converted values.
+fn apply_phong_extras(out: &mut Material, m: &::gltf::Material<'_>) {
+    let Some(raw) = m.extras() else {
+        return;
+    };
+    let Ok(v) = ::gltf::json::deserialize::from_str::<::gltf::json::Value>(raw.get()) else {
+        return;
+    };
+    let Some(p) = v.get(PHONG_EXTRAS) else {
+        return;
+    };
+    let num = |k: &str| {
+        p.get(k)
+            .and_then(|x| x.as_f64())
+            .map(|x| x as f32)
+            .filter(|x| x.is_finite())
+    };
+    let rgb = |k: &str| -> Option<[f32; 3]> {
+        let a = p.get(k)?.as_array()?;
+        let c: Vec<f32> = a
+            .iter()
+            .filter_map(|x| x.as_f64())
+            .map(|x| x as f32)
+            .collect();
+        (c.len() == 3 && c.iter().all(|x| x.is_finite())).then(|| [c[0], c[1], c[2]])
+    };
+    if let Some(c) = rgb("diffuse") {
+        out.diffuse = c;
+    }
+    if let Some(c) = rgb("specular") {
+        out.specular = c;
+    }
+    if let Some(x) = num("shininess") {
+        out.shininess = x.clamp(0.0, 1e4);
+    }
+    if let Some(x) = num("reflectivity") {
+        out.reflectivity = x.clamp(0.0, 1.0);
     }
 }

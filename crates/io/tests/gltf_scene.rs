@@ -749,3 +749,117 @@ fn mtl_map_kd_samples_the_right_texel_with_obj_coordinates() {
     let again = parse_mesh(&p, obj.as_bytes()).unwrap();
     assert_eq!(again.mesh.materials[0].base_texture, m[0].base_texture);
 }
+
+/// A scene written by `write_gltf_scene` reads back with the same
+/// materials, camera and lights (of every kind), triangle for triangle.
+#[test]
+fn written_scene_reads_back_with_materials_camera_and_lights() {
+    use raykit_core::{Camera, Light, Material, PointLight, TriangleMesh, Vec3};
+    let v = Vec3::new;
+    let mut mesh = TriangleMesh {
+        positions: vec![v(0., 0., 0.), v(1., 0., 0.), v(0., 1., 0.), v(1., 1., 0.5)],
+        indices: vec![[0, 1, 2], [1, 3, 2], [0, 2, 3]],
+        ..TriangleMesh::default()
+    };
+    mesh.materials = vec![
+        Material {
+            name: "mirror".into(),
+            diffuse: [0.0; 3],
+            specular: [0.9, 0.8, 0.7],
+            shininess: 300.0,
+            reflectivity: 1.0,
+            ..Material::default()
+        },
+        Material {
+            name: "glass".into(),
+            diffuse: [1.0; 3],
+            transmission: 1.0,
+            ior: 1.33,
+            emission: [0.1, 0.2, 0.3],
+            ..Material::default()
+        },
+    ];
+    mesh.tri_material = vec![0, 1, 0];
+    let camera = Camera {
+        eye: v(3.0, 2.0, 5.0),
+        target: v(0.5, 0.4, 0.0),
+        up: Vec3::Y,
+        vfov_deg: 37.0,
+    };
+    let lights = vec![
+        Light::from(PointLight::new(v(1.0, 4.0, 2.0), v(20.0, 18.0, 16.0))),
+        Light::Spot {
+            position: v(-2.0, 3.0, 1.0),
+            direction: v(0.5, -1.0, -0.2).normalize(),
+            intensity: v(5.0, 5.0, 4.0),
+            cos_inner: 0.3f32.cos(),
+            cos_outer: 0.5f32.cos(),
+        },
+        Light::Directional {
+            direction: v(-0.3, -1.0, 0.4).normalize(),
+            irradiance: v(0.7, 0.6, 0.5),
+        },
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["s.gltf", "s.glb"] {
+        let path = dir.path().join(name);
+        raykit_io::write_atomic(&path, |w| {
+            raykit_io::write_gltf_scene(w, &mesh, Some(&camera), &lights, name.ends_with(".glb"))
+        })
+        .unwrap();
+        let back = raykit_io::load(&path).unwrap();
+        assert!(back.warnings.is_empty(), "{:?}", back.warnings);
+        // One primitive per material run: the loader copies the shared
+        // vertices per primitive, so compare corners, not indices.
+        assert_eq!(back.mesh.num_triangles(), 3);
+        for t in 0..3 {
+            assert_eq!(
+                back.mesh.triangle(t),
+                mesh.triangle(t),
+                "{name}: triangle {t}"
+            );
+            let (a, b) = (
+                &mesh.materials[mesh.tri_material[t] as usize],
+                &back.mesh.materials[back.mesh.material_of(t) as usize],
+            );
+            assert_eq!(
+                (a.diffuse, a.specular, a.shininess, a.reflectivity),
+                (b.diffuse, b.specular, b.shininess, b.reflectivity),
+                "{name}"
+            );
+            assert_eq!(
+                (a.transmission, a.ior, a.emission),
+                (b.transmission, b.ior, b.emission),
+                "{name}"
+            );
+        }
+        let c = back.camera.expect("a camera");
+        assert!((c.eye - camera.eye).length() < 1e-5);
+        let (f0, f1) = (
+            (camera.target - camera.eye).normalize(),
+            (c.target - c.eye).normalize(),
+        );
+        assert!((f0 - f1).length() < 1e-5, "{f0} vs {f1}");
+        assert!(c.up.normalize().dot(Vec3::Y) > 0.9 && (c.vfov_deg - 37.0).abs() < 1e-3);
+        assert_eq!(back.lights.len(), 3);
+        for (a, b) in lights.iter().zip(&back.lights) {
+            assert_eq!(a.kind_name(), b.kind_name());
+            // Same light everywhere: compare what it gives a few points.
+            for p in [v(0.0, 0.0, 0.0), v(0.5, 0.2, -0.3), v(-1.0, 1.0, 1.0)] {
+                let (x, y) = (a.toward(p), b.toward(p));
+                assert!(
+                    (x.to_light - y.to_light).length() < 1e-5,
+                    "{name} {}",
+                    a.kind_name()
+                );
+                assert!(
+                    (x.irradiance - y.irradiance).length() < 1e-4 * (1.0 + x.irradiance.length()),
+                    "{name} {}: {} vs {}",
+                    a.kind_name(),
+                    x.irradiance,
+                    y.irradiance
+                );
+            }
+        }
+    }
+}

@@ -7,7 +7,10 @@
 //! specular colour by the reflectivity (a mirror's base colour is its
 //! reflectance), the metallic factor is the reflectivity, and the roughness
 //! gives a GGX lobe as wide as the Phong exponent's (`s = 2/r⁴ − 2`).
-//! Light colours are written as unit-maximum colour times intensity.
+//! Light colours are written as unit-maximum colour times intensity. The
+//! exact Phong colours, exponent and reflectivity also go into the
+//! material's `extras.raykit_phong`, which raykit's loader prefers, so a
+//! scene survives the round trip unchanged; other viewers ignore it.
 
 use super::gltf::json_string;
 use raykit_core::glam::{Mat3, Quat};
@@ -108,8 +111,14 @@ fn material(m: &Material, used: &mut Vec<&'static str>) -> String {
     } else {
         format!(r#","extensions":{{{}}}"#, ext.join(","))
     };
+    let phong = format!(
+        r#","extras":{{"raykit_phong":{{"diffuse":{},"specular":{},"shininess":{},"reflectivity":{r}}}}}"#,
+        arr(m.diffuse),
+        arr(m.specular),
+        m.shininess
+    );
     format!(
-        r#"{{"name":{},"pbrMetallicRoughness":{{"baseColorFactor":{},"metallicFactor":{r},"roughnessFactor":{roughness}}},"emissiveFactor":{}{ext}}}"#,
+        r#"{{"name":{},"pbrMetallicRoughness":{{"baseColorFactor":{},"metallicFactor":{r},"roughnessFactor":{roughness}}},"emissiveFactor":{}{ext}{phong}}}"#,
         json_string(&m.name),
         arr([base[0], base[1], base[2], 1.0]),
         arr(emissive)
