@@ -227,16 +227,18 @@ fn speed_against_traced_primaries() {
             None,
         ));
     }
-    for (name, mesh, camera) in scenes {
-        let (w, h) = (1280u32, 720u32);
+    for ((name, mesh, camera), (w, h)) in scenes
+        .iter()
+        .flat_map(|s| [(s, (512u32, 512u32)), (s, (1280, 720))])
+    {
         let camera =
             camera.unwrap_or_else(|| Camera::fit(&mesh.bounds(), 40.0, w as f32 / h as f32));
         let test = TestKind::Moller;
         let (accel, build_ms) =
-            time(|| build_accel(AccelKind::Bvh2, test, &mesh, &BuildOptions::default()));
+            time(|| build_accel(AccelKind::Bvh2, test, mesh, &BuildOptions::default()));
         let rays = camera.rays(w, h);
         for _ in 0..2 {
-            let (raster, raster_ms) = time(|| primary_visibility(&mesh, test, &camera, w, h));
+            let (raster, raster_ms) = time(|| primary_visibility(mesh, test, &camera, w, h));
             let (ray_list, gen_ms) = time(|| {
                 (0..h)
                     .flat_map(|y| (0..w).map(move |x| (x, y)))

@@ -346,3 +346,44 @@ fn degenerate_inputs_do_not_panic() {
         }
     }
 }
+
+/// Build times of paper 001's shadow maps (the Cornell box's point light,
+/// a directional light on the dragon) at the default resolution and at
+/// 2048; run with `cargo test --release -p raykit-render --test shadowmap
+/// -- --ignored --nocapture`. Prints, asserts nothing about time.
+#[test]
+#[ignore]
+fn build_times() {
+    let cornell = raykit_scene::builtin("cornell").unwrap();
+    let mut cases = vec![("cornell point", cornell.mesh, cornell.lights[0])];
+    let dragon = std::path::Path::new("/work/shared/data/meshes/dragon_vrip_res2.ply.gz");
+    if dragon.exists() {
+        let sun = Light::Directional {
+            direction: Vec3::new(-0.4, -1.0, -0.3).normalize(),
+            irradiance: Vec3::ONE,
+        };
+        cases.push((
+            "dragon directional",
+            raykit_io::load_mesh(dragon).unwrap(),
+            sun,
+        ));
+    }
+    for (name, mesh, light) in &cases {
+        for res in [ShadowMapOptions::default().resolution, 2048] {
+            let opts = ShadowMapOptions {
+                resolution: res,
+                ..ShadowMapOptions::for_mesh(mesh)
+            };
+            for _ in 0..3 {
+                let start = std::time::Instant::now();
+                let maps = ShadowMaps::build(mesh, &[*light], &opts);
+                eprintln!(
+                    "{name}: {} tris, {res}²: build {:.1} ms, {:.1} MiB",
+                    mesh.num_triangles(),
+                    start.elapsed().as_secs_f64() * 1e3,
+                    maps.memory_bytes() as f64 / (1 << 20) as f64
+                );
+            }
+        }
+    }
+}

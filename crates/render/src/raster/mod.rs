@@ -9,17 +9,22 @@
 //!   pixel the same `Option<Hit>` as tracing the pixel's ray through an
 //!   accelerator, up to ties; [`rasterize`] for any view.
 //!
-//! The rasterizer is conservative: triangle setup computes edge functions of
-//! the projected triangle (homogeneous, so triangles crossing the eye plane
-//! need no clipping) widened by half a pixel, a band of barycentric
-//! tolerance and rounding slack, and for every candidate pixel the ray of
-//! that pixel is intersected with the triangle by the very test and
-//! precomputed data the accelerators use. The depth test on that `t`
-//! therefore keeps exactly the hit the accelerator would report, except at
-//! ties.
+//! The rasterizer is conservative: coverage is tested at each pixel's own
+//! sample position against the projected triangle expanded by the triangle
+//! tests' barycentric tolerance band and a bound on rounding
+//! ([`tight`](self::tight), in `f32`), or, for triangles crossing or near
+//! the eye plane, with homogeneous edge functions widened by half a pixel
+//! ([`setup`](self::setup), in `f64`, no clipping needed); for every
+//! candidate pixel the ray of that pixel is intersected with the triangle by
+//! the very test and precomputed data the accelerators use. The depth test
+//! on that `t` therefore keeps exactly the hit the accelerator would report,
+//! except at ties.
 
 mod bins;
+mod samples;
+mod screen;
 mod setup;
+mod tight;
 mod view;
 mod visibility;
 

@@ -2,7 +2,10 @@
 //! the exact hit of each candidate pixel's ray.
 
 use super::bins::Bins;
+use super::samples::Samples;
+use super::screen::Screen;
 use super::setup::EdgeSetup;
+use super::tight::{Tight, TightSetup};
 use super::view::RasterView;
 use raykit_core::tri::{TestKind, TriangleTest};
 use raykit_core::{with_test, Camera, Hit, Ray, TriangleMesh};
@@ -38,12 +41,17 @@ pub fn primary_visibility(
 /// (`Accel::intersect`), except where two triangles are hit at the same
 /// distance (shared edges, coplanar overlap), where either may be kept.
 ///
-/// Every triangle is set up once (edge functions of its projection,
-/// conservatively expanded, and a screen box), binned into bands of rows,
-/// and every band is rasterized in parallel: each candidate pixel of each
-/// triangle gets the exact hit of its own ray with that triangle (the same
-/// test and precomputed data as the accelerators use), and a depth test on
-/// `t` keeps the nearest. A zero-size image gives an empty buffer.
+/// Each pixel's sample position is computed once; every triangle is set up
+/// once (edge functions of its projection, widened by a bound on rounding
+/// and tested at the sample positions, [`super::tight`]; triangles near the
+/// eye plane or in degenerate views get the conservative whole-pixel setup,
+/// [`super::setup`]), triangles whose box holds no covered sample are
+/// dropped, the rest binned into bands of rows, and every band is
+/// rasterized in parallel: each candidate pixel of each triangle gets the
+/// exact hit of its own ray with that triangle (the same test and
+/// precomputed data as the accelerators use) unless the pixel's nearest hit
+/// so far is nearer than the triangle can be, and a depth test on `t` keeps
+/// the nearest. A zero-size image gives an empty buffer.
 pub fn visibility(
     mesh: &TriangleMesh,
     test: TestKind,
@@ -70,9 +78,27 @@ pub fn rasterize(
     with_test!(test, T => rasterize_with::<T>(mesh, view, width, height, sample))
 }
 
-/// One set-up triangle: edge functions, box, the test's precomputed data.
+/// How a set-up triangle's candidate pixels are found.
+enum Edges {
+    /// At the pixels' sample positions, tight ([`TightSetup`]).
+    Tight(TightSetup),
+    /// At pixel centres, widened by half a pixel ([`EdgeSetup`]).
+    Wide(EdgeSetup),
+}
+
+impl Edges {
+    /// Inclusive pixel box `(x0, x1, y0, y1)`.
+    fn bounds(&self) -> (u32, u32, u32, u32) {
+        match self {
+            Edges::Tight(e) => (e.x0, e.x1, e.y0, e.y1),
+            Edges::Wide(e) => (e.x0, e.x1, e.y0, e.y1),
+        }
+    }
+}
+
+/// One set-up triangle: candidate pixels, the test's precomputed data.
 struct Prepared<T: TriangleTest> {
-    edges: EdgeSetup,
+    edges: Edges,
     tri: T::Tri,
     prim: u32,
 }
@@ -88,70 +114,100 @@ fn rasterize_with<T: TriangleTest>(
     if pixels == 0 {
         return Vec::new();
     }
-    // Setup, in parallel, keeping mesh order.
-    let prepared: Vec<Prepared<T>> = (0..mesh.num_triangles())
-        .into_par_iter()
-        .with_min_len(1024)
-        .filter_map(|p| {
+    // Each pixel's sample position, once; without them (a degenerate view,
+    // rays not through their pixels) every triangle takes the whole-pixel
+    // setup.
+    let screen = Screen::new(view, width, height);
+    let samples = screen.and_then(|s| Samples::new(&s, width, height, sample).map(|p| (s, p)));
+    // Setup and binning, in parallel, keeping mesh order.
+    let bins = Bins::new(
+        mesh.num_triangles(),
+        BAND_HEIGHT,
+        height.div_ceil(BAND_HEIGHT) as usize,
+        |p| {
             let corners = mesh.triangle(p);
-            let edges = EdgeSetup::new(view, corners, width, height)?;
+            let tight = match &samples {
+                Some((screen, samples)) => Tight::new(screen, samples, corners, width, height),
+                None => Tight::Fallback,
+            };
+            let edges = match tight {
+                Tight::Setup(e) => Edges::Tight(e),
+                Tight::Hidden => return None,
+                Tight::Fallback => Edges::Wide(EdgeSetup::new(view, corners, width, height)?),
+            };
             let [a, b, c] = corners;
-            Some(Prepared {
+            Some(Prepared::<T> {
                 edges,
                 tri: T::precompute(a, b, c),
                 prim: p as u32,
             })
-        })
-        .collect();
-    let bands = height.div_ceil(BAND_HEIGHT) as usize;
-    let rows: Vec<(u32, u32)> = prepared
-        .par_iter()
-        .map(|t| (t.edges.y0, t.edges.y1))
-        .collect();
-    let bins = Bins::new(&rows, BAND_HEIGHT, bands);
+        },
+        |t| {
+            let (_, _, y0, y1) = t.edges.bounds();
+            (y0, y1)
+        },
+    );
     let mut out: Vec<Option<Hit>> = vec![None; pixels];
-
     let w = width as usize;
+    let pos: &[[f32; 2]] = samples.as_ref().map_or(&[], |(_, s)| &s.pos);
     out.par_chunks_mut(w * BAND_HEIGHT as usize)
         .enumerate()
-        .for_each_init(Vec::new, |rays, (band, hits)| {
-            let y_first = band as u32 * BAND_HEIGHT;
-            let rows = (hits.len() / w) as u32;
-            // The band's rays and per-ray data, made when a pixel first
-            // becomes a candidate (background pixels never need one).
-            rays.clear();
-            rays.resize(hits.len(), None);
-            for index in bins.band(band) {
-                let t = &prepared[index as usize];
-                let e = &t.edges;
-                let y0 = e.y0.max(y_first);
-                let y1 = e.y1.min(y_first + rows - 1);
-                for y in y0..=y1 {
-                    let row = (y - y_first) as usize * w;
-                    for x in e.x0..=e.x1 {
-                        if !e.covers(x, y) {
-                            continue;
-                        }
-                        let slot = row + x as usize;
-                        let (ray, rd) = rays[slot].get_or_insert_with(|| {
-                            let ray = sample(x, y);
-                            (ray, T::prepare(&ray))
-                        });
-                        let best = &mut hits[slot];
-                        let tfar = best.map_or(ray.tfar, |b| b.t);
-                        if let Some(h) = T::intersect(&t.tri, ray, rd, tfar) {
-                            if best.is_none_or(|b| h.t < b.t) {
-                                *best = Some(Hit {
-                                    t: h.t,
-                                    u: h.u,
-                                    v: h.v,
-                                    prim: t.prim,
-                                });
+        .for_each_init(
+            || (Vec::new(), Vec::new()),
+            |(rays, depth), (band, hits)| {
+                let y_first = band as u32 * BAND_HEIGHT;
+                let rows = (hits.len() / w) as u32;
+                let first = y_first as usize * w;
+                // The band's rays and per-ray data, made when a pixel first
+                // becomes a candidate (background pixels never need one),
+                // and the distance of each pixel's nearest hit so far.
+                rays.clear();
+                rays.resize(hits.len(), None);
+                depth.clear();
+                depth.resize(hits.len(), f32::INFINITY);
+                for t in bins.band(band) {
+                    let (x0, x1, ty0, ty1) = t.edges.bounds();
+                    let y0 = ty0.max(y_first);
+                    let y1 = ty1.min(y_first + rows - 1);
+                    for y in y0..=y1 {
+                        let row = (y - y_first) as usize * w;
+                        for x in x0..=x1 {
+                            let slot = row + x as usize;
+                            match &t.edges {
+                                Edges::Tight(e) => {
+                                    // Nothing nearer than the triangle's
+                                    // closest point can change the pixel.
+                                    if depth[slot] <= e.tmin || !e.covers(pos[first + slot]) {
+                                        continue;
+                                    }
+                                }
+                                Edges::Wide(e) => {
+                                    if !e.covers(x, y) {
+                                        continue;
+                                    }
+                                }
+                            }
+                            let (ray, rd) = rays[slot].get_or_insert_with(|| {
+                                let ray = sample(x, y);
+                                (ray, T::prepare(&ray))
+                            });
+                            let best = &mut hits[slot];
+                            let tfar = best.map_or(ray.tfar, |b| b.t);
+                            if let Some(h) = T::intersect(&t.tri, ray, rd, tfar) {
+                                if best.is_none_or(|b| h.t < b.t) {
+                                    *best = Some(Hit {
+                                        t: h.t,
+                                        u: h.u,
+                                        v: h.v,
+                                        prim: t.prim,
+                                    });
+                                    depth[slot] = h.t;
+                                }
                             }
                         }
                     }
                 }
-            }
-        });
+            },
+        );
     out
 }
