@@ -78,6 +78,12 @@ pub fn rasterize(
     with_test!(test, T => rasterize_with::<T>(mesh, view, width, height, sample))
 }
 
+/// Below `pixels / FEW_TRIANGLES_RATIO` triangles the rasterizer skips the
+/// per-pixel sample pass and the tight setup (measured: on the 1.3k-triangle
+/// Cornell box at 512² the sample pass alone costs more than the tight
+/// coverage saves).
+const FEW_TRIANGLES_RATIO: usize = 16;
+
 /// How a set-up triangle's candidate pixels are found.
 enum Edges {
     /// At the pixels' sample positions, tight ([`TightSetup`]).
@@ -116,9 +122,16 @@ fn rasterize_with<T: TriangleTest>(
     }
     // Each pixel's sample position, once; without them (a degenerate view,
     // rays not through their pixels) every triangle takes the whole-pixel
-    // setup.
-    let screen = Screen::new(view, width, height);
-    let samples = screen.and_then(|s| Samples::new(&s, width, height, sample).map(|p| (s, p)));
+    // setup. With far fewer triangles than pixels (large triangles, each
+    // covering many pixels) the sample pass costs more than the tight
+    // coverage saves, so the whole-pixel setup is used then too.
+    let few_triangles = mesh.num_triangles().saturating_mul(FEW_TRIANGLES_RATIO) < pixels;
+    let samples = if few_triangles {
+        None
+    } else {
+        let screen = Screen::new(view, width, height);
+        screen.and_then(|s| Samples::new(&s, width, height, sample).map(|p| (s, p)))
+    };
     // Setup and binning, in parallel, keeping mesh order.
     let bins = Bins::new(
         mesh.num_triangles(),
