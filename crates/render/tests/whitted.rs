@@ -35,7 +35,7 @@ fn frame(mesh: &TriangleMesh, env: &Environment, camera: &Camera, opts: &Whitted
         environment: env,
         shadow_maps: None,
     };
-    render_whitted(&scene, camera, opts, &|_| {}).expect("renders")
+    render_whitted(&scene, camera, opts, &|_, _| {}).expect("renders")
 }
 
 fn linear_opts(w: u32, h: u32, depth: u32) -> WhittedOptions {
@@ -360,7 +360,7 @@ fn whitted_frame(opts: &WhittedOptions) -> Frame {
         environment: &env,
         shadow_maps: None,
     };
-    render_whitted(&ws, &scene.camera.unwrap(), opts, &|_| {}).unwrap()
+    render_whitted(&ws, &scene.camera.unwrap(), opts, &|_, _| {}).unwrap()
 }
 
 #[test]
@@ -462,4 +462,114 @@ fn rasterized_primaries_give_the_traced_image() {
             traced.image.linear.len()
         );
     }
+}
+
+/// Bilinear sampling with repeat wrapping in f64, written for this test.
+fn bilinear_f64(texels: &[[f64; 3]], w: usize, h: usize, u: f64, v: f64) -> [f64; 3] {
+    let (x, y) = (u * w as f64 - 0.5, v * h as f64 - 0.5);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let at = |i: i64, j: i64| {
+        texels[(j.rem_euclid(h as i64) as usize) * w + i.rem_euclid(w as i64) as usize]
+    };
+    let (i, j) = (x0 as i64, y0 as i64);
+    std::array::from_fn(|k| {
+        let top = at(i, j)[k] * (1.0 - fx) + at(i + 1, j)[k] * fx;
+        let bottom = at(i, j + 1)[k] * (1.0 - fx) + at(i + 1, j + 1)[k] * fx;
+        top * (1.0 - fy) + bottom * fy
+    })
+}
+
+#[test]
+fn textured_diffuse_surface_shows_its_texture_under_a_directional_light() {
+    use raykit_core::glam::{Vec2, Vec4};
+    use raykit_core::{Light, Texture};
+    let texels = [
+        [0.9, 0.1, 0.1],
+        [0.1, 0.8, 0.2],
+        [0.2, 0.3, 0.9],
+        [0.7, 0.7, 0.1],
+    ];
+    let texture = Texture::new(
+        "checker",
+        2,
+        2,
+        texels
+            .iter()
+            .map(|c| Vec4::new(c[0], c[1], c[2], 1.0))
+            .collect(),
+    );
+    let v = Vec3::new;
+    // A 2 × 2 quad in z = 0 facing +z; uv (0, 0) at the top-left corner
+    // (x = −1, y = 1), u along +x, v along −y.
+    let mesh = TriangleMesh {
+        positions: vec![
+            v(-1., 1., 0.),
+            v(1., 1., 0.),
+            v(1., -1., 0.),
+            v(-1., -1., 0.),
+        ],
+        indices: vec![[0, 3, 2], [0, 2, 1]],
+        normals: Some(vec![Vec3::Z; 4]),
+        uvs: Some(vec![
+            Vec2::new(0., 0.),
+            Vec2::new(1., 0.),
+            Vec2::new(1., 1.),
+            Vec2::new(0., 1.),
+        ]),
+        materials: vec![Material {
+            base_texture: Some(std::sync::Arc::new(texture)),
+            ..material("textured", [1.0; 3], 0.0, 1.0)
+        }],
+        ..TriangleMesh::default()
+    };
+    let accel = bvh(&mesh);
+    let lights = [Light::Directional {
+        direction: -Vec3::Z,
+        irradiance: Vec3::splat(1.0),
+    }];
+    let env = Environment::Constant(Vec3::ZERO);
+    let scene = WhittedScene {
+        mesh: &mesh,
+        accel: accel.as_ref(),
+        test: TestKind::Moller,
+        lights: &lights,
+        environment: &env,
+        shadow_maps: None,
+    };
+    let camera = Camera {
+        eye: v(0.0, 0.0, 4.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        vfov_deg: 30.0,
+    };
+    let (w, h) = (40, 40);
+    let opts = WhittedOptions {
+        shadows: ShadowMode::Rays,
+        ..linear_opts(w, h, 1)
+    };
+    let f = render_whitted(&scene, &camera, &opts, &|_, _| {}).unwrap();
+    let rays = camera.rays(w, h);
+    let f64_texels: Vec<[f64; 3]> = texels.iter().map(|c| c.map(f64::from)).collect();
+    let mut inside = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let r = rays.pixel(x, y);
+            let (o, d) = (r.origin.as_dvec3(), r.dir.as_dvec3());
+            let p = o + d * (-o.z / d.z);
+            let got = f.image.linear[(y * w + x) as usize];
+            if p.x.abs() >= 0.999 || p.y.abs() >= 0.999 {
+                continue;
+            }
+            inside += 1;
+            let want = bilinear_f64(&f64_texels, 2, 2, (p.x + 1.0) / 2.0, (1.0 - p.y) / 2.0);
+            for k in 0..3 {
+                assert!(
+                    (got[k] as f64 - want[k]).abs() < 1e-4,
+                    "pixel ({x}, {y}): {got} vs {want:?}"
+                );
+            }
+        }
+    }
+    assert!(inside > 400, "{inside} pixels on the quad");
 }

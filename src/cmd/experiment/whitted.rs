@@ -205,7 +205,7 @@ fn run_scene(
                     let mut raster = Vec::new();
                     let mut last = None;
                     for _ in 0..args.reps.max(1) {
-                        let f = render_whitted(&ws, &camera, &opts, &|_| {})?;
+                        let f = render_whitted(&ws, &camera, &opts, &|_, _| {})?;
                         times.push(f.stats.seconds);
                         raster.push(f.stats.raster_seconds);
                         last = Some(f);

@@ -242,11 +242,11 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     );
     let done = AtomicU64::new(0);
     let start = std::time::Instant::now();
-    let progress = |n: u64| {
+    let progress = |n: u64, rays: u64| {
         let d = done.fetch_add(n, Ordering::Relaxed) + n;
         bar.set_position(d);
         let secs = start.elapsed().as_secs_f64().max(1e-9);
-        bar.set_message(format!("{:.2} Msamples/s", d as f64 / secs / 1e6));
+        bar.set_message(format!("{:.2} Mrays/s", rays as f64 / secs / 1e6));
     };
     let frame = pool.install(|| render_whitted(&scene, &setup.camera, &opts, &progress))?;
     bar.finish_and_clear();

@@ -95,7 +95,8 @@ impl std::fmt::Display for FrameError {
 impl std::error::Error for FrameError {}
 
 /// Render `scene` through `camera` with the Whitted integrator chosen in
-/// `opts`. `progress` is called with a number of pixel samples as they
+/// `opts`. `progress(samples, rays)` is called as pixel samples finish, with
+/// their number and the total of rays traced so far in the frame
 /// finish. Sample positions come from [`sample_position`], so the recursive
 /// and wavefront integrators and the traced and rasterized primaries all
 /// see the same camera rays; the result does not depend on the thread count.
@@ -103,7 +104,7 @@ pub fn render_whitted(
     scene: &WhittedScene,
     camera: &Camera,
     opts: &WhittedOptions,
-    progress: &(dyn Fn(u64) + Sync),
+    progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Frame, FrameError> {
     let start = Instant::now();
     let shadows = match opts.shadows {
@@ -154,7 +155,7 @@ pub fn render_whitted(
             ),
             IntegratorKind::Wavefront => {
                 let hits = wavefront_pass(&tracer, width, height, &ray_of, primary, &mut sum);
-                progress(n as u64);
+                progress(n as u64, tracer.counts.total());
                 hits
             }
         };
@@ -190,7 +191,7 @@ fn recursive_pass(
     sample: u32,
     primary: Option<&[Option<Hit>]>,
     sum: &mut [Vec3],
-    progress: &(dyn Fn(u64) + Sync),
+    progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Vec<Option<Hit>> {
     let (width, height) = (opts.width, opts.height);
     let spp = opts.samples_per_pixel.max(1);
@@ -217,7 +218,7 @@ fn recursive_pass(
                     (l, hit)
                 })
                 .collect();
-            progress(tile.pixels());
+            progress(tile.pixels(), tracer.counts.total());
             out
         })
         .collect();
