@@ -79,6 +79,18 @@ impl Aabb {
         (self.min + self.max) * 0.5
     }
 
+    /// The eight corners; corner `i` takes `max` on x when bit 0 of `i` is
+    /// set, on y for bit 1 and on z for bit 2.
+    pub fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|i| {
+            Vec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
+
     /// Length of the diagonal (0 for the empty box).
     pub fn diagonal(&self) -> f32 {
         if self.is_empty() {

@@ -39,28 +39,7 @@ impl Camera {
     /// A camera that frames `bounds` tightly for an image of the given
     /// `aspect` (width / height): [`Camera::fit_points`] on the box corners.
     pub fn fit(bounds: &Aabb, vfov_deg: f32, aspect: f32) -> Camera {
-        let corners: Vec<Vec3> = (0..8)
-            .map(|i| {
-                Vec3::new(
-                    if i & 1 == 0 {
-                        bounds.min.x
-                    } else {
-                        bounds.max.x
-                    },
-                    if i & 2 == 0 {
-                        bounds.min.y
-                    } else {
-                        bounds.max.y
-                    },
-                    if i & 4 == 0 {
-                        bounds.min.z
-                    } else {
-                        bounds.max.z
-                    },
-                )
-            })
-            .collect();
-        Camera::fit_points(bounds, &corners, vfov_deg, aspect)
+        Camera::fit_points(bounds, &bounds.corners(), vfov_deg, aspect)
     }
 
     /// A camera that frames `points` (which lie in `bounds`) tightly for an

@@ -88,24 +88,7 @@ pub(crate) fn orthographic(dir: Vec3, bounds: &Aabb, res: u32, border: u32) -> R
     let right = perpendicular(dir);
     let up = right.cross(dir);
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for i in 0..8 {
-        let c = Vec3::new(
-            if i & 1 == 0 {
-                bounds.min.x
-            } else {
-                bounds.max.x
-            },
-            if i & 2 == 0 {
-                bounds.min.y
-            } else {
-                bounds.max.y
-            },
-            if i & 4 == 0 {
-                bounds.min.z
-            } else {
-                bounds.max.z
-            },
-        );
+    for c in bounds.corners() {
         let q = Vec3::new(c.dot(right), c.dot(up), c.dot(dir));
         lo = lo.min(q);
         hi = hi.max(q);
