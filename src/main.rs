@@ -3,6 +3,8 @@
 
 mod build_args;
 mod cmd;
+#[cfg(feature = "embree")]
+mod embree;
 mod measure;
 mod paths;
 mod plot;

@@ -2,6 +2,7 @@
 //! `bench --verify` to check a structure against brute force.
 
 use raykit_core::Hit;
+use raykit_core::{Ray, TriangleMesh};
 use serde::Serialize;
 
 /// Relative tolerance on hit distances.
@@ -71,6 +72,23 @@ pub fn compare_occlusion(reference: &[bool], got: &[bool]) -> Verdict {
         hit_miss: reference.iter().zip(got).filter(|(a, b)| a != b).count(),
         ..Default::default()
     }
+}
+
+/// Barycentric distance (f64) of `ray`'s crossing of triangle `prim` from
+/// the triangle's nearest edge: negative outside, positive inside.
+pub fn edge_margin(mesh: &TriangleMesh, ray: &Ray, prim: u32) -> f64 {
+    let [a, b, c] = mesh.triangle(prim as usize).map(|p| p.as_dvec3());
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-300 {
+        return 0.0;
+    }
+    let s = o - a;
+    let u = s.dot(p) / det;
+    let v = d.dot(s.cross(e1)) / det;
+    u.min(v).min(1.0 - u - v)
 }
 
 #[cfg(test)]

@@ -46,6 +46,13 @@ pub struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
+    /// Compare with another engine in the same process: `embree` (needs a
+    /// build with `--features embree` and Debian's libembree-dev). Ours is
+    /// --accel/--test when they name one structure and test, else bvh2 ×
+    /// moller; prints ours, Embree's and the ratio per cell and checks that
+    /// every answer agrees.
+    #[arg(long, value_name = "ENGINE")]
+    compare: Option<String>,
     #[command(flatten)]
     build: crate::build_args::BuildArgs,
 }
@@ -113,6 +120,9 @@ fn parse_list<K: Copy>(
 
 /// Run the benchmark.
 pub fn run(args: BenchArgs) -> Result<ExitCode> {
+    if let Some(engine) = &args.compare {
+        return compare(&args, engine);
+    }
     let accels = parse_list(&args.accel, &AccelKind::ALL, AccelKind::name, "--accel")?;
     let tests = parse_list(&args.test, &TestKind::ALL, TestKind::name, "--test")?;
     let reps = args.reps.max(1);
@@ -382,4 +392,39 @@ fn rate(mrays: f64) -> String {
     } else {
         format!("{mrays:.5}")
     }
+}
+
+/// `--compare ENGINE`.
+fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
+    if engine != "embree" {
+        anyhow::bail!("unknown --compare engine '{engine}': expected embree");
+    }
+    #[cfg(feature = "embree")]
+    {
+        let one = |s: &str, default: &str| {
+            if s == "all" {
+                default.to_string()
+            } else {
+                s.to_string()
+            }
+        };
+        let (kind, test) =
+            crate::cmd::trace::parse_names(&one(&args.accel, "bvh2"), &one(&args.test, "moller"))?;
+        let mesh = scene_arg::load(&args.mesh)?.mesh;
+        crate::cmd::bench_compare::run(crate::cmd::bench_compare::CompareSetup {
+            mesh: &mesh,
+            name: &args.mesh,
+            ours: (kind, test),
+            options: args.build.options(),
+            size: args.size,
+            reps: args.reps.max(1),
+            threads: args.threads,
+            json: args.json,
+        })
+    }
+    #[cfg(not(feature = "embree"))]
+    anyhow::bail!(
+        "this raykit was built without Embree: install libembree-dev (apt-get install libembree-dev) \
+         and build with `cargo build --release --features embree`"
+    )
 }

@@ -1,6 +1,8 @@
 //! One module per subcommand.
 
 pub mod bench;
+#[cfg(feature = "embree")]
+pub mod bench_compare;
 pub mod cull;
 pub mod experiment;
 pub mod export;
