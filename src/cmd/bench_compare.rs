@@ -5,7 +5,7 @@
 //! and rays grazing a shared edge that one engine catches and the other
 //! slips through, are ties).
 
-use crate::embree::{EmbreeScene, Quality};
+use crate::embree::{EmbreeDevice, EmbreeScene, Quality};
 use crate::measure::{median_min_max, pool, timed};
 use crate::verify::{compare_hits, compare_occlusion, edge_margin, Verdict, T_TOLERANCE};
 use anyhow::Result;
@@ -158,10 +158,12 @@ pub fn run(s: CompareSetup) -> Result<ExitCode> {
         let (t_ours, sp) = time_median(s.reps, || {
             ours = Some(p.install(|| build_accel(kind, test, mesh, &s.options)));
         });
+        // The device (Embree's thread pool) is made outside the timing.
+        let device = EmbreeDevice::new(threads)?;
         for quality in [Quality::High, Quality::Medium] {
             let mut err = None;
             let (t_em, sp2) = time_median(s.reps, || {
-                if let Err(e) = EmbreeScene::build(mesh, quality, threads) {
+                if let Err(e) = EmbreeScene::build(&device, mesh, quality) {
                     err = Some(e);
                 }
             });
@@ -180,7 +182,7 @@ pub fn run(s: CompareSetup) -> Result<ExitCode> {
         }
     }
     let ours = ours.expect("built");
-    let embree = EmbreeScene::build(mesh, Quality::High, 0)?;
+    let embree = EmbreeScene::build(&EmbreeDevice::new(0)?, mesh, Quality::High)?;
     let mut cells = Vec::new();
     for (si, set) in RayKind::ALL.into_iter().enumerate() {
         let rays = &sets[si];
@@ -291,36 +293,8 @@ fn print_report(r: &Comparison, reps: usize) {
         "{}: {} triangles; ours = {}, Embree 3 single-ray API (HIGH build) unless noted; median of {reps} runs",
         r.mesh, r.triangles, r.ours
     );
-    println!(
-        "\n{:<42} {:>7} {:>10} {:>10} {:>8} {:>7}",
-        "build (ms)", "threads", "ours", "Embree", "Embree÷ours", "spread"
-    );
-    for c in &r.builds_ms {
-        println!(
-            "{:<42} {:>7} {:>10.1} {:>10.1} {:>10.2}× {:>6.0}%",
-            c.what,
-            c.threads,
-            c.ours,
-            c.embree,
-            c.ratio,
-            100.0 * c.spread
-        );
-    }
-    println!(
-        "\n{:<42} {:>7} {:>10} {:>10} {:>8} {:>7}",
-        "Mrays/s", "threads", "ours", "Embree", "ours÷Embree", "spread"
-    );
-    for c in &r.mrays {
-        println!(
-            "{:<42} {:>7} {:>10.2} {:>10.2} {:>10.2}× {:>6.0}%",
-            c.what,
-            c.threads,
-            c.ours,
-            c.embree,
-            c.ratio,
-            100.0 * c.spread
-        );
-    }
+    print_cells("build (ms)", "Embree÷ours", 1, &r.builds_ms);
+    print_cells("Mrays/s", "ours÷Embree", 2, &r.mrays);
     println!("\nanswers against Embree (every ray):");
     for a in &r.agreement {
         let v = &a.verdict;
@@ -333,6 +307,25 @@ fn print_report(r: &Comparison, reps: usize) {
             a.edge_grazes,
             v.ties,
             if a.ok() { "" } else { "  <-- DISAGREE" }
+        );
+    }
+}
+
+/// One table of cells, values with `digits` decimals.
+fn print_cells(title: &str, ratio: &str, digits: usize, cells: &[Cell]) {
+    println!(
+        "\n{title:<42} {:>7} {:>10} {:>10} {ratio:>8} {:>7}",
+        "threads", "ours", "Embree", "spread"
+    );
+    for c in cells {
+        println!(
+            "{:<42} {:>7} {:>10.digits$} {:>10.digits$} {:>10.2}× {:>6.0}%",
+            c.what,
+            c.threads,
+            c.ours,
+            c.embree,
+            c.ratio,
+            100.0 * c.spread
         );
     }
 }

@@ -9,6 +9,7 @@ use anyhow::{bail, Result};
 use raykit_core::accel::AccelStats;
 use raykit_core::{Aabb, Accel, Hit, Ray, TriangleMesh};
 use std::ffi::CString;
+use std::sync::Arc;
 
 /// Embree's build quality.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -19,9 +20,45 @@ pub enum Quality {
     High,
 }
 
+/// An Embree device: its thread pool and allocator, created once so that
+/// build timings measure the build alone.
+pub struct EmbreeDevice {
+    raw: ffi::RTCDevice,
+}
+
+// SAFETY: an Embree device may be used from any thread.
+unsafe impl Send for EmbreeDevice {}
+// SAFETY: as above.
+unsafe impl Sync for EmbreeDevice {}
+
+impl EmbreeDevice {
+    /// A device with `threads` build threads (0: Embree's default, all cores).
+    pub fn new(threads: usize) -> Result<Arc<EmbreeDevice>> {
+        let config = CString::new(if threads == 0 {
+            String::new()
+        } else {
+            format!("threads={threads}")
+        })?;
+        // SAFETY: a valid NUL-terminated configuration string.
+        let raw = unsafe { ffi::rtcNewDevice(config.as_ptr()) };
+        if raw.is_null() {
+            bail!("Embree could not create a device");
+        }
+        Ok(Arc::new(EmbreeDevice { raw }))
+    }
+}
+
+impl Drop for EmbreeDevice {
+    fn drop(&mut self) {
+        // SAFETY: created by `new`, released once.
+        unsafe { ffi::rtcReleaseDevice(self.raw) };
+    }
+}
+
 /// A committed Embree scene holding one triangle mesh.
 pub struct EmbreeScene {
-    device: ffi::RTCDevice,
+    /// Kept so the device outlives the scene.
+    _device: Arc<EmbreeDevice>,
     scene: ffi::RTCScene,
     bounds: Aabb,
     triangles: usize,
@@ -34,21 +71,17 @@ unsafe impl Send for EmbreeScene {}
 unsafe impl Sync for EmbreeScene {}
 
 impl EmbreeScene {
-    /// Build Embree's BVH over `mesh` with `quality`, using `threads` build
-    /// threads (0: Embree's default, all cores).
-    pub fn build(mesh: &TriangleMesh, quality: Quality, threads: usize) -> Result<EmbreeScene> {
-        let config = CString::new(if threads == 0 {
-            String::new()
-        } else {
-            format!("threads={threads}")
-        })?;
+    /// Build Embree's BVH over `mesh` with `quality` on `device`.
+    pub fn build(
+        dev: &Arc<EmbreeDevice>,
+        mesh: &TriangleMesh,
+        quality: Quality,
+    ) -> Result<EmbreeScene> {
+        let raw = dev.raw;
         // SAFETY: plain FFI calls with valid arguments; every buffer Embree
         // returns is written within the size we asked for.
         unsafe {
-            let device = ffi::rtcNewDevice(config.as_ptr());
-            if device.is_null() {
-                bail!("Embree could not create a device");
-            }
+            let device = raw;
             let scene = ffi::rtcNewScene(device);
             let q = match quality {
                 Quality::Medium => ffi::RTC_BUILD_QUALITY_MEDIUM,
@@ -77,7 +110,6 @@ impl EmbreeScene {
             if vb.is_null() || ib.is_null() {
                 ffi::rtcReleaseGeometry(geom);
                 ffi::rtcReleaseScene(scene);
-                ffi::rtcReleaseDevice(device);
                 bail!("Embree could not allocate the mesh buffers");
             }
             let verts = std::slice::from_raw_parts_mut(vb, nv * 3);
@@ -95,11 +127,10 @@ impl EmbreeScene {
             let err = ffi::rtcGetDeviceError(device);
             if err != ffi::RTC_ERROR_NONE {
                 ffi::rtcReleaseScene(scene);
-                ffi::rtcReleaseDevice(device);
                 bail!("Embree reported error {err} while building the scene");
             }
             Ok(EmbreeScene {
-                device,
+                _device: Arc::clone(dev),
                 scene,
                 bounds: mesh.bounds(),
                 triangles: mesh.num_triangles(),
@@ -206,11 +237,9 @@ impl Accel for EmbreeScene {
 
 impl Drop for EmbreeScene {
     fn drop(&mut self) {
-        // SAFETY: the handles came from `build` and are released once.
-        unsafe {
-            ffi::rtcReleaseScene(self.scene);
-            ffi::rtcReleaseDevice(self.device);
-        }
+        // SAFETY: the scene came from `build` and is released once, before
+        // the device (which `self.device` keeps alive until after this).
+        unsafe { ffi::rtcReleaseScene(self.scene) };
     }
 }
 
@@ -234,7 +263,7 @@ mod tests {
             &BuildOptions::default(),
         );
         for quality in [Quality::High, Quality::Medium] {
-            let em = EmbreeScene::build(&mesh, quality, 1).unwrap();
+            let em = EmbreeScene::build(&EmbreeDevice::new(1).unwrap(), &mesh, quality).unwrap();
             let mut rng = Pcg32::new(7);
             let b = mesh.bounds();
             let mut stream_rays = Vec::new();
