@@ -13,8 +13,13 @@ use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
 
-/// Traversal stack entries: each wide node visited pushes at most three.
+/// Traversal stack entries for any tree: each wide node visited pushes at
+/// most three.
 const STACK: usize = 3 * MAX_DEPTH + 1;
+
+/// The stack of trees that need no more (most do; a smaller stack is cheaper
+/// to set up per ray).
+const SMALL_STACK: usize = 64;
 
 /// 4-wide BVH in the style of Embree's (issue 8, "beat Embree on the CPU";
 /// BVHs as in paper 001), made by collapsing the binned-SAH binary tree of
@@ -36,6 +41,8 @@ pub struct Bvh4<T: TriangleTest> {
     root: Child4,
     tris: LeafTriangles<T>,
     stats: AccelStats,
+    /// Whether traversal fits in [`SMALL_STACK`] entries.
+    small_stack: bool,
 }
 
 impl<T: TriangleTest> Bvh4<T> {
@@ -59,11 +66,22 @@ impl<T: TriangleTest> Bvh4<T> {
             root: wide.root,
             tris,
             stats,
+            small_stack: wide.stack <= SMALL_STACK,
         }
     }
 
     #[inline(always)]
     fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
+        if self.small_stack {
+            self.traverse_with::<ANY, SMALL_STACK>(ray)
+        } else {
+            self.traverse_with::<ANY, STACK>(ray)
+        }
+    }
+
+    /// Traversal with an `N`-entry stack, enough for this tree.
+    #[inline(always)]
+    fn traverse_with<const ANY: bool, const N: usize>(&self, ray: &Ray) -> (Option<Hit>, bool) {
         let rd = T::prepare(ray);
         let mut tfar = ray.tfar;
         let mut best: Option<Hit> = None;
@@ -71,7 +89,7 @@ impl<T: TriangleTest> Bvh4<T> {
             return (None, false);
         }
         let rb = RayBox4::new(ray);
-        let mut stack = [(Child4::default(), 0f32); STACK];
+        let mut stack = [(Child4::default(), 0f32); N];
         let mut sp = 0usize;
         let mut cur = self.root;
         loop {

@@ -43,6 +43,10 @@ pub(crate) struct Collapsed {
     pub leaves: usize,
     pub depth: u32,
     pub sah_cost: f64,
+    /// Most traversal stack entries a ray can need: the largest sum, over a
+    /// root-to-leaf path, of each inner node's children less one (at a node,
+    /// the stack holds at most the unvisited siblings of its ancestors).
+    pub stack: usize,
 }
 
 /// Collapse the binary tree below `root` into 4-wide nodes: each wide node
@@ -57,9 +61,10 @@ pub(crate) fn collapse(root: &BuildNode, traversal_cost: f64) -> Collapsed {
         leaves: 0,
         depth: 0,
         sah_cost: 0.0,
+        stack: 0,
     };
     let root_area = (root.bounds().surface_area() as f64).max(f64::MIN_POSITIVE);
-    c.root = emit(root, 0, root_area, traversal_cost, &mut c);
+    c.root = emit(root, 0, 0, root_area, traversal_cost, &mut c);
     c
 }
 
@@ -92,7 +97,14 @@ fn wide_children(node: &BuildNode) -> ([&BuildNode; 4], usize) {
     (kids, n)
 }
 
-fn emit(node: &BuildNode, depth: u32, root_area: f64, c_trav: f64, c: &mut Collapsed) -> Child4 {
+fn emit(
+    node: &BuildNode,
+    depth: u32,
+    pending: usize,
+    root_area: f64,
+    c_trav: f64,
+    c: &mut Collapsed,
+) -> Child4 {
     c.depth = c.depth.max(depth);
     let rel = node.bounds().surface_area() as f64 / root_area;
     match node {
@@ -114,10 +126,12 @@ fn emit(node: &BuildNode, depth: u32, root_area: f64, c_trav: f64, c: &mut Colla
                 child: [Child4::EMPTY; 4],
             };
             let (kids, k) = wide_children(node);
+            let pending = pending + k - 1;
+            c.stack = c.stack.max(pending);
             for (slot, kid) in kids[..k].iter().enumerate() {
                 let b: NodeBox = kid.bounds().into();
                 n.boxes.set(slot, &b);
-                n.child[slot] = emit(kid, depth + 1, root_area, c_trav, c);
+                n.child[slot] = emit(kid, depth + 1, pending, root_area, c_trav, c);
             }
             c.nodes[index] = n;
             Child4 {
@@ -166,6 +180,7 @@ mod tests {
             assert_eq!(c.leaves, bin_leaves, "same leaves as the binary tree");
             assert!(c.inner + c.leaves <= bin_nodes);
             assert!(c.depth <= bin_depth);
+            assert!(c.stack <= 3 * c.depth as usize);
             assert_eq!(c.inner, c.nodes.len());
             // Walk the wide tree; every triangle position is covered once.
             let mut seen = vec![0u32; tree.order.len()];
