@@ -220,3 +220,58 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
         self.stats.clone()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::BruteForce;
+    use crate::rng::Pcg32;
+    use crate::tri::Moller;
+    use glam::Vec3;
+
+    /// Triangles shrinking geometrically towards the origin: the SAH peels
+    /// them off one at a time, so the tree is a deep chain whose traversal
+    /// needs more than the small stack.
+    #[test]
+    fn deep_chain_uses_the_large_stack_and_agrees_with_brute_force() {
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for i in 0..100u32 {
+            let s = 0.7f32.powi(i as i32);
+            positions.extend([
+                Vec3::new(s, 0.0, 0.0),
+                Vec3::new(s * 1.1, s, 0.0),
+                Vec3::new(s, 0.0, s),
+            ]);
+            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let mesh = TriangleMesh::new(positions, indices);
+        let opts = BuildOptions {
+            max_leaf_size: 1,
+            ..Default::default()
+        };
+        let wide = Bvh4::<Moller>::build(&mesh, &opts);
+        let brute = BruteForce::<Moller>::new(&mesh);
+        assert!(!wide.small_stack, "the chain should need the large stack");
+        let mut rng = Pcg32::new(4);
+        let mut hits = 0;
+        for _ in 0..5000 {
+            let target =
+                rng.in_box(Vec3::ZERO, Vec3::splat(0.3)) * 0.7f32.powi(rng.below(40) as i32);
+            let origin = target + rng.unit_vector() * 2.0;
+            let ray = Ray::new(origin, target - origin);
+            let (a, b) = (wide.intersect(&ray), brute.intersect(&ray));
+            // Equal up to ties, as in tests/accel_agreement.rs.
+            match (a, b) {
+                (Some(x), Some(y)) => {
+                    let tol = 1e-5 * x.t.abs().max(y.t.abs()).max(1e-6);
+                    assert!((x.t - y.t).abs() <= tol, "{ray:?} {x:?} {y:?}");
+                }
+                (x, y) => assert_eq!(x.is_some(), y.is_some(), "{ray:?}"),
+            }
+            assert_eq!(wide.occluded(&ray), b.is_some(), "{ray:?}");
+            hits += a.is_some() as usize;
+        }
+        assert!(hits > 100, "{hits}");
+    }
+}
