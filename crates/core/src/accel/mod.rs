@@ -3,6 +3,8 @@
 //!
 //! - [`BruteForce`]: every ray against every triangle, the reference.
 //! - [`Bvh2`]: binary BVH, binned-SAH build, stack traversal nearest child first.
+//! - [`Bvh4`]: 4-wide BVH collapsed from the binary build, SSE box tests of
+//!   four children at once (issue 8).
 //! - [`ThreadedBvh`]: paper 001's BVH in pre-order with escape indices,
 //!   traversed without a stack.
 
@@ -19,7 +21,7 @@ mod leaf;
 mod registry;
 
 pub use brute::BruteForce;
-pub use bvh::{BuildOptions, Bvh2, ThreadedBvh};
+pub use bvh::{BuildOptions, Bvh2, Bvh4, ThreadedBvh};
 pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
 pub use registry::{build_accel, kd_accel_from_tree, AccelKind};
 

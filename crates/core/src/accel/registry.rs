@@ -3,7 +3,8 @@
 
 use super::kdtree::{KdBuildNode, KdTree};
 use super::{
-    Accel, BruteForce, BuildOptions, Bvh2, KdBacktrack, KdRestart, KdRopes, KdStack, ThreadedBvh,
+    Accel, BruteForce, BuildOptions, Bvh2, Bvh4, KdBacktrack, KdRestart, KdRopes, KdStack,
+    ThreadedBvh,
 };
 use crate::aabb::Aabb;
 use crate::mesh::TriangleMesh;
@@ -17,6 +18,8 @@ pub enum AccelKind {
     Brute,
     /// [`Bvh2`].
     Bvh2,
+    /// [`Bvh4`].
+    Bvh4,
     /// [`ThreadedBvh`].
     ThreadedBvh,
     /// [`KdStack`].
@@ -31,9 +34,10 @@ pub enum AccelKind {
 
 impl AccelKind {
     /// Every structure, in a fixed order.
-    pub const ALL: [AccelKind; 7] = [
+    pub const ALL: [AccelKind; 8] = [
         AccelKind::Brute,
         AccelKind::Bvh2,
+        AccelKind::Bvh4,
         AccelKind::ThreadedBvh,
         AccelKind::KdStack,
         AccelKind::KdRopes,
@@ -54,6 +58,7 @@ impl AccelKind {
         match self {
             AccelKind::Brute => "brute",
             AccelKind::Bvh2 => "bvh2",
+            AccelKind::Bvh4 => "bvh4",
             AccelKind::ThreadedBvh => "bvh-threaded",
             AccelKind::KdStack => "kd-stack",
             AccelKind::KdRopes => "kd-ropes",
@@ -70,6 +75,9 @@ impl AccelKind {
             }
             AccelKind::Bvh2 => {
                 "binary BVH, parallel binned-SAH build, stack traversal nearest child first"
+            }
+            AccelKind::Bvh4 => {
+                "4-wide BVH collapsed from the binary build, SSE box tests, ordered stack traversal"
             }
             AccelKind::ThreadedBvh => {
                 "paper 001: BVH nodes in pre-order with escape indices, stackless traversal"
@@ -101,6 +109,7 @@ pub fn build_accel(
     with_test!(test, T => match kind {
         AccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)) as Box<dyn Accel>,
         AccelKind::Bvh2 => Box::new(Bvh2::<T>::build(mesh, options)),
+        AccelKind::Bvh4 => Box::new(Bvh4::<T>::build(mesh, options)),
         AccelKind::ThreadedBvh => Box::new(ThreadedBvh::<T>::build(mesh, options)),
         AccelKind::KdStack => Box::new(KdStack::<T>::build(mesh, &options.kd)),
         AccelKind::KdRopes => Box::new(KdRopes::<T>::build(mesh, &options.kd)),

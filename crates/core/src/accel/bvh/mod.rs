@@ -4,17 +4,23 @@
 //!   layouts, parallel over subtrees with rayon.
 //! - [`Bvh2`]: binary BVH in depth-first order with sibling pairs side by side,
 //!   traversed with a per-ray stack, nearest child first.
+//! - [`Bvh4`]: 4-wide BVH collapsed from the binary build (issue 8), four
+//!   box tests at once with SSE, ordered stack traversal.
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
 //!   indices, traversed without a stack.
 
+mod box4;
 pub mod build;
 mod bvh2;
+mod bvh4;
+mod node4;
 mod node_box;
 pub(crate) use node_box::NodeBox;
 mod threaded;
 
 pub use build::{BuildNode, BuildOptions};
 pub use bvh2::Bvh2;
+pub use bvh4::Bvh4;
 pub use threaded::ThreadedBvh;
 
 /// Deepest tree the builders produce; traversal stacks are sized from it.
