@@ -76,6 +76,7 @@ pub fn compare_occlusion(reference: &[bool], got: &[bool]) -> Verdict {
 
 /// Barycentric distance (f64) of `ray`'s crossing of triangle `prim` from
 /// the triangle's nearest edge: negative outside, positive inside.
+#[cfg_attr(not(feature = "embree"), allow(dead_code))]
 pub fn edge_margin(mesh: &TriangleMesh, ray: &Ray, prim: u32) -> f64 {
     let [a, b, c] = mesh.triangle(prim as usize).map(|p| p.as_dvec3());
     let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());

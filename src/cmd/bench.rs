@@ -423,8 +423,11 @@ fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
         })
     }
     #[cfg(not(feature = "embree"))]
-    anyhow::bail!(
+    {
+        let _ = args;
+        anyhow::bail!(
         "this raykit was built without Embree: install libembree-dev (apt-get install libembree-dev) \
          and build with `cargo build --release --features embree`"
     )
+    }
 }
