@@ -145,7 +145,7 @@ pub struct RenderArgs {
     #[arg(long, value_delimiter = ',')]
     aov: Vec<String>,
     /// Acceleration structure (`raykit info accels`).
-    #[arg(long, default_value = "bvh2")]
+    #[arg(long, default_value = "bvh4")]
     accel: String,
     /// Ray/triangle test (`raykit info tests`).
     #[arg(long, default_value = "moller")]
