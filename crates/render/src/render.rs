@@ -3,11 +3,10 @@
 use crate::image::Image;
 use crate::options::RenderOptions;
 use crate::shade::Shader;
-use crate::tiles::{tiles, TILE_SIZE};
+use crate::tiles::map_pixels;
 use raykit_core::glam::Vec3;
 use raykit_core::rng::Pcg32;
 use raykit_core::{Accel, Camera, TriangleMesh};
-use rayon::prelude::*;
 
 /// Render `mesh` (with `accel` built on it) lit by `lights` through `camera`.
 ///
@@ -42,23 +41,6 @@ pub fn render(
             .sum();
         sum / spp as f32
     };
-    let tiles = tiles(width, height, TILE_SIZE);
-    let rendered: Vec<Vec<Vec3>> = tiles
-        .par_iter()
-        .map(|tile| {
-            let out: Vec<Vec3> = tile
-                .coords()
-                .map(|(x, y)| pixel(x, y) * opts.exposure)
-                .collect();
-            progress(tile.pixels());
-            out
-        })
-        .collect();
-    let mut linear = vec![Vec3::ZERO; width as usize * height as usize];
-    for (tile, pixels) in tiles.iter().zip(rendered) {
-        for ((x, y), c) in tile.coords().zip(pixels) {
-            linear[y as usize * width as usize + x as usize] = c;
-        }
-    }
+    let linear = map_pixels(width, height, &|x, y| pixel(x, y) * opts.exposure, progress);
     Image::from_linear(width, height, linear, opts.encoding)
 }

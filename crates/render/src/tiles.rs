@@ -1,5 +1,7 @@
 //! Splitting the image into square tiles, the unit of parallel work.
 
+use rayon::prelude::*;
+
 /// Side of a tile in pixels.
 pub const TILE_SIZE: u32 = 32;
 
@@ -27,6 +29,34 @@ impl Tile {
         (self.y..self.y + self.height)
             .flat_map(move |y| (self.x..self.x + self.width).map(move |x| (x, y)))
     }
+}
+
+/// Evaluate `pixel(x, y)` for every pixel of a `width` × `height` image,
+/// tile by tile ([`TILE_SIZE`]²) in parallel on the rayon pool, calling
+/// `progress` with each finished tile's pixel count; returns the values
+/// row-major. The result does not depend on the number of threads.
+pub fn map_pixels<T: Send + Clone + Default>(
+    width: u32,
+    height: u32,
+    pixel: &(dyn Fn(u32, u32) -> T + Sync),
+    progress: &(dyn Fn(u64) + Sync),
+) -> Vec<T> {
+    let tiles = tiles(width, height, TILE_SIZE);
+    let rendered: Vec<Vec<T>> = tiles
+        .par_iter()
+        .map(|tile| {
+            let out: Vec<T> = tile.coords().map(|(x, y)| pixel(x, y)).collect();
+            progress(tile.pixels());
+            out
+        })
+        .collect();
+    let mut image = vec![T::default(); width as usize * height as usize];
+    for (tile, values) in tiles.iter().zip(rendered) {
+        for ((x, y), v) in tile.coords().zip(values) {
+            image[y as usize * width as usize + x as usize] = v;
+        }
+    }
+    image
 }
 
 /// The tiles covering a `width` × `height` image, row by row.

@@ -9,13 +9,10 @@ use crate::env::Environment;
 use crate::image::Image;
 use crate::raster;
 use crate::shadowmap::ShadowMaps;
-use crate::tiles::{tiles, TILE_SIZE};
-use raykit_core::camera::PrimaryRays;
+use crate::tiles::map_pixels;
 use raykit_core::glam::Vec3;
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Camera, Hit, Light, Ray, TriangleMesh};
-use rayon::prelude::*;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// The scene a frame is rendered from.
@@ -146,9 +143,9 @@ pub fn render_whitted(
         let hits = match opts.integrator {
             IntegratorKind::Recursive => recursive_pass(
                 &tracer,
-                &rays,
-                opts,
-                sample,
+                width,
+                height,
+                &ray_of,
                 primary.as_deref(),
                 &mut sum,
                 progress,
@@ -168,12 +165,12 @@ pub fn render_whitted(
     let image = Image::from_linear(width, height, linear, opts.encoding);
     let c = &tracer.counts;
     let stats = FrameStats {
-        primary_rays: c.primary.load(Ordering::Relaxed),
-        shadow_rays: c.shadow.load(Ordering::Relaxed),
-        secondary_rays: c.secondary.load(Ordering::Relaxed),
+        primary_rays: c.primary.get(),
+        shadow_rays: c.shadow.get(),
+        secondary_rays: c.secondary.get(),
         raster_seconds,
         seconds: start.elapsed().as_secs_f64(),
-        environment_hits: c.environment.load(Ordering::Relaxed),
+        environment_hits: c.environment.get(),
     };
     Ok(Frame {
         image,
@@ -182,53 +179,43 @@ pub fn render_whitted(
     })
 }
 
-/// One sample of every pixel, depth-first per path, tile-parallel; adds the
-/// radiance to `sum` and returns the first hits.
+/// One sample of every pixel (rays from `ray_of`), depth-first per path,
+/// tile-parallel; adds the radiance to `sum` and returns the first hits.
 fn recursive_pass(
     tracer: &Tracer,
-    rays: &PrimaryRays,
-    opts: &WhittedOptions,
-    sample: u32,
+    width: u32,
+    height: u32,
+    ray_of: &(dyn Fn(u32, u32) -> Ray + Sync),
     primary: Option<&[Option<Hit>]>,
     sum: &mut [Vec3],
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Vec<Option<Hit>> {
-    let (width, height) = (opts.width, opts.height);
-    let spp = opts.samples_per_pixel.max(1);
-    let tiles = tiles(width, height, TILE_SIZE);
-    let rendered: Vec<Vec<(Vec3, Option<Hit>)>> = tiles
-        .par_iter()
-        .map(|tile| {
-            let out = tile
-                .coords()
-                .map(|(x, y)| {
-                    let (fx, fy) = sample_position(opts.seed, width, spp, x, y, sample);
-                    let ray: Ray = rays.ray(fx, fy);
-                    let hit = match primary {
-                        Some(p) => p[y as usize * width as usize + x as usize],
-                        None => {
-                            tracer.counts.primary.fetch_add(1, Ordering::Relaxed);
-                            tracer.accel.intersect(&ray)
-                        }
-                    };
-                    let l = match &hit {
-                        Some(h) => tracer.shade_recursive(&ray, h, 1),
-                        None => tracer.miss(&ray),
-                    };
-                    (l, hit)
-                })
-                .collect();
-            progress(tile.pixels(), tracer.counts.total());
-            out
+    let traced = map_pixels(
+        width,
+        height,
+        &|x, y| {
+            let ray = ray_of(x, y);
+            let hit = match primary {
+                Some(p) => p[y as usize * width as usize + x as usize],
+                None => {
+                    tracer.counts.primary.add(1);
+                    tracer.accel.intersect(&ray)
+                }
+            };
+            let l = match &hit {
+                Some(h) => tracer.shade_recursive(&ray, h, 1),
+                None => tracer.miss(&ray),
+            };
+            (l, hit)
+        },
+        &|n| progress(n, tracer.counts.total()),
+    );
+    traced
+        .into_iter()
+        .zip(sum.iter_mut())
+        .map(|((l, hit), s)| {
+            *s += l;
+            hit
         })
-        .collect();
-    let mut hits = vec![None; width as usize * height as usize];
-    for (tile, pixels) in tiles.iter().zip(rendered) {
-        for ((x, y), (c, h)) in tile.coords().zip(pixels) {
-            let i = y as usize * width as usize + x as usize;
-            sum[i] += c;
-            hits[i] = h;
-        }
-    }
-    hits
+        .collect()
 }

@@ -15,5 +15,5 @@ mod wavefront;
 pub use frame::{render_whitted, Frame, FrameError, FrameStats, WhittedScene};
 pub use options::{IntegratorKind, PrimaryMode, ShadowMode, WhittedOptions, DEFAULT_MAX_DEPTH};
 pub use samples::sample_position;
-pub use tracer::{Bounce, RayCounts, Scatter, Secondary, ShadowSource, Tracer};
+pub use tracer::{Bounce, RayCounter, RayCounts, Scatter, Secondary, ShadowSource, Tracer};
 pub use wavefront::RayState;

@@ -68,25 +68,51 @@ pub struct Scatter {
     pub secondary: [Option<Secondary>; 2],
 }
 
+/// A counter the rayon workers bump on the hot path without contending:
+/// one cache line per worker slot, summed when read.
+#[derive(Debug, Default)]
+pub struct RayCounter {
+    slots: [Slot; COUNTER_SLOTS],
+}
+
+/// Worker slots of a [`RayCounter`] (workers beyond share slots).
+const COUNTER_SLOTS: usize = 16;
+
+#[derive(Debug, Default)]
+#[repr(align(64))]
+struct Slot(AtomicU64);
+
+impl RayCounter {
+    /// Add `n`.
+    #[inline]
+    pub fn add(&self, n: u64) {
+        let i = rayon::current_thread_index().unwrap_or(0) % COUNTER_SLOTS;
+        self.slots[i].0.fetch_add(n, Ordering::Relaxed);
+    }
+
+    /// The total so far.
+    pub fn get(&self) -> u64 {
+        self.slots.iter().map(|s| s.0.load(Ordering::Relaxed)).sum()
+    }
+}
+
 /// Ray counts of a frame.
 #[derive(Debug, Default)]
 pub struct RayCounts {
     /// Camera rays traced (not rasterized).
-    pub primary: AtomicU64,
+    pub primary: RayCounter,
     /// Shadow rays traced.
-    pub shadow: AtomicU64,
+    pub shadow: RayCounter,
     /// Reflection and refraction rays traced.
-    pub secondary: AtomicU64,
+    pub secondary: RayCounter,
     /// Rays that left the scene and took the environment's radiance.
-    pub environment: AtomicU64,
+    pub environment: RayCounter,
 }
 
 impl RayCounts {
     /// All rays traced.
     pub fn total(&self) -> u64 {
-        self.primary.load(Ordering::Relaxed)
-            + self.shadow.load(Ordering::Relaxed)
-            + self.secondary.load(Ordering::Relaxed)
+        self.primary.get() + self.shadow.get() + self.secondary.get()
     }
 }
 
@@ -140,7 +166,7 @@ impl<'a> Tracer<'a> {
 
     /// Radiance of a ray that left the scene.
     pub fn miss(&self, ray: &Ray) -> Vec3 {
-        self.counts.environment.fetch_add(1, Ordering::Relaxed);
+        self.counts.environment.add(1);
         self.environment.radiance(ray.origin, ray.dir)
     }
 
@@ -217,7 +243,7 @@ impl<'a> Tracer<'a> {
         match self.shadows {
             ShadowSource::Off => 1.0,
             ShadowSource::Rays => {
-                self.counts.shadow.fetch_add(1, Ordering::Relaxed);
+                self.counts.shadow.add(1);
                 let origin = s.point + s.geometric_normal * self.bias;
                 let ray = Ray::segment(origin, ls.to_light, 0.0, ls.distance * (1.0 - 1e-4));
                 if self.accel.occluded(&ray) {
@@ -245,7 +271,7 @@ impl<'a> Tracer<'a> {
         let sc = self.scatter(ray, hit, depth);
         let mut out = sc.local;
         for sec in sc.secondary.iter().flatten() {
-            self.counts.secondary.fetch_add(1, Ordering::Relaxed);
+            self.counts.secondary.add(1);
             out += sec.weight * self.radiance(&sec.ray, depth + 1);
         }
         out

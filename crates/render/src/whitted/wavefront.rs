@@ -21,7 +21,6 @@ use super::tracer::Tracer;
 use raykit_core::glam::Vec3;
 use raykit_core::{Hit, Ray};
 use rayon::prelude::*;
-use std::sync::atomic::Ordering;
 
 /// Rays per parallel batch of the intersect stage.
 const BATCH: usize = 4096;
@@ -143,10 +142,7 @@ pub fn wavefront_pass(
             q.state = state;
             next.extend(spawned.into_iter().flatten());
         }
-        tracer
-            .counts
-            .secondary
-            .fetch_add(next.len() as u64, Ordering::Relaxed);
+        tracer.counts.secondary.add(next.len() as u64);
         queue = next;
     }
     first_hits.unwrap_or_default()
@@ -157,10 +153,7 @@ fn intersect_stage(tracer: &Tracer, queue: &[QueuedRay]) -> Vec<Option<Hit>> {
     let rays: Vec<Ray> = queue.iter().map(|q| q.ray).collect();
     let mut hits = vec![None; rays.len()];
     if queue.first().is_some_and(|q| q.depth == 1) {
-        tracer
-            .counts
-            .primary
-            .fetch_add(rays.len() as u64, Ordering::Relaxed);
+        tracer.counts.primary.add(rays.len() as u64);
     }
     rays.par_chunks(BATCH)
         .zip(hits.par_chunks_mut(BATCH))
