@@ -43,6 +43,21 @@ impl<T: TriangleTest> LeafTriangles<T> {
         &self.prims[first..first + count]
     }
 
+    /// The precomputed triangles as 32-bit words and the map back to mesh
+    /// triangles, for devices with kernels of their own.
+    pub fn flat(&self) -> super::flat::FlatTriangles {
+        let mut words = Vec::with_capacity(self.tris.len() * T::WORDS);
+        for tri in &self.tris {
+            T::write_words(tri, &mut words);
+        }
+        super::flat::FlatTriangles {
+            test: T::NAME,
+            words_per_tri: T::WORDS,
+            words,
+            prims: self.prims.clone(),
+        }
+    }
+
     /// Bytes held (precomputed data and the index map).
     pub fn bytes(&self) -> usize {
         self.tris.len() * std::mem::size_of::<T::Tri>() + self.prims.len() * 4

@@ -95,6 +95,16 @@ pub trait TriangleTest: Send + Sync + 'static {
     fn occluded(tri: &Self::Tri, ray: &Ray, rd: &Self::RayData, tfar: f32) -> bool {
         Self::intersect(tri, ray, rd, tfar).is_some()
     }
+
+    /// Number of 32-bit words [`TriangleTest::write_words`] appends per
+    /// triangle.
+    const WORDS: usize;
+
+    /// Append the precomputed triangle as 32-bit words (`f32` bits, or a
+    /// `u32` where the record holds an integer), in the order the GPU
+    /// kernels read them (`crates/gpu/src/shaders/tri_*.wgsl`), so a device
+    /// tests exactly the data the CPU tests.
+    fn write_words(tri: &Self::Tri, out: &mut Vec<u32>);
 }
 
 /// The triangle tests by name, for run-time selection (`--test NAME`).

@@ -224,6 +224,15 @@ impl TriangleTest for Moller {
         }
     }
 
+    const WORDS: usize = 11;
+
+    /// `v0, e1, e2, e1_max, e2_max`.
+    fn write_words(tri: &MollerTri, out: &mut Vec<u32>) {
+        let words = [tri.v0.to_array(), tri.e1.to_array(), tri.e2.to_array()];
+        out.extend(words.iter().flatten().map(|x| x.to_bits()));
+        out.extend([tri.e1_max.to_bits(), tri.e2_max.to_bits()]);
+    }
+
     #[inline]
     fn prepare(ray: &Ray) -> f32 {
         K_BARY * U * max_abs(ray.dir)

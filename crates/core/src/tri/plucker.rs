@@ -369,6 +369,19 @@ impl TriangleTest for Plucker {
         }
     }
 
+    const WORDS: usize = 28;
+
+    /// `e0, m0, e1, m1, e2, m2, n, a, scale_v, scale_u, tol_m, cap`.
+    fn write_words(tri: &PluckerTri, out: &mut Vec<u32>) {
+        for i in 0..3 {
+            out.extend(tri.e[i].to_array().map(f32::to_bits));
+            out.extend(tri.m[i].to_array().map(f32::to_bits));
+        }
+        out.extend(tri.n.to_array().map(f32::to_bits));
+        out.extend(tri.a.to_array().map(f32::to_bits));
+        out.extend([tri.scale_v, tri.scale_u, tri.tol_m, tri.cap].map(f32::to_bits));
+    }
+
     #[inline]
     fn intersect(tri: &PluckerTri, ray: &Ray, rd: &PluckerRay, tfar: f32) -> Option<TriHit> {
         test::<true, true>(tri, ray, rd, tfar, 1.0)

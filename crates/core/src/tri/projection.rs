@@ -229,6 +229,16 @@ impl TriangleTest for Projection {
     const NAME: &'static str = "projection";
     type Tri = ProjectionTri;
     type RayData = ();
+    const WORDS: usize = 12;
+
+    /// The 48-byte record as it lies in memory (`k` as an integer).
+    fn write_words(tri: &ProjectionTri, out: &mut Vec<u32>) {
+        out.extend([tri.n_u.to_bits(), tri.n_v.to_bits(), tri.n_d.to_bits(), tri.k]);
+        out.extend([tri.b_nu, tri.b_nv, tri.b_d].map(f32::to_bits));
+        out.push(0);
+        out.extend([tri.c_nu, tri.c_nv, tri.c_d].map(f32::to_bits));
+        out.push(0);
+    }
 
     fn precompute(a: Vec3, b: Vec3, c: Vec3) -> ProjectionTri {
         let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());

@@ -59,6 +59,21 @@ impl<T: TriangleTest> ThreadedBvh<T> {
         ThreadedBvh { nodes, tris, stats }
     }
 
+    /// The nodes and triangles as flat arrays for devices with kernels of
+    /// their own.
+    pub fn flat(&self) -> crate::accel::FlatThreadedBvh {
+        let mut nodes = Vec::with_capacity(self.nodes.len() * 8);
+        for n in &self.nodes {
+            nodes.extend(n.bounds.min.map(f32::to_bits));
+            nodes.extend(n.bounds.max.map(f32::to_bits));
+            nodes.extend([n.escape, n.prims]);
+        }
+        crate::accel::FlatThreadedBvh {
+            nodes,
+            tris: self.tris.flat(),
+        }
+    }
+
     #[inline(always)]
     fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
         let rd = T::prepare(ray);

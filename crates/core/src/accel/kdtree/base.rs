@@ -123,6 +123,18 @@ impl<T: TriangleTest> KdTree<T> {
         (cells, parents)
     }
 
+    /// The tree as flat arrays for devices with kernels of their own.
+    pub fn flat(&self) -> crate::accel::FlatKdTree {
+        crate::accel::FlatKdTree {
+            nodes: self.nodes.iter().flat_map(|n| n.words()).collect(),
+            indices: self.indices.clone(),
+            root_min: self.root_cell.min.to_array(),
+            root_max: self.root_cell.max.to_array(),
+            depth: self.shape.depth,
+            tris: self.tris.flat(),
+        }
+    }
+
     /// How the tree was built.
     pub fn info(&self) -> &KdBuildInfo {
         &self.info

@@ -46,6 +46,11 @@ impl KdNode {
         }
     }
 
+    /// The node's two words as stored.
+    pub fn words(self) -> [u32; 2] {
+        [self.word, self.data]
+    }
+
     /// True for a leaf.
     #[inline(always)]
     pub fn is_leaf(self) -> bool {

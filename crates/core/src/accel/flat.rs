@@ -1,0 +1,65 @@
+//! Structures as flat arrays of 32-bit words, for devices that trace them
+//! with kernels of their own (the GPU backend of issue 9, `crates/gpu`).
+//!
+//! The arrays are exactly what the CPU traverses — the same nodes, the same
+//! triangle order, the same precomputed triangle records — so a device that
+//! runs the same arithmetic reports the same hits.
+
+/// Precomputed triangles in a structure's leaf order: `words_per_tri` words
+/// each (see [`crate::tri::TriangleTest::write_words`]), and the mesh
+/// triangle index of each.
+#[derive(Clone, Debug)]
+pub struct FlatTriangles {
+    /// The triangle test whose records these are (`moller`, `plucker`,
+    /// `projection`).
+    pub test: &'static str,
+    /// Words per triangle record.
+    pub words_per_tri: usize,
+    /// The records, back to back.
+    pub words: Vec<u32>,
+    /// Mesh triangle index of each record.
+    pub prims: Vec<u32>,
+}
+
+/// Paper 000's kd-tree as flat arrays: the 8-byte nodes (two words each:
+/// leaf bit, 2 axis bits and 28-bit first-child offset; split bits or leaf
+/// count), the triangle-index list, the root cell and the triangles.
+#[derive(Clone, Debug)]
+pub struct FlatKdTree {
+    /// Two words per node, as [`crate::accel::kdtree`]'s `KdNode`.
+    pub nodes: Vec<u32>,
+    /// The leaves' entries: positions in `tris`.
+    pub indices: Vec<u32>,
+    /// Lower corner of the root cell.
+    pub root_min: [f32; 3],
+    /// Upper corner of the root cell.
+    pub root_max: [f32; 3],
+    /// Longest root-to-leaf path: a stack of this many entries suffices.
+    pub depth: u32,
+    /// The precomputed triangles.
+    pub tris: FlatTriangles,
+}
+
+/// Paper 001's threaded BVH as flat arrays: eight words per node in
+/// pre-order (padded box min and max as `f32` bits, escape index, leaf
+/// range with the count in the top 5 bits and the first triangle below,
+/// count 0 for inner nodes) and the triangles.
+#[derive(Clone, Debug)]
+pub struct FlatThreadedBvh {
+    /// Eight words per node.
+    pub nodes: Vec<u32>,
+    /// The precomputed triangles.
+    pub tris: FlatTriangles,
+}
+
+impl FlatTriangles {
+    /// Number of triangle records.
+    pub fn len(&self) -> usize {
+        self.prims.len()
+    }
+
+    /// True when there are no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.prims.is_empty()
+    }
+}

@@ -1,0 +1,190 @@
+//! Compute pipelines assembled from WGSL pieces, and their dispatch.
+
+use crate::context::GpuContext;
+use crate::error::{GpuError, GpuResult};
+
+/// Threads per workgroup of every raykit kernel (`@workgroup_size(64)`).
+pub const WORKGROUP: u32 = 64;
+
+/// The WGSL sources, embedded in the binary.
+pub mod wgsl {
+    /// Ray and hit records, NaN-aware min/max.
+    pub const COMMON: &str = include_str!("shaders/common.wgsl");
+    /// The scene bindings (group 0) and the leaf loop.
+    pub const SCENE: &str = include_str!("shaders/scene.wgsl");
+    /// Möller–Trumbore.
+    pub const TRI_MOLLER: &str = include_str!("shaders/tri_moller.wgsl");
+    /// Plücker (paper 000).
+    pub const TRI_PLUCKER: &str = include_str!("shaders/tri_plucker.wgsl");
+    /// Paper 000's kd-tree with a per-thread stack.
+    pub const KD_STACK: &str = include_str!("shaders/kd_stack.wgsl");
+    /// Paper 001's threaded BVH.
+    pub const BVH_THREADED: &str = include_str!("shaders/bvh_threaded.wgsl");
+    /// Brute force.
+    pub const BRUTE: &str = include_str!("shaders/brute.wgsl");
+    /// Batch ray queries.
+    pub const TRACE: &str = include_str!("shaders/trace.wgsl");
+}
+
+/// One compute pipeline with an explicit layout.
+pub struct Kernel {
+    /// The pipeline.
+    pub pipeline: wgpu::ComputePipeline,
+    /// Its bind group layouts, by group index.
+    pub layouts: Vec<wgpu::BindGroupLayout>,
+}
+
+/// A bind group layout entry for a storage buffer (read-only or not) or a
+/// uniform buffer at `binding`.
+pub fn layout_entry(binding: u32, kind: BindingKind) -> wgpu::BindGroupLayoutEntry {
+    let ty = match kind {
+        BindingKind::Storage => wgpu::BufferBindingType::Storage { read_only: true },
+        BindingKind::StorageRw => wgpu::BufferBindingType::Storage { read_only: false },
+        BindingKind::Uniform => wgpu::BufferBindingType::Uniform,
+    };
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// How a buffer is bound.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BindingKind {
+    /// `var<storage, read>`.
+    Storage,
+    /// `var<storage, read_write>`.
+    StorageRw,
+    /// `var<uniform>`.
+    Uniform,
+}
+
+/// The scene's group 0: nodes, indices, triangle records, prims (storage),
+/// accel parameters (uniform); see `shaders/scene.wgsl`.
+pub const SCENE_GROUP: [BindingKind; 5] = [
+    BindingKind::Storage,
+    BindingKind::Storage,
+    BindingKind::Storage,
+    BindingKind::Storage,
+    BindingKind::Uniform,
+];
+
+impl Kernel {
+    /// Compile `sources` (concatenated in order) and build the pipeline for
+    /// `entry` with one bind group layout per element of `groups`.
+    pub fn new(
+        ctx: &GpuContext,
+        label: &str,
+        sources: &[&str],
+        entry: &str,
+        groups: &[&[BindingKind]],
+    ) -> GpuResult<Kernel> {
+        let source = sources.join("\n");
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = ctx
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        let layouts: Vec<wgpu::BindGroupLayout> = groups
+            .iter()
+            .enumerate()
+            .map(|(g, kinds)| {
+                let entries: Vec<_> = kinds
+                    .iter()
+                    .enumerate()
+                    .map(|(b, &k)| layout_entry(b as u32, k))
+                    .collect();
+                ctx.device
+                    .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                        label: Some(&format!("{label} group {g}")),
+                        entries: &entries,
+                    })
+            })
+            .collect();
+        let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(Some).collect();
+        let pipeline_layout = ctx
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &layout_refs,
+                immediate_size: 0,
+            });
+        let pipeline = ctx
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Shader(format!("{label}: {e}")));
+        }
+        Ok(Kernel { pipeline, layouts })
+    }
+
+    /// A bind group for group `g` over `buffers` (bindings 0, 1, ...).
+    pub fn bind(&self, ctx: &GpuContext, g: usize, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        let entries: Vec<_> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &self.layouts[g],
+            entries: &entries,
+        })
+    }
+}
+
+/// Workgroup counts `(x, y)` covering `threads` threads within the
+/// device's per-dimension limit, and the threads per row `x · WORKGROUP`
+/// that kernels use to turn `(gid.x, gid.y)` into one index.
+pub fn grid(ctx: &GpuContext, threads: usize) -> GpuResult<(u32, u32, u32)> {
+    let groups = threads.div_ceil(WORKGROUP as usize).max(1) as u64;
+    let max = ctx.limits.max_compute_workgroups_per_dimension as u64;
+    let x = groups.min(max);
+    let y = groups.div_ceil(x);
+    if y > max {
+        return Err(GpuError::Limit {
+            what: format!("a dispatch of {threads} threads"),
+            needed: groups,
+            limit: max * max,
+            name: "max_compute_workgroups_per_dimension (squared)",
+        });
+    }
+    Ok((x as u32, y as u32, (x * WORKGROUP as u64) as u32))
+}
+
+/// Record one dispatch of `kernel` with `groups` bound, covering `(x, y)`
+/// workgroups.
+pub fn dispatch(
+    enc: &mut wgpu::CommandEncoder,
+    kernel: &Kernel,
+    groups: &[&wgpu::BindGroup],
+    (x, y): (u32, u32),
+) {
+    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: None,
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(&kernel.pipeline);
+    for (i, g) in groups.iter().enumerate() {
+        pass.set_bind_group(i as u32, Some(*g), &[]);
+    }
+    pass.dispatch_workgroups(x, y, 1);
+}

@@ -1,0 +1,29 @@
+//! raykit's GPU backend on wgpu (issue 9): WGSL compute kernels that trace
+//! the same structures, with the same triangle records and arithmetic, as
+//! the CPU engine, so that both give the same answers.
+//!
+//! - [`GpuContext`]: adapter and device (any Vulkan, Metal or DX12 GPU; in
+//!   CI Mesa's lavapipe).
+//! - [`GpuScene`]: a structure uploaded: paper 000's kd-tree with 8-byte
+//!   nodes traversed with a fixed-size per-thread stack
+//!   (`shaders/kd_stack.wgsl`), paper 001's threaded BVH with escape indices
+//!   (`shaders/bvh_threaded.wgsl`), or brute force; triangles precomputed for
+//!   paper 000's Plücker test or Möller–Trumbore (paper 001).
+//! - [`GpuTracer`]: batch nearest-hit and occlusion queries.
+//!
+//! Every kernel is WGSL assembled from small pieces (`shaders/`): the
+//! common records, the scene bindings, one triangle test, one structure, one
+//! entry file.
+
+mod buffers;
+mod context;
+mod error;
+pub mod kernel;
+mod scene;
+mod trace;
+
+pub use buffers::{check_binding, output, read_words, storage, uniform};
+pub use context::GpuContext;
+pub use error::{GpuError, GpuResult};
+pub use scene::{gpu_test_supported, GpuAccelKind, GpuScene};
+pub use trace::{GpuRays, GpuTracer, CHUNK};

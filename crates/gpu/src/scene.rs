@@ -1,0 +1,232 @@
+//! A triangle mesh's acceleration structure uploaded to the GPU: paper
+//! 000's kd-tree or paper 001's threaded BVH (or brute force), with the
+//! triangles precomputed for the Plücker or Möller test.
+
+use crate::buffers::{storage, uniform};
+use crate::context::GpuContext;
+use crate::error::{GpuError, GpuResult};
+use crate::kernel::{wgsl, Kernel};
+use raykit_core::accel::{BuildOptions, FlatTriangles, KdOptions, KdStack, ThreadedBvh};
+use raykit_core::tri::{Moller, Plucker, TestKind, TriangleTest};
+use raykit_core::TriangleMesh;
+use std::time::Instant;
+
+/// The structures the GPU kernels traverse.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum GpuAccelKind {
+    /// Paper 000: kd-tree with 8-byte nodes and a fixed-size per-thread stack.
+    KdStack,
+    /// Paper 001: BVH in pre-order with escape indices, no stack.
+    BvhThreaded,
+    /// Every ray against every triangle (the reference).
+    Brute,
+}
+
+impl GpuAccelKind {
+    /// Every kind, fastest-first in the usual case.
+    pub const ALL: [GpuAccelKind; 3] = [
+        GpuAccelKind::KdStack,
+        GpuAccelKind::BvhThreaded,
+        GpuAccelKind::Brute,
+    ];
+
+    /// The name `--accel` takes; the same as the CPU structure it mirrors.
+    pub fn name(self) -> &'static str {
+        match self {
+            GpuAccelKind::KdStack => "kd-stack",
+            GpuAccelKind::BvhThreaded => "bvh-threaded",
+            GpuAccelKind::Brute => "brute",
+        }
+    }
+
+    /// Parse a name.
+    pub fn from_name(name: &str) -> Option<GpuAccelKind> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    fn wgsl(self) -> &'static str {
+        match self {
+            GpuAccelKind::KdStack => wgsl::KD_STACK,
+            GpuAccelKind::BvhThreaded => wgsl::BVH_THREADED,
+            GpuAccelKind::Brute => wgsl::BRUTE,
+        }
+    }
+}
+
+/// Names of the triangle tests the GPU kernels implement.
+pub fn gpu_test_supported(test: TestKind) -> bool {
+    matches!(test, TestKind::Moller | TestKind::Plucker)
+}
+
+/// Uniform block of `shaders/scene.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct AccelParams {
+    root_min: [f32; 3],
+    num_indices: u32,
+    root_max: [f32; 3],
+    num_nodes: u32,
+    num_tris: u32,
+    _pad: [u32; 3],
+}
+
+/// A structure and its triangles in GPU buffers (bind group 0 of every
+/// tracing kernel, see `shaders/scene.wgsl`).
+pub struct GpuScene {
+    /// The structure.
+    pub kind: GpuAccelKind,
+    /// The triangle test.
+    pub test: TestKind,
+    /// Triangle records (a kd-tree may hold more references than records).
+    pub num_tris: usize,
+    /// Nodes.
+    pub num_nodes: usize,
+    /// Bytes uploaded (nodes, indices, triangle records, prims).
+    pub bytes: usize,
+    /// Bytes of the nodes alone.
+    pub node_bytes: usize,
+    /// Seconds to build the structure on the CPU.
+    pub build_seconds: f64,
+    /// Seconds to precompute, flatten and upload.
+    pub upload_seconds: f64,
+    buffers: [wgpu::Buffer; 5],
+}
+
+/// The structure's arrays before upload.
+struct Flat {
+    nodes: Vec<u32>,
+    indices: Vec<u32>,
+    root: ([f32; 3], [f32; 3]),
+    tris: FlatTriangles,
+}
+
+fn flat_for<T: TriangleTest>(
+    mesh: &TriangleMesh,
+    kind: GpuAccelKind,
+    bvh: &BuildOptions,
+    kd: &KdOptions,
+) -> (Flat, f64) {
+    let start = Instant::now();
+    match kind {
+        GpuAccelKind::KdStack => {
+            let accel = KdStack::<T>::build(mesh, kd);
+            let secs = start.elapsed().as_secs_f64();
+            let f = accel.tree().flat();
+            let flat = Flat {
+                nodes: f.nodes,
+                indices: f.indices,
+                root: (f.root_min, f.root_max),
+                tris: f.tris,
+            };
+            (flat, secs)
+        }
+        GpuAccelKind::BvhThreaded => {
+            let accel = ThreadedBvh::<T>::build(mesh, bvh);
+            let secs = start.elapsed().as_secs_f64();
+            let f = accel.flat();
+            let flat = Flat {
+                nodes: f.nodes,
+                indices: Vec::new(),
+                root: ([0.0; 3], [0.0; 3]),
+                tris: f.tris,
+            };
+            (flat, secs)
+        }
+        GpuAccelKind::Brute => {
+            let mut words = Vec::with_capacity(mesh.num_triangles() * T::WORDS);
+            for i in 0..mesh.num_triangles() {
+                let [a, b, c] = mesh.triangle(i);
+                T::write_words(&T::precompute(a, b, c), &mut words);
+            }
+            let tris = FlatTriangles {
+                test: T::NAME,
+                words_per_tri: T::WORDS,
+                words,
+                prims: (0..mesh.num_triangles() as u32).collect(),
+            };
+            let flat = Flat {
+                nodes: Vec::new(),
+                indices: Vec::new(),
+                root: ([0.0; 3], [0.0; 3]),
+                tris,
+            };
+            (flat, 0.0)
+        }
+    }
+}
+
+impl GpuScene {
+    /// Build `kind` over `mesh` on the CPU (the same build as the CPU
+    /// structure of that name) and upload it with the triangles precomputed
+    /// for `test`.
+    pub fn build(
+        ctx: &GpuContext,
+        mesh: &TriangleMesh,
+        kind: GpuAccelKind,
+        test: TestKind,
+        bvh: &BuildOptions,
+        kd: &KdOptions,
+    ) -> GpuResult<GpuScene> {
+        let (flat, build_seconds) = match test {
+            TestKind::Moller => flat_for::<Moller>(mesh, kind, bvh, kd),
+            TestKind::Plucker => flat_for::<Plucker>(mesh, kind, bvh, kd),
+            TestKind::Projection => {
+                return Err(GpuError::Unsupported(
+                    "the projection test; the GPU kernels implement plucker and moller".into(),
+                ))
+            }
+        };
+        let start = Instant::now();
+        let num_nodes = match kind {
+            GpuAccelKind::KdStack => flat.nodes.len() / 2,
+            GpuAccelKind::BvhThreaded => flat.nodes.len() / 8,
+            GpuAccelKind::Brute => 0,
+        };
+        let params = AccelParams {
+            root_min: flat.root.0,
+            num_indices: flat.indices.len() as u32,
+            root_max: flat.root.1,
+            num_nodes: num_nodes as u32,
+            num_tris: flat.tris.len() as u32,
+            _pad: [0; 3],
+        };
+        let buffers = [
+            storage(ctx, "scene nodes", &flat.nodes)?,
+            storage(ctx, "scene triangle-index list", &flat.indices)?,
+            storage(ctx, "scene triangle records", &flat.tris.words)?,
+            storage(ctx, "scene triangle ids", &flat.tris.prims)?,
+            uniform(ctx, "scene parameters", &params),
+        ];
+        let node_bytes = flat.nodes.len() * 4;
+        let bytes = node_bytes + (flat.indices.len() + flat.tris.words.len() + flat.tris.prims.len()) * 4;
+        ctx.wait()?;
+        Ok(GpuScene {
+            kind,
+            test,
+            num_tris: flat.tris.len(),
+            num_nodes,
+            bytes,
+            node_bytes,
+            build_seconds,
+            upload_seconds: start.elapsed().as_secs_f64(),
+            buffers,
+        })
+    }
+
+    /// The WGSL that defines `scene_intersect(ray) -> Hit` and
+    /// `scene_occluded(ray) -> bool` for this structure and test, to be
+    /// placed before a kernel's own source.
+    pub fn wgsl(&self) -> Vec<&'static str> {
+        let tri = match self.test {
+            TestKind::Plucker => wgsl::TRI_PLUCKER,
+            _ => wgsl::TRI_MOLLER,
+        };
+        vec![wgsl::COMMON, wgsl::SCENE, tri, self.kind.wgsl()]
+    }
+
+    /// Group 0 of `kernel`, bound to this scene.
+    pub fn bind(&self, ctx: &GpuContext, kernel: &Kernel) -> wgpu::BindGroup {
+        let refs: Vec<&wgpu::Buffer> = self.buffers.iter().collect();
+        kernel.bind(ctx, 0, &refs)
+    }
+}

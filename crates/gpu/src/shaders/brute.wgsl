@@ -1,0 +1,20 @@
+// Every ray against every triangle: the GPU reference.
+
+fn brute_trace(r: RayIn, any: bool) -> Hit {
+    var best = miss_hit();
+    let rd = tri_prepare(r);
+    for (var i = 0u; i < accel.num_tris; i++) {
+        if test_triangle(i, r, rd, any, &best) {
+            return Hit(0.0, 0.0, 0.0, 0u);
+        }
+    }
+    return best;
+}
+
+fn scene_intersect(r: RayIn) -> Hit {
+    return brute_trace(r, false);
+}
+
+fn scene_occluded(r: RayIn) -> bool {
+    return brute_trace(r, true).prim != MISS;
+}

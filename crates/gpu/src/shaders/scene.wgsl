@@ -1,0 +1,61 @@
+// The scene's bindings (group 0), shared by every kernel that traces the
+// triangle mesh: the structure's nodes and index list, the precomputed
+// triangle records in leaf order and their mesh triangle indices.
+// Accel files (kd_stack.wgsl, bvh_threaded.wgsl, brute.wgsl) define
+// scene_intersect(ray) -> Hit and scene_occluded(ray) -> bool over them.
+
+struct AccelParams {
+    root_min: vec3f,
+    num_indices: u32,
+    root_max: vec3f,
+    num_nodes: u32,
+    num_tris: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+@group(0) @binding(0) var<storage, read> nodes: array<u32>;
+@group(0) @binding(1) var<storage, read> indices: array<u32>;
+@group(0) @binding(2) var<storage, read> tri_words: array<u32>;
+@group(0) @binding(3) var<storage, read> prims: array<u32>;
+@group(0) @binding(4) var<uniform> accel: AccelParams;
+
+struct TriHit {
+    hit: bool,
+    t: f32,
+    u: f32,
+    v: f32,
+}
+
+fn tw(i: u32) -> f32 {
+    return bitcast<f32>(tri_words[i]);
+}
+
+fn tw3(i: u32) -> vec3f {
+    return vec3f(tw(i), tw(i + 1u), tw(i + 2u));
+}
+
+// glam's operation order, so results round as on the CPU.
+fn dot3(a: vec3f, b: vec3f) -> f32 {
+    return (a.x * b.x + a.y * b.y) + a.z * b.z;
+}
+
+fn cross3(a: vec3f, b: vec3f) -> vec3f {
+    return vec3f(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
+}
+
+// Test the triangle record at position i; nearest-hit mode keeps the
+// nearest hit in best (ties keep the earlier triangle) and returns false;
+// any-hit mode returns true at a hit.
+fn test_triangle(i: u32, r: RayIn, rd: TriRay, any: bool, best: ptr<function, Hit>) -> bool {
+    let tfar = (*best).t;
+    if any {
+        return tri_occluded(i, r, rd, fmin(tfar, r.tfar));
+    }
+    let h = tri_intersect(i, r, rd, fmin(tfar, r.tfar));
+    if h.hit && ((*best).prim == MISS || h.t < (*best).t) {
+        *best = Hit(h.t, h.u, h.v, prims[i]);
+    }
+    return false;
+}
