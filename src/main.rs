@@ -1,10 +1,12 @@
 //! The `raykit` command line: argument parsing and wiring only; the work is
 //! done by the library crates.
 
+mod backend;
 mod build_args;
 mod cmd;
 #[cfg(feature = "embree")]
 mod embree;
+mod gpu_measure;
 mod measure;
 mod paths;
 mod plot;

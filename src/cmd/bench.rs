@@ -1,6 +1,7 @@
 //! `raykit bench`: build time, memory and Mrays/s of every structure ×
 //! triangle test on the standard ray sets, on one thread and on all threads.
 
+use crate::backend::Backend;
 use crate::measure::{median_min_max, pool, timed};
 use crate::scene_arg;
 use crate::verify::{self, Verdict};
@@ -53,6 +54,11 @@ pub struct BenchArgs {
     /// every answer agrees.
     #[arg(long, value_name = "ENGINE")]
     compare: Option<String>,
+    /// `gpu` measures the GPU kernels (kd-stack, bvh-threaded × plucker,
+    /// moller) instead, every answer checked against the CPU structure of
+    /// the same name; see also `raykit experiment gpu`.
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    backend: Backend,
     #[command(flatten)]
     build: crate::build_args::BuildArgs,
 }
@@ -122,6 +128,17 @@ fn parse_list<K: Copy>(
 pub fn run(args: BenchArgs) -> Result<ExitCode> {
     if let Some(engine) = &args.compare {
         return compare(&args, engine);
+    }
+    if args.backend == Backend::Gpu {
+        return crate::cmd::bench_gpu::run(crate::cmd::bench_gpu::GpuBenchSetup {
+            mesh: &args.mesh,
+            accel: &args.accel,
+            test: &args.test,
+            size: args.size,
+            reps: args.reps.max(1),
+            json: args.json,
+            options: args.build.options(),
+        });
     }
     let accels = parse_list(&args.accel, &AccelKind::ALL, AccelKind::name, "--accel")?;
     let tests = parse_list(&args.test, &TestKind::ALL, TestKind::name, "--test")?;

@@ -3,6 +3,7 @@
 pub mod bench;
 #[cfg(feature = "embree")]
 pub mod bench_compare;
+pub mod bench_gpu;
 pub mod cull;
 pub mod experiment;
 pub mod export;

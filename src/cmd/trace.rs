@@ -1,5 +1,6 @@
 //! `raykit trace`: trace a ray file and write hits or occlusion bytes.
 
+use crate::backend::{gpu_accel, open_gpu, Backend};
 use crate::measure::{pool, timed};
 use crate::scene_arg;
 use crate::verify;
@@ -8,6 +9,7 @@ use clap::Args;
 use raykit_core::accel::{build_accel, AccelKind};
 use raykit_core::tri::TestKind;
 use raykit_core::Ray;
+use raykit_gpu::{GpuScene, GpuTracer};
 use serde_json::json;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -28,9 +30,10 @@ pub struct TraceArgs {
     /// Output hit file (or occlusion file with --occlusion).
     #[arg(long)]
     out: PathBuf,
-    /// Acceleration structure (`raykit info accels`).
-    #[arg(long, default_value = "bvh2")]
-    accel: String,
+    /// Acceleration structure (`raykit info accels`; default bvh2, or
+    /// kd-stack with --backend gpu, which also takes bvh-threaded and brute).
+    #[arg(long)]
+    accel: Option<String>,
     /// Ray/triangle test (`raykit info tests`).
     #[arg(long, default_value = "moller")]
     test: String,
@@ -44,6 +47,10 @@ pub struct TraceArgs {
     /// the same triangle test, report disagreements and fail if any.
     #[arg(long, value_name = "N")]
     verify: Option<usize>,
+    /// Trace on the CPU (all cores) or on the GPU (wgpu compute kernels;
+    /// the JSON line then names the adapter and adds the kernel time).
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    backend: Backend,
     #[command(flatten)]
     build: crate::build_args::BuildArgs,
 }
@@ -69,7 +76,10 @@ pub fn parse_names(accel: &str, test: &str) -> Result<(AccelKind, TestKind)> {
 
 /// Trace the file.
 pub fn run(args: TraceArgs) -> Result<ExitCode> {
-    let (kind, test) = parse_names(&args.accel, &args.test)?;
+    if args.backend == Backend::Gpu {
+        return run_gpu(args);
+    }
+    let (kind, test) = parse_names(args.accel.as_deref().unwrap_or("bvh2"), &args.test)?;
     crate::paths::ensure_not_input(&args.out, &[&args.rays, std::path::Path::new(&args.mesh)])?;
     let pool = pool(args.threads)?;
     let threads = pool.current_num_threads();
@@ -112,17 +122,42 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
     let Some(k) = args.verify else {
         return Ok(ExitCode::SUCCESS);
     };
+    check_against_brute(
+        &mesh,
+        &rays,
+        test,
+        &opts,
+        k,
+        &pool,
+        hits.as_deref(),
+        occluded.as_deref(),
+    )
+}
+
+/// `--verify N`: recheck N rays spread over the file with brute force and
+/// the same triangle test; fail on any disagreement.
+#[allow(clippy::too_many_arguments)]
+fn check_against_brute(
+    mesh: &raykit_core::TriangleMesh,
+    rays: &[Ray],
+    test: TestKind,
+    opts: &raykit_core::accel::BuildOptions,
+    k: usize,
+    pool: &rayon::ThreadPool,
+    hits: Option<&[Option<raykit_core::Hit>]>,
+    occluded: Option<&[bool]>,
+) -> Result<ExitCode> {
     let idx = verify::sample(rays.len(), k);
     let sample: Vec<Ray> = idx.iter().map(|&i| rays[i]).collect();
-    let brute = build_accel(AccelKind::Brute, test, &mesh, &opts);
+    let brute = build_accel(AccelKind::Brute, test, mesh, opts);
     let verdict = pool.install(|| {
-        if let Some(h) = &hits {
+        if let Some(h) = hits {
             let mut want = vec![None; sample.len()];
             brute.intersect_batch(&sample, &mut want);
             let got: Vec<_> = idx.iter().map(|&i| h[i]).collect();
             verify::compare_hits(&want, &got)
         } else {
-            let o = occluded.as_ref().expect("one of the two is set");
+            let o = occluded.expect("one of the two is set");
             let mut want = vec![false; sample.len()];
             brute.occluded_batch(&sample, &mut want);
             let got: Vec<_> = idx.iter().map(|&i| o[i]).collect();
@@ -138,4 +173,76 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// `--backend gpu`: the same job on the GPU kernels.
+fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
+    let kind = gpu_accel(args.accel.as_deref().unwrap_or("kd-stack"))?;
+    let test = TestKind::from_name(&args.test)
+        .filter(|t| raykit_gpu::gpu_test_supported(*t))
+        .ok_or_else(|| {
+            anyhow!(
+                "--test '{}' has no GPU kernel; with --backend gpu use plucker or moller",
+                args.test
+            )
+        })?;
+    crate::paths::ensure_not_input(&args.out, &[&args.rays, std::path::Path::new(&args.mesh)])?;
+    let ctx = open_gpu()?;
+    let pool = pool(args.threads)?;
+    let (scene, load_s) = timed(|| scene_arg::load(&args.mesh));
+    let mesh = scene?.mesh;
+    let rays = raykit_io::read_rays(&args.rays)?;
+    if rays.is_empty() {
+        bail!("{}: the ray file holds no rays", args.rays.display());
+    }
+    let opts = args.build.options();
+    let gpu = |e: raykit_gpu::GpuError| anyhow!("{e}");
+    let scene = pool
+        .install(|| GpuScene::build(&ctx, &mesh, kind, test, &opts, &opts.kd))
+        .map_err(gpu)?;
+    let tracer = GpuTracer::new(&ctx, &scene).map_err(gpu)?;
+    let (mut hits, mut occluded) = (Vec::new(), Vec::new());
+    let mut kernel_s = 0.0;
+    let start = std::time::Instant::now();
+    for chunk in rays.chunks(raykit_gpu::CHUNK) {
+        let up = tracer.upload(chunk).map_err(gpu)?;
+        kernel_s += tracer.run(&up, args.occlusion).map_err(gpu)?;
+        if args.occlusion {
+            occluded.extend(tracer.occlusion(&up).map_err(gpu)?);
+        } else {
+            hits.extend(tracer.hits(&up).map_err(gpu)?);
+        }
+    }
+    let trace_s = start.elapsed().as_secs_f64();
+    if args.occlusion {
+        raykit_io::write_occlusion(&args.out, &occluded)?;
+    } else {
+        raykit_io::write_hits(&args.out, &hits)?;
+    }
+    eprintln!(
+        "{}",
+        json!({
+            "backend": "gpu",
+            "adapter": ctx.describe(),
+            "accel": kind.name(),
+            "test": test.name(),
+            "load_ms": load_s * 1e3,
+            "build_ms": scene.build_seconds * 1e3,
+            "upload_ms": scene.upload_seconds * 1e3,
+            "trace_ms": trace_s * 1e3,
+            "kernel_ms": kernel_s * 1e3,
+            "rays": rays.len(),
+            "mrays": rays.len() as f64 / trace_s / 1e6,
+            "kernel_mrays": rays.len() as f64 / kernel_s / 1e6,
+        })
+    );
+    let Some(k) = args.verify else {
+        return Ok(ExitCode::SUCCESS);
+    };
+    let (h, o) = if args.occlusion {
+        (None, Some(&occluded[..]))
+    } else {
+        (Some(&hits[..]), None)
+    };
+    check_against_brute(&mesh, &rays, test, &opts, k, &pool, h, o)
 }

@@ -1,0 +1,128 @@
+//! Measuring a GPU structure × triangle test on ray sets, with every
+//! answer checked against the CPU structure it mirrors: shared by `raykit
+//! bench --backend gpu` and `raykit experiment gpu`.
+
+use crate::backend::cpu_twin;
+use crate::measure::median_min_max;
+use crate::verify::{self, Verdict};
+use anyhow::{anyhow, Result};
+use raykit_core::accel::{build_accel, BuildOptions};
+use raykit_core::tri::TestKind;
+use raykit_core::{Ray, TriangleMesh};
+use raykit_gpu::{GpuAccelKind, GpuContext, GpuScene, GpuTracer, CHUNK};
+use serde::Serialize;
+
+/// Speed on one ray set.
+#[derive(Serialize, Clone, Debug)]
+pub struct GpuCell {
+    /// `primary`, `shadow` or `incoherent`.
+    pub set: &'static str,
+    /// Rays traced.
+    pub rays: usize,
+    /// Mrays/s from submission to completion of the kernel (median).
+    pub mrays: f64,
+    /// (max − min) / median of the kernel times.
+    pub spread: f64,
+    /// GPU answers against the CPU twin's, every ray.
+    pub verify: Verdict,
+}
+
+/// One structure × test on one mesh.
+#[derive(Serialize, Clone, Debug)]
+pub struct GpuRow {
+    /// Structure name.
+    pub accel: &'static str,
+    /// Triangle test name.
+    pub test: &'static str,
+    /// CPU build of the structure (ms).
+    pub build_ms: f64,
+    /// Flattening and upload (ms).
+    pub upload_ms: f64,
+    /// Bytes on the device.
+    pub bytes: usize,
+    /// Bytes of the nodes alone.
+    pub node_bytes: usize,
+    /// Nodes.
+    pub nodes: usize,
+    /// Per ray set.
+    pub cells: Vec<GpuCell>,
+}
+
+/// The ray sets measured, in the order of [`raykit_core::raysets::standard_sets`]:
+/// nearest hits for primary and incoherent rays, occlusion for shadow rays.
+pub const SETS: [&str; 3] = ["primary", "shadow", "incoherent"];
+
+/// Build `kind` × `test` on the GPU and its CPU twin, trace every set
+/// `reps` times on the GPU (after one warm-up run whose answers are
+/// checked against the CPU twin's on every ray).
+pub fn measure(
+    ctx: &GpuContext,
+    mesh: &TriangleMesh,
+    kind: GpuAccelKind,
+    test: TestKind,
+    opts: &BuildOptions,
+    sets: &[Vec<Ray>; 3],
+    reps: usize,
+    mut progress: impl FnMut(&str),
+) -> Result<GpuRow> {
+    progress(&format!(
+        "{} × {}: build and upload",
+        kind.name(),
+        test.name()
+    ));
+    let scene =
+        GpuScene::build(ctx, mesh, kind, test, opts, &opts.kd).map_err(|e| anyhow!("{e}"))?;
+    let tracer = GpuTracer::new(ctx, &scene).map_err(|e| anyhow!("{e}"))?;
+    let twin = build_accel(cpu_twin(kind), test, mesh, opts);
+    let mut cells = Vec::new();
+    for (si, set) in SETS.iter().enumerate() {
+        progress(&format!("{} × {}: {set} rays", kind.name(), test.name()));
+        let any = *set == "shadow";
+        let mut times = Vec::new();
+        let mut verdict = Verdict::default();
+        for chunk in sets[si].chunks(CHUNK) {
+            let up = tracer.upload(chunk).map_err(|e| anyhow!("{e}"))?;
+            tracer.run(&up, any).map_err(|e| anyhow!("{e}"))?;
+            let v = if any {
+                let got = tracer.occlusion(&up).map_err(|e| anyhow!("{e}"))?;
+                let mut want = vec![false; chunk.len()];
+                twin.occluded_batch(chunk, &mut want);
+                verify::compare_occlusion(&want, &got)
+            } else {
+                let got = tracer.hits(&up).map_err(|e| anyhow!("{e}"))?;
+                let mut want = vec![None; chunk.len()];
+                twin.intersect_batch(chunk, &mut want);
+                verify::compare_hits(&want, &got)
+            };
+            verdict.checked += v.checked;
+            verdict.hit_miss += v.hit_miss;
+            verdict.distance += v.distance;
+            verdict.ties += v.ties;
+            for r in 0..reps.max(1) {
+                let secs = tracer.run(&up, any).map_err(|e| anyhow!("{e}"))?;
+                if times.len() <= r {
+                    times.push(0.0);
+                }
+                times[r] += secs;
+            }
+        }
+        let (med, lo, hi) = median_min_max(&times);
+        cells.push(GpuCell {
+            set,
+            rays: sets[si].len(),
+            mrays: sets[si].len() as f64 / med / 1e6,
+            spread: (hi - lo) / med,
+            verify: verdict,
+        });
+    }
+    Ok(GpuRow {
+        accel: kind.name(),
+        test: test.name(),
+        build_ms: scene.build_seconds * 1e3,
+        upload_ms: scene.upload_seconds * 1e3,
+        bytes: scene.bytes,
+        node_bytes: scene.node_bytes,
+        nodes: scene.num_nodes,
+        cells,
+    })
+}
