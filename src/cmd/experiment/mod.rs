@@ -2,6 +2,7 @@
 //! machine, written as Markdown, CSV, JSON and SVG plots.
 
 pub mod cull;
+pub mod gpu;
 pub mod kdtree_traversal;
 pub mod serve;
 pub mod split_heuristic;
@@ -45,6 +46,10 @@ enum Which {
     /// primaries × shadow rays against shadow maps × recursive against
     /// wavefront, at 1 and 2 passes, with the image differences.
     Whitted(whitted::WhittedExperimentArgs),
+    /// Paper 000's Table 2 on the GPU backend: Mrays/s of the stack kd-tree
+    /// and threaded BVH kernels × Plücker and Möller, node memory, the CPU
+    /// beside them, every answer checked.
+    Gpu(gpu::GpuExperimentArgs),
 }
 
 /// Run the chosen experiment.
@@ -56,6 +61,7 @@ pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
         Which::Serve(a) => serve::run(a),
         Which::Terrain(a) => terrain::run(a),
         Which::Whitted(a) => whitted::run(a),
+        Which::Gpu(a) => gpu::run(a),
     }
 }
 
