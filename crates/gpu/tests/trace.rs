@@ -115,3 +115,43 @@ fn shared_meshes_agree_with_cpu() {
         &[GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded],
     );
 }
+
+#[test]
+fn scenes_beyond_a_device_limit_fail_naming_the_limit() {
+    let mut small = gpu().clone();
+    eprintln!(
+        "adapter limits: max_storage_buffer_binding_size {}, max_buffer_size {}",
+        small.limits.max_storage_buffer_binding_size, small.limits.max_buffer_size
+    );
+    // A device that allows 4 KiB per binding cannot hold the bunny's
+    // 3,674 triangle records.
+    small.limits.max_storage_buffer_binding_size = 4096;
+    let mesh = raykit_io::load_mesh(&shared_data().join("meshes/bunny_3674.obj")).unwrap();
+    let err = GpuScene::build(
+        &small,
+        &mesh,
+        GpuAccelKind::KdStack,
+        TestKind::Plucker,
+        &BuildOptions::default(),
+        &KdOptions::default(),
+    )
+    .err()
+    .expect("the scene does not fit");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("max_storage_buffer_binding_size") && msg.contains("4096"),
+        "{msg}"
+    );
+    // Projection has no kernel: a clear error, not a wrong answer.
+    let err = GpuScene::build(
+        gpu(),
+        &mesh,
+        GpuAccelKind::KdStack,
+        TestKind::Projection,
+        &BuildOptions::default(),
+        &KdOptions::default(),
+    )
+    .err()
+    .expect("projection is refused");
+    assert!(err.to_string().contains("projection"), "{err}");
+}
