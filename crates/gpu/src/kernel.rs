@@ -24,6 +24,8 @@ pub mod wgsl {
     pub const BRUTE: &str = include_str!("shaders/brute.wgsl");
     /// Batch ray queries.
     pub const TRACE: &str = include_str!("shaders/trace.wgsl");
+    /// Per-ray maximum-mipmap terrain casting (Tevs et al. 2008).
+    pub const TERRAIN_MAXMIP: &str = include_str!("shaders/terrain_maxmip.wgsl");
 }
 
 /// One compute pipeline with an explicit layout.

@@ -1,0 +1,82 @@
+//! Throughput of the GPU terrain caster, for `raykit experiment gpu` and
+//! benchmarks: per-ray maximum-mipmap traversal (Tevs et al. 2008, paper
+//! 004's method C) timed from submission to completion of the kernel.
+
+use super::GpuTerrain;
+use crate::context::GpuContext;
+use crate::error::{GpuError, GpuResult};
+use crate::trace::CHUNK;
+use raykit_terrain::view::TerrainCamera;
+use raykit_terrain::{HeightField, MaxMipmap};
+use std::time::Instant;
+
+/// Timings of [`time_terrain_casts`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct TerrainTiming {
+    /// Rays per run (the view's pixels).
+    pub rays: usize,
+    /// Kernel seconds of each run, submission to completion.
+    pub seconds: Vec<f64>,
+    /// Millions of rays per second of the fastest run.
+    pub best_mrays: f64,
+    /// Millions of rays per second of the median run.
+    pub median_mrays: f64,
+    /// Rays that hit the terrain.
+    pub hits: usize,
+    /// Mean nodes visited plus cells tested per ray.
+    pub mean_steps: f64,
+    /// Seconds to upload the heights and pyramid and compile the kernel.
+    pub setup_seconds: f64,
+    /// Seconds to make and upload the rays (host, f64, then rounded).
+    pub ray_seconds: f64,
+}
+
+/// Cast `camera`'s view of `field` `reps` times (after one warm-up run) on
+/// the GPU and time the kernel. The view may have at most [`CHUNK`] pixels
+/// (one dispatch); `reps` at least 1.
+pub fn time_terrain_casts(
+    ctx: &GpuContext,
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    camera: &TerrainCamera,
+    reps: usize,
+) -> GpuResult<TerrainTiming> {
+    let pixels = camera.width as usize * camera.height as usize;
+    if pixels == 0 || pixels > CHUNK {
+        return Err(GpuError::Unsupported(format!(
+            "timing a {}x{} view; the timed view must have 1 to {CHUNK} pixels",
+            camera.width, camera.height
+        )));
+    }
+    let start = Instant::now();
+    let terrain = GpuTerrain::new(ctx, field, pyramid)?;
+    ctx.wait()?;
+    let setup_seconds = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let view = terrain.upload_view(ctx, field, camera, 0, pixels)?;
+    ctx.wait()?;
+    let ray_seconds = start.elapsed().as_secs_f64();
+    terrain.run(ctx, &view)?;
+    let mut seconds = Vec::with_capacity(reps.max(1));
+    for _ in 0..reps.max(1) {
+        seconds.push(terrain.run(ctx, &view)?);
+    }
+    let (hits, steps) = terrain.results(ctx, &view)?;
+    let mut sorted = seconds.clone();
+    sorted.sort_by(f64::total_cmp);
+    let mrays = |s: f64| pixels as f64 / s.max(1e-12) / 1e6;
+    Ok(TerrainTiming {
+        rays: pixels,
+        best_mrays: mrays(sorted[0]),
+        median_mrays: mrays(sorted[sorted.len() / 2]),
+        seconds,
+        hits: hits.iter().filter(|h| h.is_some()).count(),
+        mean_steps: steps
+            .iter()
+            .map(|s| (s.nodes + s.cells) as f64)
+            .sum::<f64>()
+            / pixels as f64,
+        setup_seconds,
+        ray_seconds,
+    })
+}
