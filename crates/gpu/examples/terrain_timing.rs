@@ -1,12 +1,12 @@
 //! GPU against CPU terrain ray casting on one view: the maximum-mipmap
-//! kernel's Mrays/s (Tevs et al. 2008, paper 004's method C; kernel time,
-//! submission to completion) beside the CPU's maxmip and paper 004's boxes
-//! casters (all cores, rays made and cast).
+//! kernel's Mrays/s (Tevs et al. 2008, paper 004's method C) and paper
+//! 004's boxes kernel (kernel time, submission to completion) beside the
+//! CPU's maxmip and boxes casters (all cores, rays made and cast).
 //!
 //! `cargo run --release -p raykit-gpu --example terrain_timing -- DEM [WIDTH HEIGHT REPS]`
 //! with DEM a file raykit-terrain reads or `fractal:SIZE`.
 
-use raykit_gpu::{time_terrain_casts, GpuContext};
+use raykit_gpu::{time_terrain_boxes, time_terrain_casts, GpuContext};
 use raykit_terrain::io::{load_dem, LoadOptions};
 use raykit_terrain::view::{cast_image, Caster};
 use raykit_terrain::{HeightField, MaxMipmap, TerrainCamera};
@@ -59,6 +59,14 @@ fn main() -> Result<(), String> {
         t.median_mrays,
         t.setup_seconds * 1e3,
         t.ray_seconds * 1e3
+    );
+    let b = time_terrain_boxes(&ctx, &field, &pyramid, &cam, 16.0, reps as usize)
+        .map_err(|e| e.to_string())?;
+    println!(
+        "gpu boxes tau 16: best {:.2} Mrays/s, median {:.2} (kernel); boxes selected and rays {:.0} ms",
+        b.best_mrays,
+        b.median_mrays,
+        b.ray_seconds * 1e3
     );
     for (name, caster) in [
         ("maxmip", Caster::MaxMipmap),

@@ -30,5 +30,5 @@ pub use buffers::{check_binding, output, read_words, storage, uniform};
 pub use context::GpuContext;
 pub use error::{GpuError, GpuResult};
 pub use scene::{gpu_test_supported, GpuAccelKind, GpuScene};
-pub use terrain::{time_terrain_casts, GpuTerrain, TerrainTiming};
+pub use terrain::{time_terrain_boxes, time_terrain_casts, GpuCaster, GpuTerrain, TerrainTiming};
 pub use trace::{GpuRays, GpuTracer, CHUNK};

@@ -1,6 +1,6 @@
-//! The GPU terrain caster (per-ray maximum-mipmap traversal, Tevs et al.
-//! 2008; paper 004's method C, in f32) against the CPU's f64 maximum-mipmap
-//! caster on every pixel of test views of the shared DEMs and a fractal
+//! The GPU terrain casters (per-ray maximum-mipmap traversal, Tevs et al.
+//! 2008, paper 004's method C; paper 004's per-frame boxes; in f32) against
+//! the CPU's f64 casters of the same kind on every pixel of test views of the shared DEMs and a fractal
 //! one: same hit or miss and same hit cell, distances within 1e-4
 //! relative. Pixels may differ only where f32 rounding decides: each
 //! difference must be explained and they must be under 0.1% of the pixels.
@@ -8,7 +8,7 @@
 mod support;
 
 use raykit_gpu::terrain::GpuGridRay;
-use raykit_gpu::{time_terrain_casts, GpuTerrain};
+use raykit_gpu::{time_terrain_boxes, time_terrain_casts, GpuCaster, GpuTerrain};
 use raykit_terrain::io::{load_dem, LoadOptions};
 use raykit_terrain::maxmip::trace;
 use raykit_terrain::view::{cast_image, Caster};
@@ -116,11 +116,25 @@ fn cpu_on_gpu_ray(field: &HeightField, pyramid: &MaxMipmap, r: &GpuGridRay) -> O
     .map(|h| TerrainHit { t: h.t + r.t0, ..h })
 }
 
-fn compare(field: &HeightField, pyramid: &MaxMipmap, cam: &TerrainCamera, what: &str) -> Agreement {
+fn compare(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    cam: &TerrainCamera,
+    caster: GpuCaster,
+    what: &str,
+) -> Agreement {
     let ctx = gpu();
-    let cpu = cast_image(field, pyramid, cam, Caster::MaxMipmap);
+    let cpu = cast_image(
+        field,
+        pyramid,
+        cam,
+        match caster {
+            GpuCaster::MaxMipmap => Caster::MaxMipmap,
+            GpuCaster::Boxes { tau } => Caster::Boxes { tau },
+        },
+    );
     let terrain = GpuTerrain::new(ctx, field, pyramid).unwrap();
-    let got = terrain.cast(ctx, field, cam).unwrap();
+    let got = terrain.cast(ctx, field, pyramid, cam, caster).unwrap();
     let rays = raykit_gpu::terrain::view_rays(field, cam, 0, cpu.hits.len());
     let mut a = Agreement {
         pixels: cpu.hits.len(),
@@ -221,14 +235,23 @@ fn views(field: &HeightField) -> Vec<TerrainCamera> {
 fn check_dem(name: &str, field: &HeightField) {
     let pyramid = MaxMipmap::new(field);
     let mut total = Agreement::default();
+    let casters = [GpuCaster::MaxMipmap, GpuCaster::Boxes { tau: 16.0 }];
     for (v, cam) in views(field).iter().enumerate() {
-        let a = compare(field, &pyramid, cam, &format!("{name} view {v}"));
-        assert!(a.hits > 0, "{name} view {v} sees no terrain");
-        total.pixels += a.pixels;
-        total.rounding += a.rounding;
-        total.border += a.border;
-        total.grazing += a.grazing;
-        total.unexplained.extend(a.unexplained);
+        for caster in casters {
+            let a = compare(
+                field,
+                &pyramid,
+                cam,
+                caster,
+                &format!("{name} {caster:?} view {v}"),
+            );
+            assert!(a.hits > 0, "{name} view {v} sees no terrain");
+            total.pixels += a.pixels;
+            total.rounding += a.rounding;
+            total.border += a.border;
+            total.grazing += a.grazing;
+            total.unexplained.extend(a.unexplained);
+        }
     }
     assert!(
         total.unexplained.is_empty(),
@@ -253,17 +276,17 @@ fn shared_dem(file: &str) -> HeightField {
 }
 
 #[test]
-fn gpu_maxmip_equals_cpu_on_the_lidar_dem() {
+fn gpu_casters_equal_cpu_on_the_lidar_dem() {
     check_dem("lidar_dem_400.tif", &shared_dem("lidar_dem_400.tif"));
 }
 
 #[test]
-fn gpu_maxmip_equals_cpu_on_srtm() {
+fn gpu_casters_equal_cpu_on_srtm() {
     check_dem("N57E011.hgt", &shared_dem("N57E011.hgt"));
 }
 
 #[test]
-fn gpu_maxmip_equals_cpu_on_terragen() {
+fn gpu_casters_equal_cpu_on_terragen() {
     check_dem(
         "RealisticTerrain_Large.ter",
         &shared_dem("RealisticTerrain_Large.ter"),
@@ -271,7 +294,7 @@ fn gpu_maxmip_equals_cpu_on_terragen() {
 }
 
 #[test]
-fn gpu_maxmip_equals_cpu_on_a_fractal() {
+fn gpu_casters_equal_cpu_on_a_fractal() {
     let dem = raykit_terrain::fractal::fractal(513, 7, 0.55);
     check_dem("fractal:513:7", &HeightField::new(&dem).unwrap());
 }
@@ -287,6 +310,8 @@ fn timing_reports_throughput() {
     assert_eq!(t.seconds.len(), 2);
     assert!(t.best_mrays > 0.0 && t.best_mrays >= t.median_mrays);
     assert!(t.hits > 0 && t.mean_steps > 1.0);
+    let b = time_terrain_boxes(gpu(), &field, &pyramid, &cam, 16.0, 2).unwrap();
+    assert_eq!(b.hits, t.hits);
 }
 
 #[test]

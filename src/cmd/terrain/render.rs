@@ -12,7 +12,7 @@ use crate::paths::ensure_not_input;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use raykit_gpu::{GpuContext, GpuTerrain};
+use raykit_gpu::{GpuCaster, GpuContext, GpuTerrain};
 use raykit_terrain::shadow::{light_above_ground, shadow_mask, Light, ShadowMethod};
 use raykit_terrain::view::{cast_image, Caster};
 use raykit_terrain::{Dem, HeightField, MaxMipmap, TerrainCamera};
@@ -47,7 +47,7 @@ pub enum CasterArg {
 pub enum BackendArg {
     /// The CPU casters, parallel over rows (every --caster).
     Cpu,
-    /// raykit-gpu's WGSL kernel (wgpu: Vulkan, Metal, DX12 or Mesa's lavapipe): per-ray maximum-mipmap traversal in f32 (--caster maxmip only).
+    /// raykit-gpu's WGSL kernels (wgpu: Vulkan, Metal, DX12 or Mesa's lavapipe), f32 (--caster maxmip or boxes).
     Gpu,
 }
 
@@ -75,14 +75,15 @@ raykit terrain render dem.tif --drape ortho.png --light 429452,5150685,30\n  \
 raykit terrain render fractal:513 --path 500,500,2300:4000,2500,2100:4500,4500,2200 --frames 120 --out frames/f{}.png\n  \
 raykit terrain render N57E011.hgt --backend gpu --heatmap steps.png\n\n\
 GPU backend (--backend gpu): the heights and the maximum mipmap are uploaded once and a WGSL \
-kernel casts one ray per pixel by per-ray maximum-mipmap traversal (Tevs et al. 2008, the same \
-walk as --caster maxmip) in f32 on the same declared surface; hit cells, distances and step \
-counts come back and the host shades them with the same code, so the image equals the CPU's \
-but at the rare pixels where f32 rounding decides (a hit on a cell border or a ray grazing the \
-surface). It needs a wgpu adapter (a Vulkan, Metal or DX12 driver, or Mesa's software \
-lavapipe: apt-get install mesa-vulkan-drivers) and casts with --caster maxmip only; the DEM's \
-heights and pyramid must each fit one storage buffer of the device (the error names the \
-limit).\n\n\
+kernel casts one ray per pixel in f32 on the same declared surface: --caster maxmip walks the \
+maximum mipmap per ray (Tevs et al. 2008) as the CPU does; --caster boxes takes paper 004's \
+boxes from the CPU's per-frame quadtree traversal, finds each pixel's nearest box entry and \
+marches from there. Hit cells, distances and step counts come back and the host shades them \
+with the same code, so the image equals the CPU's but at the rare pixels where f32 rounding \
+decides (a hit on a cell border or a ray grazing the surface). It needs a wgpu adapter (a \
+Vulkan, Metal or DX12 driver, or Mesa's software lavapipe: apt-get install \
+mesa-vulkan-drivers); --caster march runs on the CPU only; the DEM's heights and pyramid must \
+each fit one storage buffer of the device (the error names the limit).\n\n\
 Fly-through: --path renders --frames images along the polyline (evenly by distance); the camera \
 looks along the path, 10° downward. --out (and --heatmap) must contain {}, replaced by the frame \
 number (from 0, zero-padded to the same width)."
@@ -108,9 +109,9 @@ pub struct TerrainRenderArgs {
     /// Camera EYE:TARGET as X,Y,Z:X,Y,Z in map coordinates (the same as --eye and --target).
     #[arg(long, value_name = "X,Y,Z:X,Y,Z", value_parser = parse_camera, allow_hyphen_values = true, conflicts_with_all = ["eye", "target", "path"])]
     camera: Option<([f64; 3], [f64; 3])>,
-    /// Ray caster [default: boxes with --backend cpu, maxmip with --backend gpu].
-    #[arg(long, value_enum)]
-    caster: Option<CasterArg>,
+    /// Ray caster (--backend gpu: maxmip or boxes).
+    #[arg(long, value_enum, default_value_t = CasterArg::Boxes)]
+    caster: CasterArg,
     /// Cast the rays on the CPU or the GPU.
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     backend: BackendArg,
@@ -409,16 +410,15 @@ fn write_png(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<()> {
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// The caster: `--caster`, or the backend's default (boxes on the CPU,
-/// maxmip on the GPU); the GPU backend casts with the maximum mipmap only.
-fn resolve_caster(args: &TerrainRenderArgs) -> Result<CasterArg> {
-    match (args.backend, args.caster) {
-        (BackendArg::Cpu, c) => Ok(c.unwrap_or(CasterArg::Boxes)),
-        (BackendArg::Gpu, None | Some(CasterArg::Maxmip)) => Ok(CasterArg::Maxmip),
-        (BackendArg::Gpu, Some(c)) => bail!(
-            "--backend gpu casts with the maximum mipmap only (--caster maxmip, the default there); \
-             --caster {} runs on the CPU (--backend cpu)",
-            c.to_possible_value().map_or("?".into(), |v| v.get_name().to_string())
+/// The GPU caster for `--caster` (maxmip or boxes; the reference march
+/// runs on the CPU only).
+fn gpu_caster(args: &TerrainRenderArgs) -> Result<GpuCaster> {
+    match args.caster {
+        CasterArg::Maxmip => Ok(GpuCaster::MaxMipmap),
+        CasterArg::Boxes => Ok(GpuCaster::Boxes { tau: args.tau }),
+        CasterArg::March => bail!(
+            "--backend gpu casts with --caster maxmip or boxes; --caster march (the reference) \
+             runs on the CPU (--backend cpu)"
         ),
     }
 }
@@ -488,7 +488,11 @@ fn check_args(args: &TerrainRenderArgs) -> Result<()> {
 /// Render and write the PNG(s).
 pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
     check_args(&args)?;
-    let caster_arg = resolve_caster(&args)?;
+    let caster_arg = args.caster;
+    let gpu_caster = match args.backend {
+        BackendArg::Gpu => Some(gpu_caster(&args)?),
+        BackendArg::Cpu => None,
+    };
     let frames = if args.path.is_some() { args.frames } else { 1 };
     let digits = (frames.saturating_sub(1)).to_string().len();
     let outputs = |pattern: &Path| -> Vec<PathBuf> {
@@ -615,16 +619,18 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
         CasterArg::Maxmip => Caster::MaxMipmap,
         CasterArg::Boxes => Caster::Boxes { tau: args.tau },
     };
-    let caster_name = match (caster_arg, &gpu) {
-        (_, Some((ctx, _, setup_s))) => format!(
-            "maxmip on the GPU, {}, upload {:.0} ms",
+    let mut caster_name = match caster_arg {
+        CasterArg::March => "march".to_string(),
+        CasterArg::Maxmip => "maxmip".to_string(),
+        CasterArg::Boxes => format!("boxes, tau {}", args.tau),
+    };
+    if let Some((ctx, _, setup_s)) = &gpu {
+        caster_name += &format!(
+            " on the GPU, {}, upload {:.0} ms",
             ctx.describe(),
             setup_s * 1e3
-        ),
-        (CasterArg::March, None) => "march".to_string(),
-        (CasterArg::Maxmip, None) => "maxmip".to_string(),
-        (CasterArg::Boxes, None) => format!("boxes, tau {}", args.tau),
-    };
+        );
+    }
 
     let bar = if args.path.is_some() {
         ProgressBar::new(frames as u64).with_style(
@@ -650,7 +656,8 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
         };
         let (cast, cast_s) = match &gpu {
             Some((ctx, terrain, _)) => {
-                let (cast, s) = timed(|| terrain.cast(ctx, &field, &camera));
+                let caster = gpu_caster.expect("set with the GPU");
+                let (cast, s) = timed(|| terrain.cast(ctx, &field, &pyramid, &camera, caster));
                 (cast.map_err(|e| anyhow!("--backend gpu: {e}"))?, s)
             }
             None => pool.install(|| timed(|| cast_image(&field, &pyramid, &camera, caster))),

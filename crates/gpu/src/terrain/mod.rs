@@ -8,15 +8,19 @@
 //! - [`GpuTerrain`]: the uploaded surface and the compiled kernel;
 //! - [`GpuTerrain::cast`]: a [`CastImage`](raykit_terrain::view::CastImage)
 //!   like the CPU's `cast_image`, so the host shades it the same way;
-//! - [`time_terrain_casts`]: Mrays/s of the kernel for benchmarks.
+//! - [`time_terrain_casts`]: Mrays/s of the kernel for benchmarks;
+//! - paper 004's per-frame boxes ([`GpuCaster::Boxes`],
+//!   `shaders/terrain_boxes.wgsl`): the CPU's boxes uploaded, each pixel's
+//!   nearest box entry found on the GPU, a march from there.
 
+mod boxes;
 mod cast;
 mod rays;
 mod timing;
 
-pub use cast::GpuView;
+pub use cast::{GpuCaster, GpuView};
 pub use rays::{ray_words, view_rays, GpuGridRay, RAY_WORDS};
-pub use timing::{time_terrain_casts, TerrainTiming};
+pub use timing::{time_terrain_boxes, time_terrain_casts, TerrainTiming};
 
 use crate::buffers::storage;
 use crate::context::GpuContext;
@@ -40,7 +44,15 @@ const TERRAIN_GROUP: [BindingKind; 5] = [
     BindingKind::Uniform,
 ];
 
-/// Uniform block of `shaders/terrain_maxmip.wgsl`.
+/// Group 1 of `shaders/terrain_boxes.wgsl`: boxes, row lists (storage),
+/// chunk parameters (uniform).
+const BOXES_GROUP: [BindingKind; 3] = [
+    BindingKind::Storage,
+    BindingKind::Storage,
+    BindingKind::Uniform,
+];
+
+/// Uniform block of `shaders/terrain_cell.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct TerrainParams {
@@ -59,6 +71,8 @@ pub struct GpuTerrain {
     maxes: wgpu::Buffer,
     params: TerrainParams,
     kernel: Kernel,
+    boxes_kernel: Kernel,
+    cells: (u32, u32),
     /// Bytes uploaded (heights and pyramid maxima).
     pub bytes: u64,
 }
@@ -108,9 +122,16 @@ impl GpuTerrain {
         let kernel = Kernel::new(
             ctx,
             "terrain maxmip",
-            &[wgsl::COMMON, wgsl::TERRAIN_MAXMIP],
+            &[wgsl::COMMON, wgsl::TERRAIN_CELL, wgsl::TERRAIN_MAXMIP],
             "terrain_maxmip",
             &[&TERRAIN_GROUP],
+        )?;
+        let boxes_kernel = Kernel::new(
+            ctx,
+            "terrain boxes",
+            &[wgsl::COMMON, wgsl::TERRAIN_CELL, wgsl::TERRAIN_BOXES],
+            "terrain_boxes",
+            &[&TERRAIN_GROUP, &BOXES_GROUP],
         )?;
         Ok(GpuTerrain {
             heights: heights_buf,
@@ -123,6 +144,8 @@ impl GpuTerrain {
                 levels,
             },
             kernel,
+            boxes_kernel,
+            cells: (cw as u32, ch as u32),
             bytes: 4 * (heights.len() + maxes.len()) as u64,
         })
     }

@@ -2,7 +2,7 @@
 //! benchmarks: per-ray maximum-mipmap traversal (Tevs et al. 2008, paper
 //! 004's method C) timed from submission to completion of the kernel.
 
-use super::GpuTerrain;
+use super::{GpuCaster, GpuTerrain};
 use crate::context::GpuContext;
 use crate::error::{GpuError, GpuResult};
 use crate::trace::CHUNK;
@@ -27,18 +27,44 @@ pub struct TerrainTiming {
     pub mean_steps: f64,
     /// Seconds to upload the heights and pyramid and compile the kernel.
     pub setup_seconds: f64,
-    /// Seconds to make and upload the rays (host, f64, then rounded).
+    /// Seconds to make and upload the rays (host, f64, then rounded) and,
+    /// for the boxes, to select and upload them.
     pub ray_seconds: f64,
 }
 
 /// Cast `camera`'s view of `field` `reps` times (after one warm-up run) on
-/// the GPU and time the kernel. The view may have at most [`CHUNK`] pixels
-/// (one dispatch); `reps` at least 1.
+/// the GPU with the per-ray maximum-mipmap kernel and time the kernel. The
+/// view may have at most [`CHUNK`] pixels (one dispatch); `reps` at least 1.
 pub fn time_terrain_casts(
     ctx: &GpuContext,
     field: &HeightField,
     pyramid: &MaxMipmap,
     camera: &TerrainCamera,
+    reps: usize,
+) -> GpuResult<TerrainTiming> {
+    time_caster(ctx, field, pyramid, camera, GpuCaster::MaxMipmap, reps)
+}
+
+/// [`time_terrain_casts`] for paper 004's per-frame boxes with LOD `tau`:
+/// the kernel time covers each pixel's nearest box entry and its march; the
+/// CPU's box selection is in `ray_seconds`.
+pub fn time_terrain_boxes(
+    ctx: &GpuContext,
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    camera: &TerrainCamera,
+    tau: f64,
+    reps: usize,
+) -> GpuResult<TerrainTiming> {
+    time_caster(ctx, field, pyramid, camera, GpuCaster::Boxes { tau }, reps)
+}
+
+fn time_caster(
+    ctx: &GpuContext,
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    camera: &TerrainCamera,
+    caster: GpuCaster,
     reps: usize,
 ) -> GpuResult<TerrainTiming> {
     let pixels = camera.width as usize * camera.height as usize;
@@ -53,7 +79,7 @@ pub fn time_terrain_casts(
     ctx.wait()?;
     let setup_seconds = start.elapsed().as_secs_f64();
     let start = Instant::now();
-    let view = terrain.upload_view(ctx, field, camera, 0, pixels)?;
+    let view = terrain.upload_view(ctx, field, pyramid, camera, caster, 0, pixels)?;
     ctx.wait()?;
     let ray_seconds = start.elapsed().as_secs_f64();
     terrain.run(ctx, &view)?;
