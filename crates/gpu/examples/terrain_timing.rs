@@ -53,6 +53,11 @@ fn main() -> Result<(), String> {
         field.width, field.height, t.hits, t.mean_steps
     );
     println!(
+        "device {}: storage binding limit {} MiB",
+        ctx.describe(),
+        ctx.limits.max_storage_buffer_binding_size >> 20
+    );
+    println!(
         "gpu maxmip ({}): best {:.2} Mrays/s, median {:.2} (kernel); setup {:.0} ms, rays {:.0} ms",
         ctx.describe(),
         t.best_mrays,

@@ -328,3 +328,22 @@ fn oversized_grids_are_refused_with_a_reason() {
         "{text}"
     );
 }
+
+/// A DEM whose heights exceed one storage binding (a 16k² DEM on many
+/// devices) is refused naming the buffer and the limit, never panics: the
+/// device's limit is lowered here to make a small DEM too big.
+#[test]
+fn a_dem_over_the_binding_limit_names_the_limit() {
+    let mut ctx = gpu().clone();
+    ctx.limits.max_storage_buffer_binding_size = 4096;
+    let field = HeightField::new(&raykit_terrain::fractal::fractal(65, 1, 0.55)).unwrap();
+    let pyramid = MaxMipmap::new(&field);
+    let err = GpuTerrain::new(&ctx, &field, &pyramid)
+        .err()
+        .expect("refused");
+    let text = err.to_string();
+    assert!(
+        text.contains("heights of a 65x65 DEM") && text.contains("max_storage_buffer_binding_size"),
+        "{text}"
+    );
+}
