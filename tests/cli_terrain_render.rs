@@ -157,6 +157,14 @@ fn gpu_backend_gives_the_cpu_image() {
         );
     }
 
+    let o = render(&g, &["--backend", "gpu"]);
+    ok(&o);
+    let e = text(&o.stderr);
+    assert!(
+        e.contains("maxmip on the GPU"),
+        "the GPU's default caster: {e}"
+    );
+
     let o = render(&g, &["--backend", "gpu", "--caster", "march"]);
     assert!(!o.status.success(), "--backend gpu --caster march accepted");
     let e = text(&o.stderr);

@@ -30,8 +30,7 @@ use raykit_terrain::{HeightField, MaxMipmap};
 
 /// Most pyramid levels the kernel's parameter block holds.
 pub const MAX_LEVELS: usize = 24;
-/// Most cells along x or y: the kernel packs (col, row) into 16 bits each
-/// (and its traversal stack is sized for the levels this gives).
+/// Most cells along x or y: the kernels pack (col, row) into 16 bits each.
 pub const MAX_CELLS: usize = 65_535;
 
 /// The kernel's bindings: heights, pyramid maxima, rays (storage),
