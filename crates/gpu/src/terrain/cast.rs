@@ -62,7 +62,7 @@ pub struct GpuView {
 
 impl GpuTerrain {
     /// Upload the rays of pixels `first .. first + count` of `camera`
-    /// (`count` at most [`CHUNK`]) and, for paper 004's boxes, the frame's
+    /// (`count` is cut to [`CHUNK`] and to the image) and, for paper 004's boxes, the frame's
     /// boxes (selected on the CPU from `pyramid`).
     #[allow(clippy::too_many_arguments)]
     pub fn upload_view(
@@ -75,7 +75,8 @@ impl GpuTerrain {
         first: usize,
         count: usize,
     ) -> GpuResult<GpuView> {
-        let count = count.min(CHUNK);
+        let pixels = camera.width as usize * camera.height as usize;
+        let count = count.min(CHUNK).min(pixels.saturating_sub(first));
         let rays = view_rays(field, camera, first, count);
         let (x, y, row) = grid(ctx, count)?;
         let params = TerrainParams {
