@@ -24,6 +24,12 @@ pub mod wgsl {
     pub const BRUTE: &str = include_str!("shaders/brute.wgsl");
     /// Batch ray queries.
     pub const TRACE: &str = include_str!("shaders/trace.wgsl");
+    /// Terrain bindings and the per-cell test of the declared surface.
+    pub const TERRAIN_CELL: &str = include_str!("shaders/terrain_cell.wgsl");
+    /// Paper 004's per-frame boxes: nearest box entry, then a march.
+    pub const TERRAIN_BOXES: &str = include_str!("shaders/terrain_boxes.wgsl");
+    /// Per-ray maximum-mipmap terrain casting (Tevs et al. 2008).
+    pub const TERRAIN_MAXMIP: &str = include_str!("shaders/terrain_maxmip.wgsl");
 }
 
 /// One compute pipeline with an explicit layout.

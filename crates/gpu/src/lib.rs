@@ -10,6 +10,9 @@
 //!   (`shaders/bvh_threaded.wgsl`), or brute force; triangles precomputed for
 //!   paper 000's Plücker test or Möller–Trumbore (paper 001).
 //! - [`GpuTracer`]: batch nearest-hit and occlusion queries.
+//! - [`GpuTerrain`]: height-field ray casting by per-ray maximum-mipmap
+//!   traversal (Tevs et al. 2008, paper 004's method C) on the declared
+//!   two-triangles-per-cell surface of `raykit-terrain`.
 //!
 //! Every kernel is WGSL assembled from small pieces (`shaders/`): the
 //! common records, the scene bindings, one triangle test, one structure, one
@@ -20,10 +23,12 @@ mod context;
 mod error;
 pub mod kernel;
 mod scene;
+pub mod terrain;
 mod trace;
 
 pub use buffers::{check_binding, output, read_words, storage, uniform};
 pub use context::GpuContext;
 pub use error::{GpuError, GpuResult};
 pub use scene::{gpu_test_supported, GpuAccelKind, GpuScene};
+pub use terrain::{time_terrain_boxes, time_terrain_casts, GpuCaster, GpuTerrain, TerrainTiming};
 pub use trace::{GpuRays, GpuTracer, CHUNK};

@@ -12,6 +12,7 @@ use crate::paths::ensure_not_input;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use raykit_gpu::{GpuCaster, GpuContext, GpuTerrain};
 use raykit_terrain::shadow::{light_above_ground, shadow_mask, Light, ShadowMethod};
 use raykit_terrain::view::{cast_image, Caster};
 use raykit_terrain::{Dem, HeightField, MaxMipmap, TerrainCamera};
@@ -31,7 +32,7 @@ const PATH_PITCH_DEG: f64 = 10.0;
 const SANE_DIAGONALS: f64 = 10.0;
 
 /// Which caster (all three are exact and give identical images).
-#[derive(Clone, Copy, Debug, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum CasterArg {
     /// Per-cell 2D DDA from the grid's bounding box (the reference).
     March,
@@ -39,6 +40,15 @@ pub enum CasterArg {
     Maxmip,
     /// Paper 004: per-frame quadtree boxes with LOD τ, then a march from each pixel's box entry.
     Boxes,
+}
+
+/// Where the rays are cast (shading is on the host either way).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// The CPU casters, parallel over rows (every --caster).
+    Cpu,
+    /// raykit-gpu's WGSL kernels (wgpu: Vulkan, Metal, DX12 or Mesa's lavapipe), f32 (--caster maxmip or boxes).
+    Gpu,
 }
 
 /// Eye positions of a fly-through, map coordinates.
@@ -62,7 +72,18 @@ Examples:\n  raykit terrain render N57E011.hgt --out n57.png\n  \
 raykit terrain render fractal:1025:7 --sun 300,20 --heatmap steps.png\n  \
 raykit terrain render dem.tif --eye 429000,5149000,900 --target 430500,5151000,300 --caster maxmip\n  \
 raykit terrain render dem.tif --drape ortho.png --light 429452,5150685,30\n  \
-raykit terrain render fractal:513 --path 500,500,2300:4000,2500,2100:4500,4500,2200 --frames 120 --out frames/f{}.png\n\n\
+raykit terrain render fractal:513 --path 500,500,2300:4000,2500,2100:4500,4500,2200 --frames 120 --out frames/f{}.png\n  \
+raykit terrain render N57E011.hgt --backend gpu --heatmap steps.png\n\n\
+GPU backend (--backend gpu): the heights and the maximum mipmap are uploaded once and a WGSL \
+kernel casts one ray per pixel in f32 on the same declared surface: --caster maxmip (the \
+default there) walks the maximum mipmap per ray (Tevs et al. 2008) as the CPU does; --caster boxes takes paper 004's \
+boxes from the CPU's per-frame quadtree traversal, finds each pixel's nearest box entry and \
+marches from there. Hit cells, distances and step counts come back and the host shades them \
+with the same code, so the image equals the CPU's but at the rare pixels where f32 rounding \
+decides (a hit on a cell border or a ray grazing the surface). It needs a wgpu adapter (a \
+Vulkan, Metal or DX12 driver, or Mesa's software lavapipe: apt-get install \
+mesa-vulkan-drivers); --caster march runs on the CPU only; the DEM's heights and pyramid must \
+each fit one storage buffer of the device (the error names the limit).\n\n\
 Fly-through: --path renders --frames images along the polyline (evenly by distance); the camera \
 looks along the path, 10° downward. --out (and --heatmap) must contain {}, replaced by the frame \
 number (from 0, zero-padded to the same width)."
@@ -88,9 +109,12 @@ pub struct TerrainRenderArgs {
     /// Camera EYE:TARGET as X,Y,Z:X,Y,Z in map coordinates (the same as --eye and --target).
     #[arg(long, value_name = "X,Y,Z:X,Y,Z", value_parser = parse_camera, allow_hyphen_values = true, conflicts_with_all = ["eye", "target", "path"])]
     camera: Option<([f64; 3], [f64; 3])>,
-    /// Ray caster.
-    #[arg(long, value_enum, default_value_t = CasterArg::Boxes)]
-    caster: CasterArg,
+    /// Ray caster [default: boxes with --backend cpu, maxmip with --backend gpu (the faster of the two on each, measured on lavapipe)].
+    #[arg(long, value_enum)]
+    caster: Option<CasterArg>,
+    /// Cast the rays on the CPU or the GPU.
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    backend: BackendArg,
     /// LOD of --caster boxes: refine a quadtree node while it covers at least 4·τ² pixels.
     #[arg(long, default_value_t = 16.0)]
     tau: f64,
@@ -386,6 +410,37 @@ fn write_png(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<()> {
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
+/// The caster: `--caster`, or the backend's faster one (paper 004's boxes
+/// on the CPU, the per-ray maximum mipmap on the GPU).
+fn resolve_caster(args: &TerrainRenderArgs) -> CasterArg {
+    args.caster.unwrap_or(match args.backend {
+        BackendArg::Cpu => CasterArg::Boxes,
+        BackendArg::Gpu => CasterArg::Maxmip,
+    })
+}
+
+/// The GPU caster for `--caster` (maxmip or boxes; the reference march
+/// runs on the CPU only).
+fn gpu_caster(args: &TerrainRenderArgs) -> Result<GpuCaster> {
+    match resolve_caster(args) {
+        CasterArg::Maxmip => Ok(GpuCaster::MaxMipmap),
+        CasterArg::Boxes => Ok(GpuCaster::Boxes { tau: args.tau }),
+        CasterArg::March => bail!(
+            "--backend gpu casts with --caster maxmip or boxes; --caster march (the reference) \
+             runs on the CPU (--backend cpu)"
+        ),
+    }
+}
+
+/// The GPU device and the DEM uploaded to it (`--backend gpu`).
+fn open_gpu(field: &HeightField, pyramid: &MaxMipmap) -> Result<(GpuContext, GpuTerrain, f64)> {
+    let start = std::time::Instant::now();
+    let ctx = GpuContext::new().map_err(|e| anyhow!("--backend gpu: {e}"))?;
+    let terrain =
+        GpuTerrain::new(&ctx, field, pyramid).map_err(|e| anyhow!("--backend gpu: {e}"))?;
+    Ok((ctx, terrain, start.elapsed().as_secs_f64()))
+}
+
 /// Validate the plain numeric arguments.
 fn check_args(args: &TerrainRenderArgs) -> Result<()> {
     if args.width == 0 || args.width > 16384 {
@@ -442,6 +497,11 @@ fn check_args(args: &TerrainRenderArgs) -> Result<()> {
 /// Render and write the PNG(s).
 pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
     check_args(&args)?;
+    let caster_arg = resolve_caster(&args);
+    let gpu_caster = match args.backend {
+        BackendArg::Gpu => Some(gpu_caster(&args)?),
+        BackendArg::Cpu => None,
+    };
     let frames = if args.path.is_some() { args.frames } else { 1 };
     let digits = (frames.saturating_sub(1)).to_string().len();
     let outputs = |pattern: &Path| -> Vec<PathBuf> {
@@ -559,16 +619,27 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
         }
     };
 
-    let caster = match args.caster {
+    let gpu = match args.backend {
+        BackendArg::Gpu => Some(open_gpu(&field, &pyramid)?),
+        BackendArg::Cpu => None,
+    };
+    let caster = match caster_arg {
         CasterArg::March => Caster::March,
         CasterArg::Maxmip => Caster::MaxMipmap,
         CasterArg::Boxes => Caster::Boxes { tau: args.tau },
     };
-    let caster_name = match args.caster {
+    let mut caster_name = match caster_arg {
         CasterArg::March => "march".to_string(),
         CasterArg::Maxmip => "maxmip".to_string(),
         CasterArg::Boxes => format!("boxes, tau {}", args.tau),
     };
+    if let Some((ctx, _, setup_s)) = &gpu {
+        caster_name += &format!(
+            " on the GPU, {}, upload {:.0} ms",
+            ctx.describe(),
+            setup_s * 1e3
+        );
+    }
 
     let bar = if args.path.is_some() {
         ProgressBar::new(frames as u64).with_style(
@@ -592,8 +663,14 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
             width: args.width,
             height: args.height,
         };
-        let (cast, cast_s) =
-            pool.install(|| timed(|| cast_image(&field, &pyramid, &camera, caster)));
+        let (cast, cast_s) = match &gpu {
+            Some((ctx, terrain, _)) => {
+                let caster = gpu_caster.expect("set with the GPU");
+                let (cast, s) = timed(|| terrain.cast(ctx, &field, &pyramid, &camera, caster));
+                (cast.map_err(|e| anyhow!("--backend gpu: {e}"))?, s)
+            }
+            None => pool.install(|| timed(|| cast_image(&field, &pyramid, &camera, caster))),
+        };
         let frame = camera.frame();
         let (rgb, shade_s) = pool.install(|| timed(|| shading.image(&frame, &cast.hits)));
         let start_write = std::time::Instant::now();
@@ -644,7 +721,7 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
         load_s * 1e3,
         pyramid_s * 1e3,
     );
-    let boxes_text = match args.caster {
+    let boxes_text = match caster_arg {
         CasterArg::Boxes if boxes_min == boxes_max => format!(", {boxes_max} boxes"),
         CasterArg::Boxes => format!(", {boxes_min}..{boxes_max} boxes"),
         _ => String::new(),
