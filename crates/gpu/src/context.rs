@@ -19,6 +19,10 @@ pub struct GpuContext {
     /// The limits the device was opened with (the adapter's own).
     pub limits: wgpu::Limits,
     errors: Arc<std::sync::Mutex<Vec<String>>>,
+    /// Compiled kernels by source, entry point and layout, so a kernel is
+    /// compiled once per device however many scenes use it.
+    pub(crate) kernels:
+        Arc<std::sync::Mutex<std::collections::HashMap<u64, crate::kernel::Kernel>>>,
 }
 
 impl std::fmt::Debug for GpuContext {
@@ -64,6 +68,7 @@ impl GpuContext {
             info,
             limits,
             errors,
+            kernels: Arc::default(),
         })
     }
 

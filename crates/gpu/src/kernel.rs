@@ -33,6 +33,7 @@ pub mod wgsl {
 }
 
 /// One compute pipeline with an explicit layout.
+#[derive(Clone)]
 pub struct Kernel {
     /// The pipeline.
     pub pipeline: wgpu::ComputePipeline,
@@ -61,7 +62,7 @@ pub fn layout_entry(binding: u32, kind: BindingKind) -> wgpu::BindGroupLayoutEnt
 }
 
 /// How a buffer is bound.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum BindingKind {
     /// `var<storage, read>`.
     Storage,
@@ -92,6 +93,15 @@ impl Kernel {
         groups: &[&[BindingKind]],
     ) -> GpuResult<Kernel> {
         let source = sources.join("\n");
+        let key = {
+            use std::hash::{Hash, Hasher};
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            (&source, entry, groups).hash(&mut h);
+            h.finish()
+        };
+        if let Some(k) = ctx.kernels.lock().unwrap().get(&key) {
+            return Ok(k.clone());
+        }
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = ctx
             .device
@@ -136,7 +146,9 @@ impl Kernel {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Shader(format!("{label}: {e}")));
         }
-        Ok(Kernel { pipeline, layouts })
+        let kernel = Kernel { pipeline, layouts };
+        ctx.kernels.lock().unwrap().insert(key, kernel.clone());
+        Ok(kernel)
     }
 
     /// A bind group for group `g` over `buffers` (bindings 0, 1, ...).
