@@ -3,7 +3,7 @@
 //! Möller) on primary, shadow and incoherent rays, with the node memory of
 //! each layout (Table 1) and the CPU's speed on the same structure beside it.
 
-use super::{cached_dragon, shared_mesh, write_csv, write_text};
+use super::{cached_dragon, gpu_terrain, shared_mesh, write_csv, write_text};
 use crate::backend::{cpu_twin, open_gpu};
 use crate::build_args::BuildArgs;
 use crate::cmd::bench_gpu::gpu_lists;
@@ -46,7 +46,14 @@ pub struct GpuExperimentArgs {
     /// Triangle tests (`all` = plucker,moller).
     #[arg(long, default_value = "all")]
     test: String,
-    /// Output folder for results.md, speed.csv and results.json.
+    /// DEMs for the terrain casters (repeat the option; default: the shared
+    /// Terragen, SRTM and lidar DEMs; `none` skips the terrain part).
+    #[arg(long)]
+    dem: Vec<String>,
+    /// Terrain view size `WIDTHxHEIGHT`.
+    #[arg(long, default_value = "1024x768", value_parser = parse_view)]
+    terrain_view: (u32, u32),
+    /// Output folder for results.md, speed.csv, terrain.csv and results.json.
     #[arg(long, default_value = "experiments/gpu")]
     out: PathBuf,
     #[command(flatten)]
@@ -72,6 +79,36 @@ struct Row {
     checked: usize,
     disagreements: usize,
     ties: usize,
+}
+
+fn parse_view(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
+    let n = |v: &str| {
+        v.parse::<u32>()
+            .ok()
+            .filter(|&x| (1..=16384).contains(&x))
+            .ok_or_else(|| format!("'{v}' is not a size from 1 to 16384"))
+    };
+    Ok((n(w)?, n(h)?))
+}
+
+fn default_dems() -> Vec<String> {
+    [
+        "RealisticTerrain_Large.ter",
+        "N57E011.hgt",
+        "lidar_dem_400.tif",
+    ]
+    .iter()
+    .map(|f| {
+        super::shared_data()
+            .join("terrain")
+            .join(f)
+            .to_string_lossy()
+            .into_owned()
+    })
+    .collect()
 }
 
 fn default_meshes() -> Vec<String> {
@@ -168,11 +205,25 @@ pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
         }
         bar.finish_and_clear();
     }
-    let md = markdown(&rows, &args, &ctx.describe(), all.current_num_threads());
+    let dems = match args.dem.as_slice() {
+        [] => default_dems(),
+        [n] if n == "none" => Vec::new(),
+        d => d.to_vec(),
+    };
+    let mut terrain = Vec::new();
+    for dem in &dems {
+        eprintln!("terrain: {dem}…");
+        terrain.push(all.install(|| gpu_terrain::measure_dem(&ctx, dem, args.terrain_view, reps))?);
+    }
+    let mut md = markdown(&rows, &args, &ctx.describe(), all.current_num_threads());
+    if !terrain.is_empty() {
+        md += &gpu_terrain::markdown(&terrain, all.current_num_threads());
+        write_csv(&args.out, "terrain.csv", &terrain)?;
+    }
     print!("{md}");
     write_text(&args.out, "results.md", &md)?;
     write_csv(&args.out, "speed.csv", &rows)?;
-    let json = serde_json::json!({ "adapter": ctx.describe(), "size": args.size, "reps": reps, "rows": rows });
+    let json = serde_json::json!({ "adapter": ctx.describe(), "size": args.size, "reps": reps, "rows": rows, "terrain": terrain });
     write_text(
         &args.out,
         "results.json",

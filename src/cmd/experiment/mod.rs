@@ -3,6 +3,7 @@
 
 pub mod cull;
 pub mod gpu;
+pub mod gpu_terrain;
 pub mod kdtree_traversal;
 pub mod serve;
 pub mod split_heuristic;
