@@ -23,7 +23,9 @@ pub struct GpuContext {
 
 impl std::fmt::Debug for GpuContext {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("GpuContext").field("adapter", &self.describe()).finish()
+        f.debug_struct("GpuContext")
+            .field("adapter", &self.describe())
+            .finish()
     }
 }
 

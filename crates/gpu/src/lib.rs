@@ -10,6 +10,8 @@
 //!   (`shaders/bvh_threaded.wgsl`), or brute force; triangles precomputed for
 //!   paper 000's Plücker test or Möller–Trumbore (paper 001).
 //! - [`GpuTracer`]: batch nearest-hit and occlusion queries.
+//! - [`render_whitted_gpu`]: the Whitted renderer, as paper 000's single
+//!   kernel or paper 001's stream of kernels over ray queues.
 //!
 //! Every kernel is WGSL assembled from small pieces (`shaders/`): the
 //! common records, the scene bindings, one triangle test, one structure, one
@@ -19,11 +21,13 @@ mod buffers;
 mod context;
 mod error;
 pub mod kernel;
+pub mod render;
 mod scene;
 mod trace;
 
 pub use buffers::{check_binding, output, read_words, storage, uniform};
 pub use context::GpuContext;
 pub use error::{GpuError, GpuResult};
+pub use render::{check_options, render_whitted_gpu, ShadeScene, MAX_GPU_DEPTH};
 pub use scene::{gpu_test_supported, GpuAccelKind, GpuScene};
 pub use trace::{GpuRays, GpuTracer, CHUNK};

@@ -198,7 +198,8 @@ impl GpuScene {
             uniform(ctx, "scene parameters", &params),
         ];
         let node_bytes = flat.nodes.len() * 4;
-        let bytes = node_bytes + (flat.indices.len() + flat.tris.words.len() + flat.tris.prims.len()) * 4;
+        let bytes =
+            node_bytes + (flat.indices.len() + flat.tris.words.len() + flat.tris.prims.len()) * 4;
         ctx.wait()?;
         Ok(GpuScene {
             kind,

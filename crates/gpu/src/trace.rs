@@ -50,7 +50,13 @@ impl<'a> GpuTracer<'a> {
         src.push(wgsl::TRACE);
         let groups: [&[BindingKind]; 2] = [&SCENE_GROUP, &TRACE_GROUP];
         let name = format!("{} {}", scene.kind.name(), scene.test.name());
-        let nearest = Kernel::new(ctx, &format!("{name} nearest"), &src, "trace_nearest", &groups)?;
+        let nearest = Kernel::new(
+            ctx,
+            &format!("{name} nearest"),
+            &src,
+            "trace_nearest",
+            &groups,
+        )?;
         let any = Kernel::new(ctx, &format!("{name} any"), &src, "trace_any", &groups)?;
         Ok(GpuTracer {
             ctx,
@@ -66,8 +72,10 @@ impl<'a> GpuTracer<'a> {
         let mut words = Vec::with_capacity(rays.len() * 8);
         for r in rays {
             words.extend(
-                [r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar]
-                    .map(f32::to_bits),
+                [
+                    r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar,
+                ]
+                .map(f32::to_bits),
             );
         }
         let (x, y, row) = grid(self.ctx, rays.len())?;
@@ -97,7 +105,9 @@ impl<'a> GpuTracer<'a> {
         let mut enc = self
             .ctx
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("trace") });
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("trace"),
+            });
         dispatch(&mut enc, kernel, &[&g0, &g1], rays.groups);
         let start = Instant::now();
         self.ctx.queue.submit([enc.finish()]);

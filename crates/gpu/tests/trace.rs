@@ -14,7 +14,9 @@ use support::{compare, describe, gpu, shared_data};
 fn cpu_accel<T: TriangleTest>(mesh: &TriangleMesh, kind: GpuAccelKind) -> Box<dyn Accel> {
     match kind {
         GpuAccelKind::KdStack => Box::new(KdStack::<T>::build(mesh, &KdOptions::default())),
-        GpuAccelKind::BvhThreaded => Box::new(ThreadedBvh::<T>::build(mesh, &BuildOptions::default())),
+        GpuAccelKind::BvhThreaded => {
+            Box::new(ThreadedBvh::<T>::build(mesh, &BuildOptions::default()))
+        }
         GpuAccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)),
     }
 }
@@ -35,8 +37,15 @@ fn agree(name: &str, mesh: &TriangleMesh, size: u32, kinds: &[GpuAccelKind]) {
                 TestKind::Plucker => cpu_accel::<Plucker>(mesh, kind),
                 _ => cpu_accel::<Moller>(mesh, kind),
             };
-            let scene = GpuScene::build(ctx, mesh, kind, test, &BuildOptions::default(), &KdOptions::default())
-                .unwrap();
+            let scene = GpuScene::build(
+                ctx,
+                mesh,
+                kind,
+                test,
+                &BuildOptions::default(),
+                &KdOptions::default(),
+            )
+            .unwrap();
             let tracer = GpuTracer::new(ctx, &scene).unwrap();
             for (set, rays) in ["primary", "shadow", "incoherent"].iter().zip(&sets) {
                 let mut want = vec![None; rays.len()];
@@ -62,9 +71,17 @@ fn agree(name: &str, mesh: &TriangleMesh, size: u32, kinds: &[GpuAccelKind]) {
                 cpu.occluded_batch(rays, &mut occ);
                 let gocc = tracer.occluded_batch(rays).unwrap();
                 let bad: Vec<usize> = (0..rays.len()).filter(|&i| occ[i] != gocc[i]).collect();
-                assert!(bad.is_empty(), "{label}: occlusion differs on {} rays, first {:?}", bad.len(), &bad[..bad.len().min(5)]);
+                assert!(
+                    bad.is_empty(),
+                    "{label}: occlusion differs on {} rays, first {:?}",
+                    bad.len(),
+                    &bad[..bad.len().min(5)]
+                );
                 // Occlusion agrees with the nearest hit on both sides.
-                assert!((0..rays.len()).all(|i| gocc[i] == got[i].is_some()), "{label}: GPU occlusion != GPU hit");
+                assert!(
+                    (0..rays.len()).all(|i| gocc[i] == got[i].is_some()),
+                    "{label}: GPU occlusion != GPU hit"
+                );
             }
         }
     }
@@ -86,5 +103,10 @@ fn shared_meshes_agree_with_cpu() {
         agree(file, &mesh, 96, &GpuAccelKind::ALL);
     }
     let dragon = raykit_io::load_mesh(&dir.join("dragon_vrip_res4.ply.gz")).unwrap();
-    agree("dragon_res4", &dragon, 96, &[GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded]);
+    agree(
+        "dragon_res4",
+        &dragon,
+        96,
+        &[GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded],
+    );
 }
