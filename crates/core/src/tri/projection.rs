@@ -233,7 +233,12 @@ impl TriangleTest for Projection {
 
     /// The 48-byte record as it lies in memory (`k` as an integer).
     fn write_words(tri: &ProjectionTri, out: &mut Vec<u32>) {
-        out.extend([tri.n_u.to_bits(), tri.n_v.to_bits(), tri.n_d.to_bits(), tri.k]);
+        out.extend([
+            tri.n_u.to_bits(),
+            tri.n_v.to_bits(),
+            tri.n_d.to_bits(),
+            tri.k,
+        ]);
         out.extend([tri.b_nu, tri.b_nv, tri.b_d].map(f32::to_bits));
         out.push(0);
         out.extend([tri.c_nu, tri.c_nv, tri.c_d].map(f32::to_bits));
