@@ -94,7 +94,7 @@ fn environment_code(env: &Environment) -> GpuResult<(u32, Vec3)> {
         Environment::Sky => Ok((0, Vec3::ZERO)),
         Environment::Constant(c) => Ok((1, *c)),
         Environment::Map { .. } => Err(GpuError::Unsupported(
-            "HDR environment maps (--env FILE); use the sky or --env-color".into(),
+            "HDR environment maps (--env FILE); use --env sky, black, white or R,G,B".into(),
         )),
         Environment::Box { .. } => Err(GpuError::Unsupported(
             "the environment box (--env-box) and HDR environment maps (--env FILE)".into(),
