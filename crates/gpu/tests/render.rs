@@ -16,9 +16,12 @@ mod support;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions, KdOptions};
 use raykit_core::glam::Vec3;
 use raykit_core::tri::TestKind;
-use raykit_core::{Camera, Ray};
-use raykit_gpu::{render_whitted_gpu, GpuAccelKind, GpuScene, GpuTracer, ShadeScene};
-use raykit_render::env::Environment;
+use raykit_core::{Camera, Light, Material, PointLight, Ray, Texture};
+use raykit_gpu::{
+    check_scene as gpu_check_scene, render_whitted_gpu, GpuAccelKind, GpuError, GpuScene,
+    GpuTracer, ShadeScene,
+};
+use raykit_render::env::{Environment, EquirectMap};
 use raykit_render::whitted::{
     render_whitted, Frame, IntegratorKind, ShadowMode, WhittedOptions, WhittedScene,
 };
@@ -167,10 +170,11 @@ fn agreement(
         .fold(0.0f32, f32::max);
     eprintln!(
         "{label}: {:.3}% of {} pixels within 1e-3 relative; {} differ ({ties} first-hit ties, {edges} edge pixels); \
-         largest relative difference {worst:.2e}; GPU {:.0} ms, CPU {:.0} ms",
+         largest relative difference {worst:.2e}; {} environment hits; GPU {:.0} ms, CPU {:.0} ms",
         100.0 * frac,
         c.len(),
         differing.len(),
+        gf.stats.environment_hits,
         gf.stats.seconds * 1e3,
         cpu.stats.seconds * 1e3
     );
@@ -197,7 +201,11 @@ fn agreement(
 
 fn check_scene(spec: &str, env: Environment, spp: u32) {
     let scene = raykit_scene::builtin(spec).unwrap();
-    let g = gpu_scene(&scene, GpuAccelKind::BvhThreaded);
+    check(spec, &scene, env, spp, GpuAccelKind::BvhThreaded);
+}
+
+fn check(spec: &str, scene: &Scene, env: Environment, spp: u32, kind: GpuAccelKind) {
+    let g = gpu_scene(scene, kind);
     let mut frames = Vec::new();
     for integrator in [IntegratorKind::Recursive, IntegratorKind::Wavefront] {
         let opts = options(integrator, spp);
@@ -252,4 +260,112 @@ fn shirley6_matches_cpu() {
         Environment::Constant(Vec3::new(0.3, 0.4, 0.5)),
         1,
     );
+}
+
+/// Spot, directional and point lights together, and the kd-tree kernel
+/// (paper 000's structure) instead of the threaded BVH.
+#[test]
+fn every_light_kind_on_the_kd_tree_matches_cpu() {
+    let mut scene = raykit_scene::builtin("whitted").unwrap();
+    let b = scene.mesh.bounds();
+    let c = b.center();
+    let top = Vec3::new(c.x, b.max.y - 0.05 * b.diagonal(), c.z);
+    scene.lights = vec![
+        Light::Spot {
+            position: top,
+            direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
+            intensity: Vec3::new(3.0, 2.5, 2.0) * b.diagonal() * b.diagonal() * 0.05,
+            cos_inner: 20f32.to_radians().cos(),
+            cos_outer: 35f32.to_radians().cos(),
+        },
+        Light::Directional {
+            direction: Vec3::new(-0.3, -1.0, -0.6).normalize(),
+            irradiance: Vec3::new(0.3, 0.3, 0.35),
+        },
+        Light::Point(PointLight::with_irradiance_at(
+            top + Vec3::new(0.1, 0.0, 0.1) * b.diagonal(),
+            Vec3::splat(0.4),
+            0.5 * b.diagonal(),
+        )),
+    ];
+    check(
+        "whitted, three light kinds",
+        &scene,
+        Environment::Sky,
+        1,
+        GpuAccelKind::KdStack,
+    );
+}
+
+/// A smooth equirectangular map, looked up by direction and through paper
+/// 001's environment box, rotated and scaled.
+fn test_map() -> EquirectMap {
+    let (w, h) = (64, 32);
+    let texels = (0..w * h)
+        .map(|k| {
+            let (i, j) = ((k % w) as f32 / w as f32, (k / w) as f32 / h as f32);
+            [
+                0.2 + 0.8 * i,
+                0.3 + 0.5 * j,
+                0.5 + 0.4 * (i * 6.283).sin() * (j * 3.14).sin(),
+            ]
+        })
+        .collect();
+    EquirectMap::new(w, h, texels)
+        .unwrap()
+        .with_rotation_deg(30.0)
+        .with_intensity(1.5)
+}
+
+#[test]
+fn environment_map_and_box_match_cpu() {
+    let scene = raykit_scene::builtin("shirley6").unwrap();
+    check(
+        "shirley6, map",
+        &scene,
+        Environment::map(test_map()),
+        1,
+        GpuAccelKind::BvhThreaded,
+    );
+    let env = Environment::env_box(test_map(), scene.mesh.bounds(), 2.0);
+    assert!(matches!(env, Environment::Box { .. }));
+    check(
+        "shirley6, environment box",
+        &scene,
+        env,
+        1,
+        GpuAccelKind::BvhThreaded,
+    );
+}
+
+#[test]
+fn textures_are_refused_by_name() {
+    let mut scene = raykit_scene::builtin("cornell").unwrap();
+    scene.mesh.materials.push(Material {
+        name: "checker".into(),
+        base_texture: Some(std::sync::Arc::new(Texture::new(
+            "t",
+            1,
+            1,
+            vec![raykit_core::glam::Vec4::ONE],
+        ))),
+        ..Material::default()
+    });
+    let ss = ShadeScene {
+        mesh: &scene.mesh,
+        lights: &scene.lights,
+        environment: &Environment::Sky,
+    };
+    let err = gpu_check_scene(&ss).unwrap_err();
+    assert!(matches!(err, GpuError::Unsupported(_)));
+    let msg = err.to_string();
+    assert!(
+        msg.contains("not supported by --backend gpu")
+            && msg.contains("textures")
+            && msg.contains("checker"),
+        "{msg}"
+    );
+    let g = gpu_scene(&scene, GpuAccelKind::Brute);
+    let opts = options(IntegratorKind::Recursive, 1);
+    assert!(render_whitted_gpu(gpu(), &g, &ss, &camera(&scene), &opts, &|_, _| {}).is_err());
 }

@@ -9,7 +9,8 @@
 //!   environment and shading kernels chained through ray queues.
 //!
 //! Both run the same WGSL shading (`shaders/render/`: surface, lights,
-//! Blinn-Phong, Fresnel, refraction, the sky) as the CPU's
+//! Blinn-Phong, Fresnel, refraction, the sky, equirectangular maps and
+//! paper 001's environment box) as the CPU's
 //! `Tracer::scatter`, with camera samples placed by the CPU's
 //! `sample_position`, and hand back linear radiance that the caller encodes
 //! as the CPU renderer does.
@@ -38,12 +39,13 @@ use upload::{FrameSettings, ShadeBuffers};
 pub const MAX_GPU_DEPTH: u32 = 16;
 
 /// Bind group 1 of every render kernel (`shade_data.wgsl`).
-const SHADE_GROUP: [BindingKind; 5] = [
+const SHADE_GROUP: [BindingKind; 6] = [
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Uniform,
     BindingKind::StorageRw,
     BindingKind::StorageRw,
+    BindingKind::Storage,
 ];
 
 /// Uniform `StageParams` of the render kernels: threads, threads per grid

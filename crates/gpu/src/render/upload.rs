@@ -2,7 +2,7 @@
 //! per-triangle corners, vertex normals and material index, the material
 //! and light tables and the frame's parameters, uploaded as bind group 1 of
 //! both organisations (`shaders/render/shade_data.wgsl`), with the ray
-//! counters and the radiance accumulator.
+//! counters, the radiance accumulator and the environment map.
 
 use crate::buffers::{output, storage, uniform};
 use crate::context::GpuContext;
@@ -35,6 +35,16 @@ pub struct ShadeParams {
     shadows: u32,
     lights_offset: u32,
     shadow_scale: f32,
+    map_width: u32,
+    map_height: u32,
+    map_turn: f32,
+    map_intensity: f32,
+    box_min: [f32; 3],
+    _pad0: u32,
+    box_max: [f32; 3],
+    _pad1: u32,
+    box_center: [f32; 3],
+    _pad2: u32,
 }
 
 /// What the shading reads about the scene, independent of the camera.
@@ -73,37 +83,67 @@ pub struct ShadeBuffers {
     pub counters: wgpu::Buffer,
     /// Radiance sums (3 words per pixel).
     pub radiance: wgpu::Buffer,
+    /// The environment map's texels.
+    pub env_texels: wgpu::Buffer,
 }
 
 impl ShadeBuffers {
-    /// The five buffers in binding order.
-    pub fn all(&self) -> [&wgpu::Buffer; 5] {
+    /// The six buffers in binding order.
+    pub fn all(&self) -> [&wgpu::Buffer; 6] {
         [
             &self.tris,
             &self.tables,
             &self.params,
             &self.counters,
             &self.radiance,
+            &self.env_texels,
         ]
     }
 }
 
-/// The environment as (kind, colour): 0 sky, 1 constant; maps are refused.
-fn environment_code(env: &Environment) -> GpuResult<(u32, Vec3)> {
+/// The environment as the shaders read it: kind (0 sky, 1 constant, 2 map
+/// by direction, 3 paper 001's environment box), colour, map and box.
+#[derive(Default)]
+struct EnvUpload {
+    kind: u32,
+    color: Vec3,
+    map: Option<(u32, u32, f32, f32)>,
+    texels: Vec<u32>,
+    bounds: Option<raykit_core::Aabb>,
+}
+
+fn environment_upload(env: &Environment) -> EnvUpload {
+    let with_map = |kind, map: &raykit_render::env::EquirectMap| {
+        // EquirectMap::with_rotation_deg's turn, from the same inputs.
+        let turn = (map.rotation_deg() / 360.0).rem_euclid(1.0);
+        EnvUpload {
+            kind,
+            map: Some((
+                map.width() as u32,
+                map.height() as u32,
+                turn,
+                map.intensity(),
+            )),
+            texels: map.texels().iter().flatten().map(|x| x.to_bits()).collect(),
+            ..EnvUpload::default()
+        }
+    };
     match env {
-        Environment::Sky => Ok((0, Vec3::ZERO)),
-        Environment::Constant(c) => Ok((1, *c)),
-        Environment::Map { .. } => Err(GpuError::Unsupported(
-            "HDR environment maps (--env FILE); use --env sky, black, white or R,G,B".into(),
-        )),
-        Environment::Box { .. } => Err(GpuError::Unsupported(
-            "the environment box (--env-box) and HDR environment maps (--env FILE)".into(),
-        )),
+        Environment::Sky => EnvUpload::default(),
+        Environment::Constant(c) => EnvUpload {
+            kind: 1,
+            color: *c,
+            ..EnvUpload::default()
+        },
+        Environment::Map { map } => with_map(2, map),
+        Environment::Box { map, bounds } => EnvUpload {
+            bounds: Some(*bounds),
+            ..with_map(3, map)
+        },
     }
 }
 
-/// Refuse what the GPU shading cannot do yet: textured materials and
-/// environment maps.
+/// Refuse what the GPU shading cannot do yet: textured materials.
 pub fn check_scene(scene: &ShadeScene) -> GpuResult<()> {
     if let Some(m) = scene
         .mesh
@@ -116,7 +156,7 @@ pub fn check_scene(scene: &ShadeScene) -> GpuResult<()> {
             m.name
         )));
     }
-    environment_code(scene.environment).map(|_| ())
+    Ok(())
 }
 
 fn push3(out: &mut Vec<u32>, v: [f32; 3]) {
@@ -206,7 +246,11 @@ impl ShadeBuffers {
         settings: &FrameSettings,
     ) -> GpuResult<ShadeBuffers> {
         check_scene(scene)?;
-        let (env_kind, env_color) = environment_code(scene.environment)?;
+        let env = environment_upload(scene.environment);
+        let (map_width, map_height, map_turn, map_intensity) = env.map.unwrap_or_default();
+        let bounds = env
+            .bounds
+            .unwrap_or(raykit_core::Aabb::new(Vec3::ZERO, Vec3::ZERO));
         let mesh = scene.mesh;
         let mut tables = Vec::new();
         for m in &mesh.materials {
@@ -232,12 +276,22 @@ impl ShadeBuffers {
             max_depth: settings.max_depth.max(1),
             ambient: settings.ambient.to_array(),
             bias: shadow_bias(mesh),
-            env_color: env_color.to_array(),
-            env_kind,
+            env_color: env.color.to_array(),
+            env_kind: env.kind,
             has_normals: mesh.normals.is_some() as u32,
             shadows: settings.shadows as u32,
             lights_offset,
             shadow_scale: 1.0 - 1e-4,
+            map_width,
+            map_height,
+            map_turn,
+            map_intensity,
+            box_min: bounds.min.to_array(),
+            _pad0: 0,
+            box_max: bounds.max.to_array(),
+            _pad1: 0,
+            box_center: bounds.center().to_array(),
+            _pad2: 0,
         };
         let pixels = settings.width as usize * settings.height as usize;
         Ok(ShadeBuffers {
@@ -246,6 +300,7 @@ impl ShadeBuffers {
             params: uniform(ctx, "shading parameters", &params),
             counters: output(ctx, "ray counters", 4)?,
             radiance: output(ctx, "radiance", 3 * pixels)?,
+            env_texels: storage(ctx, "environment map", &env.texels)?,
         })
     }
 }

@@ -43,7 +43,7 @@ fn render_pixel(@builtin(global_invocation_id) gid: vec3u) {
         let h = scene_intersect(r);
         if h.prim == MISS {
             atomicAdd(&counters[2], 1u);
-            total += p.w * environment(r.d);
+            total += p.w * environment(r.o, r.d);
             continue;
         }
         let sc = scatter(r, h, p.depth);

@@ -22,6 +22,18 @@ struct ShadeParams {
     lights_offset: u32,
     // 1 - 1e-4 rounded to f32 on the host, as the CPU shortens shadow rays.
     shadow_scale: f32,
+    // The equirectangular map (env_kind 2 and 3): size, turn (rotation as a
+    // fraction of a full turn), intensity; the environment box (env_kind 3).
+    map_width: u32,
+    map_height: u32,
+    map_turn: f32,
+    map_intensity: f32,
+    box_min: vec3f,
+    _pad0: u32,
+    box_max: vec3f,
+    _pad1: u32,
+    box_center: vec3f,
+    _pad2: u32,
 }
 
 // 20 words per triangle: corners a, b, c; vertex normals na, nb, nc;
@@ -35,6 +47,8 @@ struct ShadeParams {
 @group(1) @binding(3) var<storage, read_write> counters: array<atomic<u32>>;
 // Linear radiance summed over samples, three f32 bit patterns per pixel.
 @group(1) @binding(4) var<storage, read_write> radiance: array<atomic<u32>>;
+// The environment map's linear RGB texels, row-major (one word without a map).
+@group(1) @binding(5) var<storage, read> env_texels: array<f32>;
 
 const F32_MIN_POSITIVE: f32 = 1.17549435e-38;
 

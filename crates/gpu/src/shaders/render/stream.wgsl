@@ -69,7 +69,7 @@ fn miss(@builtin(global_invocation_id) gid: vec3u) {
     }
     let q = queue_in[i];
     atomicAdd(&counters[2], 1u);
-    add_radiance(q.pixel, q.w * environment(q.d));
+    add_radiance(q.pixel, q.w * environment(q.o, q.d));
     queue_in[i].state = STATE_ENVIRONMENT;
 }
 
