@@ -94,7 +94,7 @@ fn unsupported_options_are_refused_by_name() {
 }
 
 #[test]
-fn gpu_refuses_environment_maps() {
+fn gpu_environment_box_png_equals_the_cpu_png() {
     let data = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
@@ -105,12 +105,23 @@ fn gpu_refuses_environment_maps() {
         map.display()
     );
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("x.png");
-    let o = render(&["--backend", "gpu", "--env", s(&map), "--env-box"], &out);
-    let err = text(&o.stderr);
-    assert!(!o.status.success());
-    assert!(
-        err.contains("not supported by --backend gpu") && err.contains("--env-box"),
-        "{err}"
+    let (cpu, gpu) = (dir.path().join("cpu.png"), dir.path().join("gpu.png"));
+    let env = ["--scene", "builtin:shirley6", "--env", s(&map), "--env-box"];
+    let o = render(&env, &cpu);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let mut args = env.to_vec();
+    args.extend(["--backend", "gpu", "--integrator", "wavefront"]);
+    let o = render(&args, &gpu);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let (want, got) = (rgb(&cpu), rgb(&gpu));
+    let off = want
+        .chunks(3)
+        .zip(got.chunks(3))
+        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 1))
+        .count();
+    eprintln!(
+        "environment box: {off} of {} pixels differ by more than 1/255",
+        want.len() / 3
     );
+    assert!(off * 1000 <= want.len() / 3 * 5, "{off} pixels differ");
 }
