@@ -70,10 +70,9 @@ fn gpu_png_equals_the_cpu_png() {
 fn unsupported_options_are_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.png");
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 5] = [
         (&["--shadows", "maps"], "--shadows maps"),
         (&["--primary", "raster"], "--primary raster"),
-        (&["--aov", "depth"], "--aov"),
         (&["--accel", "bvh4"], "--accel bvh4"),
         (&["--test", "projection"], "--test projection"),
         (&["--depth", "20"], "--depth 20"),
@@ -124,4 +123,28 @@ fn gpu_environment_box_png_equals_the_cpu_png() {
         want.len() / 3
     );
     assert!(off * 1000 <= want.len() / 3 * 5, "{off} pixels differ");
+}
+
+#[test]
+fn gpu_aovs_equal_the_cpu_aovs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cpu, gpu) = (dir.path().join("cpu.png"), dir.path().join("gpu.png"));
+    let o = render(&["--aov", "id,depth"], &cpu);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let o = render(&["--aov", "id,depth", "--backend", "gpu"], &gpu);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    for kind in ["id", "depth"] {
+        let want = rgb(&dir.path().join(format!("cpu.{kind}.png")));
+        let got = rgb(&dir.path().join(format!("gpu.{kind}.png")));
+        let off = want
+            .chunks(3)
+            .zip(got.chunks(3))
+            .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 1))
+            .count();
+        eprintln!("{kind} AOV: {off} of {} pixels differ", want.len() / 3);
+        assert!(
+            off * 1000 <= want.len() / 3 * 5,
+            "{kind}: {off} pixels differ"
+        );
+    }
 }

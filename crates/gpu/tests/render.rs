@@ -87,7 +87,9 @@ fn gpu_frame(scene: &Scene, g: &GpuScene, env: &Environment, opts: &WhittedOptio
         lights: &scene.lights,
         environment: env,
     };
-    render_whitted_gpu(gpu(), g, &ss, &camera(scene), opts, &|_, _| {}).unwrap()
+    render_whitted_gpu(gpu(), g, &ss, &camera(scene), opts, &|_, _| {})
+        .unwrap()
+        .frame
 }
 
 fn close(a: Vec3, b: Vec3, rel: f32) -> bool {

@@ -17,7 +17,7 @@ use raykit_render::whitted::{Frame, WhittedOptions};
 pub const DEFAULT_GPU_ACCEL: GpuAccelKind = GpuAccelKind::BvhThreaded;
 
 /// A GPU frame and what made it.
-pub struct GpuFrame {
+pub struct GpuRun {
     /// The frame (no first hits).
     pub frame: Frame,
     /// Seconds to build and upload the structure.
@@ -41,10 +41,7 @@ pub fn gpu_accel(accel: Option<&str>) -> Result<GpuAccelKind> {
 }
 
 /// Refuse what the GPU renderer cannot do before anything is loaded.
-pub fn check_args(opts: &WhittedOptions, aovs: bool, test: TestKind) -> Result<()> {
-    if aovs {
-        bail!("not supported by --backend gpu: --aov (first-hit AOVs); use --backend cpu");
-    }
+pub fn check_args(opts: &WhittedOptions, test: TestKind) -> Result<()> {
     if !raykit_gpu::gpu_test_supported(test) {
         bail!(
             "not supported by --backend gpu: --test {}; the GPU kernels implement plucker and moller",
@@ -64,7 +61,7 @@ pub fn render(
     opts: &WhittedOptions,
     build: &raykit_core::accel::BuildOptions,
     progress: &dyn Fn(u64, u64),
-) -> Result<GpuFrame> {
+) -> Result<GpuRun> {
     let shade = ShadeScene {
         mesh,
         lights: &setup.lights,
@@ -74,9 +71,10 @@ pub fn render(
     let ctx = GpuContext::new()?;
     eprintln!("GPU: {}", ctx.describe());
     let scene = GpuScene::build(&ctx, mesh, kind, test, build, &build.kd)?;
-    let frame = render_whitted_gpu(&ctx, &scene, &shade, &setup.camera, opts, progress)?;
-    Ok(GpuFrame {
-        frame,
+    let g = render_whitted_gpu(&ctx, &scene, &shade, &setup.camera, opts, progress)?;
+    eprintln!("GPU kernels compiled in {:.0} ms", g.compile_seconds * 1e3);
+    Ok(GpuRun {
+        frame: g.frame,
         build_seconds: scene.build_seconds + scene.upload_seconds,
         describe: format!("{}, {}, {}", ctx.info.name, kind.name(), test.name()),
     })

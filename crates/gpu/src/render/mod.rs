@@ -26,7 +26,7 @@ use crate::error::{GpuError, GpuResult};
 use crate::kernel::{wgsl, BindingKind, Kernel, SCENE_GROUP};
 use crate::scene::GpuScene;
 use raykit_core::glam::Vec3;
-use raykit_core::Camera;
+use raykit_core::{Camera, Hit};
 use raykit_render::whitted::{
     sample_position, Frame, FrameStats, IntegratorKind, PrimaryMode, ShadowMode, WhittedOptions,
 };
@@ -56,7 +56,26 @@ struct StageParams {
     count: u32,
     row: u32,
     capacity: u32,
-    _pad: u32,
+    record_first: u32,
+}
+
+/// What one organisation's run reports.
+struct RunReport {
+    /// Secondary rays, when the run counted them on the host.
+    secondary: Option<u64>,
+    /// Seconds spent compiling its kernels.
+    compile_seconds: f64,
+    /// The first camera sample's nearest hits (t, u, v, prim words).
+    first_hits: Vec<u32>,
+}
+
+/// A frame rendered on the GPU.
+pub struct GpuFrame {
+    /// The image, first hits (for AOVs) and ray counts; `stats.seconds`
+    /// excludes compiling the kernels.
+    pub frame: Frame,
+    /// Seconds spent compiling the WGSL kernels (once per process).
+    pub compile_seconds: f64,
 }
 
 /// Refuse options the GPU renderer does not implement, naming them (never
@@ -132,8 +151,8 @@ fn positions(opts: &WhittedOptions, sample: u32) -> Vec<u32> {
 /// organisation `opts.integrator` picks: recursive → paper 000's single
 /// kernel, wavefront → paper 001's stream. `progress(samples, rays)` is
 /// called after each camera sample of every pixel. The frame holds the
-/// average linear radiance times the exposure, encoded as the CPU's; it has
-/// no first hits (AOVs are a CPU feature).
+/// average linear radiance times the exposure, encoded as the CPU's, and
+/// the first camera sample's hits, as the CPU's frame does.
 pub fn render_whitted_gpu(
     ctx: &GpuContext,
     gpu: &GpuScene,
@@ -141,7 +160,7 @@ pub fn render_whitted_gpu(
     camera: &Camera,
     opts: &WhittedOptions,
     progress: &dyn Fn(u64, u64),
-) -> GpuResult<Frame> {
+) -> GpuResult<GpuFrame> {
     check_options(opts)?;
     let start = Instant::now();
     let settings = FrameSettings {
@@ -154,7 +173,7 @@ pub fn render_whitted_gpu(
     let shade = ShadeBuffers::upload(ctx, scene, camera, &settings)?;
     let n = opts.width as usize * opts.height as usize;
     let spp = opts.samples_per_pixel.max(1);
-    let secondary = match opts.integrator {
+    let report = match opts.integrator {
         IntegratorKind::Recursive => megakernel::run(ctx, gpu, &shade, opts, progress)?,
         IntegratorKind::Wavefront => stream::run(ctx, gpu, &shade, opts, progress)?,
     };
@@ -174,18 +193,30 @@ pub fn render_whitted_gpu(
     let stats = FrameStats {
         primary_rays: n as u64 * spp as u64,
         shadow_rays: counters[0] as u64,
-        secondary_rays: match opts.integrator {
-            IntegratorKind::Recursive => counters[1] as u64,
-            IntegratorKind::Wavefront => secondary,
-        },
+        secondary_rays: report.secondary.unwrap_or(counters[1] as u64),
         raster_seconds: 0.0,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds: start.elapsed().as_secs_f64() - report.compile_seconds,
         environment_hits: counters[2] as u64,
     };
-    Ok(Frame {
-        image: Image::from_linear(opts.width, opts.height, linear, opts.encoding),
-        first_hits: Vec::new(),
-        stats,
+    let first_hits = report
+        .first_hits
+        .chunks_exact(4)
+        .map(|w| {
+            (w[3] != u32::MAX).then(|| Hit {
+                t: f32::from_bits(w[0]),
+                u: f32::from_bits(w[1]),
+                v: f32::from_bits(w[2]),
+                prim: w[3],
+            })
+        })
+        .collect();
+    Ok(GpuFrame {
+        frame: Frame {
+            image: Image::from_linear(opts.width, opts.height, linear, opts.encoding),
+            first_hits,
+            stats,
+        },
+        compile_seconds: report.compile_seconds,
     })
 }
 

@@ -6,7 +6,7 @@
 //! two rays per shaded ray, so no ray is ever dropped.
 
 use super::upload::ShadeBuffers;
-use super::{counted, kernel, positions, StageParams};
+use super::{counted, kernel, positions, RunReport, StageParams};
 use crate::buffers::{output, read_words, storage, uniform};
 use crate::context::GpuContext;
 use crate::error::{GpuError, GpuResult};
@@ -73,14 +73,17 @@ pub(super) fn run(
     shade: &ShadeBuffers,
     opts: &WhittedOptions,
     progress: &dyn Fn(u64, u64),
-) -> GpuResult<u64> {
+) -> GpuResult<RunReport> {
+    let compile = std::time::Instant::now();
     let kernels = Kernels {
         raygen: kernel(ctx, gpu, wgsl::STREAM, "raygen", &STAGE_GROUP)?,
         intersect: kernel(ctx, gpu, wgsl::STREAM, "intersect", &STAGE_GROUP)?,
         miss: kernel(ctx, gpu, wgsl::STREAM, "miss", &STAGE_GROUP)?,
         shade: kernel(ctx, gpu, wgsl::STREAM, "shade", &STAGE_GROUP)?,
     };
+    let compile_seconds = compile.elapsed().as_secs_f64();
     let n = opts.width as usize * opts.height as usize;
+    let mut first_hits = Vec::new();
     let mut current = Growing::new(ctx, "ray queue", RAY_WORDS, n)?;
     let mut next = Growing::new(ctx, "next ray queue", RAY_WORDS, 2 * n)?;
     let mut hits = Growing::new(ctx, "queue hits", HIT_WORDS, n)?;
@@ -91,7 +94,7 @@ pub(super) fn run(
             count: 0,
             row: 0,
             capacity: 0,
-            _pad: 0,
+            record_first: 0,
         },
     );
     let mut secondary = 0u64;
@@ -107,7 +110,7 @@ pub(super) fn run(
                 count: count as u32,
                 row,
                 capacity: next.capacity as u32,
-                _pad: 0,
+                record_first: 0,
             };
             ctx.queue
                 .write_buffer(&params, 0, bytemuck::bytes_of(&stage));
@@ -136,6 +139,10 @@ pub(super) fn run(
             }
             ctx.queue.submit([enc.finish()]);
             let queued = read_words(ctx, &shade.counters, 4)?[3] as usize;
+            if first && sample == 0 {
+                // The camera rays sit at their pixels' slots.
+                first_hits = read_words(ctx, &hits.buffer, 4 * n)?;
+            }
             if queued > next.capacity {
                 return Err(GpuError::Readback(format!(
                     "the next-bounce queue overflowed ({queued} rays for {} slots)",
@@ -150,5 +157,9 @@ pub(super) fn run(
         let rays = (sample as u64 + 1) * n as u64 + secondary + counted(ctx, shade)?;
         progress(n as u64, rays);
     }
-    Ok(secondary)
+    Ok(RunReport {
+        secondary: Some(secondary),
+        compile_seconds,
+        first_hits,
+    })
 }

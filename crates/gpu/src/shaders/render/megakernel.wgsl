@@ -11,12 +11,15 @@ struct StageParams {
     count: u32,
     row: u32,
     capacity: u32,
-    _pad: u32,
+    // 1 on the first camera sample: record the camera rays' hits (AOVs).
+    record_first: u32,
 }
 
 // Sample positions of this pass, (fx, fy) per pixel.
 @group(2) @binding(0) var<storage, read> positions: array<f32>;
 @group(2) @binding(1) var<uniform> stage: StageParams;
+// The first camera sample's nearest hit per pixel.
+@group(2) @binding(2) var<storage, read_write> first_hits: array<Hit>;
 
 struct Pending {
     o: vec3f,
@@ -41,6 +44,9 @@ fn render_pixel(@builtin(global_invocation_id) gid: vec3u) {
         let p = stack[top];
         let r = make_ray(p.o, p.d, 0.0, inf());
         let h = scene_intersect(r);
+        if p.depth == 1u && stage.record_first != 0u {
+            first_hits[i] = h;
+        }
         if h.prim == MISS {
             atomicAdd(&counters[2], 1u);
             total += p.w * environment(r.o, r.d);

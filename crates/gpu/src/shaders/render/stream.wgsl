@@ -9,7 +9,7 @@ struct StageParams {
     count: u32,
     row: u32,
     capacity: u32,
-    _pad: u32,
+    record_first: u32,
 }
 
 struct QueuedRay {
