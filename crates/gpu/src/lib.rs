@@ -28,8 +28,6 @@ mod trace;
 pub use buffers::{check_binding, output, read_words, storage, uniform};
 pub use context::GpuContext;
 pub use error::{GpuError, GpuResult};
-pub use render::{
-    check_options, check_scene, render_whitted_gpu, GpuFrame, ShadeScene, MAX_GPU_DEPTH,
-};
+pub use render::{check_options, render_whitted_gpu, GpuFrame, ShadeScene, MAX_GPU_DEPTH};
 pub use scene::{gpu_test_supported, GpuAccelKind, GpuScene};
 pub use trace::{GpuRays, GpuTracer, CHUNK};

@@ -16,11 +16,8 @@ mod support;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions, KdOptions};
 use raykit_core::glam::Vec3;
 use raykit_core::tri::TestKind;
-use raykit_core::{Camera, Light, Material, PointLight, Ray, Texture};
-use raykit_gpu::{
-    check_scene as gpu_check_scene, render_whitted_gpu, GpuAccelKind, GpuError, GpuScene,
-    GpuTracer, ShadeScene,
-};
+use raykit_core::{Camera, Light, PointLight, Ray, Texture};
+use raykit_gpu::{render_whitted_gpu, GpuAccelKind, GpuScene, GpuTracer, ShadeScene};
 use raykit_render::env::{Environment, EquirectMap};
 use raykit_render::whitted::{
     render_whitted, Frame, IntegratorKind, ShadowMode, WhittedOptions, WhittedScene,
@@ -340,34 +337,47 @@ fn environment_map_and_box_match_cpu() {
     );
 }
 
+/// A base-colour texture (8×8 checker of distinct colours, bilinear,
+/// repeating) on every material of the Cornell box, with texture
+/// coordinates from the positions.
 #[test]
-fn textures_are_refused_by_name() {
-    let mut scene = raykit_scene::builtin("cornell").unwrap();
-    scene.mesh.materials.push(Material {
-        name: "checker".into(),
-        base_texture: Some(std::sync::Arc::new(Texture::new(
-            "t",
-            1,
-            1,
-            vec![raykit_core::glam::Vec4::ONE],
-        ))),
-        ..Material::default()
-    });
-    let ss = ShadeScene {
-        mesh: &scene.mesh,
-        lights: &scene.lights,
-        environment: &Environment::Sky,
-    };
-    let err = gpu_check_scene(&ss).unwrap_err();
-    assert!(matches!(err, GpuError::Unsupported(_)));
-    let msg = err.to_string();
-    assert!(
-        msg.contains("not supported by --backend gpu")
-            && msg.contains("textures")
-            && msg.contains("checker"),
-        "{msg}"
+fn textures_match_cpu() {
+    let mut scene = raykit_scene::builtin("whitted").unwrap();
+    let b = scene.mesh.bounds();
+    let ext = b.extent().max_element();
+    scene.mesh.uvs = Some(
+        scene
+            .mesh
+            .positions
+            .iter()
+            .map(|p| {
+                raykit_core::Vec2::new(
+                    (p.x + p.y - b.min.x) / ext * 2.3,
+                    (p.z - p.y - b.min.z) / ext * 1.7,
+                )
+            })
+            .collect(),
     );
-    let g = gpu_scene(&scene, GpuAccelKind::Brute);
-    let opts = options(IntegratorKind::Recursive, 1);
-    assert!(render_whitted_gpu(gpu(), &g, &ss, &camera(&scene), &opts, &|_, _| {}).is_err());
+    let texels = (0..64)
+        .map(|k| {
+            let (i, j) = ((k % 8) as f32, (k / 8) as f32);
+            raykit_core::glam::Vec4::new(
+                0.2 + 0.1 * i,
+                0.9 - 0.1 * j,
+                if (k + k / 8) % 2 == 0 { 0.9 } else { 0.2 },
+                1.0,
+            )
+        })
+        .collect();
+    let tex = std::sync::Arc::new(Texture::new("checker", 8, 8, texels));
+    for m in &mut scene.mesh.materials {
+        m.base_texture = Some(tex.clone());
+    }
+    check(
+        "whitted, textured",
+        &scene,
+        Environment::Sky,
+        1,
+        GpuAccelKind::BvhThreaded,
+    );
 }

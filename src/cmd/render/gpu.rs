@@ -8,7 +8,7 @@ use anyhow::{bail, Result};
 use raykit_core::tri::TestKind;
 use raykit_core::TriangleMesh;
 use raykit_gpu::{
-    check_options, check_scene, render_whitted_gpu, GpuAccelKind, GpuContext, GpuScene, ShadeScene,
+    check_options, render_whitted_gpu, GpuAccelKind, GpuContext, GpuScene, ShadeScene,
 };
 use raykit_render::whitted::{Frame, WhittedOptions};
 
@@ -67,7 +67,6 @@ pub fn render(
         lights: &setup.lights,
         environment: &setup.environment,
     };
-    check_scene(&shade)?;
     let ctx = GpuContext::new()?;
     eprintln!("GPU: {}", ctx.describe());
     let scene = GpuScene::build(&ctx, mesh, kind, test, build, &build.kd)?;

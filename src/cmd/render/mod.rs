@@ -109,8 +109,8 @@ Without --light the scene's lights are used, or one point light above the mesh.\
 --backend gpu renders the same image on the GPU (wgpu compute; Mesa's lavapipe without a GPU):\n\
 --integrator recursive runs paper 000's single kernel (one thread per pixel sample, --depth up to 16),\n\
 --integrator wavefront paper 001's stream of kernels over ray queues. --accel picks kd-stack,\n\
-bvh-threaded (default) or brute, --test plucker or moller. Textures, --shadows maps and\n\
---primary raster are CPU-only and are refused with an error."
+bvh-threaded (default) or brute, --test plucker or moller. --shadows maps and --primary raster\n\
+are CPU-only and are refused with an error."
 )]
 pub struct RenderArgs {
     #[command(flatten)]

@@ -9,17 +9,19 @@
 //!   environment and shading kernels chained through ray queues.
 //!
 //! Both run the same WGSL shading (`shaders/render/`: surface, lights,
-//! Blinn-Phong, Fresnel, refraction, the sky, equirectangular maps and
+//! base-colour textures, Blinn-Phong, Fresnel, refraction, the sky, equirectangular maps and
 //! paper 001's environment box) as the CPU's
 //! `Tracer::scatter`, with camera samples placed by the CPU's
 //! `sample_position`, and hand back linear radiance that the caller encodes
 //! as the CPU renderer does.
 
+mod env_upload;
 mod megakernel;
+mod records;
 mod stream;
 mod upload;
 
-pub use upload::{check_scene, ShadeScene};
+pub use upload::ShadeScene;
 
 use crate::context::GpuContext;
 use crate::error::{GpuError, GpuResult};
@@ -39,12 +41,13 @@ use upload::{FrameSettings, ShadeBuffers};
 pub const MAX_GPU_DEPTH: u32 = 16;
 
 /// Bind group 1 of every render kernel (`shade_data.wgsl`).
-const SHADE_GROUP: [BindingKind; 6] = [
+const SHADE_GROUP: [BindingKind; 7] = [
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Uniform,
     BindingKind::StorageRw,
     BindingKind::StorageRw,
+    BindingKind::Storage,
     BindingKind::Storage,
 ];
 

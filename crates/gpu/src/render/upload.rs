@@ -2,18 +2,18 @@
 //! per-triangle corners, vertex normals and material index, the material
 //! and light tables and the frame's parameters, uploaded as bind group 1 of
 //! both organisations (`shaders/render/shade_data.wgsl`), with the ray
-//! counters, the radiance accumulator and the environment map.
+//! counters, the radiance accumulator, the environment map and the
+//! base-colour textures.
 
+use super::env_upload::environment_upload;
+use super::records::{light_record, material_record, triangle_records, TextureAtlas};
 use crate::buffers::{output, storage, uniform};
 use crate::context::GpuContext;
-use crate::error::{GpuError, GpuResult};
+use crate::error::GpuResult;
 use raykit_core::glam::Vec3;
 use raykit_core::{Camera, Light, Material, TriangleMesh};
 use raykit_render::env::Environment;
 use raykit_render::shadow_bias;
-
-/// Words per triangle in the shading buffer.
-pub const TRI_WORDS: usize = 20;
 
 /// Uniform block `ShadeParams` of `shade_data.wgsl`.
 #[repr(C)]
@@ -85,11 +85,13 @@ pub struct ShadeBuffers {
     pub radiance: wgpu::Buffer,
     /// The environment map's texels.
     pub env_texels: wgpu::Buffer,
+    /// Every material's base-colour texels, one after the other.
+    pub tex_texels: wgpu::Buffer,
 }
 
 impl ShadeBuffers {
-    /// The six buffers in binding order.
-    pub fn all(&self) -> [&wgpu::Buffer; 6] {
+    /// The seven buffers in binding order.
+    pub fn all(&self) -> [&wgpu::Buffer; 7] {
         [
             &self.tris,
             &self.tables,
@@ -97,144 +99,9 @@ impl ShadeBuffers {
             &self.counters,
             &self.radiance,
             &self.env_texels,
+            &self.tex_texels,
         ]
     }
-}
-
-/// The environment as the shaders read it: kind (0 sky, 1 constant, 2 map
-/// by direction, 3 paper 001's environment box), colour, map and box.
-#[derive(Default)]
-struct EnvUpload {
-    kind: u32,
-    color: Vec3,
-    map: Option<(u32, u32, f32, f32)>,
-    texels: Vec<u32>,
-    bounds: Option<raykit_core::Aabb>,
-}
-
-fn environment_upload(env: &Environment) -> EnvUpload {
-    let with_map = |kind, map: &raykit_render::env::EquirectMap| {
-        // EquirectMap::with_rotation_deg's turn, from the same inputs.
-        let turn = (map.rotation_deg() / 360.0).rem_euclid(1.0);
-        EnvUpload {
-            kind,
-            map: Some((
-                map.width() as u32,
-                map.height() as u32,
-                turn,
-                map.intensity(),
-            )),
-            texels: map.texels().iter().flatten().map(|x| x.to_bits()).collect(),
-            ..EnvUpload::default()
-        }
-    };
-    match env {
-        Environment::Sky => EnvUpload::default(),
-        Environment::Constant(c) => EnvUpload {
-            kind: 1,
-            color: *c,
-            ..EnvUpload::default()
-        },
-        Environment::Map { map } => with_map(2, map),
-        Environment::Box { map, bounds } => EnvUpload {
-            bounds: Some(*bounds),
-            ..with_map(3, map)
-        },
-    }
-}
-
-/// Refuse what the GPU shading cannot do yet: textured materials.
-pub fn check_scene(scene: &ShadeScene) -> GpuResult<()> {
-    if let Some(m) = scene
-        .mesh
-        .materials
-        .iter()
-        .find(|m| m.base_texture.is_some())
-    {
-        return Err(GpuError::Unsupported(format!(
-            "textures (material '{}' has a base-colour texture); use --backend cpu",
-            m.name
-        )));
-    }
-    Ok(())
-}
-
-fn push3(out: &mut Vec<u32>, v: [f32; 3]) {
-    out.extend(v.map(f32::to_bits));
-}
-
-fn material_record(m: &Material, out: &mut Vec<u32>) {
-    push3(out, m.diffuse);
-    out.push(m.shininess.to_bits());
-    push3(out, m.specular);
-    out.push(m.reflectivity.clamp(0.0, 1.0).to_bits());
-    push3(out, m.emission);
-    out.push(m.transmission.clamp(0.0, 1.0).to_bits());
-    out.push(m.ior.to_bits());
-    out.extend([0; 3]);
-}
-
-fn light_record(l: &Light, out: &mut Vec<u32>) {
-    let z = [0.0; 3];
-    let (kind, pos, dir, e, inner, outer) = match *l {
-        Light::Point(p) => (
-            0,
-            p.position.to_array(),
-            z,
-            p.intensity.to_array(),
-            0.0,
-            0.0,
-        ),
-        Light::Spot {
-            position,
-            direction,
-            intensity,
-            cos_inner,
-            cos_outer,
-        } => (
-            1,
-            position.to_array(),
-            direction.to_array(),
-            intensity.to_array(),
-            cos_inner,
-            cos_outer,
-        ),
-        Light::Directional {
-            direction,
-            irradiance,
-        } => (2, z, direction.to_array(), irradiance.to_array(), 0.0, 0.0),
-    };
-    out.push(kind);
-    push3(out, pos);
-    push3(out, dir);
-    push3(out, e);
-    out.extend([inner, outer, (inner - outer).max(1e-6)].map(f32::to_bits));
-    out.extend([0; 3]);
-}
-
-/// Per-triangle corners, vertex normals (zero without normals) and
-/// material index (meshes without that material get the default one,
-/// appended after the mesh's own, as `Surface::at` falls back).
-fn triangle_records(mesh: &TriangleMesh) -> Vec<u32> {
-    let fallback = mesh.materials.len() as u32;
-    let mut out = Vec::with_capacity(mesh.num_triangles() * TRI_WORDS);
-    for i in 0..mesh.num_triangles() {
-        for p in mesh.triangle(i) {
-            push3(&mut out, p.to_array());
-        }
-        for k in mesh.indices[i] {
-            let n = mesh.normals.as_ref().map_or(Vec3::ZERO, |n| n[k as usize]);
-            push3(&mut out, n.to_array());
-        }
-        let m = mesh.material_of(i);
-        out.push(if (m as usize) < mesh.materials.len() {
-            m
-        } else {
-            fallback
-        });
-        out.push(0);
-    }
-    out
 }
 
 impl ShadeBuffers {
@@ -245,18 +112,18 @@ impl ShadeBuffers {
         camera: &Camera,
         settings: &FrameSettings,
     ) -> GpuResult<ShadeBuffers> {
-        check_scene(scene)?;
         let env = environment_upload(scene.environment);
+        let atlas = TextureAtlas::build(&scene.mesh.materials);
         let (map_width, map_height, map_turn, map_intensity) = env.map.unwrap_or_default();
         let bounds = env
             .bounds
             .unwrap_or(raykit_core::Aabb::new(Vec3::ZERO, Vec3::ZERO));
         let mesh = scene.mesh;
         let mut tables = Vec::new();
-        for m in &mesh.materials {
-            material_record(m, &mut tables);
+        for (i, m) in mesh.materials.iter().enumerate() {
+            material_record(m, atlas.entry(i), &mut tables);
         }
-        material_record(&Material::default(), &mut tables);
+        material_record(&Material::default(), [0; 3], &mut tables);
         let lights_offset = tables.len() as u32;
         for l in scene.lights {
             light_record(l, &mut tables);
@@ -301,6 +168,7 @@ impl ShadeBuffers {
             counters: output(ctx, "ray counters", 4)?,
             radiance: output(ctx, "radiance", 3 * pixels)?,
             env_texels: storage(ctx, "environment map", &env.texels)?,
+            tex_texels: storage(ctx, "textures", &atlas.texels)?,
         })
     }
 }

@@ -4,7 +4,8 @@
 // up to two secondary rays with their weights (reflection: (1-t) r
 // Schlick(ks) + t F; refraction: t (1-F) kd).
 // Material record (16 words): diffuse, shininess, specular, reflectivity,
-// emission, transmission, ior (t and r clamped to [0, 1] on the host).
+// emission, transmission, ior (t and r clamped to [0, 1] on the host),
+// the base-colour texture's first texel, width and height (width 0: none).
 
 struct Scatter {
     local: vec3f,
@@ -19,7 +20,7 @@ struct Scatter {
 fn scatter(r: RayIn, h: Hit, depth: u32) -> Scatter {
     let s = surface_at(r, h);
     let mb = 16u * s.material;
-    let kd = tv3(mb);
+    let kd = tv3(mb) * base_colour(mb, s.uv);
     let shininess = tf(mb + 3u);
     let ks = tv3(mb + 4u);
     let refl = tf(mb + 7u);

@@ -36,8 +36,8 @@ struct ShadeParams {
     _pad2: u32,
 }
 
-// 20 words per triangle: corners a, b, c; vertex normals na, nb, nc;
-// material index; one unused word.
+// 26 words per triangle: corners a, b, c; vertex normals na, nb, nc;
+// material index; one unused word; texture coordinates ta, tb, tc.
 @group(1) @binding(0) var<storage, read> shade_tris: array<u32>;
 // Materials (16 words each) from word 0, lights (16 words each) from
 // sp.lights_offset.
@@ -49,11 +49,17 @@ struct ShadeParams {
 @group(1) @binding(4) var<storage, read_write> radiance: array<atomic<u32>>;
 // The environment map's linear RGB texels, row-major (one word without a map).
 @group(1) @binding(5) var<storage, read> env_texels: array<f32>;
+// Every material's base-colour texture, linear RGB, one after the other.
+@group(1) @binding(6) var<storage, read> tex_texels: array<f32>;
 
 const F32_MIN_POSITIVE: f32 = 1.17549435e-38;
 
 fn sw3(i: u32) -> vec3f {
     return vec3f(bitcast<f32>(shade_tris[i]), bitcast<f32>(shade_tris[i + 1u]), bitcast<f32>(shade_tris[i + 2u]));
+}
+
+fn sw2(i: u32) -> vec2f {
+    return vec2f(bitcast<f32>(shade_tris[i]), bitcast<f32>(shade_tris[i + 1u]));
 }
 
 fn tf(i: u32) -> f32 {
@@ -89,10 +95,11 @@ struct Surface {
     ns: vec3f,
     front: bool,
     material: u32,
+    uv: vec2f,
 }
 
 fn surface_at(r: RayIn, h: Hit) -> Surface {
-    let b = 20u * h.prim;
+    let b = 26u * h.prim;
     let a = sw3(b);
     let bb = sw3(b + 3u);
     let c = sw3(b + 6u);
@@ -112,7 +119,8 @@ fn surface_at(r: RayIn, h: Hit) -> Surface {
     if dot3(ns, ng) < 0.0 {
         ns = -ns;
     }
-    return Surface(point, ng, ns, front, shade_tris[b + 18u]);
+    let uv = sw2(b + 20u) * w + sw2(b + 22u) * u + sw2(b + 24u) * v;
+    return Surface(point, ng, ns, front, shade_tris[b + 18u], uv);
 }
 
 // Add c to pixel p's sum (a compare-and-swap loop per channel: WGSL has no
@@ -137,4 +145,42 @@ fn camera_ray(fx: f32, fy: f32) -> RayIn {
     let sy = 1.0 - 2.0 * fy / f32(sp.height);
     let d = normalize3(sp.forward + sp.right * sx + sp.up * sy);
     return make_ray(sp.eye, d, 0.0, inf());
+}
+
+fn tex_texel(first: u32, w: i32, h: i32, i: i32, j: i32) -> vec3f {
+    var ii = i % w;
+    if ii < 0 {
+        ii += w;
+    }
+    var jj = j % h;
+    if jj < 0 {
+        jj += h;
+    }
+    let k = 3u * (first + u32(jj * w + ii));
+    return vec3f(tex_texels[k], tex_texels[k + 1u], tex_texels[k + 2u]);
+}
+
+// Texture::sample: bilinear, repeating, texel centres at (i + 1/2) / width;
+// the texture of material record mb, or 1 without one.
+fn base_colour(mb: u32, uv: vec2f) -> vec3f {
+    let first = tables[mb + 13u];
+    let w = i32(tables[mb + 14u]);
+    let h = i32(tables[mb + 15u]);
+    if w == 0 || h == 0 {
+        return vec3f(1.0);
+    }
+    let x = uv.x * f32(w) - 0.5;
+    let y = uv.y * f32(h) - 0.5;
+    if !(is_finite(x) && is_finite(y)) {
+        return tex_texel(first, w, h, 0, 0);
+    }
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let i = i32(x0);
+    let j = i32(y0);
+    let top = tex_texel(first, w, h, i, j) * (1.0 - fx) + tex_texel(first, w, h, i + 1, j) * fx;
+    let bottom = tex_texel(first, w, h, i, j + 1) * (1.0 - fx) + tex_texel(first, w, h, i + 1, j + 1) * fx;
+    return top * (1.0 - fy) + bottom * fy;
 }
