@@ -7,11 +7,11 @@ use wgpu::util::DeviceExt;
 /// Check that `bytes` fit one storage binding and one buffer of `ctx`.
 pub fn check_binding(ctx: &GpuContext, what: &str, bytes: u64) -> GpuResult<()> {
     let l = &ctx.limits;
-    if bytes > l.max_storage_buffer_binding_size as u64 {
+    if bytes > l.max_storage_buffer_binding_size {
         return Err(GpuError::Limit {
             what: what.to_string(),
             needed: bytes,
-            limit: l.max_storage_buffer_binding_size as u64,
+            limit: l.max_storage_buffer_binding_size,
             name: "max_storage_buffer_binding_size",
         });
     }

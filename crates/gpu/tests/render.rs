@@ -208,16 +208,10 @@ fn check(spec: &str, scene: &Scene, env: Environment, spp: u32, kind: GpuAccelKi
     let mut frames = Vec::new();
     for integrator in [IntegratorKind::Recursive, IntegratorKind::Wavefront] {
         let opts = options(integrator, spp);
-        let cpu = cpu_frame(&scene, &env, &opts);
-        let gf = gpu_frame(&scene, &g, &env, &opts);
-        agreement(
-            &format!("{spec} {integrator:?} spp {spp}"),
-            &scene,
-            &g,
-            &cpu,
-            &gf,
-            &opts,
-        );
+        let cpu = cpu_frame(scene, &env, &opts);
+        let gf = gpu_frame(scene, &g, &env, &opts);
+        let label = format!("{spec} {} {integrator:?} spp {spp}", kind.name());
+        agreement(&label, scene, &g, &cpu, &gf, &opts);
         frames.push(gf);
     }
     // The two GPU organisations: the same rays, sums in another order.
@@ -306,7 +300,7 @@ fn test_map() -> EquirectMap {
             [
                 0.2 + 0.8 * i,
                 0.3 + 0.5 * j,
-                0.5 + 0.4 * (i * 6.283).sin() * (j * 3.14).sin(),
+                0.5 + 0.4 * (i * std::f32::consts::TAU).sin() * (j * std::f32::consts::PI).sin(),
             ]
         })
         .collect();
