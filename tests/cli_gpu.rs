@@ -148,3 +148,22 @@ fn gpu_aovs_equal_the_cpu_aovs() {
         );
     }
 }
+
+#[test]
+fn a_missing_adapter_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_raykit"))
+        .args(["render", "--backend", "gpu", "--out", s(&out)])
+        .args(SIZE)
+        .env("WGPU_BACKEND", "vulkan")
+        .env("VK_DRIVER_FILES", dir.path().join("no-such-driver.json"))
+        .env("VK_ICD_FILENAMES", dir.path().join("no-such-driver.json"))
+        .output()
+        .unwrap();
+    let err = text(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("no GPU adapter found") && err.contains("--backend cpu"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!out.exists());
+}
