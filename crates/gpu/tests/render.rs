@@ -48,17 +48,12 @@ fn camera(scene: &Scene) -> Camera {
         .unwrap_or_else(|| Camera::fit(&scene.mesh.bounds(), 45.0, W as f32 / H as f32))
 }
 
-fn cpu_frame(scene: &Scene, env: &Environment, opts: &WhittedOptions) -> Frame {
-    let accel = build_accel(
-        AccelKind::Bvh4,
-        TestKind::Moller,
-        &scene.mesh,
-        &BuildOptions::default(),
-    );
+fn cpu_frame(scene: &Scene, env: &Environment, opts: &WhittedOptions, test: TestKind) -> Frame {
+    let accel = build_accel(AccelKind::Bvh4, test, &scene.mesh, &BuildOptions::default());
     let ws = WhittedScene {
         mesh: &scene.mesh,
         accel: accel.as_ref(),
-        test: TestKind::Moller,
+        test,
         lights: &scene.lights,
         environment: env,
         shadow_maps: None,
@@ -66,12 +61,12 @@ fn cpu_frame(scene: &Scene, env: &Environment, opts: &WhittedOptions) -> Frame {
     render_whitted(&ws, &camera(scene), opts, &|_, _| {}).unwrap()
 }
 
-fn gpu_scene(scene: &Scene, kind: GpuAccelKind) -> GpuScene {
+fn gpu_scene(scene: &Scene, kind: GpuAccelKind, test: TestKind) -> GpuScene {
     GpuScene::build(
         gpu(),
         &scene.mesh,
         kind,
-        TestKind::Moller,
+        test,
         &BuildOptions::default(),
         &KdOptions::default(),
     )
@@ -204,13 +199,30 @@ fn check_scene(spec: &str, env: Environment, spp: u32) {
 }
 
 fn check(spec: &str, scene: &Scene, env: Environment, spp: u32, kind: GpuAccelKind) {
-    let g = gpu_scene(scene, kind);
+    check_with(spec, scene, env, spp, kind, TestKind::Moller)
+}
+
+/// GPU (structure `kind`, triangle test `test`) against the CPU's bvh4 with
+/// the same test, both organisations.
+fn check_with(
+    spec: &str,
+    scene: &Scene,
+    env: Environment,
+    spp: u32,
+    kind: GpuAccelKind,
+    test: TestKind,
+) {
+    let g = gpu_scene(scene, kind, test);
     let mut frames = Vec::new();
     for integrator in [IntegratorKind::Recursive, IntegratorKind::Wavefront] {
         let opts = options(integrator, spp);
-        let cpu = cpu_frame(scene, &env, &opts);
+        let cpu = cpu_frame(scene, &env, &opts, test);
         let gf = gpu_frame(scene, &g, &env, &opts);
-        let label = format!("{spec} {} {integrator:?} spp {spp}", kind.name());
+        let label = format!(
+            "{spec} {} {} {integrator:?} spp {spp}",
+            kind.name(),
+            test.name()
+        );
         agreement(&label, scene, &g, &cpu, &gf, &opts);
         frames.push(gf);
     }
@@ -255,10 +267,10 @@ fn shirley6_matches_cpu() {
     );
 }
 
-/// Spot, directional and point lights together, and the kd-tree kernel
-/// (paper 000's structure) instead of the threaded BVH.
+/// Spot, directional and point lights together, and paper 000's kd-tree
+/// kernel with its Plücker test instead of the threaded BVH with Möller.
 #[test]
-fn every_light_kind_on_the_kd_tree_matches_cpu() {
+fn every_light_kind_on_the_plucker_kd_tree_matches_cpu() {
     let mut scene = raykit_scene::builtin("whitted").unwrap();
     let b = scene.mesh.bounds();
     let c = b.center();
@@ -281,12 +293,14 @@ fn every_light_kind_on_the_kd_tree_matches_cpu() {
             0.5 * b.diagonal(),
         )),
     ];
-    check(
+    // Paper 000's combination: the kd-tree with the Plücker test.
+    check_with(
         "whitted, three light kinds",
         &scene,
         Environment::Sky,
         1,
         GpuAccelKind::KdStack,
+        TestKind::Plucker,
     );
 }
 
