@@ -163,7 +163,10 @@ fn a_missing_adapter_is_a_clear_error() {
         .unwrap();
     let err = text(&o.stderr);
     assert!(!o.status.success());
-    assert!(err.contains("no GPU adapter found") && err.contains("--backend cpu"), "{err}");
+    assert!(
+        err.contains("no GPU adapter found") && err.contains("--backend cpu"),
+        "{err}"
+    );
     assert!(!err.contains("panicked"), "{err}");
     assert!(!out.exists());
 }

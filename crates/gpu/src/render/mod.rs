@@ -72,7 +72,8 @@ struct RunReport {
     first_hits: Vec<u32>,
 }
 
-/// A frame rendered on the GPU.
+/// A frame rendered on the GPU by paper 000's single kernel or paper 001's
+/// stream.
 pub struct GpuFrame {
     /// The image, first hits (for AOVs) and ray counts; `stats.seconds`
     /// excludes compiling the kernels.
@@ -81,8 +82,10 @@ pub struct GpuFrame {
     pub compile_seconds: f64,
 }
 
-/// Refuse options the GPU renderer does not implement, naming them (never
-/// a silently different image).
+/// Refuse options the GPU renderer (papers 000 and 001 on wgpu) does not
+/// implement, naming them (never a silently different image): paper 001's
+/// shadow maps and rasterized primaries, and paths longer than paper 000's
+/// single kernel's ray stack.
 pub fn check_options(opts: &WhittedOptions) -> GpuResult<()> {
     if opts.shadows == ShadowMode::Maps {
         return Err(GpuError::Unsupported(

@@ -65,8 +65,8 @@ struct Kernels {
     shade: Kernel,
 }
 
-/// Run the stream for every camera sample; returns the number of
-/// next-bounce rays queued (the secondary rays).
+/// Run the stream for every camera sample; reports the next-bounce rays
+/// queued (the secondary rays) and the first sample's camera-ray hits.
 pub(super) fn run(
     ctx: &GpuContext,
     gpu: &GpuScene,

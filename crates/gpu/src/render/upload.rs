@@ -47,7 +47,8 @@ pub struct ShadeParams {
     _pad2: u32,
 }
 
-/// What the shading reads about the scene, independent of the camera.
+/// What the shading of papers 000 and 001 reads about the scene,
+/// independent of the camera: geometry with materials, lights, environment.
 pub struct ShadeScene<'a> {
     /// Geometry with materials.
     pub mesh: &'a TriangleMesh,
