@@ -52,7 +52,7 @@ impl fmt::Display for GpuError {
             ),
             GpuError::Shader(why) => write!(f, "GPU pipeline creation failed: {why}"),
             GpuError::Readback(why) => write!(f, "reading results back from the GPU failed: {why}"),
-            GpuError::Unsupported(why) => write!(f, "not supported by the GPU backend: {why}"),
+            GpuError::Unsupported(why) => write!(f, "not supported by --backend gpu: {why}"),
         }
     }
 }

@@ -30,6 +30,20 @@ pub mod wgsl {
     pub const TERRAIN_BOXES: &str = include_str!("shaders/terrain_boxes.wgsl");
     /// Per-ray maximum-mipmap terrain casting (Tevs et al. 2008).
     pub const TERRAIN_MAXMIP: &str = include_str!("shaders/terrain_maxmip.wgsl");
+    /// The renderer's shading data (group 1), surface, camera ray.
+    pub const SHADE_DATA: &str = include_str!("shaders/render/shade_data.wgsl");
+    /// Reflection, refraction, Fresnel.
+    pub const OPTICS: &str = include_str!("shaders/render/optics.wgsl");
+    /// Lights and Blinn-Phong with shadow rays.
+    pub const LIGHTING: &str = include_str!("shaders/render/lighting.wgsl");
+    /// Sky and constant environments.
+    pub const ENVIRONMENT: &str = include_str!("shaders/render/environment.wgsl");
+    /// The Whitted shading kernel (Tracer::scatter).
+    pub const SCATTER: &str = include_str!("shaders/render/scatter.wgsl");
+    /// Paper 000's single render kernel.
+    pub const MEGAKERNEL: &str = include_str!("shaders/render/megakernel.wgsl");
+    /// Paper 001's stream kernels.
+    pub const STREAM: &str = include_str!("shaders/render/stream.wgsl");
 }
 
 /// One compute pipeline with an explicit layout.

@@ -13,6 +13,8 @@
 //! - [`GpuTerrain`]: height-field ray casting by per-ray maximum-mipmap
 //!   traversal (Tevs et al. 2008, paper 004's method C) on the declared
 //!   two-triangles-per-cell surface of `raykit-terrain`.
+//! - [`render_whitted_gpu`]: the Whitted renderer, as paper 000's single
+//!   kernel or paper 001's stream of kernels over ray queues.
 //!
 //! Every kernel is WGSL assembled from small pieces (`shaders/`): the
 //! common records, the scene bindings, one triangle test, one structure, one
@@ -22,6 +24,7 @@ mod buffers;
 mod context;
 mod error;
 pub mod kernel;
+pub mod render;
 mod scene;
 pub mod terrain;
 mod trace;
@@ -29,6 +32,7 @@ mod trace;
 pub use buffers::{check_binding, output, read_words, storage, uniform};
 pub use context::GpuContext;
 pub use error::{GpuError, GpuResult};
+pub use render::{check_options, render_whitted_gpu, GpuFrame, ShadeScene, MAX_GPU_DEPTH};
 pub use scene::{gpu_test_supported, GpuAccelKind, GpuScene};
 pub use terrain::{time_terrain_boxes, time_terrain_casts, GpuCaster, GpuTerrain, TerrainTiming};
 pub use trace::{GpuRays, GpuTracer, CHUNK};

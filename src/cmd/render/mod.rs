@@ -2,8 +2,10 @@
 //! and other scenes, point/spot/directional lights, shadow rays or shadow
 //! maps, mirrors and glass, HDR environments (optionally paper 001's
 //! environment box), traced or rasterized primaries, recursive or wavefront
-//! integration — written to PNG or EXR, with optional AOVs.
+//! integration — written to PNG or EXR, with optional AOVs — on the CPU or,
+//! with `--backend gpu`, on the GPU (issue 9).
 
+mod gpu;
 pub mod lights_arg;
 mod output;
 pub mod setup;
@@ -54,6 +56,17 @@ pub enum IntegratorArg {
     Wavefront,
 }
 
+/// Where the frame is rendered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// The CPU renderer (every feature), tile-parallel on the worker threads.
+    Cpu,
+    /// WGSL compute kernels through wgpu (any Vulkan, Metal or DX12 GPU, or
+    /// Mesa's lavapipe): paper 000's single kernel for --integrator
+    /// recursive, paper 001's stream of kernels for --integrator wavefront.
+    Gpu,
+}
+
 impl From<ShadowArg> for ShadowMode {
     fn from(a: ShadowArg) -> ShadowMode {
         match a {
@@ -92,7 +105,12 @@ raykit render --shadows maps --pcf 5 --primary raster --integrator wavefront --o
 raykit render --scene bunny.obj --light dir:-1,-2,-1 --light spot:0,3,2:0,0,0:25:1,0.8,0.6\n\n\
 Without --eye the scene's own camera is used, or one framing the whole mesh.\n\
 Without --light the scene's lights are used, or one point light above the mesh.\n\
---depth counts rays per path: 1 is direct light only, 2 adds one reflection/refraction bounce."
+--depth counts rays per path: 1 is direct light only, 2 adds one reflection/refraction bounce.\n\n\
+--backend gpu renders the same image on the GPU (wgpu compute; Mesa's lavapipe without a GPU):\n\
+--integrator recursive runs paper 000's single kernel (one thread per pixel sample, --depth up to 16),\n\
+--integrator wavefront paper 001's stream of kernels over ray queues. --accel picks kd-stack,\n\
+bvh-threaded (default) or brute, --test plucker or moller. --shadows maps and --primary raster\n\
+are CPU-only and are refused with an error."
 )]
 pub struct RenderArgs {
     #[command(flatten)]
@@ -144,9 +162,14 @@ pub struct RenderArgs {
     /// the output, plus PNG previews).
     #[arg(long, value_delimiter = ',')]
     aov: Vec<String>,
-    /// Acceleration structure (`raykit info accels`).
-    #[arg(long, default_value = "bvh4")]
-    accel: String,
+    /// Acceleration structure (`raykit info accels`; default bvh4, or
+    /// bvh-threaded with --backend gpu, which takes kd-stack, bvh-threaded or
+    /// brute).
+    #[arg(long)]
+    accel: Option<String>,
+    /// Render on the CPU or the GPU (same image; see below).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    backend: BackendArg,
     /// Ray/triangle test (`raykit info tests`).
     #[arg(long, default_value = "moller")]
     test: String,
@@ -184,35 +207,21 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         })
         .collect::<Result<_>>()?;
     let format = output::Format::of(&args.out)?;
-    let (kind, test) = parse_names(&args.accel, &args.test)?;
+    let backend = args.backend;
+    let cpu_accel = match backend {
+        BackendArg::Cpu => args.accel.as_deref().unwrap_or("bvh4"),
+        BackendArg::Gpu => "bvh4",
+    };
+    let (kind, test) = parse_names(cpu_accel, &args.test)?;
+    let gpu_kind = match backend {
+        BackendArg::Gpu => Some(gpu::gpu_accel(args.accel.as_deref())?),
+        BackendArg::Cpu => None,
+    };
     crate::paths::ensure_not_input(&args.out, &[std::path::Path::new(&args.scene.scene)])?;
-    let pool = pool(args.threads)?;
-    let aspect = args.width as f32 / args.height as f32;
-    let (setup, load_s) = timed(|| setup::setup(&args.scene, aspect));
-    let setup = setup?;
-    let mesh = &setup.scene.mesh;
-    let (accel, build_s) =
-        pool.install(|| timed(|| build_accel(kind, test, mesh, &args.build.options())));
     let shadows: ShadowMode = if args.no_shadows {
         ShadowMode::Off
     } else {
         args.shadows.into()
-    };
-    let (maps, maps_s) = if shadows == ShadowMode::Maps {
-        let mut o = ShadowMapOptions::for_mesh(mesh);
-        o.resolution = args.shadow_map_size.clamp(16, 16384);
-        o.pcf = args.pcf.clamp(1, 15);
-        let diag = mesh.bounds().diagonal();
-        if let Some(b) = args.shadow_bias {
-            o.bias_constant = b * diag;
-        }
-        if let Some(b) = args.shadow_slope_bias {
-            o.bias_slope = b;
-        }
-        let (m, s) = pool.install(|| timed(|| ShadowMaps::build(mesh, &setup.lights, &o)));
-        (Some(m), s)
-    } else {
-        (None, 0.0)
     };
     let opts = WhittedOptions {
         width: args.width,
@@ -227,14 +236,14 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         encoding: Encoding::Srgb,
         ..WhittedOptions::default()
     };
-    let scene = WhittedScene {
-        mesh,
-        accel: accel.as_ref(),
-        test,
-        lights: &setup.lights,
-        environment: &setup.environment,
-        shadow_maps: maps.as_ref(),
-    };
+    if gpu_kind.is_some() {
+        gpu::check_args(&opts, test)?;
+    }
+    let pool = pool(args.threads)?;
+    let aspect = args.width as f32 / args.height as f32;
+    let (setup, load_s) = timed(|| setup::setup(&args.scene, aspect));
+    let setup = setup?;
+    let mesh = &setup.scene.mesh;
     let samples = args.width as u64 * args.height as u64 * args.spp as u64;
     let bar = ProgressBar::new(samples).with_style(
         ProgressStyle::with_template("{bar:30} {percent:>3}% {msg} [{elapsed}<{eta}]")
@@ -248,7 +257,54 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         let secs = start.elapsed().as_secs_f64().max(1e-9);
         bar.set_message(format!("{:.2} Mrays/s", rays as f64 / secs / 1e6));
     };
-    let frame = pool.install(|| render_whitted(&scene, &setup.camera, &opts, &progress))?;
+    let mut maps_note = String::new();
+    let (frame, build_s, structure) = match gpu_kind {
+        Some(gkind) => {
+            let g = pool.install(|| {
+                gpu::render(
+                    gkind,
+                    test,
+                    mesh,
+                    &setup,
+                    &opts,
+                    &args.build.options(),
+                    &progress,
+                )
+            })?;
+            (g.frame, g.build_seconds, g.describe)
+        }
+        None => {
+            let (accel, build_s) =
+                pool.install(|| timed(|| build_accel(kind, test, mesh, &args.build.options())));
+            let maps = if shadows == ShadowMode::Maps {
+                let mut o = ShadowMapOptions::for_mesh(mesh);
+                o.resolution = args.shadow_map_size.clamp(16, 16384);
+                o.pcf = args.pcf.clamp(1, 15);
+                let diag = mesh.bounds().diagonal();
+                if let Some(b) = args.shadow_bias {
+                    o.bias_constant = b * diag;
+                }
+                if let Some(b) = args.shadow_slope_bias {
+                    o.bias_slope = b;
+                }
+                let (m, s) = pool.install(|| timed(|| ShadowMaps::build(mesh, &setup.lights, &o)));
+                maps_note = format!(", shadow maps {:.0} ms", s * 1e3);
+                Some(m)
+            } else {
+                None
+            };
+            let scene = WhittedScene {
+                mesh,
+                accel: accel.as_ref(),
+                test,
+                lights: &setup.lights,
+                environment: &setup.environment,
+                shadow_maps: maps.as_ref(),
+            };
+            let frame = pool.install(|| render_whitted(&scene, &setup.camera, &opts, &progress))?;
+            (frame, build_s, format!("{}, {}", kind.name(), test.name()))
+        }
+    };
     bar.finish_and_clear();
     output::write_image(&args.out, format, &frame.image)?;
     for kind in &aovs {
@@ -256,7 +312,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     }
     let st = &frame.stats;
     eprintln!(
-        "{}: {} triangles, {} lights, env {}; load {:.0} ms, build {:.0} ms ({}, {}){}, render {:.0} ms \
+        "{}: {} triangles, {} lights, env {}; load {:.0} ms, build {:.0} ms ({}){}, render {:.0} ms \
          ({}×{}, {} spp, depth {}, {:?} shadows, {:?} primaries, {:?}; {:.2} Mrays: {} primary, {} shadow, {} secondary; {:.2} Mrays/s) -> {}",
         setup.scene.name,
         mesh.num_triangles(),
@@ -264,9 +320,8 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         setup.environment.describe(),
         load_s * 1e3,
         build_s * 1e3,
-        kind.name(),
-        test.name(),
-        if maps.is_some() { format!(", shadow maps {:.0} ms", maps_s * 1e3) } else { String::new() },
+        structure,
+        maps_note,
         st.seconds * 1e3,
         args.width,
         args.height,
