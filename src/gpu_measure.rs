@@ -52,19 +52,34 @@ pub struct GpuRow {
 /// nearest hits for primary and incoherent rays, occlusion for shadow rays.
 pub const SETS: [&str; 3] = ["primary", "shadow", "incoherent"];
 
+/// What every structure × test is measured on.
+pub struct Workload<'a> {
+    /// The mesh.
+    pub mesh: &'a TriangleMesh,
+    /// Build options of the structures.
+    pub opts: &'a BuildOptions,
+    /// Primary, shadow and incoherent rays.
+    pub sets: &'a [Vec<Ray>; 3],
+    /// Timed runs per set (the median is reported).
+    pub reps: usize,
+}
+
 /// Build `kind` × `test` on the GPU and its CPU twin, trace every set
 /// `reps` times on the GPU (after one warm-up run whose answers are
 /// checked against the CPU twin's on every ray).
 pub fn measure(
     ctx: &GpuContext,
-    mesh: &TriangleMesh,
+    work: &Workload,
     kind: GpuAccelKind,
     test: TestKind,
-    opts: &BuildOptions,
-    sets: &[Vec<Ray>; 3],
-    reps: usize,
     mut progress: impl FnMut(&str),
 ) -> Result<GpuRow> {
+    let Workload {
+        mesh,
+        opts,
+        sets,
+        reps,
+    } = *work;
     progress(&format!(
         "{} × {}: build and upload",
         kind.name(),

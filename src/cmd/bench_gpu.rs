@@ -3,7 +3,7 @@
 //! Plücker and Möller tests, every answer checked against the CPU twin.
 
 use crate::backend::{gpu_accel, open_gpu};
-use crate::gpu_measure::{measure, GpuRow};
+use crate::gpu_measure::{measure, GpuRow, Workload};
 use crate::measure::pool;
 use crate::scene_arg;
 use anyhow::{anyhow, Result};
@@ -86,9 +86,15 @@ pub fn run(s: GpuBenchSetup) -> Result<ExitCode> {
             .expect("valid template"),
     );
     let mut rows = Vec::new();
+    let work = Workload {
+        mesh: &mesh,
+        opts: &s.options,
+        sets: &sets,
+        reps: s.reps,
+    };
     for &test in &tests {
         for &kind in &accels {
-            let row = measure(&ctx, &mesh, kind, test, &s.options, &sets, s.reps, |m| {
+            let row = measure(&ctx, &work, kind, test, |m| {
                 bar.set_message(m.to_string());
                 bar.inc(1);
             })?;

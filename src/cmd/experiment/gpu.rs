@@ -7,7 +7,7 @@ use super::{cached_dragon, gpu_terrain, shared_mesh, write_csv, write_text};
 use crate::backend::{cpu_twin, open_gpu};
 use crate::build_args::BuildArgs;
 use crate::cmd::bench_gpu::gpu_lists;
-use crate::gpu_measure::{measure, SETS};
+use crate::gpu_measure::{measure, Workload, SETS};
 use crate::measure::{median_min_max, pool, timed};
 use crate::scene_arg;
 use anyhow::Result;
@@ -151,9 +151,15 @@ pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
                 .expect("valid template"),
         );
         bar.set_prefix(scene.name.clone());
+        let work = Workload {
+            mesh,
+            opts: &opts,
+            sets: &sets,
+            reps,
+        };
         for &test in &tests {
             for &kind in &accels {
-                let g = measure(&ctx, mesh, kind, test, &opts, &sets, reps, |m| {
+                let g = measure(&ctx, &work, kind, test, |m| {
                     bar.set_message(m.to_string());
                     bar.inc(1);
                 })?;

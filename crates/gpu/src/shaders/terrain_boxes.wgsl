@@ -40,17 +40,6 @@ fn box_entry(k: u32, o: vec3f, inv: vec3f, tmax: f32) -> f32 {
     return inf();
 }
 
-// Parameter where the ray leaves column (or row) `cell` along one axis.
-fn line_exit(o: f32, d: f32, cell: u32) -> f32 {
-    if d > 0.0 {
-        return (f32(cell) + 1.0 - o) / d;
-    }
-    if d < 0.0 {
-        return (f32(cell) - o) / d;
-    }
-    return inf();
-}
-
 @compute @workgroup_size(64)
 fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
     let ray = gid.x + gid.y * tp.row;
@@ -96,8 +85,8 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
                 break;
             }
             cells += 1u;
-            let tx = line_exit(o.x, d.x, c);
-            let ty = line_exit(o.y, d.y, r);
+            let tx = node_exit(o.x, d.x, c, 1u);
+            let ty = node_exit(o.y, d.y, r, 1u);
             let tb = max(min(min(tx, ty), span), ta);
             let h = hit_cell(c, r, o, d, ta, tb);
             if h.y > 0.5 && h.x <= cand_reach {

@@ -96,3 +96,17 @@ fn hit_cell(c: u32, r: u32, o: vec3f, d: vec3f, a: f32, b: f32) -> vec3f {
     }
     return best;
 }
+
+// Parameter where the ray leaves the node of `size` cells at index `k`
+// along one axis (the same line, hence the same value, as the parent's
+// cut there), +inf when the ray runs parallel. A single cell is a node of
+// size 1.
+fn node_exit(o: f32, d: f32, k: u32, size: u32) -> f32 {
+    if d > 0.0 {
+        return (f32((k + 1u) * size) - o) / d;
+    }
+    if d < 0.0 {
+        return (f32(k * size) - o) / d;
+    }
+    return inf();
+}

@@ -33,19 +33,6 @@
 // (4 words): t from the origin (f32 bits, +inf on a miss), cell
 // (col | row << 16, or MISS), nodes visited, cells tested.
 
-// Parameter where the ray leaves the node of `size` cells at index `k`
-// along one axis (the same line, hence the same value, as the parent's
-// cut there), +inf when the ray runs parallel.
-fn node_exit(o: f32, d: f32, k: u32, size: u32) -> f32 {
-    if d > 0.0 {
-        return (f32((k + 1u) * size) - o) / d;
-    }
-    if d < 0.0 {
-        return (f32(k * size) - o) / d;
-    }
-    return inf();
-}
-
 @compute @workgroup_size(64)
 fn terrain_maxmip(@builtin(global_invocation_id) gid: vec3u) {
     let ray = gid.x + gid.y * tp.row;
