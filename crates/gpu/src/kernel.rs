@@ -87,13 +87,17 @@ pub enum BindingKind {
 }
 
 /// The scene's group 0: nodes, indices, triangle records, prims (storage),
-/// accel parameters (uniform); see `shaders/scene.wgsl`.
-pub const SCENE_GROUP: [BindingKind; 5] = [
+/// accel parameters (uniform), and three more bindings for triangle records
+/// beyond one binding's limit; see `shaders/scene.wgsl`.
+pub const SCENE_GROUP: [BindingKind; 8] = [
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Uniform,
+    BindingKind::Storage,
+    BindingKind::Storage,
+    BindingKind::Storage,
 ];
 
 impl Kernel {

@@ -67,7 +67,39 @@ struct AccelParams {
     root_max: [f32; 3],
     num_nodes: u32,
     num_tris: u32,
-    _pad: [u32; 3],
+    chunk_words: u32,
+    _pad: [u32; 2],
+}
+
+/// Bindings the triangle records may be spread over (`shaders/scene.wgsl`).
+pub const RECORD_BINDINGS: usize = 4;
+
+/// Words of triangle records per binding: all of them when they fit one
+/// binding (`u32::MAX` then, which the kernels read as "one binding"), else
+/// as many whole records as fit, with an error naming the limit when even
+/// [`RECORD_BINDINGS`] bindings cannot hold them.
+fn chunk_words(ctx: &GpuContext, words: usize, per_tri: usize) -> GpuResult<usize> {
+    let limit = ctx
+        .limits
+        .max_storage_buffer_binding_size
+        .min(ctx.limits.max_buffer_size)
+        / 4;
+    if words as u64 <= limit {
+        return Ok(u32::MAX as usize);
+    }
+    let chunk = (limit as usize / per_tri.max(1)) * per_tri;
+    if chunk == 0 || words.div_ceil(chunk) > RECORD_BINDINGS {
+        return Err(GpuError::Limit {
+            what: format!(
+                "{} bytes of triangle records in {RECORD_BINDINGS} bindings",
+                words * 4
+            ),
+            needed: (words * 4).div_ceil(RECORD_BINDINGS) as u64,
+            limit: limit * 4,
+            name: "max_storage_buffer_binding_size",
+        });
+    }
+    Ok(chunk)
 }
 
 /// A structure and its triangles in GPU buffers (bind group 0 of every
@@ -89,7 +121,7 @@ pub struct GpuScene {
     pub build_seconds: f64,
     /// Seconds to precompute, flatten and upload.
     pub upload_seconds: f64,
-    buffers: [wgpu::Buffer; 5],
+    buffers: [wgpu::Buffer; 8],
 }
 
 /// The structure's arrays before upload.
@@ -188,14 +220,27 @@ impl GpuScene {
             root_max: flat.root.1,
             num_nodes: num_nodes as u32,
             num_tris: flat.tris.len() as u32,
-            _pad: [0; 3],
+            chunk_words: 0,
+            _pad: [0; 2],
+        };
+        let words = &flat.tris.words;
+        let chunk = chunk_words(ctx, words.len(), flat.tris.words_per_tri)?;
+        let part = |k: usize| {
+            &words[(k * chunk).min(words.len())..((k + 1).saturating_mul(chunk)).min(words.len())]
+        };
+        let params = AccelParams {
+            chunk_words: chunk.min(u32::MAX as usize) as u32,
+            ..params
         };
         let buffers = [
             storage(ctx, "scene nodes", &flat.nodes)?,
             storage(ctx, "scene triangle-index list", &flat.indices)?,
-            storage(ctx, "scene triangle records", &flat.tris.words)?,
+            storage(ctx, "scene triangle records", part(0))?,
             storage(ctx, "scene triangle ids", &flat.tris.prims)?,
             uniform(ctx, "scene parameters", &params),
+            storage(ctx, "scene triangle records, second binding", part(1))?,
+            storage(ctx, "scene triangle records, third binding", part(2))?,
+            storage(ctx, "scene triangle records, fourth binding", part(3))?,
         ];
         let node_bytes = flat.nodes.len() * 4;
         let bytes =

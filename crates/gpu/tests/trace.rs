@@ -155,3 +155,63 @@ fn scenes_beyond_a_device_limit_fail_naming_the_limit() {
     .expect("projection is refused");
     assert!(err.to_string().contains("projection"), "{err}");
 }
+
+#[test]
+fn triangle_records_split_across_bindings_give_the_same_answers() {
+    // A device allowing 160 KiB per binding holds the bunny's nodes but
+    // needs three bindings for its 411 KB of Plücker records.
+    let mut small = gpu().clone();
+    small.limits.max_storage_buffer_binding_size = 160 * 1024;
+    let mesh = raykit_io::load_mesh(&shared_data().join("meshes/bunny_3674.obj")).unwrap();
+    let reference = BruteForce::<Moller>::new(&mesh);
+    let sets = standard_sets(&mesh, &reference, 64, 3);
+    for kind in [GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded] {
+        for test in [TestKind::Plucker, TestKind::Moller] {
+            let scene = GpuScene::build(
+                &small,
+                &mesh,
+                kind,
+                test,
+                &BuildOptions::default(),
+                &KdOptions::default(),
+            )
+            .unwrap();
+            let whole = GpuScene::build(
+                gpu(),
+                &mesh,
+                kind,
+                test,
+                &BuildOptions::default(),
+                &KdOptions::default(),
+            )
+            .unwrap();
+            let split = GpuTracer::new(&small, &scene).unwrap();
+            let one = GpuTracer::new(gpu(), &whole).unwrap();
+            for rays in [&sets[0], &sets[2]] {
+                let a = split.intersect_batch(rays).unwrap();
+                let b = one.intersect_batch(rays).unwrap();
+                assert!(a.iter().any(|h| h.is_some()));
+                assert_eq!(
+                    a,
+                    b,
+                    "{} × {}: split records change the answers",
+                    kind.name(),
+                    test.name()
+                );
+            }
+        }
+    }
+    // Beyond four bindings the error names the limit.
+    small.limits.max_storage_buffer_binding_size = 64 * 1024;
+    let err = GpuScene::build(
+        &small,
+        &mesh,
+        GpuAccelKind::BvhThreaded,
+        TestKind::Plucker,
+        &BuildOptions::default(),
+        &KdOptions::default(),
+    )
+    .err()
+    .expect("does not fit four bindings");
+    assert!(err.to_string().contains("in 4 bindings"), "{err}");
+}

@@ -1,6 +1,9 @@
 // The scene's bindings (group 0), shared by every kernel that traces the
 // triangle mesh: the structure's nodes and index list, the precomputed
-// triangle records in leaf order and their mesh triangle indices.
+// triangle records in leaf order and their mesh triangle indices. Records
+// beyond one storage binding's limit continue in up to three more bindings
+// of chunk_words words each (whole records); a scene that fits one binding
+// has chunk_words = 0xffffffff and never reads the others.
 // Accel files (kd_stack.wgsl, bvh_threaded.wgsl, brute.wgsl) define
 // scene_intersect(ray) -> Hit and scene_occluded(ray) -> bool over them.
 
@@ -10,7 +13,7 @@ struct AccelParams {
     root_max: vec3f,
     num_nodes: u32,
     num_tris: u32,
-    _pad0: u32,
+    chunk_words: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -20,6 +23,9 @@ struct AccelParams {
 @group(0) @binding(2) var<storage, read> tri_words: array<u32>;
 @group(0) @binding(3) var<storage, read> prims: array<u32>;
 @group(0) @binding(4) var<uniform> accel: AccelParams;
+@group(0) @binding(5) var<storage, read> tri_words1: array<u32>;
+@group(0) @binding(6) var<storage, read> tri_words2: array<u32>;
+@group(0) @binding(7) var<storage, read> tri_words3: array<u32>;
 
 struct TriHit {
     hit: bool,
@@ -29,7 +35,17 @@ struct TriHit {
 }
 
 fn tw(i: u32) -> f32 {
-    return bitcast<f32>(tri_words[i]);
+    let c = accel.chunk_words;
+    if i < c {
+        return bitcast<f32>(tri_words[i]);
+    }
+    if i - c < c {
+        return bitcast<f32>(tri_words1[i - c]);
+    }
+    if i - 2u * c < c {
+        return bitcast<f32>(tri_words2[i - 2u * c]);
+    }
+    return bitcast<f32>(tri_words3[i - 3u * c]);
 }
 
 fn tw3(i: u32) -> vec3f {
