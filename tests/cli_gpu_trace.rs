@@ -22,6 +22,23 @@ fn read_hits(path: &std::path::Path) -> Vec<(f32, u32)> {
         .collect()
 }
 
+/// 8² primary rays of the Cornell box in a temporary folder.
+fn cornell_rays() -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let rays = dir.path().join("r.bin");
+    let out = raykit(&[
+        "rays",
+        "--mesh",
+        "builtin:cornell",
+        "--size",
+        "8",
+        "--out",
+        s(&rays),
+    ]);
+    assert_ok(&out, "raykit rays");
+    (dir, rays)
+}
+
 fn assert_ok(out: &std::process::Output, what: &str) {
     assert!(
         out.status.success(),
@@ -142,20 +159,7 @@ fn gpu_bench_checks_every_answer() {
 
 #[test]
 fn gpu_requests_without_a_kernel_fail_with_a_message() {
-    let dir = tempfile::tempdir().unwrap();
-    let rays = dir.path().join("r.bin");
-    assert_ok(
-        &raykit(&[
-            "rays",
-            "--mesh",
-            "builtin:cornell",
-            "--size",
-            "8",
-            "--out",
-            s(&rays),
-        ]),
-        "raykit rays",
-    );
+    let (dir, rays) = cornell_rays();
     let hits = dir.path().join("h.bin");
     for (flag, value, expect) in [
         ("--accel", "bvh4", "has no GPU kernel"),
@@ -186,20 +190,7 @@ fn gpu_requests_without_a_kernel_fail_with_a_message() {
 fn no_adapter_is_a_clear_error() {
     // Only Vulkan, Metal and DX12 are built in; asking for OpenGL alone
     // leaves wgpu without an adapter on every platform.
-    let dir = tempfile::tempdir().unwrap();
-    let rays = dir.path().join("r.bin");
-    assert_ok(
-        &raykit(&[
-            "rays",
-            "--mesh",
-            "builtin:cornell",
-            "--size",
-            "8",
-            "--out",
-            s(&rays),
-        ]),
-        "raykit rays",
-    );
+    let (dir, rays) = cornell_rays();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_raykit"))
         .args([
             "trace",
