@@ -110,13 +110,13 @@ pub struct Moller;
 /// vectors and their max norms (Möller & Trumbore 1997).
 #[derive(Clone, Copy, Debug)]
 pub struct MollerTri {
-    v0: Vec3,
-    e1: Vec3,
-    e2: Vec3,
+    pub(crate) v0: Vec3,
+    pub(crate) e1: Vec3,
+    pub(crate) e2: Vec3,
     /// `max |e1_i|`.
-    e1_max: f32,
+    pub(crate) e1_max: f32,
     /// `max |e2_i|`.
-    e2_max: f32,
+    pub(crate) e2_max: f32,
 }
 
 #[inline(always)]

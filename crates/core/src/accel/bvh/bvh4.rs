@@ -4,6 +4,7 @@ use super::box4::RayBox4;
 use super::build::{build, BuildOptions};
 use super::node4::{collapse, Child4, Node4};
 use super::node_box::NodeBox;
+use super::tri4::{Ray4, Tri4Leaves};
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
 use crate::accel::leaf::LeafTriangles;
@@ -11,7 +12,9 @@ use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
-use crate::tri::TriangleTest;
+use crate::tri::{Moller, TriangleTest};
+use std::any::TypeId;
+use std::mem::MaybeUninit;
 
 /// Traversal stack entries for any tree: each wide node visited pushes at
 /// most three.
@@ -35,24 +38,106 @@ const SMALL_STACK: usize = 64;
 /// fixed-size stack (farthest deepest) and skipped on pop when a nearer hit
 /// has been found since. Occlusion queries do not sort and stop at the first
 /// hit.
+///
+/// Over [`Moller`] the leaves are packs of four triangles tested at once
+/// with SSE, as Embree's `triangle4` (Wald et al. 2014; see
+/// [`super::tri4`]), with the scalar test's answers bit for bit; the other
+/// tests keep one triangle at a time.
 pub struct Bvh4<T: TriangleTest> {
     nodes: Vec<Node4>,
     root_box: NodeBox,
     root: Child4,
-    tris: LeafTriangles<T>,
+    leaves: Leaves<T>,
     stats: AccelStats,
     /// Whether traversal fits in [`SMALL_STACK`] entries.
     small_stack: bool,
 }
 
+/// The leaves of a [`Bvh4`]: packs of four for [`Moller`], single
+/// triangles for the other tests.
+enum Leaves<T: TriangleTest> {
+    /// One triangle after the other; leaf references are triangle ranges.
+    Single(LeafTriangles<T>),
+    /// Packs of four; leaf references start at their first pack.
+    Packed(Tri4Leaves),
+}
+
+/// A leaf test for one ray, so that traversal is written once for both kinds
+/// of leaves (a trait rather than a closure, to force it inline).
+trait LeafTest {
+    /// Test the leaf `first`, `count` (see [`Tri4Leaves::test`]).
+    fn test<const ANY: bool>(
+        &self,
+        first: usize,
+        count: usize,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool;
+}
+
+struct PackedLeaf<'a> {
+    packs: &'a Tri4Leaves,
+    ray: &'a Ray,
+    r4: Ray4,
+}
+
+impl LeafTest for PackedLeaf<'_> {
+    #[inline(always)]
+    fn test<const ANY: bool>(
+        &self,
+        first: usize,
+        count: usize,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        self.packs
+            .test::<ANY>(first, count, self.ray, &self.r4, tfar, best)
+    }
+}
+
+struct SingleLeaf<'a, T: TriangleTest> {
+    tris: &'a LeafTriangles<T>,
+    ray: &'a Ray,
+    rd: T::RayData,
+}
+
+impl<T: TriangleTest> LeafTest for SingleLeaf<'_, T> {
+    #[inline(always)]
+    fn test<const ANY: bool>(
+        &self,
+        first: usize,
+        count: usize,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        self.tris
+            .test::<ANY>(first, count, self.ray, &self.rd, tfar, best)
+    }
+}
+
 impl<T: TriangleTest> Bvh4<T> {
     /// Build over all triangles of `mesh`.
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        let packed = TypeId::of::<T>() == TypeId::of::<Moller>();
+        // Packs of four: the SAH counts a leaf's pack tests, not its
+        // triangles (the other tests keep the caller's setting).
+        let options = &BuildOptions {
+            leaf_block: if packed { 4 } else { options.leaf_block },
+            ..options.clone()
+        };
         let tree = build(mesh, options);
-        let wide = collapse(&tree.root, options.traversal_cost as f64);
+        let mut wide = collapse(&tree.root, options.traversal_cost as f64);
         let root_box = tree.root.bounds().into();
         let node_bytes = std::mem::size_of_val(&wide.nodes[..]);
-        let (tris, binary) = tree.into_leaves(mesh, node_bytes, options);
+        let (leaves, binary) = if packed {
+            let packs = Tri4Leaves::new(mesh, &tree.order, &mut wide.nodes, &mut wide.root);
+            let stats = tree.stats(node_bytes, options);
+            let bytes = node_bytes + packs.bytes();
+            (Leaves::Packed(packs), AccelStats { bytes, ..stats })
+        } else {
+            let (tris, stats) = tree.into_leaves(mesh, node_bytes, options);
+            (Leaves::Single(tris), stats)
+        };
         let stats = AccelStats {
             nodes: wide.inner + wide.leaves,
             leaves: wide.leaves,
@@ -64,7 +149,7 @@ impl<T: TriangleTest> Bvh4<T> {
             nodes: wide.nodes,
             root_box,
             root: wide.root,
-            tris,
+            leaves,
             stats,
             small_stack: wide.stack <= SMALL_STACK,
         }
@@ -72,33 +157,62 @@ impl<T: TriangleTest> Bvh4<T> {
 
     #[inline(always)]
     fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
-        if self.small_stack {
-            self.traverse_with::<ANY, SMALL_STACK>(ray)
-        } else {
-            self.traverse_with::<ANY, STACK>(ray)
+        if self.stats.triangle_refs == 0 {
+            return (None, false);
+        }
+        match &self.leaves {
+            Leaves::Packed(packs) => {
+                let leaf = PackedLeaf {
+                    packs,
+                    ray,
+                    r4: Ray4::new(ray),
+                };
+                self.walk::<ANY>(ray, leaf)
+            }
+            Leaves::Single(tris) => {
+                let leaf = SingleLeaf {
+                    tris,
+                    ray,
+                    rd: T::prepare(ray),
+                };
+                self.walk::<ANY>(ray, leaf)
+            }
         }
     }
 
-    /// Traversal with an `N`-entry stack, enough for this tree.
     #[inline(always)]
-    fn traverse_with<const ANY: bool, const N: usize>(&self, ray: &Ray) -> (Option<Hit>, bool) {
-        let rd = T::prepare(ray);
+    fn walk<const ANY: bool>(&self, ray: &Ray, leaf: impl LeafTest) -> (Option<Hit>, bool) {
+        if self.small_stack {
+            self.traverse_with::<ANY, SMALL_STACK>(ray, leaf)
+        } else {
+            self.traverse_with::<ANY, STACK>(ray, leaf)
+        }
+    }
+
+    /// Traversal with an `N`-entry stack, enough for this tree; `leaf` tests
+    /// a leaf's triangles (`first`, `count`, the current `tfar` and nearest
+    /// hit) and returns true for an any-hit query's hit.
+    #[inline(always)]
+    fn traverse_with<const ANY: bool, const N: usize>(
+        &self,
+        ray: &Ray,
+        leaf: impl LeafTest,
+    ) -> (Option<Hit>, bool) {
         let mut tfar = ray.tfar;
         let mut best: Option<Hit> = None;
-        if self.tris.len() == 0 || self.root_box.entry(ray, ray.tnear, tfar) == f32::INFINITY {
+        if self.root_box.entry(ray, ray.tnear, tfar) == f32::INFINITY {
             return (None, false);
         }
         let rb = RayBox4::new(ray);
-        let mut stack = [(Child4::default(), 0f32); N];
+        // Left uninitialised: zeroing it cost about 5% of a ray's
+        // instructions (a memset per ray), and only pushed entries are read.
+        let mut stack = [const { MaybeUninit::<(Child4, f32)>::uninit() }; N];
         let mut sp = 0usize;
         let mut cur = self.root;
         loop {
             if cur.count > 0 {
                 let (first, count) = (cur.index as usize, cur.count as usize);
-                if self
-                    .tris
-                    .test::<ANY>(first, count, ray, &rd, &mut tfar, &mut best)
-                {
+                if leaf.test::<ANY>(first, count, &mut tfar, &mut best) {
                     return (None, true);
                 }
             } else {
@@ -116,12 +230,12 @@ impl<T: TriangleTest> Bvh4<T> {
                     mask &= mask - 1;
                     if ANY {
                         // Any hit ends the query: no ordering needed.
-                        stack[sp] = (node.child[i1], h.t[i1]);
+                        stack[sp].write((node.child[i1], h.t[i1]));
                         sp += 1;
                         while mask != 0 {
                             let i = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
-                            stack[sp] = (node.child[i], h.t[i]);
+                            stack[sp].write((node.child[i], h.t[i]));
                             sp += 1;
                         }
                         cur = node.child[i0];
@@ -133,7 +247,7 @@ impl<T: TriangleTest> Bvh4<T> {
                         } else {
                             (i1, i0)
                         };
-                        stack[sp] = (node.child[far], h.t[far]);
+                        stack[sp].write((node.child[far], h.t[far]));
                         sp += 1;
                         cur = node.child[near];
                         continue;
@@ -158,7 +272,9 @@ impl<T: TriangleTest> Bvh4<T> {
                         }
                         hits[j] = e;
                     }
-                    stack[sp..sp + n - 1].copy_from_slice(&hits[..n - 1]);
+                    for (slot, &e) in stack[sp..sp + n - 1].iter_mut().zip(&hits[..n - 1]) {
+                        slot.write(e);
+                    }
                     sp += n - 1;
                     cur = hits[n - 1].0;
                     continue;
@@ -171,7 +287,10 @@ impl<T: TriangleTest> Bvh4<T> {
                     return (best, false);
                 }
                 sp -= 1;
-                let (c, t) = stack[sp];
+                // SAFETY: every entry below the stack pointer was written by
+                // a push above (`sp` grows only right after a write), so
+                // entry `sp` is initialised.
+                let (c, t) = unsafe { stack[sp].assume_init() };
                 if t <= tfar {
                     cur = c;
                     break;
@@ -194,14 +313,23 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
     /// node, the root's from `root_box`.
     fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
         let root = Aabb::new(self.root_box.min.into(), self.root_box.max.into());
-        if self.tris.len() == 0 || !enter(&root) {
+        if self.stats.triangle_refs == 0 || !enter(&root) {
             return;
         }
         let mut stack = vec![self.root];
         let mut accepted = Vec::with_capacity(4);
+        let mut prims = Vec::new();
         while let Some(cur) = stack.pop() {
             if cur.count > 0 {
-                leaf(self.tris.prims(cur.index as usize, cur.count as usize));
+                let (first, count) = (cur.index as usize, cur.count as usize);
+                match &self.leaves {
+                    Leaves::Single(tris) => leaf(tris.prims(first, count)),
+                    Leaves::Packed(packs) => {
+                        prims.clear();
+                        packs.prims(cur, &mut prims);
+                        leaf(&prims);
+                    }
+                }
                 continue;
             }
             let node = &self.nodes[cur.index as usize];

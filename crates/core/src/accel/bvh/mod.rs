@@ -5,7 +5,9 @@
 //! - [`Bvh2`]: binary BVH in depth-first order with sibling pairs side by side,
 //!   traversed with a per-ray stack, nearest child first.
 //! - [`Bvh4`]: 4-wide BVH collapsed from the binary build (issue 8), four
-//!   box tests at once with SSE, ordered stack traversal.
+//!   box tests at once with SSE, ordered stack traversal; over Möller its
+//!   leaves are packs of four triangles tested at once (`tri4`, Embree's
+//!   `triangle4`).
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
 //!   indices, traversed without a stack.
 
@@ -17,6 +19,9 @@ mod node4;
 mod node_box;
 pub(crate) use node_box::NodeBox;
 mod threaded;
+mod tri4;
+#[cfg(target_arch = "x86_64")]
+mod tri4_sse;
 
 pub use build::{BuildNode, BuildOptions};
 pub use bvh2::Bvh2;

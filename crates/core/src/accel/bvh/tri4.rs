@@ -1,0 +1,525 @@
+//! Leaves of [`super::Bvh4`] as packs of four Möller triangles in
+//! structure-of-arrays layout, tested four at once (issue 8, step 2).
+//!
+//! This is the idea of Embree's `triangle4` leaves (Wald, Woop, Benthin,
+//! Johnson, Ernst, "Embree: a kernel framework for efficient CPU ray
+//! tracing", SIGGRAPH 2014): a leaf's triangles are stored lane by lane, so
+//! one ray meets four of them with the same SIMD instructions a scalar test
+//! spends on one. The arithmetic is [`Moller::intersect`]'s, operation for
+//! operation and in the same order (no fused multiply-adds), so every lane
+//! gives bit for bit the hit, `t`, `u` and `v` of the scalar test, with its
+//! conservative tolerance capped at [`crate::tri::MAX_EDGE_TOLERANCE`]; the
+//! SSE kernel is in [`super::tri4_sse`], the scalar fallback here.
+//!
+//! A leaf of `n` triangles takes `ceil(n / 4)` consecutive packs, the
+//! triangles in the binary build's leaf order; the unused lanes of the last
+//! pack hold a zero triangle, which the test never hits (its determinant is
+//! 0 or NaN for every ray) and which the lane mask excludes besides.
+
+use super::node4::{Child4, Node4};
+use crate::hit::Hit;
+use crate::mesh::TriangleMesh;
+use crate::ray::Ray;
+use crate::tri::moller::MollerTri;
+use crate::tri::{Moller, TriangleTest, MAX_EDGE_TOLERANCE};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Four Möller triangles (first corner, edge vectors, their max norms) in
+/// structure-of-arrays layout, with their mesh triangle indices: Embree's
+/// `triangle4` (Wald et al. 2014) with [`Moller`]'s record. 192 bytes, three
+/// cache lines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub(crate) struct Tri4 {
+    /// First corner, `v0[axis][lane]`.
+    pub v0: [[f32; 4]; 3],
+    /// `b - a`, per axis.
+    pub e1: [[f32; 4]; 3],
+    /// `c - a`, per axis.
+    pub e2: [[f32; 4]; 3],
+    /// `max |e1_i|` per lane.
+    pub e1_max: [f32; 4],
+    /// `max |e2_i|` per lane.
+    pub e2_max: [f32; 4],
+    /// Mesh triangle index per lane (`u32::MAX` in unused lanes).
+    pub prim: [u32; 4],
+}
+
+impl Tri4 {
+    /// Four unused lanes (zero triangles, never hit).
+    pub const EMPTY: Tri4 = Tri4 {
+        v0: [[0.0; 4]; 3],
+        e1: [[0.0; 4]; 3],
+        e2: [[0.0; 4]; 3],
+        e1_max: [0.0; 4],
+        e2_max: [0.0; 4],
+        prim: [u32::MAX; 4],
+    };
+
+    /// Store `tri` (mesh triangle `prim`) in lane `lane`.
+    pub fn set(&mut self, lane: usize, tri: &MollerTri, prim: u32) {
+        for a in 0..3 {
+            self.v0[a][lane] = tri.v0[a];
+            self.e1[a][lane] = tri.e1[a];
+            self.e2[a][lane] = tri.e2[a];
+        }
+        self.e1_max[lane] = tri.e1_max;
+        self.e2_max[lane] = tri.e2_max;
+        self.prim[lane] = prim;
+    }
+
+    /// The triangle in lane `lane`.
+    pub fn get(&self, lane: usize) -> MollerTri {
+        let at = |v: &[[f32; 4]; 3]| Vec3::new(v[0][lane], v[1][lane], v[2][lane]);
+        MollerTri {
+            v0: at(&self.v0),
+            e1: at(&self.e1),
+            e2: at(&self.e2),
+            e1_max: self.e1_max[lane],
+            e2_max: self.e2_max[lane],
+        }
+    }
+
+    /// Test the lanes in `lanes` (bit `i` for lane `i`) against the ray over
+    /// `[ray.tnear, tfar]`: with SSE on x86_64 (part of its baseline), one
+    /// lane after the other elsewhere.
+    #[inline(always)]
+    pub fn hits(&self, ray: &Ray, r: &Ray4, tfar: f32, lanes: u32) -> TriHits4 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let _ = ray;
+            super::tri4_sse::hits(self, r, tfar, lanes)
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            self.hits_scalar(ray, r, tfar, lanes)
+        }
+    }
+
+    /// [`Tri4::hits`] one lane at a time with [`Moller::intersect`] (the
+    /// fallback off x86_64, and the reference of the unit tests).
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    pub fn hits_scalar(&self, ray: &Ray, r: &Ray4, tfar: f32, lanes: u32) -> TriHits4 {
+        let mut out = TriHits4::default();
+        for lane in 0..4 {
+            if lanes & (1 << lane) == 0 {
+                continue;
+            }
+            if let Some(h) = Moller::intersect(&self.get(lane), ray, &r.scale[0], tfar) {
+                out.mask |= 1 << lane;
+                out.t[lane] = h.t;
+                out.u[lane] = h.u;
+                out.v[lane] = h.v;
+            }
+        }
+        out
+    }
+}
+
+/// Which lanes of a [`Tri4`] a ray hits, and where (`t`, `u`, `v` are
+/// meaningful only in lanes set in `mask`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct TriHits4 {
+    pub mask: u32,
+    pub t: [f32; 4],
+    pub u: [f32; 4],
+    pub v: [f32; 4],
+}
+
+/// A ray prepared once for [`Tri4`] tests: origin, direction and its
+/// absolute value broadcast to four lanes, [`Moller`]'s tolerance factor
+/// `64u · max|d_i|` and its cheap determinant bound `0.75` times that, and
+/// `tnear`.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(crate) struct Ray4 {
+    pub origin: [[f32; 4]; 3],
+    pub dir: [[f32; 4]; 3],
+    pub dir_abs: [[f32; 4]; 3],
+    pub scale: [f32; 4],
+    pub clear_scale: [f32; 4],
+    pub tnear: [f32; 4],
+}
+
+impl Ray4 {
+    /// Prepare `ray`.
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        let scale = Moller::prepare(ray);
+        let o = ray.origin.to_array();
+        let d = ray.dir.to_array();
+        Ray4 {
+            origin: o.map(|x| [x; 4]),
+            dir: d.map(|x| [x; 4]),
+            dir_abs: d.map(|x| [x.abs(); 4]),
+            scale: [scale; 4],
+            // The scalar test's `0.75 * scale * e1_max * e2_max` multiplies
+            // left to right, so this first product is the same.
+            clear_scale: [0.75 * scale; 4],
+            tnear: [ray.tnear; 4],
+        }
+    }
+}
+
+/// The packed leaves of a [`super::Bvh4`] over [`Moller`]: Embree-style
+/// `triangle4` packs (Wald et al. 2014), a leaf's packs consecutive.
+pub(crate) struct Tri4Leaves {
+    packs: Vec<Tri4>,
+}
+
+impl Tri4Leaves {
+    /// Pack the leaves of a collapsed tree: `order` is the build's triangle
+    /// order, and every leaf reference in `nodes` and `root` (triangle range
+    /// `index..index + count` of `order`) is rewritten to start at its first
+    /// pack instead; `count` stays the number of triangles. Packs follow
+    /// the nodes' order, so a node's leaves lie side by side.
+    pub fn new(mesh: &TriangleMesh, order: &[u32], nodes: &mut [Node4], root: &mut Child4) -> Self {
+        let tris: Vec<MollerTri> = order
+            .par_iter()
+            .map(|&p| {
+                let [a, b, c] = mesh.triangle(p as usize);
+                Moller::precompute(a, b, c)
+            })
+            .collect();
+        let mut packs = Vec::with_capacity(order.len().div_ceil(4) + nodes.len());
+        let mut pack = |leaf: &mut Child4| {
+            let (first, count) = (leaf.index as usize, leaf.count as usize);
+            leaf.index = packs.len() as u32;
+            for start in (first..first + count).step_by(4) {
+                let mut p = Tri4::EMPTY;
+                for (lane, i) in (start..(start + 4).min(first + count)).enumerate() {
+                    p.set(lane, &tris[i], order[i]);
+                }
+                packs.push(p);
+            }
+        };
+        if root.count > 0 {
+            pack(root);
+        }
+        for node in nodes.iter_mut() {
+            for child in node.child.iter_mut() {
+                if child.count > 0 {
+                    pack(child);
+                }
+            }
+        }
+        Tri4Leaves { packs }
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of_val(&self.packs[..])
+    }
+
+    /// Mesh triangle indices of the leaf `leaf`, appended to `out`.
+    pub fn prims(&self, leaf: Child4, out: &mut Vec<u32>) {
+        let first = leaf.index as usize;
+        let count = leaf.count as usize;
+        for (k, p) in self.packs[first..first + count.div_ceil(4)]
+            .iter()
+            .enumerate()
+        {
+            out.extend_from_slice(&p.prim[..(count - 4 * k).min(4)]);
+        }
+    }
+
+    /// Test the `count` triangles of the leaf whose packs start at `first`,
+    /// with exactly the answers of the scalar leaf loop
+    /// ([`crate::accel::leaf::LeafTriangles::test`] over [`Moller`]):
+    /// nearest-hit mode (`ANY = false`) keeps the nearest hit in `best` and
+    /// shrinks `tfar` to it, the earlier triangle winning at equal `t`;
+    /// any-hit mode returns true at the first pack with a hit.
+    #[inline(always)]
+    pub fn test<const ANY: bool>(
+        &self,
+        first: usize,
+        count: usize,
+        ray: &Ray,
+        r: &Ray4,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        let mut left = count;
+        for p in &self.packs[first..first + count.div_ceil(4)] {
+            let lanes = if left >= 4 { 0xf } else { (1u32 << left) - 1 };
+            left = left.saturating_sub(4);
+            let h = p.hits(ray, r, *tfar, lanes);
+            if h.mask == 0 {
+                continue;
+            }
+            if ANY {
+                return true;
+            }
+            // Nearest lane, the earliest at equal t: what the scalar loop
+            // keeps, since all four were tested against the same tfar and
+            // it accepts a later triangle only when strictly nearer.
+            let mut m = h.mask;
+            let mut k = m.trailing_zeros() as usize;
+            m &= m - 1;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if h.t[i] < h.t[k] {
+                    k = i;
+                }
+            }
+            if best.is_none_or(|b| h.t[k] < b.t) {
+                *tfar = h.t[k];
+                *best = Some(Hit {
+                    t: h.t[k],
+                    u: h.u[k],
+                    v: h.v[k],
+                    prim: p.prim[k],
+                });
+            }
+        }
+        false
+    }
+}
+
+/// The cap of the scalar test, for the SIMD kernel.
+pub(crate) const CAP: f32 = MAX_EDGE_TOLERANCE;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::leaf::LeafTriangles;
+    use crate::rng::Pcg32;
+
+    /// A triangle of random shape, size and place, or now and then a
+    /// degenerate one (all corners equal, two equal, or collinear), or one
+    /// with a non-finite corner.
+    fn corners(rng: &mut Pcg32) -> [Vec3; 3] {
+        let scale = 10f32.powf(rng.range_f32(-3.0, 3.0));
+        let centre =
+            rng.in_box(Vec3::splat(-1.0), Vec3::splat(1.0)) * 10f32.powf(rng.range_f32(-1.0, 4.0));
+        let a = centre + rng.unit_vector() * scale;
+        let b = centre + rng.unit_vector() * scale;
+        let c = centre + rng.unit_vector() * scale;
+        match rng.below(16) {
+            0 => [a, a, a],
+            1 => [a, b, b],
+            2 => [a, b, a + (b - a) * rng.range_f32(-2.0, 2.0)],
+            3 => {
+                let mut t = [a, b, c];
+                t[rng.below(3) as usize][rng.below(3) as usize] =
+                    [f32::NAN, f32::INFINITY, f32::NEG_INFINITY][rng.below(3) as usize];
+                t
+            }
+            _ => [a, b, c],
+        }
+    }
+
+    /// Random packs and rays: rays aimed at a lane's triangle (inside, on an
+    /// edge shared with the next lane, or just outside), parallel to its
+    /// plane, random, or with NaN and infinite components; tnear and tfar
+    /// random, or tfar exactly at a hit.
+    #[test]
+    fn sse_pack_equals_scalar_moller_bit_for_bit() {
+        let mut rng = Pcg32::new(2014);
+        let (mut hits, mut misses, mut edge_hits) = (0usize, 0usize, 0usize);
+        for n in 0..250_000 {
+            let mut tri = [[Vec3::ZERO; 3]; 4];
+            for t in &mut tri {
+                *t = corners(&mut rng);
+            }
+            // Lanes 0 and 1 share the edge b-c now and then (as in a mesh,
+            // in opposite orientation).
+            let shared = rng.below(3) == 0;
+            if shared {
+                let [_, b, c] = tri[0];
+                let d = (b + c) * 0.5 + rng.unit_vector() * (b - c).length();
+                tri[1] = [c, b, d];
+            }
+            let mut pack = Tri4::EMPTY;
+            let used = 1 + rng.below(4) as usize;
+            let pre: Vec<MollerTri> = tri
+                .iter()
+                .map(|&[a, b, c]| Moller::precompute(a, b, c))
+                .collect();
+            for (lane, t) in pre.iter().enumerate().take(used) {
+                pack.set(lane, t, lane as u32);
+            }
+            let lanes = if rng.below(4) == 0 {
+                rng.below(16)
+            } else {
+                (1u32 << used) - 1
+            };
+            let aim_lane = rng.below(used as u32) as usize;
+            let [a, b, c] = tri[aim_lane];
+            let (u, v) = match rng.below(4) {
+                0 if shared => {
+                    let s = rng.next_f32();
+                    (1.0 - s, s)
+                }
+                1 => (rng.range_f32(-0.01, 1.01), rng.range_f32(-0.01, 1.01)),
+                _ => {
+                    let (u, v) = (rng.next_f32(), rng.next_f32());
+                    if u + v > 1.0 {
+                        (1.0 - u, 1.0 - v)
+                    } else {
+                        (u, v)
+                    }
+                }
+            };
+            let target = a + (b - a) * u + (c - a) * v;
+            let mut origin = target + rng.unit_vector() * 10f32.powf(rng.range_f32(-2.0, 3.0));
+            let mut dir = match rng.below(8) {
+                // In the triangle's plane.
+                0 => (b - a) * rng.range_f32(-1.0, 1.0) + (c - a) * rng.range_f32(-1.0, 1.0),
+                1 => rng.unit_vector(),
+                _ => (target - origin) * rng.range_f32(0.1, 10.0),
+            };
+            if rng.below(32) == 0 {
+                let bad = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0][rng.below(4) as usize];
+                if rng.below(2) == 0 {
+                    origin[rng.below(3) as usize] = bad;
+                } else {
+                    dir[rng.below(3) as usize] = bad;
+                }
+            }
+            let tnear = if rng.below(4) == 0 {
+                rng.range_f32(0.0, 2.0)
+            } else {
+                0.0
+            };
+            let mut tfar = match rng.below(4) {
+                0 => rng.range_f32(0.0, 3.0),
+                1 => f32::NAN,
+                _ => f32::INFINITY,
+            };
+            let ray = Ray::segment(origin, dir, tnear, f32::INFINITY);
+            let r = Ray4::new(&ray);
+            if rng.below(4) == 0 {
+                // tfar exactly at the aimed lane's hit, the edge of the interval.
+                if let Some(h) = Moller::intersect(&pre[aim_lane], &ray, &r.scale[0], tfar) {
+                    tfar = h.t;
+                }
+            }
+            let ray = Ray { tfar, ..ray };
+            let simd = pack.hits(&ray, &r, tfar, lanes);
+            // The independent reference: the scalar test on each lane's own
+            // precomputed record.
+            for (lane, t) in pre.iter().enumerate() {
+                let want = if lane < used && lanes & (1 << lane) != 0 {
+                    Moller::intersect(t, &ray, &r.scale[0], tfar)
+                } else {
+                    None
+                };
+                let got = simd.mask & (1 << lane) != 0;
+                assert_eq!(
+                    got,
+                    want.is_some(),
+                    "pack {n} lane {lane}: {ray:?} {:?}",
+                    tri[lane]
+                );
+                match want {
+                    Some(h) => {
+                        let g = (simd.t[lane], simd.u[lane], simd.v[lane]);
+                        assert_eq!(
+                            [g.0.to_bits(), g.1.to_bits(), g.2.to_bits()],
+                            [h.t.to_bits(), h.u.to_bits(), h.v.to_bits()],
+                            "pack {n} lane {lane}: {ray:?} {g:?} {h:?}"
+                        );
+                        hits += 1;
+                    }
+                    None => misses += 1,
+                }
+            }
+            // Both neighbours of a shared edge hit (the edge band).
+            edge_hits += (shared && simd.mask & 3 == 3) as usize;
+            // The portable fallback too.
+            let scalar = pack.hits_scalar(&ray, &r, tfar, lanes);
+            assert_eq!(scalar.mask, simd.mask);
+        }
+        assert!(
+            hits > 50_000 && misses > 500_000,
+            "{hits} hits, {misses} misses"
+        );
+        assert!(
+            edge_hits > 1000,
+            "{edge_hits} rays hit both sides of an edge"
+        );
+    }
+
+    /// Whole leaves of 1 to 13 triangles, with duplicates (equal `t` on
+    /// different triangles): the packed leaf keeps exactly the scalar leaf
+    /// loop's nearest hit, tie rule and shrunk `tfar`, and the same
+    /// occlusion answer.
+    #[test]
+    fn packed_leaf_equals_scalar_leaf_loop() {
+        let mut rng = Pcg32::new(4);
+        let mut ties = 0;
+        for _ in 0..20_000 {
+            let n = 1 + rng.below(13) as usize;
+            let mut positions = Vec::new();
+            let mut indices = Vec::new();
+            for i in 0..n {
+                let t = if i > 0 && rng.below(4) == 0 {
+                    // A copy of an earlier triangle (a tie), maybe reordered.
+                    let j = rng.below(i as u32) as usize * 3;
+                    [positions[j], positions[j + 1], positions[j + 2]]
+                } else {
+                    let c = rng.in_box(Vec3::splat(-1.0), Vec3::splat(1.0));
+                    [0, 1, 2].map(|_| c + rng.unit_vector() * 0.7)
+                };
+                positions.extend(t);
+                indices.push([3 * i as u32, 3 * i as u32 + 1, 3 * i as u32 + 2]);
+            }
+            let mesh = TriangleMesh::new(positions, indices);
+            let order: Vec<u32> = (0..n as u32).collect();
+            let scalar = LeafTriangles::<Moller>::new(&mesh, order.clone());
+            let mut root = Child4 {
+                index: 0,
+                count: n as u32,
+            };
+            let packed = Tri4Leaves::new(&mesh, &order, &mut [], &mut root);
+            assert_eq!(root.index, 0);
+            let mut prims = Vec::new();
+            packed.prims(root, &mut prims);
+            assert_eq!(prims, order);
+
+            let origin = rng.in_box(Vec3::splat(-3.0), Vec3::splat(3.0));
+            let ray = Ray::new(
+                origin,
+                rng.in_box(Vec3::splat(-0.5), Vec3::splat(0.5)) - origin,
+            );
+            let (rd, r4) = (Moller::prepare(&ray), Ray4::new(&ray));
+            // Start with no hit, or with a hit found earlier (as in a
+            // previous leaf), at a distance that may equal one of these.
+            let start = match rng.below(3) {
+                0 => None,
+                _ => {
+                    let [a, b, c] = mesh.triangle(rng.below(n as u32) as usize);
+                    let tri = Moller::precompute(a, b, c);
+                    Moller::intersect(&tri, &ray, &rd, ray.tfar).map(|h| Hit {
+                        t: h.t,
+                        u: h.u,
+                        v: h.v,
+                        prim: 1000,
+                    })
+                }
+            };
+            let (mut tf_a, mut best_a) = (start.map_or(ray.tfar, |h| h.t), start);
+            let (mut tf_b, mut best_b) = (tf_a, start);
+            scalar.test::<false>(0, n, &ray, &rd, &mut tf_a, &mut best_a);
+            packed.test::<false>(0, n, &ray, &r4, &mut tf_b, &mut best_b);
+            assert_eq!(tf_a.to_bits(), tf_b.to_bits());
+            assert_eq!(
+                best_a.map(|h| (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim)),
+                best_b.map(|h| (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim))
+            );
+            if let (Some(a), Some(s)) = (best_a, start) {
+                ties += (a.prim != s.prim && a.t == s.t) as usize;
+            }
+            let tfar = ray.tfar;
+            let (mut x, mut y) = (None, None);
+            assert_eq!(
+                scalar.test::<true>(0, n, &ray, &rd, &mut tfar.clone(), &mut x),
+                packed.test::<true>(0, n, &ray, &r4, &mut tfar.clone(), &mut y)
+            );
+        }
+        assert_eq!(ties, 0, "a later equal hit never replaces the earlier one");
+    }
+}
