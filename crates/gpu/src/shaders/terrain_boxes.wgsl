@@ -46,10 +46,10 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
     if ray >= tp.count {
         return;
     }
-    let base = 8u * ray;
-    let o = vec3f(rays[base], rays[base + 1u], rays[base + 2u]);
-    let span = rays[base + 3u];
-    let d = vec3f(rays[base + 4u], rays[base + 5u], rays[base + 6u]);
+    let tr = load_terrain_ray(ray);
+    let o = tr.o;
+    let span = tr.span;
+    let d = tr.d;
     let pixel = bp.first + ray;
     let px = pixel % bp.width;
     let py = pixel / bp.width;
@@ -69,6 +69,8 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
     }
     var hit_t = inf();
     var hit_id = MISS;
+    var cand_t = inf();
+    var cand_id = MISS;
     var cells = 0u;
     if start < inf() {
         // Start a hair before the box entry, so a hit on the box's face is
@@ -77,9 +79,7 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
         let p = o + ta * d;
         var c = u32(clamp(floor(p.x), 0.0, f32(bp.cw - 1u)));
         var r = u32(clamp(floor(p.y), 0.0, f32(bp.ch - 1u)));
-        var cand_t = inf();
         var cand_reach = inf();
-        var cand_id = MISS;
         loop {
             if ta > cand_reach {
                 break;
@@ -127,13 +127,6 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
             }
             ta = tb;
         }
-        if hit_id == MISS {
-            hit_t = cand_t;
-            hit_id = cand_id;
-        }
     }
-    out[4u * ray] = bitcast<u32>(hit_t);
-    out[4u * ray + 1u] = hit_id;
-    out[4u * ray + 2u] = visits;
-    out[4u * ray + 3u] = cells;
+    write_cast(ray, hit_t, hit_id, cand_t, cand_id, visits, cells);
 }

@@ -110,3 +110,35 @@ fn node_exit(o: f32, d: f32, k: u32, size: u32) -> f32 {
     }
     return inf();
 }
+
+// Ray `ray` of the rays buffer: origin, span (the last t inside the grid's
+// box, negative when the ray misses it) and direction.
+struct TerrainRay {
+    o: vec3f,
+    span: f32,
+    d: vec3f,
+}
+
+fn load_terrain_ray(ray: u32) -> TerrainRay {
+    let base = 8u * ray;
+    return TerrainRay(
+        vec3f(rays[base], rays[base + 1u], rays[base + 2u]),
+        rays[base + 3u],
+        vec3f(rays[base + 4u], rays[base + 5u], rays[base + 6u]),
+    );
+}
+
+// Write a ray's result: the accepted hit or, when none followed it, the
+// held-back candidate within the rounding bound; then the two step counts.
+fn write_cast(ray: u32, hit_t: f32, hit_id: u32, cand_t: f32, cand_id: u32, steps_a: u32, steps_b: u32) {
+    var t = hit_t;
+    var id = hit_id;
+    if id == MISS {
+        t = cand_t;
+        id = cand_id;
+    }
+    out[4u * ray] = bitcast<u32>(t);
+    out[4u * ray + 1u] = id;
+    out[4u * ray + 2u] = steps_a;
+    out[4u * ray + 3u] = steps_b;
+}

@@ -39,10 +39,10 @@ fn terrain_maxmip(@builtin(global_invocation_id) gid: vec3u) {
     if ray >= tp.count {
         return;
     }
-    let base = 8u * ray;
-    let o = vec3f(rays[base], rays[base + 1u], rays[base + 2u]);
-    let span = rays[base + 3u];
-    let d = vec3f(rays[base + 4u], rays[base + 5u], rays[base + 6u]);
+    let tr = load_terrain_ray(ray);
+    let o = tr.o;
+    let span = tr.span;
+    let d = tr.d;
     var hit_t = inf();
     var hit_cell_id = MISS;
     var nodes = 0u;
@@ -154,12 +154,5 @@ fn terrain_maxmip(@builtin(global_invocation_id) gid: vec3u) {
         j = uj;
         ta = tb;
     }
-    if hit_cell_id == MISS {
-        hit_t = cand_t;
-        hit_cell_id = cand_cell;
-    }
-    out[4u * ray] = bitcast<u32>(hit_t);
-    out[4u * ray + 1u] = hit_cell_id;
-    out[4u * ray + 2u] = nodes;
-    out[4u * ray + 3u] = cells;
+    write_cast(ray, hit_t, hit_cell_id, cand_t, cand_cell, nodes, cells);
 }
