@@ -85,8 +85,7 @@ pub fn measure(
         kind.name(),
         test.name()
     ));
-    let scene =
-        GpuScene::build(ctx, mesh, kind, test, opts, &opts.kd).map_err(|e| anyhow!("{e}"))?;
+    let scene = GpuScene::build(ctx, mesh, kind, test, opts).map_err(|e| anyhow!("{e}"))?;
     let tracer = GpuTracer::new(ctx, &scene).map_err(|e| anyhow!("{e}"))?;
     let twin = build_accel(cpu_twin(kind), test, mesh, opts);
     let mut cells = Vec::new();

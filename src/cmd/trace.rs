@@ -198,7 +198,7 @@ fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
     let opts = args.build.options();
     let gpu = |e: raykit_gpu::GpuError| anyhow!("{e}");
     let scene = pool
-        .install(|| GpuScene::build(&ctx, &mesh, kind, test, &opts, &opts.kd))
+        .install(|| GpuScene::build(&ctx, &mesh, kind, test, &opts))
         .map_err(gpu)?;
     let tracer = GpuTracer::new(&ctx, &scene).map_err(gpu)?;
     let (mut hits, mut occluded) = (Vec::new(), Vec::new());

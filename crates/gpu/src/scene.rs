@@ -6,7 +6,7 @@ use crate::buffers::{storage, uniform};
 use crate::context::GpuContext;
 use crate::error::{GpuError, GpuResult};
 use crate::kernel::{wgsl, Kernel};
-use raykit_core::accel::{BuildOptions, FlatTriangles, KdOptions, KdStack, ThreadedBvh};
+use raykit_core::accel::{BuildOptions, FlatTriangles, KdStack, ThreadedBvh};
 use raykit_core::tri::{Moller, Plucker, TestKind, TriangleTest};
 use raykit_core::TriangleMesh;
 use std::time::Instant;
@@ -135,13 +135,12 @@ struct Flat {
 fn flat_for<T: TriangleTest>(
     mesh: &TriangleMesh,
     kind: GpuAccelKind,
-    bvh: &BuildOptions,
-    kd: &KdOptions,
+    opts: &BuildOptions,
 ) -> (Flat, f64) {
     let start = Instant::now();
     match kind {
         GpuAccelKind::KdStack => {
-            let accel = KdStack::<T>::build(mesh, kd);
+            let accel = KdStack::<T>::build(mesh, &opts.kd);
             let secs = start.elapsed().as_secs_f64();
             let f = accel.tree().flat();
             let flat = Flat {
@@ -153,7 +152,7 @@ fn flat_for<T: TriangleTest>(
             (flat, secs)
         }
         GpuAccelKind::BvhThreaded => {
-            let accel = ThreadedBvh::<T>::build(mesh, bvh);
+            let accel = ThreadedBvh::<T>::build(mesh, opts);
             let secs = start.elapsed().as_secs_f64();
             let f = accel.flat();
             let flat = Flat {
@@ -189,19 +188,18 @@ fn flat_for<T: TriangleTest>(
 
 impl GpuScene {
     /// Build `kind` over `mesh` on the CPU (the same build as the CPU
-    /// structure of that name) and upload it with the triangles precomputed
-    /// for `test`.
+    /// structure of that name, kd-trees with `opts.kd`) and upload it with
+    /// the triangles precomputed for `test`.
     pub fn build(
         ctx: &GpuContext,
         mesh: &TriangleMesh,
         kind: GpuAccelKind,
         test: TestKind,
-        bvh: &BuildOptions,
-        kd: &KdOptions,
+        opts: &BuildOptions,
     ) -> GpuResult<GpuScene> {
         let (flat, build_seconds) = match test {
-            TestKind::Moller => flat_for::<Moller>(mesh, kind, bvh, kd),
-            TestKind::Plucker => flat_for::<Plucker>(mesh, kind, bvh, kd),
+            TestKind::Moller => flat_for::<Moller>(mesh, kind, opts),
+            TestKind::Plucker => flat_for::<Plucker>(mesh, kind, opts),
             TestKind::Projection => {
                 return Err(GpuError::Unsupported(
                     "the projection test; the GPU kernels implement plucker and moller".into(),

@@ -13,7 +13,7 @@
 
 mod support;
 
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions, KdOptions};
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::glam::Vec3;
 use raykit_core::tri::TestKind;
 use raykit_core::{Camera, Light, PointLight, Ray, Texture};
@@ -62,15 +62,7 @@ fn cpu_frame(scene: &Scene, env: &Environment, opts: &WhittedOptions, test: Test
 }
 
 fn gpu_scene(scene: &Scene, kind: GpuAccelKind, test: TestKind) -> GpuScene {
-    GpuScene::build(
-        gpu(),
-        &scene.mesh,
-        kind,
-        test,
-        &BuildOptions::default(),
-        &KdOptions::default(),
-    )
-    .unwrap()
+    GpuScene::build(gpu(), &scene.mesh, kind, test, &BuildOptions::default()).unwrap()
 }
 
 fn gpu_frame(scene: &Scene, g: &GpuScene, env: &Environment, opts: &WhittedOptions) -> Frame {

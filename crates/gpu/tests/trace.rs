@@ -37,15 +37,7 @@ fn agree(name: &str, mesh: &TriangleMesh, size: u32, kinds: &[GpuAccelKind]) {
                 TestKind::Plucker => cpu_accel::<Plucker>(mesh, kind),
                 _ => cpu_accel::<Moller>(mesh, kind),
             };
-            let scene = GpuScene::build(
-                ctx,
-                mesh,
-                kind,
-                test,
-                &BuildOptions::default(),
-                &KdOptions::default(),
-            )
-            .unwrap();
+            let scene = GpuScene::build(ctx, mesh, kind, test, &BuildOptions::default()).unwrap();
             let tracer = GpuTracer::new(ctx, &scene).unwrap();
             for (set, rays) in ["primary", "shadow", "incoherent"].iter().zip(&sets) {
                 let mut want = vec![None; rays.len()];
@@ -133,7 +125,6 @@ fn scenes_beyond_a_device_limit_fail_naming_the_limit() {
         GpuAccelKind::KdStack,
         TestKind::Plucker,
         &BuildOptions::default(),
-        &KdOptions::default(),
     )
     .err()
     .expect("the scene does not fit");
@@ -149,7 +140,6 @@ fn scenes_beyond_a_device_limit_fail_naming_the_limit() {
         GpuAccelKind::KdStack,
         TestKind::Projection,
         &BuildOptions::default(),
-        &KdOptions::default(),
     )
     .err()
     .expect("projection is refused");
@@ -167,24 +157,10 @@ fn triangle_records_split_across_bindings_give_the_same_answers() {
     let sets = standard_sets(&mesh, &reference, 64, 3);
     for kind in [GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded] {
         for test in [TestKind::Plucker, TestKind::Moller] {
-            let scene = GpuScene::build(
-                &small,
-                &mesh,
-                kind,
-                test,
-                &BuildOptions::default(),
-                &KdOptions::default(),
-            )
-            .unwrap();
-            let whole = GpuScene::build(
-                gpu(),
-                &mesh,
-                kind,
-                test,
-                &BuildOptions::default(),
-                &KdOptions::default(),
-            )
-            .unwrap();
+            let scene =
+                GpuScene::build(&small, &mesh, kind, test, &BuildOptions::default()).unwrap();
+            let whole =
+                GpuScene::build(gpu(), &mesh, kind, test, &BuildOptions::default()).unwrap();
             let split = GpuTracer::new(&small, &scene).unwrap();
             let one = GpuTracer::new(gpu(), &whole).unwrap();
             for rays in [&sets[0], &sets[2]] {
@@ -209,7 +185,6 @@ fn triangle_records_split_across_bindings_give_the_same_answers() {
         GpuAccelKind::BvhThreaded,
         TestKind::Plucker,
         &BuildOptions::default(),
-        &KdOptions::default(),
     )
     .err()
     .expect("does not fit four bindings");

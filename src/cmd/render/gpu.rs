@@ -69,7 +69,7 @@ pub fn render(
     };
     let ctx = GpuContext::new()?;
     eprintln!("GPU: {}", ctx.describe());
-    let scene = GpuScene::build(&ctx, mesh, kind, test, build, &build.kd)?;
+    let scene = GpuScene::build(&ctx, mesh, kind, test, build)?;
     let g = render_whitted_gpu(&ctx, &scene, &shade, &setup.camera, opts, progress)?;
     eprintln!("GPU kernels compiled in {:.0} ms", g.compile_seconds * 1e3);
     Ok(GpuRun {
