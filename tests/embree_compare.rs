@@ -10,41 +10,71 @@ use cli::{raykit, text};
 #[cfg(feature = "embree")]
 #[test]
 fn embree_and_ours_agree_on_every_ray_and_the_table_has_every_cell() {
-    for mesh in ["builtin:cornell", "builtin:scatter:triangles=20000"] {
-        let o = raykit(&[
-            "bench",
-            "--compare",
-            "embree",
-            "--mesh",
-            mesh,
-            "--size",
-            "96",
-            "--reps",
-            "1",
-        ]);
-        let out = text(&o.stdout);
-        assert!(
-            o.status.success(),
-            "{mesh}: answers disagree or the run failed:\n{out}\n{}",
-            text(&o.stderr)
-        );
-        for cell in [
-            "primary",
-            "shadow",
-            "incoherent",
-            "rtcIntersect1M",
-            "build vs Embree High",
-            "build vs Embree Medium",
-        ] {
-            assert!(out.contains(cell), "{mesh}: no '{cell}' row:\n{out}");
+    // Two meshes and two structures in one run, as issue 8's "done when"
+    // asks: every mesh gets its tables, then one summary.
+    let meshes = ["builtin:cornell", "builtin:scatter:triangles=20000"];
+    let o = raykit(&[
+        "bench",
+        "--compare",
+        "embree",
+        "--mesh",
+        meshes[0],
+        "--mesh",
+        meshes[1],
+        "--accel",
+        "bvh4,bvh2",
+        "--size",
+        "96",
+        "--reps",
+        "1",
+    ]);
+    let out = text(&o.stdout);
+    assert!(
+        o.status.success(),
+        "answers disagree or the run failed:\n{out}\n{}",
+        text(&o.stderr)
+    );
+    assert!(!out.contains("DISAGREE"), "{out}");
+    let (tables, summary) = out
+        .split_once("summary:")
+        .expect("a summary after the tables");
+    for cell in [
+        "primary",
+        "shadow",
+        "incoherent",
+        "primary, Embree stream (rtcIntersect1M)",
+        "build vs Embree High",
+        "build vs Embree Medium",
+    ] {
+        for accel in ["bvh4", "bvh2"] {
+            let row = format!("{cell} [{accel}] ");
+            assert_eq!(
+                tables.lines().filter(|l| l.starts_with(&row)).count(),
+                2 * meshes.len(),
+                "'{cell}' [{accel}]: one row per thread count and mesh:\n{tables}"
+            );
         }
-        assert!(!out.contains("DISAGREE"), "{out}");
-        // Every set was compared on all of its rays.
-        assert!(
-            out.contains(&format!("primary            {} rays", 96 * 96)),
-            "{out}"
-        );
     }
+    for mesh in meshes {
+        assert!(
+            tables.contains(&format!("{mesh}: ")),
+            "no tables for {mesh}:\n{out}"
+        );
+        assert!(
+            summary.lines().nth(1).unwrap_or("").contains(mesh),
+            "{summary}"
+        );
+        // SAH cost shown beside the build times.
+        assert!(tables.contains("SAH cost"), "{tables}");
+    }
+    // Every set was compared on all of its rays, for each structure.
+    assert_eq!(
+        tables
+            .matches(&format!("primary            {} rays", 96 * 96))
+            .count(),
+        2 * meshes.len(),
+        "{tables}"
+    );
 }
 
 #[cfg(not(feature = "embree"))]

@@ -23,9 +23,11 @@ reported so noisy machines show. Brute force is timed on a sample of each ray se
 sized to take about a second. The ray sets are those of `raykit rays`."
 )]
 pub struct BenchArgs {
-    /// Mesh file or builtin:NAME.
-    #[arg(long, default_value = "builtin:cornell")]
-    mesh: String,
+    /// Mesh file or builtin:NAME. With --compare the option may be
+    /// repeated: every mesh is compared and a summary gives our best ratio
+    /// per cell and mesh.
+    #[arg(long, default_value = "builtin:cornell", action = clap::ArgAction::Append)]
+    mesh: Vec<String>,
     /// Structures to measure, comma-separated, or `all`.
     #[arg(long, default_value = "all")]
     accel: String,
@@ -48,10 +50,11 @@ pub struct BenchArgs {
     #[arg(long)]
     json: bool,
     /// Compare with another engine in the same process: `embree` (needs a
-    /// build with `--features embree` and Debian's libembree-dev). Ours is
-    /// --accel/--test when they name one structure and test, else bvh2 ×
-    /// moller; prints ours, Embree's and the ratio per cell and checks that
-    /// every answer agrees.
+    /// build with `--features embree` and Debian's libembree-dev). Ours are
+    /// the structures × tests that --accel/--test list (`all` means bvh4 and
+    /// moller, our fastest); prints ours, Embree's and the ratio per cell,
+    /// our SAH cost beside the build times, and checks that every answer
+    /// agrees.
     #[arg(long, value_name = "ENGINE")]
     compare: Option<String>,
     /// `gpu` measures the GPU kernels (kd-stack, bvh-threaded × plucker,
@@ -129,9 +132,12 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     if let Some(engine) = &args.compare {
         return compare(&args, engine);
     }
+    let [mesh_spec] = &args.mesh[..] else {
+        anyhow::bail!("--mesh may be given several times only with --compare; this measurement takes one mesh");
+    };
     if args.backend == Backend::Gpu {
         return crate::cmd::bench_gpu::run(crate::cmd::bench_gpu::GpuBenchSetup {
-            mesh: &args.mesh,
+            mesh: mesh_spec,
             accel: &args.accel,
             test: &args.test,
             size: args.size,
@@ -146,12 +152,12 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     let one = pool(1)?;
     let all = pool(args.threads)?;
     let threads = all.current_num_threads();
-    let (scene, load_s) = timed(|| scene_arg::load(&args.mesh));
+    let (scene, load_s) = timed(|| scene_arg::load(mesh_spec));
     let mesh = scene?.mesh;
     let opts = args.build.options();
     eprintln!(
         "{}: {} triangles; generating ray sets ({}²)…",
-        args.mesh,
+        mesh_spec,
         mesh.num_triangles(),
         args.size
     );
@@ -263,7 +269,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     }
     bar.finish_and_clear();
     let report = Report {
-        mesh: args.mesh.clone(),
+        mesh: mesh_spec.clone(),
         triangles: mesh.num_triangles(),
         threads,
         reps,
@@ -425,13 +431,30 @@ fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
                 s.to_string()
             }
         };
-        let (kind, test) =
-            crate::cmd::trace::parse_names(&one(&args.accel, "bvh2"), &one(&args.test, "moller"))?;
-        let mesh = scene_arg::load(&args.mesh)?.mesh;
+        let kinds = parse_list(
+            &one(&args.accel, "bvh4"),
+            &AccelKind::ALL,
+            AccelKind::name,
+            "--accel",
+        )?;
+        let tests = parse_list(
+            &one(&args.test, "moller"),
+            &TestKind::ALL,
+            TestKind::name,
+            "--test",
+        )?;
+        let ours = kinds
+            .iter()
+            .flat_map(|&k| tests.iter().map(move |&t| (k, t)))
+            .collect();
+        let meshes = args
+            .mesh
+            .iter()
+            .map(|m| Ok((m.clone(), scene_arg::load(m)?.mesh)))
+            .collect::<Result<Vec<_>>>()?;
         crate::cmd::bench_compare::run(crate::cmd::bench_compare::CompareSetup {
-            mesh: &mesh,
-            name: &args.mesh,
-            ours: (kind, test),
+            meshes: &meshes,
+            ours,
             options: args.build.options(),
             size: args.size,
             reps: args.reps.max(1),

@@ -1,9 +1,10 @@
-//! `raykit bench --compare embree`: our structure and Embree 3 built on the
-//! same mesh, tracing the same rays in the same process; every cell is
+//! `raykit bench --compare embree`: our structures and Embree 3 built on
+//! the same meshes, tracing the same rays in the same process; every cell is
 //! printed as ours, Embree's and the ratio, and the answers are checked to
 //! agree (hit/miss and distance; different triangles at the same distance,
 //! and rays grazing a shared edge that one engine catches and the other
-//! slips through, are ties).
+//! slips through, are ties). With several meshes or structures a summary
+//! gives, per cell and mesh, our best ratio: issue 8's "done when" table.
 
 use crate::embree::{EmbreeDevice, EmbreeScene, Quality};
 use crate::measure::{median_min_max, pool, timed};
@@ -14,6 +15,7 @@ use raykit_core::raysets::{self, RayKind};
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Hit, Ray, TriangleMesh};
 use rayon::prelude::*;
+use rayon::ThreadPool;
 use serde::Serialize;
 use std::process::ExitCode;
 
@@ -22,12 +24,11 @@ const STREAM_PACKET: usize = 256;
 
 /// What to compare.
 pub struct CompareSetup<'a> {
-    /// The mesh.
-    pub mesh: &'a TriangleMesh,
-    /// Its name for the report.
-    pub name: &'a str,
-    /// Our structure and triangle test.
-    pub ours: (AccelKind, TestKind),
+    /// The meshes, each with its name for the report.
+    pub meshes: &'a [(String, TriangleMesh)],
+    /// Our structures × triangle tests, each measured against the same
+    /// Embree figures.
+    pub ours: Vec<(AccelKind, TestKind)>,
     /// Our build options.
     pub options: BuildOptions,
     /// Image side of the ray sets.
@@ -43,6 +44,8 @@ pub struct CompareSetup<'a> {
 #[derive(Serialize)]
 struct Cell {
     what: String,
+    /// Our structure × test of this cell.
+    structure: String,
     threads: usize,
     ours: f64,
     embree: f64,
@@ -53,29 +56,47 @@ struct Cell {
 #[derive(Serialize)]
 struct Agreement {
     set: &'static str,
+    /// Our structure × test compared.
+    structure: String,
+    /// Every ray of the set; `edge_grazes` counts the disagreements where
+    /// the nearer answer's triangle is met within the edge band (f64): the
+    /// ray grazes an edge, one engine catches it where the other slips past.
     verdict: Verdict,
-    /// Disagreements (hit/miss or distance) where the nearer answer's
-    /// triangle is met within [`EDGE_BAND`] (barycentric, f64) of its edge:
-    /// the ray grazes an edge, and one engine catches it where the other
-    /// slips past. Counted as ties.
-    edge_grazes: usize,
 }
 
-impl Agreement {
-    /// True when every disagreement is a shared-edge graze.
-    fn ok(&self) -> bool {
-        self.verdict.hit_miss + self.verdict.distance == self.edge_grazes
-    }
+/// Our build's size and quality, shown beside its build time.
+#[derive(Serialize)]
+struct BuiltFigures {
+    structure: String,
+    sah_cost: f64,
+    bytes: usize,
+    nodes: usize,
 }
 
 #[derive(Serialize)]
 struct Comparison {
     mesh: String,
     triangles: usize,
-    ours: String,
+    ours: Vec<BuiltFigures>,
     builds_ms: Vec<Cell>,
     mrays: Vec<Cell>,
     agreement: Vec<Agreement>,
+}
+
+/// Our best ratio for one cell on one mesh.
+#[derive(Serialize)]
+struct Best {
+    mesh: String,
+    ratio: f64,
+    structure: String,
+}
+
+/// One row of the summary: a cell across the meshes.
+#[derive(Serialize)]
+struct SummaryRow {
+    what: String,
+    threads: usize,
+    best: Vec<Best>,
 }
 
 /// Median seconds of `reps` runs of `f`, and the spread (max−min)/median.
@@ -95,16 +116,50 @@ fn trace(accel: &dyn Accel, rays: &[Ray], shadow: bool) {
     }
 }
 
-/// Run the comparison and print it.
+/// Run the comparison on every mesh and print it.
 pub fn run(s: CompareSetup) -> Result<ExitCode> {
     let one = pool(1)?;
     let all = pool(s.threads)?;
+    let mut reports = Vec::new();
+    for (name, mesh) in s.meshes {
+        let r = compare_mesh(&s, name, mesh, &one, &all)?;
+        if !s.json {
+            print_report(&r, s.reps);
+        }
+        reports.push(r);
+    }
+    let summary = summarise(&reports);
+    if s.json {
+        let doc = serde_json::json!({ "comparisons": reports, "summary": summary });
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+    } else if reports.len() > 1 || s.ours.len() > 1 {
+        print_summary(&summary);
+    }
+    let failed = reports
+        .iter()
+        .any(|r| r.agreement.iter().any(|a| !a.verdict.ok()));
+    Ok(if failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn label(kind: AccelKind, test: TestKind) -> String {
+    format!("{} × {}", kind.name(), test.name())
+}
+
+/// Every cell of one mesh: builds, Mrays/s and agreement.
+fn compare_mesh(
+    s: &CompareSetup,
+    name: &str,
+    mesh: &TriangleMesh,
+    one: &ThreadPool,
+    all: &ThreadPool,
+) -> Result<Comparison> {
     let n = all.current_num_threads();
-    let (kind, test) = s.ours;
-    let mesh = s.mesh;
     eprintln!(
-        "{}: {} triangles; ray sets {}²…",
-        s.name,
+        "{name}: {} triangles; ray sets {}²…",
         mesh.num_triangles(),
         s.size
     );
@@ -113,11 +168,19 @@ pub fn run(s: CompareSetup) -> Result<ExitCode> {
         raysets::standard_sets(mesh, helper.as_ref(), s.size, 1)
     });
     let mut builds = Vec::new();
-    let mut ours = None;
-    for (threads, p) in [(1, &one), (n, &all)] {
-        let (t_ours, sp) = time_median(s.reps, || {
-            ours = Some(p.install(|| build_accel(kind, test, mesh, &s.options)));
-        });
+    let mut ours: Vec<Box<dyn Accel>> = Vec::new();
+    for (threads, p) in [(1, one), (n, all)] {
+        let mut timings = Vec::new();
+        for (i, &(kind, test)) in s.ours.iter().enumerate() {
+            let mut built = None;
+            let timing = time_median(s.reps, || {
+                built = Some(p.install(|| build_accel(kind, test, mesh, &s.options)));
+            });
+            if ours.len() == i {
+                ours.push(built.expect("built at least once"));
+            }
+            timings.push(timing);
+        }
         // The device (Embree's thread pool) is made outside the timing.
         let device = EmbreeDevice::new(threads)?;
         for quality in [Quality::High, Quality::Medium] {
@@ -130,43 +193,57 @@ pub fn run(s: CompareSetup) -> Result<ExitCode> {
             if let Some(e) = err {
                 return Err(e);
             }
-            builds.push(Cell {
-                what: format!("build vs Embree {quality:?}"),
-                threads,
-                ours: t_ours * 1e3,
-                embree: t_em * 1e3,
-                // Build: a ratio above 1 means ours is faster.
-                ratio: t_em / t_ours.max(1e-12),
-                spread: sp.max(sp2),
-            });
+            for (&(kind, test), &(t_ours, sp)) in s.ours.iter().zip(&timings) {
+                builds.push(Cell {
+                    what: format!("build vs Embree {quality:?}"),
+                    structure: label(kind, test),
+                    threads,
+                    ours: t_ours * 1e3,
+                    embree: t_em * 1e3,
+                    // Build: a ratio above 1 means ours is faster.
+                    ratio: t_em / t_ours.max(1e-12),
+                    spread: sp.max(sp2),
+                });
+            }
         }
     }
-    let ours = ours.expect("built");
     let embree = EmbreeScene::build(&EmbreeDevice::new(0)?, mesh, Quality::High)?;
     let mut cells = Vec::new();
+    let mut push = |what: &str, threads, i: usize, a: f64, sa: f64, b: f64, sb: f64, m: f64| {
+        let (kind, test) = s.ours[i];
+        cells.push(Cell {
+            what: what.to_string(),
+            structure: label(kind, test),
+            threads,
+            ours: m / a,
+            embree: m / b,
+            ratio: b / a.max(1e-12),
+            spread: sa.max(sb),
+        });
+    };
     for (si, set) in RayKind::ALL.into_iter().enumerate() {
         let rays = &sets[si];
         let shadow = set == RayKind::Shadow;
-        for (threads, p) in [(1, &one), (n, &all)] {
-            let (a, sa) = time_median(s.reps, || p.install(|| trace(ours.as_ref(), rays, shadow)));
+        let m = rays.len() as f64 / 1e6;
+        for (threads, p) in [(1, one), (n, all)] {
+            let times: Vec<(f64, f64)> = ours
+                .iter()
+                .map(|o| time_median(s.reps, || p.install(|| trace(o.as_ref(), rays, shadow))))
+                .collect();
             let (b, sb) = time_median(s.reps, || p.install(|| trace(&embree, rays, shadow)));
-            let m = rays.len() as f64 / 1e6;
-            cells.push(Cell {
-                what: set.name().to_string(),
-                threads,
-                ours: m / a,
-                embree: m / b,
-                ratio: b / a.max(1e-12),
-                spread: sa.max(sb),
-            });
+            for (i, &(a, sa)) in times.iter().enumerate() {
+                push(set.name(), threads, i, a, sa, b, sb, m);
+            }
         }
     }
     // Coherent primaries: Embree's stream API against our batch path.
     let primary = &sets[0];
-    for (threads, p) in [(1, &one), (n, &all)] {
-        let (a, sa) = time_median(s.reps, || {
-            p.install(|| trace(ours.as_ref(), primary, false))
-        });
+    let m = primary.len() as f64 / 1e6;
+    for (threads, p) in [(1, one), (n, all)] {
+        let times: Vec<(f64, f64)> = ours
+            .iter()
+            .map(|o| time_median(s.reps, || p.install(|| trace(o.as_ref(), primary, false))))
+            .collect();
         let (b, sb) = time_median(s.reps, || {
             p.install(|| {
                 let mut hits: Vec<Option<Hit>> = vec![None; primary.len()];
@@ -176,111 +253,243 @@ pub fn run(s: CompareSetup) -> Result<ExitCode> {
                     .for_each(|(r, h)| embree.intersect_stream(r, h, STREAM_PACKET));
             })
         });
-        let m = primary.len() as f64 / 1e6;
-        cells.push(Cell {
-            what: "primary, Embree stream (rtcIntersect1M)".into(),
-            threads,
-            ours: m / a,
-            embree: m / b,
-            ratio: b / a.max(1e-12),
-            spread: sa.max(sb),
-        });
+        for (i, &(a, sa)) in times.iter().enumerate() {
+            push(
+                "primary, Embree stream (rtcIntersect1M)",
+                threads,
+                i,
+                a,
+                sa,
+                b,
+                sb,
+                m,
+            );
+        }
     }
-    // Agreement on every ray of every set.
-    let mut agreement = Vec::new();
-    for (si, set) in RayKind::ALL.into_iter().enumerate() {
-        let rays = &sets[si];
-        let (verdict, edge_grazes) = all.install(|| {
-            // Shadow rays: occlusion answers, and the nearest hits along the
-            // same segments to tell edge grazes apart.
-            if set == RayKind::Shadow {
-                let (mut x, mut y) = (vec![false; rays.len()], vec![false; rays.len()]);
-                embree.occluded_batch(rays, &mut x);
-                ours.occluded_batch(rays, &mut y);
-                // Only the rays whose occlusion differs: is the blocker the
-                // one engine found met at an edge?
-                let (grazes, _) = occlusion_grazes(mesh, rays, &x, &y, |r| {
-                    let (mut ha, mut hb) = (vec![None; r.len()], vec![None; r.len()]);
-                    embree.intersect_batch(r, &mut ha);
-                    ours.intersect_batch(r, &mut hb);
-                    (ha, hb)
-                });
-                (compare_occlusion(&x, &y), grazes)
-            } else {
-                let (mut a, mut b) = (vec![None; rays.len()], vec![None; rays.len()]);
-                embree.intersect_batch(rays, &mut a);
-                ours.intersect_batch(rays, &mut b);
-                (compare_hits(&a, &b), edge_grazes(mesh, rays, &a, &b))
-            }
-        });
-        agreement.push(Agreement {
-            set: set.name(),
-            verdict,
-            edge_grazes,
-        });
-    }
-    let (mut a, mut b) = (vec![None; primary.len()], vec![None; primary.len()]);
-    embree.intersect_stream(primary, &mut a, STREAM_PACKET);
-    all.install(|| ours.intersect_batch(primary, &mut b));
-    agreement.push(Agreement {
-        set: "primary (stream)",
-        verdict: compare_hits(&a, &b),
-        edge_grazes: edge_grazes(mesh, primary, &a, &b),
-    });
-    let report = Comparison {
-        mesh: s.name.to_string(),
+    let agreement = all.install(|| agreement(mesh, &sets, &embree, &ours, &s.ours));
+    Ok(Comparison {
+        mesh: name.to_string(),
         triangles: mesh.num_triangles(),
-        ours: format!("{} × {}", kind.name(), test.name()),
+        ours: s
+            .ours
+            .iter()
+            .zip(&ours)
+            .map(|(&(kind, test), o)| {
+                let st = o.stats();
+                BuiltFigures {
+                    structure: label(kind, test),
+                    sah_cost: st.sah_cost,
+                    bytes: st.bytes,
+                    nodes: st.nodes,
+                }
+            })
+            .collect(),
         builds_ms: builds,
         mrays: cells,
         agreement,
-    };
-    if s.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print_report(&report, s.reps);
-    }
-    let failed = report.agreement.iter().any(|a| !a.ok());
-    Ok(if failed {
-        ExitCode::FAILURE
-    } else {
-        ExitCode::SUCCESS
     })
 }
 
-fn print_report(r: &Comparison, reps: usize) {
+/// Every ray of every set, Embree's answers against each of ours.
+fn agreement(
+    mesh: &TriangleMesh,
+    sets: &[Vec<Ray>; 3],
+    embree: &EmbreeScene,
+    ours: &[Box<dyn Accel>],
+    names: &[(AccelKind, TestKind)],
+) -> Vec<Agreement> {
+    let mut out = Vec::new();
+    for (si, set) in RayKind::ALL.into_iter().enumerate() {
+        let rays = &sets[si];
+        if set == RayKind::Shadow {
+            // Occlusion answers, and the nearest hits along the segments
+            // whose occlusion differs to tell edge grazes apart: is the
+            // blocker the one engine found met at an edge?
+            let mut x = vec![false; rays.len()];
+            embree.occluded_batch(rays, &mut x);
+            for (o, &(kind, test)) in ours.iter().zip(names) {
+                let mut y = vec![false; rays.len()];
+                o.occluded_batch(rays, &mut y);
+                let mut verdict = compare_occlusion(&x, &y);
+                (verdict.edge_grazes, _) = occlusion_grazes(mesh, rays, &x, &y, |r| {
+                    let (mut ha, mut hb) = (vec![None; r.len()], vec![None; r.len()]);
+                    embree.intersect_batch(r, &mut ha);
+                    o.intersect_batch(r, &mut hb);
+                    (ha, hb)
+                });
+                out.push(Agreement {
+                    set: set.name(),
+                    structure: label(kind, test),
+                    verdict,
+                });
+            }
+        } else {
+            let mut a = vec![None; rays.len()];
+            embree.intersect_batch(rays, &mut a);
+            for (o, &(kind, test)) in ours.iter().zip(names) {
+                let mut b = vec![None; rays.len()];
+                o.intersect_batch(rays, &mut b);
+                let mut verdict = compare_hits(&a, &b);
+                verdict.edge_grazes = edge_grazes(mesh, rays, &a, &b);
+                out.push(Agreement {
+                    set: set.name(),
+                    structure: label(kind, test),
+                    verdict,
+                });
+            }
+        }
+    }
+    let primary = &sets[0];
+    let mut a = vec![None; primary.len()];
+    embree.intersect_stream(primary, &mut a, STREAM_PACKET);
+    for (o, &(kind, test)) in ours.iter().zip(names) {
+        let mut b = vec![None; primary.len()];
+        o.intersect_batch(primary, &mut b);
+        let mut verdict = compare_hits(&a, &b);
+        verdict.edge_grazes = edge_grazes(mesh, primary, &a, &b);
+        out.push(Agreement {
+            set: "primary (stream)",
+            structure: label(kind, test),
+            verdict,
+        });
+    }
+    out
+}
+
+/// Per cell (builds against Embree MEDIUM, every Mrays/s cell) and mesh,
+/// our best ratio and the structure that reached it.
+fn summarise(reports: &[Comparison]) -> Vec<SummaryRow> {
+    let mut rows: Vec<SummaryRow> = Vec::new();
+    for r in reports {
+        let cells = r
+            .builds_ms
+            .iter()
+            .filter(|c| c.what.ends_with("Medium"))
+            .chain(&r.mrays);
+        for c in cells {
+            let i = match rows
+                .iter()
+                .position(|x| x.what == c.what && x.threads == c.threads)
+            {
+                Some(i) => i,
+                None => {
+                    rows.push(SummaryRow {
+                        what: c.what.clone(),
+                        threads: c.threads,
+                        best: Vec::new(),
+                    });
+                    rows.len() - 1
+                }
+            };
+            let best = &mut rows[i].best;
+            match best.iter_mut().find(|b| b.mesh == r.mesh) {
+                Some(b) if b.ratio >= c.ratio => {}
+                Some(b) => {
+                    b.ratio = c.ratio;
+                    b.structure = c.structure.clone();
+                }
+                None => best.push(Best {
+                    mesh: r.mesh.clone(),
+                    ratio: c.ratio,
+                    structure: c.structure.clone(),
+                }),
+            }
+        }
+    }
+    rows
+}
+
+fn print_summary(rows: &[SummaryRow]) {
+    let Some(first) = rows.first() else {
+        return;
+    };
     println!(
-        "{}: {} triangles; ours = {}, Embree 3 single-ray API (HIGH build) unless noted; median of {reps} runs",
-        r.mesh, r.triangles, r.ours
+        "
+summary: our best ratio per cell (build: Embree MEDIUM ÷ ours; rays: ours ÷ Embree); * below 1.0×"
     );
-    print_cells("build (ms)", "Embree÷ours", 1, &r.builds_ms);
-    print_cells("Mrays/s", "ours÷Embree", 2, &r.mrays);
+    let short = |m: &str| m.rsplit('/').next().unwrap_or(m).to_string();
+    let widths: Vec<usize> = first
+        .best
+        .iter()
+        .map(|b| short(&b.mesh).chars().count().max(16))
+        .collect();
+    print!("{:<48} {:>7}", "cell", "threads");
+    for (b, w) in first.best.iter().zip(&widths) {
+        print!("  {:>w$}", short(&b.mesh));
+    }
+    println!();
+    for r in rows {
+        print!("{:<48} {:>7}", r.what, r.threads);
+        for (b, w) in r.best.iter().zip(&widths) {
+            let mark = if b.ratio < 1.0 { "*" } else { " " };
+            let s = b.structure.split(' ').next().unwrap_or("");
+            let cell = format!("{s} {:.2}×{mark}", b.ratio);
+            print!("  {cell:>w$}");
+        }
+        println!();
+    }
+}
+
+fn print_report(r: &Comparison, reps: usize) {
+    let ours: Vec<String> = r
+        .ours
+        .iter()
+        .map(|q| {
+            format!(
+                "{} (SAH cost {:.1}, {} nodes, {:.1} MB)",
+                q.structure,
+                q.sah_cost,
+                q.nodes,
+                q.bytes as f64 / 1e6
+            )
+        })
+        .collect();
+    println!(
+        "{}: {} triangles; ours = {}; Embree 3 single-ray API (HIGH build) unless noted; median of {reps} runs",
+        r.mesh,
+        r.triangles,
+        ours.join(", ")
+    );
+    let several = r.ours.len() > 1;
+    print_cells("build (ms)", "Embree÷ours", 1, &r.builds_ms, several);
+    print_cells("Mrays/s", "ours÷Embree", 2, &r.mrays, several);
     println!("\nanswers against Embree (every ray):");
     for a in &r.agreement {
         let v = &a.verdict;
         println!(
-            "  {:<18} {} rays: {} hit/miss and {} distance differences, of which {} graze an edge (f64) or hit the same triangle; {} same-distance ties{}",
+            "  {:<18} {} rays: {} hit/miss and {} distance differences, of which {} graze an edge (f64) or hit the same triangle; {} same-distance ties{}{}",
             a.set,
             v.checked,
             v.hit_miss,
             v.distance,
-            a.edge_grazes,
+            v.edge_grazes,
             v.ties,
-            if a.ok() { "" } else { "  <-- DISAGREE" }
+            if several { format!(" [{}]", a.structure) } else { String::new() },
+            if v.ok() { "" } else { "  <-- DISAGREE" }
         );
     }
 }
 
-/// One table of cells, values with `digits` decimals.
-fn print_cells(title: &str, ratio: &str, digits: usize, cells: &[Cell]) {
+/// One table of cells, values with `digits` decimals; with `several`
+/// structures each row names its own.
+fn print_cells(title: &str, ratio: &str, digits: usize, cells: &[Cell], several: bool) {
     println!(
-        "\n{title:<42} {:>7} {:>10} {:>10} {ratio:>8} {:>7}",
+        "\n{title:<48} {:>7} {:>10} {:>10} {ratio:>8} {:>7}",
         "threads", "ours", "Embree", "spread"
     );
     for c in cells {
+        let what = if several {
+            format!(
+                "{} [{}]",
+                c.what,
+                c.structure.split(' ').next().unwrap_or("")
+            )
+        } else {
+            c.what.clone()
+        };
         println!(
-            "{:<42} {:>7} {:>10.digits$} {:>10.digits$} {:>10.2}× {:>6.0}%",
-            c.what,
+            "{:<48} {:>7} {:>10.digits$} {:>10.digits$} {:>10.2}× {:>6.0}%",
+            what,
             c.threads,
             c.ours,
             c.embree,
