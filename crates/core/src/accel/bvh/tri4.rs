@@ -175,35 +175,41 @@ impl Tri4Leaves {
     /// pack instead; `count` stays the number of triangles. Packs follow
     /// the nodes' order, so a node's leaves lie side by side.
     pub fn new(mesh: &TriangleMesh, order: &[u32], nodes: &mut [Node4], root: &mut Child4) -> Self {
-        let tris: Vec<MollerTri> = order
-            .par_iter()
-            .map(|&p| {
-                let [a, b, c] = mesh.triangle(p as usize);
-                Moller::precompute(a, b, c)
-            })
-            .collect();
-        let mut packs = Vec::with_capacity(order.len().div_ceil(4) + nodes.len());
-        let mut pack = |leaf: &mut Child4| {
+        // First the packs' triangle ranges (first position in `order`, lanes
+        // used), leaf by leaf in node order, rewriting the leaf references;
+        // then the packs themselves in parallel, straight from the mesh
+        // (issue 8 step 3: the packing no longer dominates the build).
+        let mut ranges: Vec<(u32, u32)> = Vec::with_capacity(order.len().div_ceil(4) + nodes.len());
+        let mut assign = |leaf: &mut Child4| {
             let (first, count) = (leaf.index as usize, leaf.count as usize);
-            leaf.index = packs.len() as u32;
+            leaf.index = ranges.len() as u32;
             for start in (first..first + count).step_by(4) {
-                let mut p = Tri4::EMPTY;
-                for (lane, i) in (start..(start + 4).min(first + count)).enumerate() {
-                    p.set(lane, &tris[i], order[i]);
-                }
-                packs.push(p);
+                ranges.push((start as u32, (first + count - start).min(4) as u32));
             }
         };
         if root.count > 0 {
-            pack(root);
+            assign(root);
         }
         for node in nodes.iter_mut() {
             for child in node.child.iter_mut() {
                 if child.count > 0 {
-                    pack(child);
+                    assign(child);
                 }
             }
         }
+        let packs = ranges
+            .par_iter()
+            .with_min_len(1024)
+            .map(|&(start, lanes)| {
+                let mut p = Tri4::EMPTY;
+                for lane in 0..lanes as usize {
+                    let prim = order[start as usize + lane];
+                    let [a, b, c] = mesh.triangle(prim as usize);
+                    p.set(lane, &Moller::precompute(a, b, c), prim);
+                }
+                p
+            })
+            .collect();
         Tri4Leaves { packs }
     }
 
