@@ -9,7 +9,7 @@ use crate::embree::{EmbreeDevice, EmbreeScene, Quality};
 use crate::measure::{median_min_max, pool, timed};
 use crate::verify::{compare_hits, compare_occlusion, edge_margin, Verdict, T_TOLERANCE};
 use anyhow::Result;
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions, BuildQuality};
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::raysets::{self, RayKind};
 use raykit_core::tri::{TestKind, MAX_EDGE_TOLERANCE};
 use raykit_core::{Accel, Hit, Ray, TriangleMesh};
@@ -46,20 +46,6 @@ pub struct CompareSetup<'a> {
     pub threads: usize,
     /// Print JSON instead of tables.
     pub json: bool,
-}
-
-#[derive(Serialize)]
-struct SahCost {
-    build: &'static str,
-    sah_cost: f64,
-}
-
-/// How the build table names a BVH builder.
-fn quality_name(q: BuildQuality) -> &'static str {
-    match q {
-        BuildQuality::Sah => "SAH",
-        BuildQuality::Fast => "LBVH (fast)",
-    }
 }
 
 #[derive(Serialize)]
@@ -127,9 +113,6 @@ struct Comparison {
     mesh: String,
     triangles: usize,
     ours: String,
-    /// SAH cost of our tree from each builder (the first is ours, traced
-    /// below).
-    sah_cost: Vec<SahCost>,
     builds_ms: Vec<Cell>,
     mrays: Vec<Cell>,
     agreement: Vec<Agreement>,
@@ -171,24 +154,9 @@ pub fn run(s: CompareSetup) -> Result<ExitCode> {
     });
     let mut builds = Vec::new();
     let mut ours = None;
-    // The other BVH builder, timed beside ours so that build speed and tree
-    // quality (SAH cost) of both are visible together (issue 8, step 3).
-    let other_quality = match s.options.quality {
-        BuildQuality::Sah => BuildQuality::Fast,
-        BuildQuality::Fast => BuildQuality::Sah,
-    };
-    let other_opts = BuildOptions {
-        quality: other_quality,
-        ..s.options.clone()
-    };
-    let mut other_sah = 0.0;
     for (threads, p) in [(1, &one), (n, &all)] {
         let (t_ours, sp) = time_median(s.reps, || {
             ours = Some(p.install(|| build_accel(kind, test, mesh, &s.options)));
-        });
-        let (t_other, sp_other) = time_median(s.reps, || {
-            let a = p.install(|| build_accel(kind, test, mesh, &other_opts));
-            other_sah = a.stats().sah_cost;
         });
         // The device (Embree's thread pool) is made outside the timing.
         let device = EmbreeDevice::new(threads)?;
@@ -211,19 +179,6 @@ pub fn run(s: CompareSetup) -> Result<ExitCode> {
                 ratio: t_em / t_ours.max(1e-12),
                 spread: sp.max(sp2),
             });
-            if quality == Quality::Medium {
-                builds.push(Cell {
-                    what: format!(
-                        "build {} vs Embree {quality:?}",
-                        quality_name(other_quality)
-                    ),
-                    threads,
-                    ours: t_other * 1e3,
-                    embree: t_em * 1e3,
-                    ratio: t_em / t_other.max(1e-12),
-                    spread: sp_other.max(sp2),
-                });
-            }
         }
     }
     let ours = ours.expect("built");
@@ -316,16 +271,6 @@ pub fn run(s: CompareSetup) -> Result<ExitCode> {
         mesh: s.name.to_string(),
         triangles: mesh.num_triangles(),
         ours: format!("{} × {}", kind.name(), test.name()),
-        sah_cost: vec![
-            SahCost {
-                build: quality_name(s.options.quality),
-                sah_cost: ours.stats().sah_cost,
-            },
-            SahCost {
-                build: quality_name(other_quality),
-                sah_cost: other_sah,
-            },
-        ],
         builds_ms: builds,
         mrays: cells,
         agreement,
@@ -349,15 +294,6 @@ fn print_report(r: &Comparison, reps: usize) {
         r.mesh, r.triangles, r.ours
     );
     print_cells("build (ms)", "Embree÷ours", 1, &r.builds_ms);
-    let costs: Vec<String> = r
-        .sah_cost
-        .iter()
-        .map(|c| format!("{} build {:.3}", c.build, c.sah_cost))
-        .collect();
-    println!(
-        "SAH cost of our tree (lower is better; the first is the one traced): {}",
-        costs.join(", ")
-    );
     print_cells("Mrays/s", "ours÷Embree", 2, &r.mrays);
     println!("\nanswers against Embree (every ray):");
     for a in &r.agreement {
