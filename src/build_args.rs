@@ -1,7 +1,7 @@
 //! Build options shared by the commands that build a BVH or a kd-tree.
 
 use clap::Args;
-use raykit_core::accel::{BuildOptions, KdOptions, KdSplit};
+use raykit_core::accel::{BuildOptions, BuildQuality, KdOptions, KdSplit};
 
 /// BVH build options on the command line.
 #[derive(Args, Clone, Debug)]
@@ -15,6 +15,11 @@ pub struct BuildArgs {
     /// SAH cost of a node traversal relative to one triangle test.
     #[arg(long, default_value_t = BuildOptions::default().traversal_cost)]
     traversal_cost: f32,
+    /// BVH builder: `sah` (binned SAH, the better tree) or `fast` (linear
+    /// BVH after Karras 2012: Morton codes, radix sort; several times faster
+    /// to build, for dynamic scenes, a worse tree). Issue 8, step 3.
+    #[arg(long, default_value = "sah", value_parser = BuildQuality::parse)]
+    bvh_build: BuildQuality,
     /// kd-tree split rule: `sah` (Wald & Havran's O(N log N) SAH with perfect
     /// splits), `median` (spatial median) or `game:H` (paper 002's score
     /// |front-back|·(20-H) + splits·H, H in 0..=20).
@@ -36,6 +41,7 @@ impl BuildArgs {
             max_leaf_size: self.max_leaf as usize,
             bins: self.bins as usize,
             traversal_cost: self.traversal_cost.clamp(0.0, 1e3),
+            quality: self.bvh_build,
             kd: KdOptions {
                 split: self.kd_split,
                 intersection_cost: self.kd_isect_cost.clamp(1e-3, 1e3),

@@ -2,7 +2,7 @@
 //! random meshes: same hit/miss, t within 1e-5 relative, and a different
 //! triangle only at a tie (same t).
 
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions, KdOptions, KdSplit};
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions, BuildQuality, KdOptions, KdSplit};
 use raykit_core::rng::Pcg32;
 use raykit_core::tri::TestKind;
 use raykit_core::{Hit, Ray, TriangleMesh, Vec3};
@@ -264,5 +264,36 @@ fn stats_describe_the_tree() {
             _ => s.nodes * 32,
         };
         assert_eq!(s.node_bytes, expected_bytes);
+    }
+}
+
+/// The BVH layouts over trees from every builder (issue 8, step 3: the
+/// binned SAH and the fast linear BVH) agree with brute force.
+#[test]
+fn bvhs_of_every_build_quality_agree_with_brute_force() {
+    let meshes = [
+        random_soup(3000, 41),
+        grid_with_duplicates(30, 42),
+        random_soup(40, 43),
+        random_soup(1, 44),
+    ];
+    for quality in [BuildQuality::Sah, BuildQuality::Fast] {
+        for max_leaf_size in [1, 4, 16] {
+            let opts = BuildOptions {
+                quality,
+                max_leaf_size,
+                ..BuildOptions::default()
+            };
+            for (i, mesh) in meshes.iter().enumerate() {
+                let rays = random_rays(mesh, 2500, 50 + i as u64);
+                eprintln!("quality {quality:?}, max leaf {max_leaf_size}, mesh {i}");
+                check_kinds(
+                    mesh,
+                    &rays,
+                    &opts,
+                    &[AccelKind::Bvh2, AccelKind::Bvh4, AccelKind::ThreadedBvh],
+                );
+            }
+        }
     }
 }

@@ -5,16 +5,22 @@
 //! at the cheapest boundary or becomes a leaf when that is cheaper.
 //!
 //! Subtrees above [`BuildOptions::parallel_threshold`] triangles are built in
-//! parallel with `rayon::join`. The result is a pointer tree of
-//! [`BuildNode`]s plus the triangle order, which each layout flattens.
+//! parallel with `rayon::join`, and the nodes above 64k triangles are bounded
+//! and binned in parallel chunks. The inner loops (32-byte references, one
+//! binning pass for all three axes, the sweep, the in-place partition that
+//! also bounds the children's centroids) are in [`super::binning`] (issue 8,
+//! step 3). The result is a pointer tree of [`BuildNode`]s plus the
+//! triangle order, which each layout flattens; it does not depend on the
+//! number of threads. [`BuildQuality::Fast`] selects the linear BVH of
+//! [`super::lbvh`] instead.
 
+use super::binning::{partition, Bins, Mapping, PrimRef, RangeInfo};
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
 use crate::accel::leaf::LeafTriangles;
 use crate::accel::AccelStats;
 use crate::mesh::TriangleMesh;
 use crate::tri::TriangleTest;
-use glam::Vec3;
 use rayon::prelude::*;
 
 /// Options of the BVH builds.
@@ -33,8 +39,39 @@ pub struct BuildOptions {
     pub leaf_block: usize,
     /// Subtrees with more triangles than this are built on several threads.
     pub parallel_threshold: usize,
+    /// Which builder makes the tree: the binned SAH (default) or the fast
+    /// linear BVH for dynamic scenes (issue 8, step 3).
+    pub quality: BuildQuality,
     /// Options of the kd-tree builds (the structures `kd-*`).
     pub kd: crate::accel::KdOptions,
+}
+
+/// The BVH builders (issue 8, step 3: fast builds, with the SAH cost
+/// reported so speed and quality are visible together).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BuildQuality {
+    /// Binned SAH (Wald 2007) with 32-byte references, one binning pass for
+    /// the three axes and in-place partitions, as Embree's builders (Wald et
+    /// al. 2014): the slower build, the better tree.
+    #[default]
+    Sah,
+    /// Linear BVH (Karras 2012, "Maximizing parallelism in the construction
+    /// of BVHs, octrees, and k-d trees"): Morton codes of the centroids,
+    /// radix sort, the hierarchy from the codes' highest differing bits,
+    /// leaves merged where the SAH prefers (see [`super::lbvh`]). Several
+    /// times faster to build, a worse tree: for dynamic scenes.
+    Fast,
+}
+
+impl BuildQuality {
+    /// Parse `sah` or `fast` (also `lbvh`).
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "sah" => Ok(BuildQuality::Sah),
+            "fast" | "lbvh" => Ok(BuildQuality::Fast),
+            _ => Err(format!("unknown build quality {s:?} (sah, fast)")),
+        }
+    }
 }
 
 impl Default for BuildOptions {
@@ -45,6 +82,7 @@ impl Default for BuildOptions {
             traversal_cost: 1.0,
             leaf_block: 1,
             parallel_threshold: 4096,
+            quality: BuildQuality::Sah,
             kd: Default::default(),
         }
     }
@@ -102,222 +140,181 @@ pub struct BuildTree {
     pub order: Vec<u32>,
 }
 
-/// One triangle as the builder sees it.
-#[derive(Clone, Copy)]
-struct Ref {
-    bounds: Aabb,
-    centroid: Vec3,
-    prim: u32,
-}
-
-/// Build a binned-SAH tree over the triangles of `mesh`.
+/// Build a tree over the triangles of `mesh` with the builder that
+/// `options.quality` names: the binned SAH ([`BuildQuality::Sah`]) or the
+/// linear BVH ([`BuildQuality::Fast`], see [`super::lbvh`]).
 ///
 /// An empty mesh gives a single empty leaf. Degenerate inputs (all centroids
 /// equal) are split at the object median so the depth stays logarithmic.
+/// The result does not depend on the number of threads.
 pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> BuildTree {
-    let mut refs: Vec<Ref> = (0..mesh.num_triangles())
-        .into_par_iter()
-        .map(|i| {
-            let bounds = mesh.triangle_bounds(i);
-            Ref {
-                bounds,
-                centroid: bounds.center(),
-                prim: i as u32,
-            }
-        })
-        .collect();
     let opts = BuildOptions {
         max_leaf_size: options.max_leaf_size.clamp(1, 31),
         bins: options.bins.clamp(2, 256),
         leaf_block: options.leaf_block.clamp(1, 16),
         ..options.clone()
     };
-    let root = build_node(&mut refs, 0, 0, &opts);
-    BuildTree {
-        root,
-        order: refs.iter().map(|r| r.prim).collect(),
+    match opts.quality {
+        BuildQuality::Sah => sah_build(mesh, &opts),
+        BuildQuality::Fast => super::lbvh::build(mesh, &opts),
     }
 }
 
-fn bounds_of(refs: &[Ref]) -> (Aabb, Aabb) {
-    refs.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), r| {
-        (b.union(r.bounds), c.grow(r.centroid))
-    })
+/// Ranges longer than this are bounded and binned in parallel chunks.
+const PAR_BIN: usize = 64 * 1024;
+/// Chunk length of the parallel passes.
+const CHUNK: usize = 16 * 1024;
+
+/// The references of every triangle of `mesh` and their bounds (in
+/// parallel; the bounds are exact, so the result does not depend on how the
+/// work is split).
+pub(crate) fn prim_refs(mesh: &TriangleMesh) -> (Vec<PrimRef>, RangeInfo) {
+    let refs: Vec<PrimRef> = (0..mesh.num_triangles())
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| PrimRef::new(&mesh.triangle_bounds(i), i as u32))
+        .collect();
+    let info = range_info(&refs);
+    (refs, info)
 }
 
-fn build_node(refs: &mut [Ref], first: usize, depth: usize, opts: &BuildOptions) -> BuildNode {
-    let (bounds, centroids) = if refs.len() > 64 * 1024 {
-        refs.par_chunks(16 * 1024).map(bounds_of).reduce(
-            || (Aabb::EMPTY, Aabb::EMPTY),
-            |a, b| (a.0.union(b.0), a.1.union(b.1)),
-        )
+/// Bounds of `refs`, in parallel chunks when there are many.
+fn range_info(refs: &[PrimRef]) -> RangeInfo {
+    if refs.len() > PAR_BIN {
+        refs.par_chunks(CHUNK)
+            .map(RangeInfo::of)
+            .reduce(|| RangeInfo::EMPTY, RangeInfo::merge)
+            .clean()
     } else {
-        bounds_of(refs)
-    };
+        RangeInfo::of(refs).clean()
+    }
+}
+
+fn sah_build(mesh: &TriangleMesh, opts: &BuildOptions) -> BuildTree {
+    let (mut refs, info) = prim_refs(mesh);
+    let mut bins = Bins::new(opts.bins);
+    let root = sah_node(&mut refs, info, 0, 0, opts, &mut bins);
+    BuildTree {
+        root,
+        order: refs
+            .par_iter()
+            .with_min_len(4096)
+            .map(|r| r.prim())
+            .collect(),
+    }
+}
+
+/// Bins of a node of `n` references: `4 + n / 20`, at most `max`, as
+/// Embree's binned builder (Wald et al. 2014) does, so that small nodes do
+/// not pay for sweeping bins they cannot fill.
+#[inline]
+fn bins_for(n: usize, max: usize) -> usize {
+    (4 + n / 20).min(max)
+}
+
+/// Build the subtree over `refs` (at `first` in the final order), whose
+/// bounds `info` the caller knows; `bins` is this thread's scratch.
+fn sah_node(
+    refs: &mut [PrimRef],
+    info: RangeInfo,
+    first: usize,
+    depth: usize,
+    opts: &BuildOptions,
+    bins: &mut Bins,
+) -> BuildNode {
     let n = refs.len();
+    let bounds = info.bounds.aabb();
     let leaf = || BuildNode::Leaf {
         bounds,
         first: first as u32,
         count: n as u32,
     };
-    if n <= 1 {
+    let leaf_cost = blocks(n as u32, opts);
+    // Any split costs at least one traversal, so a small node whose leaf
+    // cost is no more is a leaf without binning (the same decision).
+    if n <= 1 || (n <= opts.max_leaf_size && leaf_cost <= opts.traversal_cost) {
         return leaf();
     }
     let split = if depth + 40 < MAX_DEPTH {
-        find_sah_split(refs, &bounds, &centroids, opts)
+        let nb = bins_for(n, opts.bins);
+        let map = Mapping::new(&info.centers, nb);
+        if n > PAR_BIN {
+            *bins = refs
+                .par_chunks(CHUNK)
+                .map(|c| {
+                    let mut b = Bins::new(nb);
+                    b.bin(c, &map);
+                    b
+                })
+                .reduce_with(|mut a, b| {
+                    a.merge(&b, nb);
+                    a
+                })
+                .expect("n > 0");
+        } else {
+            bins.bin(refs, &map);
+        }
+        let area = info.bounds.half_area();
+        bins.best_split(nb, area, opts.traversal_cost, |c| blocks(c, opts))
+            .map(|s| (s, map))
     } else {
         None
     };
-    let mid = match split {
-        Some(s) => {
-            let leaf_cost = blocks(n as u32, opts);
+    let (axis, mid, linfo, rinfo) = match split {
+        Some((s, map)) => {
             if s.cost >= leaf_cost && n <= opts.max_leaf_size {
                 return leaf();
             }
-            partition(refs, &s)
+            let (lc, rc) = partition(refs, &map, &s);
+            let l = RangeInfo {
+                bounds: s.left,
+                centers: lc,
+            };
+            let r = RangeInfo {
+                bounds: s.right,
+                centers: rc,
+            };
+            (s.axis, s.left_count, l.clean(), r.clean())
         }
         None if n <= opts.max_leaf_size => return leaf(),
         None => {
             // No useful SAH split (coincident centroids, or too deep): split
             // at the object median along the widest centroid axis.
-            let axis = centroids.largest_axis();
+            let axis = info.centers.aabb().largest_axis();
             let mid = n / 2;
-            refs.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-            mid
+            refs.select_nth_unstable_by(mid, |a, b| {
+                (a.lo[axis] + a.hi[axis]).total_cmp(&(b.lo[axis] + b.hi[axis]))
+            });
+            let (l, r) = refs.split_at(mid);
+            (axis, mid, range_info(l), range_info(r))
         }
-    };
-    let axis = match split {
-        Some(s) => s.axis as u8,
-        None => centroids.largest_axis() as u8,
     };
     let (left, right) = refs.split_at_mut(mid);
     let (l, r) = if n > opts.parallel_threshold {
         rayon::join(
-            || build_node(left, first, depth + 1, opts),
-            || build_node(right, first + mid, depth + 1, opts),
+            || sah_node(left, linfo, first, depth + 1, opts, bins),
+            || {
+                let mut own = Bins::new(opts.bins);
+                sah_node(right, rinfo, first + mid, depth + 1, opts, &mut own)
+            },
         )
     } else {
         (
-            build_node(left, first, depth + 1, opts),
-            build_node(right, first + mid, depth + 1, opts),
+            sah_node(left, linfo, first, depth + 1, opts, bins),
+            sah_node(right, rinfo, first + mid, depth + 1, opts, bins),
         )
     };
     BuildNode::Inner {
         bounds,
-        axis,
+        axis: axis as u8,
         children: Box::new([l, r]),
     }
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Split {
-    axis: usize,
-    /// Triangles whose centroid falls in a bin below `bin` go left.
-    bin: usize,
-    /// Binning transform of the axis: `bin = (c - lo) * scale`.
-    lo: f32,
-    scale: f32,
-    bins: usize,
-    /// SAH cost in units of one triangle test, relative to this node's area.
-    cost: f32,
-}
-
-impl Split {
-    #[inline]
-    fn bin_of(&self, c: f32) -> usize {
-        (((c - self.lo) * self.scale) as usize).min(self.bins - 1)
-    }
-}
-
-/// Evaluate all bin boundaries on all three axes; `None` when every axis has
-/// coincident centroids.
-fn find_sah_split(
-    refs: &[Ref],
-    bounds: &Aabb,
-    centroids: &Aabb,
-    opts: &BuildOptions,
-) -> Option<Split> {
-    let nb = opts.bins;
-    let parent_area = bounds.surface_area().max(f32::MIN_POSITIVE);
-    let mut best: Option<Split> = None;
-    let mut bin_bounds = vec![Aabb::EMPTY; nb];
-    let mut bin_count = vec![0u32; nb];
-    let mut right_area = vec![0.0f32; nb];
-    let mut right_count = vec![0u32; nb];
-    for axis in 0..3 {
-        let lo = centroids.min[axis];
-        let extent = centroids.max[axis] - lo;
-        if extent.is_nan() || extent <= 0.0 {
-            continue;
-        }
-        let probe = Split {
-            axis,
-            bin: 0,
-            lo,
-            scale: nb as f32 / extent,
-            bins: nb,
-            cost: 0.0,
-        };
-        bin_bounds.fill(Aabb::EMPTY);
-        bin_count.fill(0);
-        for r in refs {
-            let b = probe.bin_of(r.centroid[axis]);
-            bin_bounds[b] = bin_bounds[b].union(r.bounds);
-            bin_count[b] += 1;
-        }
-        // Suffix sweep: area and count of bins [i, nb).
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0u32);
-        for i in (1..nb).rev() {
-            acc = acc.union(bin_bounds[i]);
-            cnt += bin_count[i];
-            right_area[i] = acc.surface_area();
-            right_count[i] = cnt;
-        }
-        // Prefix sweep, evaluating the boundary before bin i.
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0u32);
-        for i in 1..nb {
-            acc = acc.union(bin_bounds[i - 1]);
-            cnt += bin_count[i - 1];
-            if cnt == 0 || right_count[i] == 0 {
-                continue;
-            }
-            let cost = opts.traversal_cost
-                + (acc.surface_area() * blocks(cnt, opts)
-                    + right_area[i] * blocks(right_count[i], opts))
-                    / parent_area;
-            if best.is_none_or(|b| cost < b.cost) {
-                best = Some(Split {
-                    bin: i,
-                    cost,
-                    ..probe
-                });
-            }
-        }
-    }
-    best
-}
-
-/// Move the refs whose centroid bin is below the split's to the front;
-/// returns how many there are (never 0 nor all, since the sweep only offers
-/// boundaries with triangles on both sides).
-fn partition(refs: &mut [Ref], split: &Split) -> usize {
-    let mut i = 0;
-    let mut j = refs.len();
-    while i < j {
-        if split.bin_of(refs[i].centroid[split.axis]) < split.bin {
-            i += 1;
-        } else {
-            j -= 1;
-            refs.swap(i, j);
-        }
-    }
-    i
 }
 
 /// The SAH's intersection cost of `n` triangles: the number of leaf tests,
 /// `ceil(n / leaf_block)`.
 #[inline]
-fn blocks(n: u32, opts: &BuildOptions) -> f32 {
+pub(crate) fn blocks(n: u32, opts: &BuildOptions) -> f32 {
     n.div_ceil(opts.leaf_block as u32) as f32
 }
 

@@ -11,10 +11,12 @@
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
 //!   indices, traversed without a stack.
 
+mod binning;
 mod box4;
 pub mod build;
 mod bvh2;
 mod bvh4;
+pub mod lbvh;
 mod node4;
 mod node_box;
 pub(crate) use node_box::NodeBox;
@@ -23,7 +25,7 @@ mod tri4;
 #[cfg(target_arch = "x86_64")]
 mod tri4_sse;
 
-pub use build::{BuildNode, BuildOptions};
+pub use build::{BuildNode, BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;
 pub use bvh4::Bvh4;
 pub use threaded::ThreadedBvh;

@@ -1,0 +1,399 @@
+//! The inner loops of the binned SAH build (issue 8, step 3): primitive
+//! references as two 4-float corners, one binning pass for all three axes,
+//! the SAH sweep over the bins, and the in-place partition.
+//!
+//! This is the layout of Wald 2007 ("On fast construction of SAH-based
+//! bounding volume hierarchies") as Embree's builders use it (Wald et al.
+//! 2014): a reference is 32 bytes (lower corner with the triangle index in
+//! its fourth lane, upper corner), the centroid is never stored (the sum of
+//! the corners, twice the centroid, is used instead), the bin of every axis
+//! is `k = (c - min) * scale` with the scale computed once per node, and a
+//! bin keeps its bounds as lower and upper 4-float corners, so that one pass
+//! over the references bins all three axes. The partition also gathers the
+//! two sides' centroid bounds, so the children start knowing their bounds
+//! and no node walks its references more than twice (bin, partition).
+
+use crate::aabb::Aabb;
+use glam::Vec3;
+
+/// Four floats; the corners of boxes with the fourth lane unused (or the
+/// triangle index in a [`PrimRef`]'s lower corner).
+pub(crate) type V4 = [f32; 4];
+
+/// Lane-wise minimum (the compare form, which compiles to `minps`).
+#[inline(always)]
+pub(crate) fn vmin(a: V4, b: V4) -> V4 {
+    std::array::from_fn(|i| if a[i] < b[i] { a[i] } else { b[i] })
+}
+
+/// Lane-wise maximum (the compare form, which compiles to `maxps`).
+#[inline(always)]
+pub(crate) fn vmax(a: V4, b: V4) -> V4 {
+    std::array::from_fn(|i| if a[i] > b[i] { a[i] } else { b[i] })
+}
+
+/// A box as two 4-float corners; the empty box has `lo = +inf`,
+/// `hi = -inf`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Box4f {
+    pub lo: V4,
+    pub hi: V4,
+}
+
+impl Box4f {
+    pub const EMPTY: Box4f = Box4f {
+        lo: [f32::INFINITY; 4],
+        hi: [f32::NEG_INFINITY; 4],
+    };
+
+    #[inline(always)]
+    pub fn union(self, o: Box4f) -> Box4f {
+        Box4f {
+            lo: vmin(self.lo, o.lo),
+            hi: vmax(self.hi, o.hi),
+        }
+    }
+
+    #[inline(always)]
+    pub fn grow(&mut self, p: V4) {
+        self.lo = vmin(self.lo, p);
+        self.hi = vmax(self.hi, p);
+    }
+
+    /// Half the surface area (the SAH only needs ratios); 0 when empty.
+    #[inline(always)]
+    pub fn half_area(&self) -> f32 {
+        let d: [f32; 3] = std::array::from_fn(|i| (self.hi[i] - self.lo[i]).max(0.0));
+        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+    }
+
+    /// As an [`Aabb`] (first three lanes).
+    pub fn aabb(&self) -> Aabb {
+        Aabb::new(
+            Vec3::new(self.lo[0], self.lo[1], self.lo[2]),
+            Vec3::new(self.hi[0], self.hi[1], self.hi[2]),
+        )
+    }
+}
+
+/// One triangle as the builder sees it: its bounds, with the mesh triangle
+/// index stored in the fourth lane of the lower corner (32 bytes, Embree's
+/// `PrimRef`, Wald et al. 2014).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(crate) struct PrimRef {
+    pub lo: V4,
+    pub hi: V4,
+}
+
+impl PrimRef {
+    /// The reference of triangle `prim` with bounds `b`.
+    pub fn new(b: &Aabb, prim: u32) -> PrimRef {
+        PrimRef {
+            lo: [b.min.x, b.min.y, b.min.z, f32::from_bits(prim)],
+            hi: [b.max.x, b.max.y, b.max.z, 0.0],
+        }
+    }
+
+    /// Mesh triangle index.
+    #[inline(always)]
+    pub fn prim(&self) -> u32 {
+        self.lo[3].to_bits()
+    }
+
+    /// Twice the centroid (the corners' sum; lane 3 is meaningless).
+    #[inline(always)]
+    pub fn center2(&self) -> V4 {
+        std::array::from_fn(|i| self.lo[i] + self.hi[i])
+    }
+
+    /// The bounds as a [`Box4f`] (lane 3 cleared).
+    #[inline(always)]
+    pub fn bounds(&self) -> Box4f {
+        Box4f {
+            lo: [self.lo[0], self.lo[1], self.lo[2], 0.0],
+            hi: [self.hi[0], self.hi[1], self.hi[2], 0.0],
+        }
+    }
+}
+
+/// Bounds of a range of references and of their (doubled) centroids.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct RangeInfo {
+    pub bounds: Box4f,
+    pub centers: Box4f,
+}
+
+impl RangeInfo {
+    pub const EMPTY: RangeInfo = RangeInfo {
+        bounds: Box4f::EMPTY,
+        centers: Box4f::EMPTY,
+    };
+
+    /// The bounds of `refs`.
+    pub fn of(refs: &[PrimRef]) -> RangeInfo {
+        let mut r = RangeInfo::EMPTY;
+        for p in refs {
+            r.add(p);
+        }
+        r
+    }
+
+    #[inline(always)]
+    pub fn add(&mut self, p: &PrimRef) {
+        self.bounds.lo = vmin(self.bounds.lo, p.lo);
+        self.bounds.hi = vmax(self.bounds.hi, p.hi);
+        self.centers.grow(p.center2());
+    }
+
+    pub fn merge(self, o: RangeInfo) -> RangeInfo {
+        RangeInfo {
+            bounds: self.bounds.union(o.bounds),
+            centers: self.centers.union(o.centers),
+        }
+    }
+
+    /// Node bounds with lane 3 cleared (the lower corner's lane 3 carries
+    /// triangle indices while accumulating).
+    pub fn clean(mut self) -> RangeInfo {
+        self.bounds.lo[3] = 0.0;
+        self.bounds.hi[3] = 0.0;
+        self.centers.lo[3] = 0.0;
+        self.centers.hi[3] = 0.0;
+        self
+    }
+}
+
+/// The binning transform of a node: `bin = (c2 - lo) * scale` per axis,
+/// clamped to the last bin; an axis whose centroids coincide has scale 0
+/// (everything in bin 0, so it offers no split).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Mapping {
+    lo: V4,
+    scale: V4,
+    last: usize,
+}
+
+impl Mapping {
+    pub fn new(centers: &Box4f, bins: usize) -> Mapping {
+        let scale = std::array::from_fn(|i| {
+            let extent = centers.hi[i] - centers.lo[i];
+            // 0.99999 keeps the largest centroid inside the last bin in most
+            // cases; the clamp catches the rest.
+            if i < 3 && extent > 0.0 && extent.is_finite() {
+                bins as f32 * 0.99999 / extent
+            } else {
+                0.0
+            }
+        });
+        Mapping {
+            lo: centers.lo,
+            scale,
+            last: bins - 1,
+        }
+    }
+
+    /// Bin of every axis of a reference.
+    #[inline(always)]
+    pub fn bins(&self, p: &PrimRef) -> [usize; 3] {
+        // The arithmetic of `index`, written four lanes wide so that it
+        // compiles to packed SSE (lane 3 is clamped like the others).
+        let c = p.center2();
+        let v: V4 = std::array::from_fn(|i| (c[i] - self.lo[i]) * self.scale[i]);
+        let v = vmax(v, [0.0; 4]);
+        let v = vmin(v, [self.last as f32; 4]);
+        // SAFETY: every lane is finite and within `[0, last]` (NaN became 0
+        // in `vmax`, which keeps its second operand then), `last < 256`.
+        let k: [i32; 4] = std::array::from_fn(|i| unsafe { v[i].to_int_unchecked::<i32>() });
+        [k[0] as usize, k[1] as usize, k[2] as usize]
+    }
+
+    /// Bin of a reference along one axis (the same arithmetic as
+    /// [`Mapping::bins`], so binning and partition agree).
+    #[inline(always)]
+    pub fn bin(&self, p: &PrimRef, axis: usize) -> usize {
+        self.index(p.lo[axis] + p.hi[axis], axis)
+    }
+
+    /// `(c - lo) * scale` clamped to `[0, last]` in floats (NaN gives 0),
+    /// then truncated: no saturating conversion on the hot path.
+    #[inline(always)]
+    fn index(&self, c: f32, axis: usize) -> usize {
+        let v = (c - self.lo[axis]) * self.scale[axis];
+        let v = if v > 0.0 { v } else { 0.0 };
+        let last = self.last as f32;
+        let v = if v < last { v } else { last };
+        // SAFETY: `v` is finite and within `[0, last]`, `last < 256`, so it
+        // fits a u32 after truncation.
+        unsafe { v.to_int_unchecked::<u32>() as usize }
+    }
+
+    pub fn num_bins(&self) -> usize {
+        self.last + 1
+    }
+}
+
+/// Per-bin bounds and counts of the three axes (bins × 3 of each).
+#[derive(Clone, Debug)]
+pub(crate) struct Bins {
+    boxes: Vec<[Box4f; 3]>,
+    counts: Vec<[u32; 3]>,
+    /// Sweep scratch: area and count of the bins at and above each bin.
+    right_area: Vec<[f32; 3]>,
+    right_count: Vec<[u32; 3]>,
+}
+
+/// The best split found by the sweep.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Split {
+    pub axis: usize,
+    /// References whose bin along `axis` is below this go left.
+    pub bin: usize,
+    /// SAH cost in units of one leaf test, relative to this node's area.
+    pub cost: f32,
+    pub left_count: usize,
+    pub left: Box4f,
+    pub right: Box4f,
+}
+
+impl Bins {
+    pub fn new(n: usize) -> Bins {
+        Bins {
+            boxes: vec![[Box4f::EMPTY; 3]; n],
+            counts: vec![[0; 3]; n],
+            right_area: vec![[0.0; 3]; n],
+            right_count: vec![[0; 3]; n],
+        }
+    }
+
+    fn clear(&mut self, n: usize) {
+        if self.boxes.len() < n {
+            *self = Bins::new(n);
+        }
+        self.boxes[..n].fill([Box4f::EMPTY; 3]);
+        self.counts[..n].fill([0; 3]);
+    }
+
+    /// Bin `refs` under `map` (the first `map.num_bins()` bins are reset).
+    pub fn bin(&mut self, refs: &[PrimRef], map: &Mapping) {
+        let nb = map.num_bins();
+        self.clear(nb);
+        let boxes = &mut self.boxes[..nb];
+        let counts = &mut self.counts[..nb];
+        for p in refs {
+            let k = map.bins(p);
+            for a in 0..3 {
+                // SAFETY: `Mapping::bins` clamps to `last = nb - 1`, and
+                // both slices hold `nb` bins.
+                let (b, c) = unsafe {
+                    (
+                        boxes.get_unchecked_mut(k[a]),
+                        counts.get_unchecked_mut(k[a]),
+                    )
+                };
+                b[a].lo = vmin(b[a].lo, p.lo);
+                b[a].hi = vmax(b[a].hi, p.hi);
+                c[a] += 1;
+            }
+        }
+    }
+
+    /// Add `other`'s first `nb` bins to this one's (exact: min, max, sums).
+    pub fn merge(&mut self, other: &Bins, nb: usize) {
+        for i in 0..nb {
+            for a in 0..3 {
+                self.boxes[i][a] = self.boxes[i][a].union(other.boxes[i][a]);
+                self.counts[i][a] += other.counts[i][a];
+            }
+        }
+    }
+
+    /// The cheapest bin boundary over the three axes under the SAH with
+    /// `cost(n)` per leaf of `n` triangles and `c_trav` per node, relative
+    /// to `parent_half_area`; `None` when no boundary has references on both
+    /// sides. Ties go to the lower axis, then the lower boundary.
+    pub fn best_split(
+        &mut self,
+        nb: usize,
+        parent_half_area: f32,
+        c_trav: f32,
+        cost: impl Fn(u32) -> f32,
+    ) -> Option<Split> {
+        let right_area = &mut self.right_area[..nb];
+        let right_count = &mut self.right_count[..nb];
+        let mut acc = [Box4f::EMPTY; 3];
+        let mut cnt = [0u32; 3];
+        for i in (1..nb).rev() {
+            for a in 0..3 {
+                acc[a] = acc[a].union(self.boxes[i][a]);
+                cnt[a] += self.counts[i][a];
+                right_area[i][a] = acc[a].half_area();
+                right_count[i][a] = cnt[a];
+            }
+        }
+        let inv = 1.0 / parent_half_area.max(f32::MIN_POSITIVE);
+        let mut best: Option<(usize, usize, f32, u32)> = None;
+        for a in 0..3 {
+            let mut acc = Box4f::EMPTY;
+            let mut cnt = 0u32;
+            for i in 1..nb {
+                acc = acc.union(self.boxes[i - 1][a]);
+                cnt += self.counts[i - 1][a];
+                let rc = right_count[i][a];
+                if cnt == 0 || rc == 0 {
+                    continue;
+                }
+                let c = c_trav + (acc.half_area() * cost(cnt) + right_area[i][a] * cost(rc)) * inv;
+                if best.is_none_or(|b| c < b.2) {
+                    best = Some((a, i, c, cnt));
+                }
+            }
+        }
+        let (axis, bin, cost, left_count) = best?;
+        let mut left = Box4f::EMPTY;
+        let mut right = Box4f::EMPTY;
+        for i in 0..nb {
+            if i < bin {
+                left = left.union(self.boxes[i][axis]);
+            } else {
+                right = right.union(self.boxes[i][axis]);
+            }
+        }
+        Some(Split {
+            axis,
+            bin,
+            cost,
+            left_count: left_count as usize,
+            left,
+            right,
+        })
+    }
+}
+
+/// Move the references whose bin along the split's axis is below the
+/// split's bin to the front, and return the two sides' centroid bounds.
+/// The front then holds exactly `split.left_count` references (the sweep
+/// counted them with the same mapping).
+pub(crate) fn partition(refs: &mut [PrimRef], map: &Mapping, split: &Split) -> (Box4f, Box4f) {
+    let axis = split.axis;
+    let mut lc = Box4f::EMPTY;
+    let mut rc = Box4f::EMPTY;
+    let mut i = 0;
+    let mut j = refs.len();
+    loop {
+        while i < j && map.bin(&refs[i], axis) < split.bin {
+            lc.grow(refs[i].center2());
+            i += 1;
+        }
+        while i < j && map.bin(&refs[j - 1], axis) >= split.bin {
+            rc.grow(refs[j - 1].center2());
+            j -= 1;
+        }
+        if i >= j {
+            break;
+        }
+        refs.swap(i, j - 1);
+    }
+    debug_assert_eq!(i, split.left_count);
+    (lc, rc)
+}
