@@ -17,6 +17,9 @@ mod bvh2;
 mod bvh4;
 mod node4;
 mod node_box;
+mod packet;
+#[cfg(target_arch = "x86_64")]
+mod packet_avx2;
 pub(crate) use node_box::NodeBox;
 mod threaded;
 mod tri4;

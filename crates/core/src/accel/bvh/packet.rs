@@ -1,0 +1,370 @@
+//! The coherent-ray path of [`super::Bvh4`] over Möller (issue 8, item 4):
+//! `intersect_batch` and `occluded_batch` cut the batch into packets of
+//! eight consecutive rays and trace each coherent packet together through
+//! the tree (Wald et al. 2001 coherent ray packets; Embree's packet
+//! kernels, Wald et al. 2014), with the AVX2 kernels of
+//! [`super::packet_avx2`].
+//!
+//! A packet is coherent when its eight rays share the signs of their
+//! reciprocal directions (one octant): the box test then uses the same near
+//! planes for every lane, which is what makes each lane's box test the
+//! single-ray one. Other packets, batches without AVX2 (detected once per
+//! batch) and trees with other leaves take the single-ray path, one ray
+//! after the other. Incoherent batches (random directions) almost never
+//! form a coherent packet, so they pay only the check.
+//!
+//! Every ray gets the single-ray traversal's answer: the same nearest `t`
+//! bit for bit (the box tests are the same per lane and conservative, the
+//! triangle tests the same), `u`, `v` and triangle of the same hit (another
+//! triangle only at exactly the same `t`, a tie the traversal order
+//! decides), and the same occlusion answer.
+
+use super::bvh4::Bvh4;
+use super::node4::{Child4, Node4};
+use super::tri4::Tri4;
+use crate::accel::{Accel, BATCH_GRAIN};
+use crate::hit::Hit;
+use crate::ray::Ray;
+use crate::tri::{Moller, TriangleTest};
+use rayon::prelude::*;
+
+/// Rays per packet.
+pub(crate) const LANES: usize = 8;
+
+#[cfg(target_arch = "x86_64")]
+use super::packet_avx2::{traverse, Hits8, Packet8};
+
+/// Nearest hits of `rays` through `bvh`: coherent packets of eight together
+/// (Wald et al. 2001), the rest one by one; in parallel over the rayon
+/// pool.
+pub(crate) fn intersect_batch<T: TriangleTest>(
+    bvh: &Bvh4<T>,
+    rays: &[Ray],
+    hits: &mut [Option<Hit>],
+) {
+    assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+    let packets = use_packets(bvh);
+    rays.par_chunks(LANES)
+        .zip(hits.par_chunks_mut(LANES))
+        .with_min_len(BATCH_GRAIN / LANES)
+        .for_each(|(r, h)| {
+            if !(packets && packet_intersect(bvh, r, h)) {
+                for (ray, hit) in r.iter().zip(h) {
+                    *hit = bvh.intersect(ray);
+                }
+            }
+        });
+}
+
+/// Occlusion of `rays` through `bvh`, packets as in [`intersect_batch`].
+pub(crate) fn occluded_batch<T: TriangleTest>(bvh: &Bvh4<T>, rays: &[Ray], occluded: &mut [bool]) {
+    assert_eq!(rays.len(), occluded.len(), "one result per ray");
+    let packets = use_packets(bvh);
+    rays.par_chunks(LANES)
+        .zip(occluded.par_chunks_mut(LANES))
+        .with_min_len(BATCH_GRAIN / LANES)
+        .for_each(|(r, o)| {
+            if !(packets && packet_occluded(bvh, r, o)) {
+                for (ray, occ) in r.iter().zip(o) {
+                    *occ = bvh.occluded(ray);
+                }
+            }
+        });
+}
+
+/// Whether this batch may use packets: packed leaves and AVX2.
+fn use_packets<T: TriangleTest>(bvh: &Bvh4<T>) -> bool {
+    bvh.packet_view().is_some() && avx2()
+}
+
+/// AVX2 on this CPU (and packets not switched off by the tests).
+fn avx2() -> bool {
+    #[cfg(test)]
+    if tests::SCALAR_ONLY.with(|s| s.get()) {
+        return false;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// The octant of a ray: the sign bits of its reciprocal direction.
+#[inline(always)]
+fn octant(ray: &Ray) -> u32 {
+    let id = ray.inv_dir;
+    (id.x.is_sign_negative() as u32)
+        | (id.y.is_sign_negative() as u32) << 1
+        | (id.z.is_sign_negative() as u32) << 2
+}
+
+/// The packet of `rays` (one to eight, all of octant `oct`); lanes past the
+/// end are out of play.
+#[cfg(target_arch = "x86_64")]
+fn packet(rays: &[Ray], oct: u32) -> Packet8 {
+    let mut p = Packet8 {
+        origin: [[0.0; LANES]; 3],
+        dir: [[1.0; LANES]; 3],
+        dir_abs: [[1.0; LANES]; 3],
+        inv_dir: [[1.0; LANES]; 3],
+        tnear: [0.0; LANES],
+        tfar: [f32::NAN; LANES],
+        scale: [0.0; LANES],
+        clear_scale: [0.0; LANES],
+        near: [0, 1, 2].map(|a| 2 * a + ((oct >> a) & 1) as usize),
+    };
+    for (l, ray) in rays.iter().enumerate() {
+        let (o, d, id) = (ray.origin, ray.dir, ray.inv_dir);
+        for a in 0..3 {
+            p.origin[a][l] = o[a];
+            p.dir[a][l] = d[a];
+            p.dir_abs[a][l] = d[a].abs();
+            p.inv_dir[a][l] = id[a];
+        }
+        let scale = Moller::prepare(ray);
+        p.scale[l] = scale;
+        // As `Ray4::new`: the scalar test's `0.75 * scale * ...` multiplies
+        // left to right.
+        p.clear_scale[l] = 0.75 * scale;
+        p.tnear[l] = ray.tnear;
+        p.tfar[l] = ray.tfar;
+    }
+    p
+}
+
+/// The octant shared by all of `rays`, if they share one.
+#[inline(always)]
+fn coherent(rays: &[Ray]) -> Option<u32> {
+    let oct = octant(&rays[0]);
+    rays[1..].iter().all(|r| octant(r) == oct).then_some(oct)
+}
+
+/// Trace `rays` (at most eight) as one packet if coherent; false when not
+/// (nothing written).
+fn packet_intersect<T: TriangleTest>(
+    bvh: &Bvh4<T>,
+    rays: &[Ray],
+    hits: &mut [Option<Hit>],
+) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let (Some(view), Some(oct)) = (bvh.packet_view(), coherent(rays)) else {
+            return false;
+        };
+        let p = packet(rays, oct);
+        let mut out = Hits8::default();
+        // SAFETY: packets are used only when `is_x86_feature_detected!`
+        // found AVX2 (`use_packets`).
+        unsafe { traverse::<false>(&view, &p, &mut out) };
+        for (l, h) in hits.iter_mut().enumerate() {
+            *h = (out.hit & (1 << l) != 0).then_some(Hit {
+                t: out.t[l],
+                u: out.u[l],
+                v: out.v[l],
+                prim: out.prim[l],
+            });
+        }
+        true
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (bvh, rays, hits);
+        false
+    }
+}
+
+/// As [`packet_intersect`], for occlusion.
+fn packet_occluded<T: TriangleTest>(bvh: &Bvh4<T>, rays: &[Ray], occluded: &mut [bool]) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let (Some(view), Some(oct)) = (bvh.packet_view(), coherent(rays)) else {
+            return false;
+        };
+        let p = packet(rays, oct);
+        let mut out = Hits8::default();
+        // SAFETY: as in `packet_intersect`.
+        unsafe { traverse::<true>(&view, &p, &mut out) };
+        for (l, o) in occluded.iter_mut().enumerate() {
+            *o = out.hit & (1 << l) != 0;
+        }
+        true
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (bvh, rays, occluded);
+        false
+    }
+}
+
+/// What the packet traversal reads of a [`Bvh4`] over Möller (issue 8,
+/// item 4): the nodes, the root and the `tri4` packs (Wald et al. 2014).
+#[derive(Clone, Copy)]
+pub(crate) struct View<'a> {
+    pub nodes: &'a [Node4],
+    pub root: Child4,
+    pub packs: &'a [Tri4],
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::accel::bvh::BuildOptions;
+    use crate::accel::BruteForce;
+    use crate::mesh::TriangleMesh;
+    use crate::rng::Pcg32;
+    use glam::Vec3;
+    use std::cell::Cell;
+
+    thread_local! {
+        /// Set by a test to force the single-ray path on this thread.
+        pub static SCALAR_ONLY: Cell<bool> = const { Cell::new(false) };
+    }
+
+    /// A bumpy grid surface (shared edges and corners) with some triangles
+    /// duplicated (ties), plus a soup of small random triangles above it.
+    fn scene(n: usize, seed: u64) -> TriangleMesh {
+        let mut rng = Pcg32::new(seed);
+        let mut positions = Vec::new();
+        for y in 0..=n {
+            for x in 0..=n {
+                let h = 0.05 * rng.next_f32();
+                positions.push(Vec3::new(x as f32 / n as f32, h, y as f32 / n as f32));
+            }
+        }
+        let w = n as u32 + 1;
+        let mut indices = Vec::new();
+        for y in 0..n as u32 {
+            for x in 0..n as u32 {
+                let a = y * w + x;
+                indices.push([a, a + 1, a + w + 1]);
+                indices.push([a, a + w + 1, a + w]);
+            }
+        }
+        let dups: Vec<[u32; 3]> = indices.iter().step_by(11).copied().collect();
+        indices.extend(dups);
+        for _ in 0..2000 {
+            let c = rng.in_box(Vec3::new(0.0, 0.1, 0.0), Vec3::new(1.0, 0.6, 1.0));
+            let s = 0.005 + 0.05 * rng.next_f32().powi(2);
+            let b = positions.len() as u32;
+            for _ in 0..3 {
+                positions.push(c + rng.unit_vector() * s);
+            }
+            indices.push([b, b + 1, b + 2]);
+        }
+        TriangleMesh::new(positions, indices)
+    }
+
+    /// Rays in rows of a pinhole image (coherent packets), with now and
+    /// then a bounded segment, an axis-parallel direction (exact zero
+    /// components, both signs of zero), a row of shadow-like rays towards
+    /// one point, or random directions (mixed octants); odd lengths leave
+    /// a tail packet.
+    fn rays(rng: &mut Pcg32, n: usize) -> Vec<Ray> {
+        let mut out = Vec::with_capacity(n);
+        let eye = Vec3::new(0.5, 1.5, -0.8) + rng.unit_vector() * 0.3;
+        let light = Vec3::new(0.2, 2.0, 0.9);
+        let w = 37;
+        while out.len() < n {
+            let i = out.len();
+            let (x, y) = (
+                (i % w) as f32 / w as f32,
+                (i / w) as f32 / (n / w + 1) as f32,
+            );
+            let target = Vec3::new(x * 1.2 - 0.1, 0.0, y * 1.2 - 0.1);
+            let mut ray = match (i / 64) % 8 {
+                // Axis-parallel, straight down, zero components of either sign.
+                0 => {
+                    let z = if rng.below(2) == 0 { 0.0 } else { -0.0 };
+                    Ray::new(target + Vec3::Y, Vec3::new(z, -1.0, z))
+                }
+                // Shadow-like: from points on and above the surface to a light.
+                1 => {
+                    let o = target + Vec3::Y * 0.1 * rng.next_f32();
+                    Ray::segment(o, light - o, 1e-4, 1.0)
+                }
+                // Random directions from the eye.
+                2 => Ray::new(eye, rng.unit_vector()),
+                _ => Ray::new(eye, target - eye),
+            };
+            if rng.below(6) == 0 {
+                let t0 = rng.range_f32(0.0, 0.8);
+                ray = Ray::segment(ray.origin, ray.dir, t0, t0 + rng.range_f32(0.0, 1.0));
+            }
+            out.push(ray);
+        }
+        out
+    }
+
+    fn bits(h: Option<Hit>) -> Option<(u32, u32, u32, u32)> {
+        h.map(|h| (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim))
+    }
+
+    /// The batch (with packets where AVX2 is present) gives every ray the
+    /// single-ray traversal's answer: the same `t` bits, and the same
+    /// triangle, `u` and `v` unless another triangle is hit at exactly the
+    /// same `t` (a tie); the same occlusion; and agrees with brute force up
+    /// to ties. The forced single-ray batch agrees too.
+    #[test]
+    fn packets_equal_single_rays_and_brute_force() {
+        let mut rng = Pcg32::new(2001);
+        let (mut packets, mut hits, mut ties) = (0usize, 0usize, 0usize);
+        for round in 0..6 {
+            let mesh = scene(40 + 13 * round, round as u64);
+            let bvh = Bvh4::<Moller>::build(&mesh, &BuildOptions::default());
+            let brute = BruteForce::<Moller>::new(&mesh);
+            let rays = rays(&mut rng, 5000 + 3 * round);
+            packets += rays.chunks(LANES).filter(|c| coherent(c).is_some()).count();
+            let mut got = vec![None; rays.len()];
+            bvh.intersect_batch(&rays, &mut got);
+            let mut occ = vec![false; rays.len()];
+            bvh.occluded_batch(&rays, &mut occ);
+            SCALAR_ONLY.with(|s| s.set(true));
+            let mut scalar = vec![None; rays.len()];
+            bvh.intersect_batch(&rays, &mut scalar);
+            let mut scalar_occ = vec![false; rays.len()];
+            bvh.occluded_batch(&rays, &mut scalar_occ);
+            SCALAR_ONLY.with(|s| s.set(false));
+            for (i, ray) in rays.iter().enumerate() {
+                let one = bvh.intersect(ray);
+                assert_eq!(bits(scalar[i]), bits(one), "fallback, ray {i}");
+                assert_eq!(scalar_occ[i], bvh.occluded(ray), "fallback, ray {i}");
+                match (got[i], one) {
+                    (Some(a), Some(b)) => {
+                        assert_eq!(a.t.to_bits(), b.t.to_bits(), "ray {i} {ray:?}");
+                        if a.prim != b.prim {
+                            // A tie: the other triangle is hit at the same t.
+                            let t = Ray::segment(ray.origin, ray.dir, a.t, a.t);
+                            let tri = |p: u32| {
+                                let [x, y, z] = mesh.triangle(p as usize);
+                                Moller::precompute(x, y, z)
+                            };
+                            let h = Moller::intersect(&tri(b.prim), &t, &Moller::prepare(ray), a.t);
+                            assert_eq!(h.map(|h| h.t.to_bits()), Some(a.t.to_bits()));
+                            ties += 1;
+                        } else {
+                            assert_eq!(bits(got[i]), bits(one), "ray {i} {ray:?}");
+                        }
+                        hits += 1;
+                    }
+                    (a, b) => assert_eq!(a.is_some(), b.is_some(), "ray {i} {ray:?}"),
+                }
+                assert_eq!(occ[i], one.is_some(), "occlusion, ray {i} {ray:?}");
+                let want = brute.intersect(ray);
+                match (got[i], want) {
+                    (Some(a), Some(b)) => {
+                        let tol = 1e-5 * a.t.abs().max(b.t.abs()).max(1e-6);
+                        assert!((a.t - b.t).abs() <= tol, "brute force, ray {i}");
+                    }
+                    (a, b) => assert_eq!(a.is_some(), b.is_some(), "brute force, ray {i}"),
+                }
+            }
+        }
+        assert!(packets > 1200, "too few coherent packets: {packets}");
+        assert!(hits > 10_000, "too few hits: {hits}");
+        eprintln!("{packets} packets, {hits} hits, {ties} ties");
+    }
+}
