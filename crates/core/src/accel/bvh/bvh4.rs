@@ -162,7 +162,7 @@ impl<T: TriangleTest> Bvh4<T> {
             Leaves::Packed(packs) if self.stats.triangle_refs > 0 => Some(super::packet::View {
                 nodes: &self.nodes,
                 root: self.root,
-                packs: packs.packs(),
+                leaves: packs,
             }),
             _ => None,
         }

@@ -19,14 +19,17 @@
 //! triangle only at exactly the same `t`, a tie the traversal order
 //! decides), and the same occlusion answer.
 
+use super::box4::RayBox4;
 use super::bvh4::Bvh4;
 use super::node4::{Child4, Node4};
-use super::tri4::Tri4;
+use super::tri4::{Ray4, Tri4Leaves};
+use super::MAX_DEPTH;
 use crate::accel::{Accel, BATCH_GRAIN};
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::tri::{Moller, TriangleTest};
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 
 /// Rays per packet.
 pub(crate) const LANES: usize = 8;
@@ -77,10 +80,16 @@ fn use_packets<T: TriangleTest>(bvh: &Bvh4<T>) -> bool {
     bvh.packet_view().is_some() && avx2()
 }
 
-/// AVX2 on this CPU (and packets not switched off by the tests).
+/// AVX2 on this CPU, and packets not switched off: by the tests, or by
+/// the environment variable `RAYKIT_PACKETS=0` (read once; for measuring
+/// the single-ray path in the same binary).
 fn avx2() -> bool {
     #[cfg(test)]
     if tests::SCALAR_ONLY.with(|s| s.get()) {
+        return false;
+    }
+    static OFF: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    if *OFF.get_or_init(|| std::env::var("RAYKIT_PACKETS").is_ok_and(|v| v == "0")) {
         return false;
     }
     #[cfg(target_arch = "x86_64")]
@@ -119,12 +128,18 @@ fn packet(rays: &[Ray], oct: u32) -> Packet8 {
     };
     for (l, ray) in rays.iter().enumerate() {
         let (o, d, id) = (ray.origin, ray.dir, ray.inv_dir);
-        for a in 0..3 {
-            p.origin[a][l] = o[a];
-            p.dir[a][l] = d[a];
-            p.dir_abs[a][l] = d[a].abs();
-            p.inv_dir[a][l] = id[a];
-        }
+        p.origin[0][l] = o.x;
+        p.origin[1][l] = o.y;
+        p.origin[2][l] = o.z;
+        p.dir[0][l] = d.x;
+        p.dir[1][l] = d.y;
+        p.dir[2][l] = d.z;
+        p.dir_abs[0][l] = d.x.abs();
+        p.dir_abs[1][l] = d.y.abs();
+        p.dir_abs[2][l] = d.z.abs();
+        p.inv_dir[0][l] = id.x;
+        p.inv_dir[1][l] = id.y;
+        p.inv_dir[2][l] = id.z;
         let scale = Moller::prepare(ray);
         p.scale[l] = scale;
         // As `Ray4::new`: the scalar test's `0.75 * scale * ...` multiplies
@@ -159,7 +174,7 @@ fn packet_intersect<T: TriangleTest>(
         let mut out = Hits8::default();
         // SAFETY: packets are used only when `is_x86_feature_detected!`
         // found AVX2 (`use_packets`).
-        unsafe { traverse::<false>(&view, &p, &mut out) };
+        unsafe { traverse::<false>(&view, rays, &p, &mut out) };
         for (l, h) in hits.iter_mut().enumerate() {
             *h = (out.hit & (1 << l) != 0).then_some(Hit {
                 t: out.t[l],
@@ -187,7 +202,7 @@ fn packet_occluded<T: TriangleTest>(bvh: &Bvh4<T>, rays: &[Ray], occluded: &mut 
         let p = packet(rays, oct);
         let mut out = Hits8::default();
         // SAFETY: as in `packet_intersect`.
-        unsafe { traverse::<true>(&view, &p, &mut out) };
+        unsafe { traverse::<true>(&view, rays, &p, &mut out) };
         for (l, o) in occluded.iter_mut().enumerate() {
             *o = out.hit & (1 << l) != 0;
         }
@@ -201,13 +216,97 @@ fn packet_occluded<T: TriangleTest>(bvh: &Bvh4<T>, rays: &[Ray], occluded: &mut 
 }
 
 /// What the packet traversal reads of a [`Bvh4`] over Möller (issue 8,
-/// item 4): the nodes, the root and the `tri4` packs (Wald et al. 2014).
+/// item 4): the nodes, the root and the `tri4` leaves (Wald et al. 2014).
 #[derive(Clone, Copy)]
 pub(crate) struct View<'a> {
     pub nodes: &'a [Node4],
     pub root: Child4,
-    pub packs: &'a [Tri4],
+    pub leaves: &'a Tri4Leaves,
 }
+
+/// Traverse the subtree `start` with one ray, as [`Bvh4`]'s single-ray
+/// traversal does from the root (same box test, same leaf test, near to
+/// far), from the ray's current `tfar` and nearest hit `best`: the packet
+/// hands its last few active rays over to this, as the hybrid traversal of
+/// Benthin, Wald, Woop, Ernst, Mark, "Combining single and packet ray
+/// tracing for arbitrary ray distributions on the Intel MIC architecture"
+/// (2012) does. Returns true for an any-hit query's hit (`ANY`).
+#[inline(always)]
+pub(crate) fn single_subtree<const ANY: bool>(
+    view: &View,
+    start: Child4,
+    ray: &Ray,
+    tfar: &mut f32,
+    best: &mut Option<Hit>,
+) -> bool {
+    let rb = RayBox4::new(ray);
+    let r4 = Ray4::new(ray);
+    let mut stack = [const { MaybeUninit::<(Child4, f32)>::uninit() }; STACK];
+    let mut sp = 0usize;
+    let mut cur = start;
+    loop {
+        if cur.count > 0 {
+            let (first, count) = (cur.index as usize, cur.count as usize);
+            if view.leaves.test::<ANY>(first, count, ray, &r4, tfar, best) {
+                return true;
+            }
+        } else {
+            let node = &view.nodes[cur.index as usize];
+            let h = node.boxes.entries(&rb, ray.tnear, *tfar);
+            let mut mask = h.mask;
+            if ANY && mask != 0 {
+                // Any hit ends the query: no ordering needed.
+                cur = node.child[mask.trailing_zeros() as usize];
+                mask &= mask - 1;
+                while mask != 0 {
+                    let s = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    stack[sp].write((node.child[s], h.t[s]));
+                    sp += 1;
+                }
+                continue;
+            }
+            if mask != 0 {
+                // Entered children, farthest first.
+                let mut order = [0usize; 4];
+                let mut n = 0;
+                while mask != 0 {
+                    let s = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let mut j = n;
+                    while j > 0 && h.t[order[j - 1]] < h.t[s] {
+                        order[j] = order[j - 1];
+                        j -= 1;
+                    }
+                    order[j] = s;
+                    n += 1;
+                }
+                for &s in &order[..n - 1] {
+                    stack[sp].write((node.child[s], h.t[s]));
+                    sp += 1;
+                }
+                cur = node.child[order[n - 1]];
+                continue;
+            }
+        }
+        loop {
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            // SAFETY: every entry below the stack pointer was written by a
+            // push above (`sp` grows only right after a write).
+            let (c, t) = unsafe { stack[sp].assume_init() };
+            if t <= *tfar {
+                cur = c;
+                break;
+            }
+        }
+    }
+}
+
+/// Traversal stack entries: each node pushes at most three.
+pub(crate) const STACK: usize = 3 * MAX_DEPTH + 1;
 
 #[cfg(test)]
 pub(crate) mod tests {

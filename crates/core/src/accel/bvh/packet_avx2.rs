@@ -26,17 +26,19 @@
 
 use super::node4::Child4;
 use super::node_box::NodeBox;
-use super::packet::View;
+use super::packet::{single_subtree, View, STACK};
 use super::tri4::{Tri4, CAP};
-use super::MAX_DEPTH;
+use crate::hit::Hit;
+use crate::ray::Ray;
 use std::arch::x86_64::*;
 use std::mem::MaybeUninit;
 
 /// Rays per packet.
 pub(crate) use super::packet::LANES;
 
-/// Stack entries: each node pushes at most three.
-const STACK: usize = 3 * MAX_DEPTH + 1;
+/// Active rays at or below which a packet hands its rays to the
+/// single-ray traversal.
+const SWITCH: u32 = 2;
 
 /// Unit roundoff of `f32`, as in the scalar test.
 const U: f32 = f32::EPSILON * 0.5;
@@ -97,7 +99,7 @@ fn ld(row: &[f32; LANES]) -> __m256 {
 /// The CPU must support AVX2 (checked by the caller with
 /// `is_x86_feature_detected!`).
 #[target_feature(enable = "avx2")]
-pub(crate) fn traverse<const ANY: bool>(view: &View, p: &Packet8, out: &mut Hits8) {
+pub(crate) fn traverse<const ANY: bool>(view: &View, rays: &[Ray], p: &Packet8, out: &mut Hits8) {
     let mut tfar = ld(&p.tfar);
     let nan = _mm256_set1_ps(f32::NAN);
     let inf = _mm256_set1_ps(f32::INFINITY);
@@ -112,14 +114,67 @@ pub(crate) fn traverse<const ANY: bool>(view: &View, p: &Packet8, out: &mut Hits
     let mut stack_t = [const { MaybeUninit::<[f32; LANES]>::uninit() }; STACK];
     let mut stack_c = [const { MaybeUninit::<Child4>::uninit() }; STACK];
     let mut sp = 0usize;
-    let rays = RayLanes::load(p);
+    let lanes = RayLanes::load(p);
     'walk: loop {
-        if cur.count > 0 {
+        let am = _mm256_movemask_ps(act) as u32;
+        if am.count_ones() <= SWITCH {
+            // Few rays left in this subtree: one at a time (hybrid
+            // traversal, Benthin et al. 2012).
+            let mut tf = [0f32; LANES];
+            // SAFETY: `tf` is eight floats; unaligned store.
+            unsafe { _mm256_storeu_ps(tf.as_mut_ptr(), tfar) };
+            if ANY {
+                for l in Lanes(am) {
+                    if single_subtree::<true>(view, cur, &rays[l], &mut tf[l], &mut None) {
+                        tf[l] = f32::NAN;
+                        occluded |= 1 << l;
+                    }
+                }
+                tfar = ld(&tf);
+                if _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_ORD_Q>(tfar, tfar)) == 0 {
+                    break 'walk;
+                }
+            } else {
+                let mut spill = Hits8::default();
+                // SAFETY: each destination is an array of eight lanes of
+                // four bytes; unaligned stores.
+                unsafe {
+                    _mm256_storeu_ps(spill.u.as_mut_ptr(), u);
+                    _mm256_storeu_ps(spill.v.as_mut_ptr(), v);
+                    _mm256_storeu_si256(spill.prim.as_mut_ptr() as *mut __m256i, prim);
+                }
+                let mut hm = _mm256_movemask_ps(has) as u32;
+                for l in Lanes(am) {
+                    let mut best = (hm & (1 << l) != 0).then(|| Hit {
+                        t: tf[l],
+                        u: spill.u[l],
+                        v: spill.v[l],
+                        prim: spill.prim[l],
+                    });
+                    single_subtree::<false>(view, cur, &rays[l], &mut tf[l], &mut best);
+                    if let Some(h) = best {
+                        tf[l] = h.t;
+                        spill.u[l] = h.u;
+                        spill.v[l] = h.v;
+                        spill.prim[l] = h.prim;
+                        hm |= 1 << l;
+                    }
+                }
+                tfar = ld(&tf);
+                u = ld(&spill.u);
+                v = ld(&spill.v);
+                // SAFETY: `spill.prim` is eight lanes of four bytes.
+                prim = unsafe { _mm256_loadu_si256(spill.prim.as_ptr() as *const __m256i) };
+                let bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+                let set = _mm256_and_si256(_mm256_set1_epi32(hm as i32), bit);
+                has = _mm256_castsi256_ps(_mm256_cmpeq_epi32(set, bit));
+            }
+        } else if cur.count > 0 {
             let (first, count) = (cur.index as usize, cur.count as usize);
             let mut left = count;
-            for pack in &view.packs[first..first + count.div_ceil(4)] {
+            for pack in &view.leaves.packs()[first..first + count.div_ceil(4)] {
                 for k in 0..left.min(4) {
-                    let h = tri_hits(pack, k, &rays, tfar, act);
+                    let h = tri_hits(pack, k, &lanes, tfar, act);
                     let Some((mask, t, tu, tv)) = h else { continue };
                     if ANY {
                         occluded |= _mm256_movemask_ps(mask) as u32;
@@ -151,27 +206,35 @@ pub(crate) fn traverse<const ANY: bool>(view: &View, p: &Packet8, out: &mut Hits
             }
         } else {
             let node = &view.nodes[cur.index as usize];
-            let mut ent = [inf; 4];
-            let mut tmin = [f32::INFINITY; 4];
+            let mut ent = [nan; 4];
+            let mut near = [inf; 4];
             let mut slots = 0u32;
             for s in 0..4 {
                 if node.child[s] == Child4::EMPTY {
                     break;
                 }
-                let (enter, m) = box_hits(&node.boxes.planes, s, &rays, p, tfar, act);
-                if _mm256_movemask_ps(m) != 0 {
-                    slots |= 1 << s;
-                    ent[s] = _mm256_blendv_ps(nan, enter, m);
-                    tmin[s] = hmin(_mm256_blendv_ps(inf, enter, m));
-                }
+                let (enter, m) = box_hits(&node.boxes.planes, s, &lanes, p, tfar, act);
+                slots |= ((_mm256_movemask_ps(m) != 0) as u32) << s;
+                ent[s] = _mm256_blendv_ps(nan, enter, m);
+                near[s] = _mm256_blendv_ps(inf, enter, m);
             }
             if slots != 0 {
-                // Entered children, farthest first.
+                let first = slots.trailing_zeros() as usize;
+                if slots & (slots - 1) == 0 {
+                    // One child entered: no ordering.
+                    cur = node.child[first];
+                    act = _mm256_cmp_ps::<_CMP_LE_OQ>(ent[first], tfar);
+                    continue;
+                }
+                // Entered children, farthest first by the packet's nearest
+                // entry.
+                let mut tmin = [0f32; 4];
                 let mut order = [0usize; 4];
                 let mut n = 0;
                 while slots != 0 {
                     let s = slots.trailing_zeros() as usize;
                     slots &= slots - 1;
+                    tmin[s] = hmin(near[s]);
                     let mut j = n;
                     while j > 0 && tmin[order[j - 1]] < tmin[s] {
                         order[j] = order[j - 1];
@@ -225,6 +288,22 @@ pub(crate) fn traverse<const ANY: bool>(view: &View, p: &Packet8, out: &mut Hits
             _mm256_storeu_ps(out.v.as_mut_ptr(), v);
             _mm256_storeu_si256(out.prim.as_mut_ptr() as *mut __m256i, prim);
         }
+    }
+}
+
+/// The set bits of a lane mask, lowest first.
+struct Lanes(u32);
+
+impl Iterator for Lanes {
+    type Item = usize;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<usize> {
+        (self.0 != 0).then(|| {
+            let l = self.0.trailing_zeros() as usize;
+            self.0 &= self.0 - 1;
+            l
+        })
     }
 }
 
