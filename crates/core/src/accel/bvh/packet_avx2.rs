@@ -36,10 +36,6 @@ use std::mem::MaybeUninit;
 /// Rays per packet.
 pub(crate) use super::packet::LANES;
 
-/// Active rays at or below which a packet hands its rays to the
-/// single-ray traversal.
-const SWITCH: u32 = 2;
-
 /// Unit roundoff of `f32`, as in the scalar test.
 const U: f32 = f32::EPSILON * 0.5;
 
@@ -92,14 +88,21 @@ fn ld(row: &[f32; LANES]) -> __m256 {
     unsafe { _mm256_loadu_ps(row.as_ptr()) }
 }
 
-/// Traverse `view` with the packet `p` (nearest hits for `ANY = false`,
-/// occlusion for `ANY = true`), answers in `out`.
+/// Traverse `view` with the packet `p` of `rays` (nearest hits for
+/// `ANY = false`, occlusion for `ANY = true`), answers in `out`; at a node
+/// or leaf with `switch` or fewer active rays, they go on one by one.
 ///
 /// # Safety
 /// The CPU must support AVX2 (checked by the caller with
 /// `is_x86_feature_detected!`).
 #[target_feature(enable = "avx2")]
-pub(crate) fn traverse<const ANY: bool>(view: &View, rays: &[Ray], p: &Packet8, out: &mut Hits8) {
+pub(crate) fn traverse<const ANY: bool>(
+    view: &View,
+    rays: &[Ray],
+    p: &Packet8,
+    switch: u32,
+    out: &mut Hits8,
+) {
     let mut tfar = ld(&p.tfar);
     let nan = _mm256_set1_ps(f32::NAN);
     let inf = _mm256_set1_ps(f32::INFINITY);
@@ -117,7 +120,7 @@ pub(crate) fn traverse<const ANY: bool>(view: &View, rays: &[Ray], p: &Packet8, 
     let lanes = RayLanes::load(p);
     'walk: loop {
         let am = _mm256_movemask_ps(act) as u32;
-        if am.count_ones() <= SWITCH {
+        if am.count_ones() <= switch {
             // Few rays left in this subtree: one at a time (hybrid
             // traversal, Benthin et al. 2012).
             let mut tf = [0f32; LANES];
