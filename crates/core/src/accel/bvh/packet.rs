@@ -139,12 +139,10 @@ fn packet(rays: &[Ray], oct: u32) -> Packet8 {
     let mut p = Packet8 {
         origin: [[0.0; LANES]; 3],
         dir: [[1.0; LANES]; 3],
-        dir_abs: [[1.0; LANES]; 3],
         inv_dir: [[1.0; LANES]; 3],
         tnear: [0.0; LANES],
         tfar: [f32::NAN; LANES],
         scale: [0.0; LANES],
-        clear_scale: [0.0; LANES],
         near: [0, 1, 2].map(|a| 2 * a + ((oct >> a) & 1) as usize),
     };
     for (l, ray) in rays.iter().enumerate() {
@@ -155,17 +153,10 @@ fn packet(rays: &[Ray], oct: u32) -> Packet8 {
         p.dir[0][l] = d.x;
         p.dir[1][l] = d.y;
         p.dir[2][l] = d.z;
-        p.dir_abs[0][l] = d.x.abs();
-        p.dir_abs[1][l] = d.y.abs();
-        p.dir_abs[2][l] = d.z.abs();
         p.inv_dir[0][l] = id.x;
         p.inv_dir[1][l] = id.y;
         p.inv_dir[2][l] = id.z;
-        let scale = Moller::prepare(ray);
-        p.scale[l] = scale;
-        // As `Ray4::new`: the scalar test's `0.75 * scale * ...` multiplies
-        // left to right.
-        p.clear_scale[l] = 0.75 * scale;
+        p.scale[l] = Moller::prepare(ray);
         p.tnear[l] = ray.tnear;
         p.tfar[l] = ray.tfar;
     }

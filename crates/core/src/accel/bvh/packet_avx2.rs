@@ -41,19 +41,18 @@ const U: f32 = f32::EPSILON * 0.5;
 
 /// Eight rays in structure-of-arrays layout, prepared as [`super::tri4`]'s
 /// `Ray4` and [`super::box4`]'s `RayBox4` prepare one ray each (same
-/// values per lane), plus the plane rows met first, common to the packet.
+/// values per lane; `|d|` and `0.75 · scale` are formed in registers), plus
+/// the plane rows met first, common to the packet.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub(crate) struct Packet8 {
     pub origin: [[f32; LANES]; 3],
     pub dir: [[f32; LANES]; 3],
-    pub dir_abs: [[f32; LANES]; 3],
     pub inv_dir: [[f32; LANES]; 3],
     pub tnear: [f32; LANES],
     /// `tfar` per lane; NaN for a lane out of play.
     pub tfar: [f32; LANES],
     pub scale: [f32; LANES],
-    pub clear_scale: [f32; LANES],
     /// Per axis, the row of [`super::box4::Box4::planes`] met first.
     pub near: [usize; 3],
 }
@@ -325,14 +324,20 @@ impl RayLanes {
     #[inline]
     #[target_feature(enable = "avx2")]
     fn load(p: &Packet8) -> Self {
+        let d = [ld(&p.dir[0]), ld(&p.dir[1]), ld(&p.dir[2])];
+        let abs_bits = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff));
+        let abs = |x: __m256| _mm256_and_ps(x, abs_bits);
+        let scale = ld(&p.scale);
         RayLanes {
             o: [ld(&p.origin[0]), ld(&p.origin[1]), ld(&p.origin[2])],
-            d: [ld(&p.dir[0]), ld(&p.dir[1]), ld(&p.dir[2])],
-            d_abs: [ld(&p.dir_abs[0]), ld(&p.dir_abs[1]), ld(&p.dir_abs[2])],
+            d,
+            d_abs: [abs(d[0]), abs(d[1]), abs(d[2])],
             inv: [ld(&p.inv_dir[0]), ld(&p.inv_dir[1]), ld(&p.inv_dir[2])],
             tnear: ld(&p.tnear),
-            scale: ld(&p.scale),
-            clear_scale: ld(&p.clear_scale),
+            scale,
+            // As `Ray4::new`: the scalar test's `0.75 * scale * ...`
+            // multiplies left to right, so this first product is the same.
+            clear_scale: _mm256_mul_ps(_mm256_set1_ps(0.75), scale),
         }
     }
 }
