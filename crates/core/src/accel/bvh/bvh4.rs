@@ -155,7 +155,7 @@ impl<T: TriangleTest> Bvh4<T> {
         }
     }
 
-    /// What the packet traversal of [`super::packet`] reads: `None` unless
+    /// What the packet traversal of `bvh/packet.rs` reads: `None` unless
     /// the leaves are `tri4` packs and the tree holds triangles.
     pub(crate) fn packet_view(&self) -> Option<super::packet::View<'_>> {
         match &self.leaves {
@@ -362,7 +362,7 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
     }
 
     /// Coherent packets of eight over Möller (issue 8, item 4; see
-    /// [`super::packet`]), single rays otherwise.
+    /// `bvh/packet.rs`), single rays otherwise.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         super::packet::intersect_batch(self, rays, hits);
     }
