@@ -13,6 +13,7 @@ use crate::tiles::map_pixels;
 use raykit_core::glam::Vec3;
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Camera, Hit, Light, Ray, TriangleMesh};
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// The scene a frame is rendered from.
@@ -131,6 +132,11 @@ pub fn render_whitted(
             rays.ray(fx, fy)
         };
         let primary = match opts.primary {
+            // The wavefront integrator traces its primaries as one batch
+            // itself; the recursive one gets them here as one batch too.
+            PrimaryMode::Traced if matches!(opts.integrator, IntegratorKind::Recursive) => {
+                Some(traced_primaries(&tracer, width, height, &ray_of))
+            }
             PrimaryMode::Traced => None,
             PrimaryMode::Rasterized => {
                 let t = Instant::now();
@@ -177,6 +183,26 @@ pub fn render_whitted(
         first_hits,
         stats,
     })
+}
+
+/// The nearest hit of every pixel's camera ray (from `ray_of`), row-major,
+/// through [`raykit_core::Accel::intersect_batch`]: consecutive pixels of a
+/// row go together, so a `bvh4` over Möller traces them as coherent packets
+/// (issue 8, item 4; Wald et al. 2001), with the single-ray answers.
+fn traced_primaries(
+    tracer: &Tracer,
+    width: u32,
+    height: u32,
+    ray_of: &(dyn Fn(u32, u32) -> Ray + Sync),
+) -> Vec<Option<Hit>> {
+    let rays: Vec<Ray> = (0..height)
+        .into_par_iter()
+        .flat_map_iter(|y| (0..width).map(move |x| ray_of(x, y)))
+        .collect();
+    let mut hits = vec![None; rays.len()];
+    tracer.accel.intersect_batch(&rays, &mut hits);
+    tracer.counts.primary.add(rays.len() as u64);
+    hits
 }
 
 /// One sample of every pixel (rays from `ray_of`), depth-first per path,

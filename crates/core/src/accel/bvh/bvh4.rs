@@ -155,6 +155,19 @@ impl<T: TriangleTest> Bvh4<T> {
         }
     }
 
+    /// What the packet traversal of `bvh/packet.rs` reads: `None` unless
+    /// the leaves are `tri4` packs and the tree holds triangles.
+    pub(crate) fn packet_view(&self) -> Option<super::packet::View<'_>> {
+        match &self.leaves {
+            Leaves::Packed(packs) if self.stats.triangle_refs > 0 => Some(super::packet::View {
+                nodes: &self.nodes,
+                root: self.root,
+                leaves: packs,
+            }),
+            _ => None,
+        }
+    }
+
     #[inline(always)]
     fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
         if self.stats.triangle_refs == 0 {
@@ -346,6 +359,17 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
 
     fn stats(&self) -> AccelStats {
         self.stats.clone()
+    }
+
+    /// Coherent packets of eight over Möller (issue 8, item 4; see
+    /// `bvh/packet.rs`), single rays otherwise.
+    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        super::packet::intersect_batch(self, rays, hits);
+    }
+
+    /// As [`Accel::intersect_batch`], for occlusion.
+    fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
+        super::packet::occluded_batch(self, rays, occluded);
     }
 }
 

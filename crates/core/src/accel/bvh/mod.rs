@@ -8,6 +8,11 @@
 //!   box tests at once with SSE, ordered stack traversal; over Möller its
 //!   leaves are packs of four triangles tested at once (`tri4`, Embree's
 //!   `triangle4`).
+//! - `packet` (with `packet_avx2`): the coherent-ray path behind
+//!   [`Bvh4`]'s `intersect_batch` / `occluded_batch` over Möller (issue 8,
+//!   item 4): packets of eight rays of one octant traced together with AVX2
+//!   (Wald et al. 2001), handing their last rays to the single-ray
+//!   traversal (Benthin et al. 2012), with the single-ray answers.
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
 //!   indices, traversed without a stack.
 
@@ -19,6 +24,9 @@ mod bvh4;
 pub mod lbvh;
 mod node4;
 mod node_box;
+mod packet;
+#[cfg(target_arch = "x86_64")]
+mod packet_avx2;
 pub(crate) use node_box::NodeBox;
 mod threaded;
 mod tri4;

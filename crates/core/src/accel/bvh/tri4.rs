@@ -219,6 +219,11 @@ impl Tri4Leaves {
         Tri4Leaves { packs }
     }
 
+    /// The packs, for the packet traversal of [`super::packet`].
+    pub(crate) fn packs(&self) -> &[Tri4] {
+        &self.packs
+    }
+
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         std::mem::size_of_val(&self.packs[..])

@@ -1,0 +1,493 @@
+//! The coherent-ray path of [`super::Bvh4`] over Möller (issue 8, item 4):
+//! `intersect_batch` and `occluded_batch` cut the batch into packets of
+//! eight consecutive rays and trace each coherent packet together through
+//! the tree (Wald et al. 2001 coherent ray packets; Embree's packet
+//! kernels, Wald et al. 2014), with the AVX2 kernels of
+//! [`super::packet_avx2`].
+//!
+//! A packet is coherent when its eight rays share the signs of their
+//! reciprocal directions (one octant): the box test then uses the same near
+//! planes for every lane, which is what makes each lane's box test the
+//! single-ray one. Other packets, batches without AVX2 (detected once per
+//! batch) and trees with other leaves take the single-ray path, one ray
+//! after the other. Incoherent batches (random directions) almost never
+//! form a coherent packet, so they pay only the check.
+//!
+//! Every ray gets the single-ray traversal's answer: the same nearest `t`
+//! bit for bit (the box tests are the same per lane and conservative, the
+//! triangle tests the same), `u`, `v` and triangle of the same hit (another
+//! triangle only at exactly the same `t`, a tie the traversal order
+//! decides), and the same occlusion answer.
+
+use super::box4::RayBox4;
+use super::bvh4::Bvh4;
+use super::node4::{Child4, Node4};
+use super::tri4::{Ray4, Tri4Leaves};
+use super::MAX_DEPTH;
+use crate::accel::{Accel, BATCH_GRAIN};
+use crate::hit::Hit;
+use crate::ray::Ray;
+use crate::tri::{Moller, TriangleTest};
+use rayon::prelude::*;
+use std::mem::MaybeUninit;
+
+/// Rays per packet.
+pub(crate) const LANES: usize = 8;
+
+#[cfg(target_arch = "x86_64")]
+use super::packet_avx2::{traverse, Hits8, Packet8};
+
+/// Active rays at or below which a packet hands its rays over to the
+/// single-ray traversal (Benthin et al. 2012's hybrid; measured on the full
+/// dragon: 2 beat 0 and 3 on shadow rays, all equal on primaries).
+const SWITCH: u32 = 2;
+
+/// Nearest hits of `rays` through `bvh`: coherent packets of eight together
+/// (Wald et al. 2001), the rest one by one; in parallel over the rayon
+/// pool.
+pub(crate) fn intersect_batch<T: TriangleTest>(
+    bvh: &Bvh4<T>,
+    rays: &[Ray],
+    hits: &mut [Option<Hit>],
+) {
+    intersect_batch_with(bvh, rays, hits, use_packets(bvh).then_some(SWITCH));
+}
+
+/// [`intersect_batch`] with packets handing over at `switch` active rays,
+/// or without packets (`None`; the caller has checked for AVX2 otherwise).
+fn intersect_batch_with<T: TriangleTest>(
+    bvh: &Bvh4<T>,
+    rays: &[Ray],
+    hits: &mut [Option<Hit>],
+    switch: Option<u32>,
+) {
+    assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+    rays.par_chunks(LANES)
+        .zip(hits.par_chunks_mut(LANES))
+        .with_min_len(BATCH_GRAIN / LANES)
+        .for_each(|(r, h)| {
+            if !switch.is_some_and(|s| packet_intersect(bvh, r, h, s)) {
+                for (ray, hit) in r.iter().zip(h) {
+                    *hit = bvh.intersect(ray);
+                }
+            }
+        });
+}
+
+/// Occlusion of `rays` through `bvh`, packets as in [`intersect_batch`].
+pub(crate) fn occluded_batch<T: TriangleTest>(bvh: &Bvh4<T>, rays: &[Ray], occluded: &mut [bool]) {
+    occluded_batch_with(bvh, rays, occluded, use_packets(bvh).then_some(SWITCH));
+}
+
+/// [`occluded_batch`] with an explicit hand-over (see
+/// [`intersect_batch_with`]).
+fn occluded_batch_with<T: TriangleTest>(
+    bvh: &Bvh4<T>,
+    rays: &[Ray],
+    occluded: &mut [bool],
+    switch: Option<u32>,
+) {
+    assert_eq!(rays.len(), occluded.len(), "one result per ray");
+    rays.par_chunks(LANES)
+        .zip(occluded.par_chunks_mut(LANES))
+        .with_min_len(BATCH_GRAIN / LANES)
+        .for_each(|(r, o)| {
+            if !switch.is_some_and(|s| packet_occluded(bvh, r, o, s)) {
+                for (ray, occ) in r.iter().zip(o) {
+                    *occ = bvh.occluded(ray);
+                }
+            }
+        });
+}
+
+/// Whether this batch may use packets: packed leaves and AVX2.
+fn use_packets<T: TriangleTest>(bvh: &Bvh4<T>) -> bool {
+    bvh.packet_view().is_some() && avx2()
+}
+
+/// AVX2 on this CPU, and packets not switched off by the environment
+/// variable `RAYKIT_PACKETS=0` (read once; for measuring the single-ray
+/// path in the same binary).
+fn avx2() -> bool {
+    static OFF: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    if *OFF.get_or_init(|| std::env::var("RAYKIT_PACKETS").is_ok_and(|v| v == "0")) {
+        return false;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// The octant of a ray: the sign bits of its reciprocal direction.
+#[inline(always)]
+fn octant(ray: &Ray) -> u32 {
+    let id = ray.inv_dir;
+    (id.x.is_sign_negative() as u32)
+        | (id.y.is_sign_negative() as u32) << 1
+        | (id.z.is_sign_negative() as u32) << 2
+}
+
+/// The packet of `rays` (one to eight, all of octant `oct`); lanes past the
+/// end are out of play.
+#[cfg(target_arch = "x86_64")]
+fn packet(rays: &[Ray], oct: u32) -> Packet8 {
+    let mut p = Packet8 {
+        origin: [[0.0; LANES]; 3],
+        dir: [[1.0; LANES]; 3],
+        inv_dir: [[1.0; LANES]; 3],
+        tnear: [0.0; LANES],
+        tfar: [f32::NAN; LANES],
+        scale: [0.0; LANES],
+        near: [0, 1, 2].map(|a| 2 * a + ((oct >> a) & 1) as usize),
+    };
+    for (l, ray) in rays.iter().enumerate() {
+        let (o, d, id) = (ray.origin, ray.dir, ray.inv_dir);
+        p.origin[0][l] = o.x;
+        p.origin[1][l] = o.y;
+        p.origin[2][l] = o.z;
+        p.dir[0][l] = d.x;
+        p.dir[1][l] = d.y;
+        p.dir[2][l] = d.z;
+        p.inv_dir[0][l] = id.x;
+        p.inv_dir[1][l] = id.y;
+        p.inv_dir[2][l] = id.z;
+        p.scale[l] = Moller::prepare(ray);
+        p.tnear[l] = ray.tnear;
+        p.tfar[l] = ray.tfar;
+    }
+    p
+}
+
+/// The octant shared by all of `rays`, if they share one.
+#[inline(always)]
+fn coherent(rays: &[Ray]) -> Option<u32> {
+    let oct = octant(&rays[0]);
+    rays[1..].iter().all(|r| octant(r) == oct).then_some(oct)
+}
+
+/// Trace `rays` (at most eight) as one packet if coherent; false when not
+/// (nothing written).
+fn packet_intersect<T: TriangleTest>(
+    bvh: &Bvh4<T>,
+    rays: &[Ray],
+    hits: &mut [Option<Hit>],
+    switch: u32,
+) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let (Some(view), Some(oct)) = (bvh.packet_view(), coherent(rays)) else {
+            return false;
+        };
+        let p = packet(rays, oct);
+        let mut out = Hits8::default();
+        // SAFETY: packets are used only when `is_x86_feature_detected!`
+        // found AVX2 (`use_packets`).
+        unsafe { traverse::<false>(&view, rays, &p, switch, &mut out) };
+        for (l, h) in hits.iter_mut().enumerate() {
+            *h = (out.hit & (1 << l) != 0).then_some(Hit {
+                t: out.t[l],
+                u: out.u[l],
+                v: out.v[l],
+                prim: out.prim[l],
+            });
+        }
+        true
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (bvh, rays, hits, switch);
+        false
+    }
+}
+
+/// As [`packet_intersect`], for occlusion.
+fn packet_occluded<T: TriangleTest>(
+    bvh: &Bvh4<T>,
+    rays: &[Ray],
+    occluded: &mut [bool],
+    switch: u32,
+) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let (Some(view), Some(oct)) = (bvh.packet_view(), coherent(rays)) else {
+            return false;
+        };
+        let p = packet(rays, oct);
+        let mut out = Hits8::default();
+        // SAFETY: as in `packet_intersect`.
+        unsafe { traverse::<true>(&view, rays, &p, switch, &mut out) };
+        for (l, o) in occluded.iter_mut().enumerate() {
+            *o = out.hit & (1 << l) != 0;
+        }
+        true
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (bvh, rays, occluded, switch);
+        false
+    }
+}
+
+/// What the packet traversal reads of a [`Bvh4`] over Möller (issue 8,
+/// item 4): the nodes, the root and the `tri4` leaves (Wald et al. 2014).
+#[derive(Clone, Copy)]
+pub(crate) struct View<'a> {
+    pub nodes: &'a [Node4],
+    pub root: Child4,
+    pub leaves: &'a Tri4Leaves,
+}
+
+/// Traverse the subtree `start` with one ray, as [`Bvh4`]'s single-ray
+/// traversal does from the root (same box test, same leaf test, near to
+/// far), from the ray's current `tfar` and nearest hit `best`: the packet
+/// hands its last few active rays over to this, as the hybrid traversal of
+/// Benthin, Wald, Woop, Ernst, Mark, "Combining single and packet ray
+/// tracing for arbitrary ray distributions on the Intel MIC architecture"
+/// (2012) does. Returns true for an any-hit query's hit (`ANY`).
+#[inline(always)]
+pub(crate) fn single_subtree<const ANY: bool>(
+    view: &View,
+    start: Child4,
+    ray: &Ray,
+    tfar: &mut f32,
+    best: &mut Option<Hit>,
+) -> bool {
+    let rb = RayBox4::new(ray);
+    let r4 = Ray4::new(ray);
+    let mut stack = [const { MaybeUninit::<(Child4, f32)>::uninit() }; STACK];
+    let mut sp = 0usize;
+    let mut cur = start;
+    loop {
+        if cur.count > 0 {
+            let (first, count) = (cur.index as usize, cur.count as usize);
+            if view.leaves.test::<ANY>(first, count, ray, &r4, tfar, best) {
+                return true;
+            }
+        } else {
+            let node = &view.nodes[cur.index as usize];
+            let h = node.boxes.entries(&rb, ray.tnear, *tfar);
+            let mut mask = h.mask;
+            if ANY && mask != 0 {
+                // Any hit ends the query: no ordering needed.
+                cur = node.child[mask.trailing_zeros() as usize];
+                mask &= mask - 1;
+                while mask != 0 {
+                    let s = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    stack[sp].write((node.child[s], h.t[s]));
+                    sp += 1;
+                }
+                continue;
+            }
+            if mask != 0 {
+                // Entered children, farthest first.
+                let mut order = [0usize; 4];
+                let mut n = 0;
+                while mask != 0 {
+                    let s = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let mut j = n;
+                    while j > 0 && h.t[order[j - 1]] < h.t[s] {
+                        order[j] = order[j - 1];
+                        j -= 1;
+                    }
+                    order[j] = s;
+                    n += 1;
+                }
+                for &s in &order[..n - 1] {
+                    stack[sp].write((node.child[s], h.t[s]));
+                    sp += 1;
+                }
+                cur = node.child[order[n - 1]];
+                continue;
+            }
+        }
+        loop {
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            // SAFETY: every entry below the stack pointer was written by a
+            // push above (`sp` grows only right after a write).
+            let (c, t) = unsafe { stack[sp].assume_init() };
+            if t <= *tfar {
+                cur = c;
+                break;
+            }
+        }
+    }
+}
+
+/// Traversal stack entries: each node pushes at most three.
+pub(crate) const STACK: usize = 3 * MAX_DEPTH + 1;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::bvh::BuildOptions;
+    use crate::accel::BruteForce;
+    use crate::mesh::TriangleMesh;
+    use crate::rng::Pcg32;
+    use glam::Vec3;
+
+    /// A bumpy grid surface (shared edges and corners) with some triangles
+    /// duplicated (ties), plus a soup of small random triangles above it.
+    fn scene(n: usize, seed: u64) -> TriangleMesh {
+        let mut rng = Pcg32::new(seed);
+        let mut positions = Vec::new();
+        for y in 0..=n {
+            for x in 0..=n {
+                let h = 0.05 * rng.next_f32();
+                positions.push(Vec3::new(x as f32 / n as f32, h, y as f32 / n as f32));
+            }
+        }
+        let w = n as u32 + 1;
+        let mut indices = Vec::new();
+        for y in 0..n as u32 {
+            for x in 0..n as u32 {
+                let a = y * w + x;
+                indices.push([a, a + 1, a + w + 1]);
+                indices.push([a, a + w + 1, a + w]);
+            }
+        }
+        let dups: Vec<[u32; 3]> = indices.iter().step_by(11).copied().collect();
+        indices.extend(dups);
+        for _ in 0..2000 {
+            let c = rng.in_box(Vec3::new(0.0, 0.1, 0.0), Vec3::new(1.0, 0.6, 1.0));
+            let s = 0.005 + 0.05 * rng.next_f32().powi(2);
+            let b = positions.len() as u32;
+            for _ in 0..3 {
+                positions.push(c + rng.unit_vector() * s);
+            }
+            indices.push([b, b + 1, b + 2]);
+        }
+        TriangleMesh::new(positions, indices)
+    }
+
+    /// Rays in rows of a pinhole image (coherent packets), with now and
+    /// then a bounded segment, an axis-parallel direction (exact zero
+    /// components, both signs of zero), a row of shadow-like rays towards
+    /// one point, or random directions (mixed octants); odd lengths leave
+    /// a tail packet.
+    fn rays(rng: &mut Pcg32, n: usize) -> Vec<Ray> {
+        let mut out = Vec::with_capacity(n);
+        let eye = Vec3::new(0.5, 1.5, -0.8) + rng.unit_vector() * 0.3;
+        let light = Vec3::new(0.2, 2.0, 0.9);
+        let w = 37;
+        while out.len() < n {
+            let i = out.len();
+            let (x, y) = (
+                (i % w) as f32 / w as f32,
+                (i / w) as f32 / (n / w + 1) as f32,
+            );
+            let target = Vec3::new(x * 1.2 - 0.1, 0.0, y * 1.2 - 0.1);
+            let mut ray = match (i / 64) % 8 {
+                // Axis-parallel, straight down, zero components of either sign.
+                0 => {
+                    let z = if rng.below(2) == 0 { 0.0 } else { -0.0 };
+                    Ray::new(target + Vec3::Y, Vec3::new(z, -1.0, z))
+                }
+                // Shadow-like: from points on and above the surface to a light.
+                1 => {
+                    let o = target + Vec3::Y * 0.1 * rng.next_f32();
+                    Ray::segment(o, light - o, 1e-4, 1.0)
+                }
+                // Random directions from the eye.
+                2 => Ray::new(eye, rng.unit_vector()),
+                _ => Ray::new(eye, target - eye),
+            };
+            if rng.below(6) == 0 {
+                let t0 = rng.range_f32(0.0, 0.8);
+                ray = Ray::segment(ray.origin, ray.dir, t0, t0 + rng.range_f32(0.0, 1.0));
+            }
+            out.push(ray);
+        }
+        out
+    }
+
+    fn bits(h: Option<Hit>) -> Option<(u32, u32, u32, u32)> {
+        h.map(|h| (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim))
+    }
+
+    /// Every ray gets the single-ray traversal's answer from the batch:
+    /// without packets, and with AVX2 packets handing over to single rays
+    /// at 2 active rays (the default), never (0: pure packets) or at once
+    /// (8): the same `t` bits, and the same triangle, `u` and `v` unless
+    /// another triangle is hit at exactly the same `t` (a tie, checked with
+    /// the scalar test on the packet's triangle); the same occlusion; and
+    /// agreement with brute force up to ties.
+    #[test]
+    fn packets_equal_single_rays_and_brute_force() {
+        let mut rng = Pcg32::new(2001);
+        let (mut packets, mut hits, mut ties) = (0usize, 0usize, 0usize);
+        let modes: &[Option<u32>] = if avx2() {
+            &[None, Some(SWITCH), Some(0), Some(8)]
+        } else {
+            eprintln!("no AVX2: only the single-ray batch is tested");
+            &[None]
+        };
+        for round in 0..6 {
+            let mesh = scene(40 + 13 * round, round as u64);
+            let bvh = Bvh4::<Moller>::build(&mesh, &BuildOptions::default());
+            let brute = BruteForce::<Moller>::new(&mesh);
+            let rays = rays(&mut rng, 5000 + 3 * round);
+            packets += rays.chunks(LANES).filter(|c| coherent(c).is_some()).count();
+            let one: Vec<Option<Hit>> = rays.iter().map(|r| bvh.intersect(r)).collect();
+            let one_occ: Vec<bool> = rays.iter().map(|r| bvh.occluded(r)).collect();
+            for (i, ray) in rays.iter().enumerate() {
+                assert_eq!(one_occ[i], one[i].is_some(), "single ray {i} {ray:?}");
+                let want = brute.intersect(ray);
+                match (one[i], want) {
+                    (Some(a), Some(b)) => {
+                        let tol = 1e-5 * a.t.abs().max(b.t.abs()).max(1e-6);
+                        assert!((a.t - b.t).abs() <= tol, "brute force, ray {i}");
+                    }
+                    (a, b) => assert_eq!(a.is_some(), b.is_some(), "brute force, ray {i}"),
+                }
+            }
+            for &mode in modes {
+                let mut got = vec![None; rays.len()];
+                intersect_batch_with(&bvh, &rays, &mut got, mode);
+                let mut occ = vec![false; rays.len()];
+                occluded_batch_with(&bvh, &rays, &mut occ, mode);
+                for (i, ray) in rays.iter().enumerate() {
+                    assert_eq!(occ[i], one_occ[i], "{mode:?}: occlusion, ray {i} {ray:?}");
+                    match (got[i], one[i]) {
+                        (Some(a), Some(b)) => {
+                            assert_eq!(a.t.to_bits(), b.t.to_bits(), "{mode:?}: ray {i} {ray:?}");
+                            if a.prim != b.prim {
+                                // A tie: the packet's triangle is hit at the
+                                // same t, with the u and v reported.
+                                let [x, y, z] = mesh.triangle(a.prim as usize);
+                                let tri = Moller::precompute(x, y, z);
+                                let h =
+                                    Moller::intersect(&tri, ray, &Moller::prepare(ray), ray.tfar)
+                                        .expect("the packet's triangle is hit");
+                                assert_eq!(
+                                    [h.t.to_bits(), h.u.to_bits(), h.v.to_bits()],
+                                    [a.t.to_bits(), a.u.to_bits(), a.v.to_bits()],
+                                    "{mode:?}: ray {i} {ray:?}"
+                                );
+                                ties += 1;
+                            } else {
+                                assert_eq!(bits(got[i]), bits(one[i]), "{mode:?}: ray {i} {ray:?}");
+                            }
+                            hits += 1;
+                        }
+                        (a, b) => {
+                            assert_eq!(a.is_some(), b.is_some(), "{mode:?}: ray {i} {ray:?}")
+                        }
+                    }
+                }
+            }
+        }
+        assert!(packets > 1200, "too few coherent packets: {packets}");
+        assert!(hits > 10_000, "too few hits: {hits}");
+        eprintln!("{packets} packets, {hits} hits, {ties} ties");
+    }
+}
