@@ -8,24 +8,32 @@
 //!   box tests at once with SSE, ordered stack traversal; over Möller its
 //!   leaves are packs of four triangles tested at once (`tri4`, Embree's
 //!   `triangle4`).
+//! - [`Bvh8`]: 8-wide BVH collapsed the same way (issue 8), eight box tests
+//!   at once with AVX (run-time detected; SSE and scalar fallbacks), the
+//!   same ordered traversal and leaves as [`Bvh4`].
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
 //!   indices, traversed without a stack.
 
 mod box4;
+mod box8;
 pub mod build;
 mod bvh2;
 mod bvh4;
+mod bvh8;
 mod node4;
+mod node8;
 mod node_box;
 pub(crate) use node_box::NodeBox;
 mod threaded;
 mod tri4;
 #[cfg(target_arch = "x86_64")]
 mod tri4_sse;
+mod wide_leaf;
 
 pub use build::{BuildNode, BuildOptions};
 pub use bvh2::Bvh2;
 pub use bvh4::Bvh4;
+pub use bvh8::Bvh8;
 pub use threaded::ThreadedBvh;
 
 /// Deepest tree the builders produce; traversal stacks are sized from it.

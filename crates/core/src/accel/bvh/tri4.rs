@@ -169,12 +169,25 @@ pub(crate) struct Tri4Leaves {
 }
 
 impl Tri4Leaves {
-    /// Pack the leaves of a collapsed tree: `order` is the build's triangle
-    /// order, and every leaf reference in `nodes` and `root` (triangle range
-    /// `index..index + count` of `order`) is rewritten to start at its first
-    /// pack instead; `count` stays the number of triangles. Packs follow
-    /// the nodes' order, so a node's leaves lie side by side.
+    /// Pack the leaves of a collapsed 4-wide tree: `order` is the build's
+    /// triangle order, and every leaf reference in `nodes` and `root`
+    /// (triangle range `index..index + count` of `order`) is rewritten to
+    /// start at its first pack instead; `count` stays the number of
+    /// triangles. Packs follow the nodes' order, so a node's leaves lie side
+    /// by side.
     pub fn new(mesh: &TriangleMesh, order: &[u32], nodes: &mut [Node4], root: &mut Child4) -> Self {
+        let refs = std::iter::once(root).chain(nodes.iter_mut().flat_map(|n| n.child.iter_mut()));
+        Self::from_refs(mesh, order, refs)
+    }
+
+    /// [`Tri4Leaves::new`] for any tree: `refs` yields every child
+    /// reference (the root first, then node by node); the leaves among them
+    /// (`count > 0`) are packed in that order and rewritten.
+    pub fn from_refs<'a>(
+        mesh: &TriangleMesh,
+        order: &[u32],
+        refs: impl Iterator<Item = &'a mut Child4>,
+    ) -> Self {
         let tris: Vec<MollerTri> = order
             .par_iter()
             .map(|&p| {
@@ -182,8 +195,8 @@ impl Tri4Leaves {
                 Moller::precompute(a, b, c)
             })
             .collect();
-        let mut packs = Vec::with_capacity(order.len().div_ceil(4) + nodes.len());
-        let mut pack = |leaf: &mut Child4| {
+        let mut packs = Vec::with_capacity(order.len().div_ceil(4) + order.len() / 4);
+        for leaf in refs.filter(|c| c.count > 0) {
             let (first, count) = (leaf.index as usize, leaf.count as usize);
             leaf.index = packs.len() as u32;
             for start in (first..first + count).step_by(4) {
@@ -192,16 +205,6 @@ impl Tri4Leaves {
                     p.set(lane, &tris[i], order[i]);
                 }
                 packs.push(p);
-            }
-        };
-        if root.count > 0 {
-            pack(root);
-        }
-        for node in nodes.iter_mut() {
-            for child in node.child.iter_mut() {
-                if child.count > 0 {
-                    pack(child);
-                }
             }
         }
         Tri4Leaves { packs }
