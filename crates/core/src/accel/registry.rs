@@ -3,7 +3,7 @@
 
 use super::kdtree::{KdBuildNode, KdTree};
 use super::{
-    Accel, BruteForce, BuildOptions, Bvh2, Bvh4, KdBacktrack, KdRestart, KdRopes, KdStack,
+    Accel, BruteForce, BuildOptions, Bvh2, Bvh4, Bvh8, KdBacktrack, KdRestart, KdRopes, KdStack,
     ThreadedBvh,
 };
 use crate::aabb::Aabb;
@@ -20,6 +20,8 @@ pub enum AccelKind {
     Bvh2,
     /// [`Bvh4`].
     Bvh4,
+    /// [`Bvh8`].
+    Bvh8,
     /// [`ThreadedBvh`].
     ThreadedBvh,
     /// [`KdStack`].
@@ -34,10 +36,11 @@ pub enum AccelKind {
 
 impl AccelKind {
     /// Every structure, in a fixed order.
-    pub const ALL: [AccelKind; 8] = [
+    pub const ALL: [AccelKind; 9] = [
         AccelKind::Brute,
         AccelKind::Bvh2,
         AccelKind::Bvh4,
+        AccelKind::Bvh8,
         AccelKind::ThreadedBvh,
         AccelKind::KdStack,
         AccelKind::KdRopes,
@@ -59,6 +62,7 @@ impl AccelKind {
             AccelKind::Brute => "brute",
             AccelKind::Bvh2 => "bvh2",
             AccelKind::Bvh4 => "bvh4",
+            AccelKind::Bvh8 => "bvh8",
             AccelKind::ThreadedBvh => "bvh-threaded",
             AccelKind::KdStack => "kd-stack",
             AccelKind::KdRopes => "kd-ropes",
@@ -78,6 +82,9 @@ impl AccelKind {
             }
             AccelKind::Bvh4 => {
                 "4-wide BVH collapsed from the binary build, SSE box tests, ordered stack traversal"
+            }
+            AccelKind::Bvh8 => {
+                "8-wide BVH collapsed from the binary build, AVX box tests (SSE/scalar fallback), ordered stack traversal"
             }
             AccelKind::ThreadedBvh => {
                 "paper 001: BVH nodes in pre-order with escape indices, stackless traversal"
@@ -110,6 +117,7 @@ pub fn build_accel(
         AccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)) as Box<dyn Accel>,
         AccelKind::Bvh2 => Box::new(Bvh2::<T>::build(mesh, options)),
         AccelKind::Bvh4 => Box::new(Bvh4::<T>::build(mesh, options)),
+        AccelKind::Bvh8 => Box::new(Bvh8::<T>::build(mesh, options)),
         AccelKind::ThreadedBvh => Box::new(ThreadedBvh::<T>::build(mesh, options)),
         AccelKind::KdStack => Box::new(KdStack::<T>::build(mesh, &options.kd)),
         AccelKind::KdRopes => Box::new(KdRopes::<T>::build(mesh, &options.kd)),

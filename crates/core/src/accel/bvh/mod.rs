@@ -13,16 +13,22 @@
 //!   item 4): packets of eight rays of one octant traced together with AVX2
 //!   (Wald et al. 2001), handing their last rays to the single-ray
 //!   traversal (Benthin et al. 2012), with the single-ray answers.
+//! - [`Bvh8`]: 8-wide BVH collapsed the same way (issue 8), eight box tests
+//!   at once with AVX (run-time detected; SSE and scalar fallbacks), the
+//!   same ordered traversal and leaves as [`Bvh4`].
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
 //!   indices, traversed without a stack.
 
 mod binning;
 mod box4;
+mod box8;
 pub mod build;
 mod bvh2;
 mod bvh4;
 pub mod lbvh;
+mod bvh8;
 mod node4;
+mod node8;
 mod node_box;
 mod packet;
 #[cfg(target_arch = "x86_64")]
@@ -32,10 +38,12 @@ mod threaded;
 mod tri4;
 #[cfg(target_arch = "x86_64")]
 mod tri4_sse;
+mod wide_leaf;
 
 pub use build::{BuildNode, BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;
 pub use bvh4::Bvh4;
+pub use bvh8::Bvh8;
 pub use threaded::ThreadedBvh;
 
 /// Deepest tree the builders produce; traversal stacks are sized from it.

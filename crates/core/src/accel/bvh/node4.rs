@@ -68,15 +68,18 @@ pub(crate) fn collapse(root: &BuildNode, traversal_cost: f64) -> Collapsed {
     c
 }
 
-/// Up to four binary-tree nodes that become the children of the wide node
-/// made from the inner node `node`.
-fn wide_children(node: &BuildNode) -> ([&BuildNode; 4], usize) {
+/// Up to `W` binary-tree nodes that become the children of the wide node
+/// made from the inner node `node` (shared by the 4- and 8-wide trees): the
+/// two children of `node`, then, while there are fewer than `W`, the
+/// largest-area inner one replaced by its two children.
+pub(super) fn wide_children<const W: usize>(node: &BuildNode) -> ([&BuildNode; W], usize) {
     let BuildNode::Inner { children, .. } = node else {
         unreachable!("only inner nodes have children")
     };
-    let mut kids = [&children[0], &children[1], &children[0], &children[0]];
+    let mut kids = [&children[0]; W];
+    kids[1] = &children[1];
     let mut n = 2;
-    while n < 4 {
+    while n < W {
         let largest = (0..n)
             .filter(|&i| matches!(kids[i], BuildNode::Inner { .. }))
             .max_by(|&a, &b| {
@@ -125,7 +128,7 @@ fn emit(
                 boxes: Box4::EMPTY,
                 child: [Child4::EMPTY; 4],
             };
-            let (kids, k) = wide_children(node);
+            let (kids, k) = wide_children::<4>(node);
             let pending = pending + k - 1;
             c.stack = c.stack.max(pending);
             for (slot, kid) in kids[..k].iter().enumerate() {

@@ -1,0 +1,467 @@
+//! 8-wide BVH with AVX box tests and ordered stack traversal (issue 8).
+
+use super::box8::{BoxPath, RayBox8};
+use super::build::{build, BuildOptions};
+use super::node4::Child4;
+use super::node8::{collapse8, Node8};
+use super::node_box::NodeBox;
+use super::tri4::{Ray4, Tri4Leaves};
+use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
+use super::MAX_DEPTH;
+use crate::aabb::Aabb;
+use crate::accel::{Accel, AccelStats};
+use crate::hit::Hit;
+use crate::mesh::TriangleMesh;
+use crate::ray::Ray;
+use crate::tri::{Moller, TriangleTest};
+use std::any::TypeId;
+use std::mem::MaybeUninit;
+
+/// Traversal stack entries for any tree: each 8-wide node visited pushes at
+/// most seven.
+const STACK: usize = 7 * MAX_DEPTH + 1;
+
+/// The stack of trees that need no more (most do).
+const SMALL_STACK: usize = 64;
+
+/// 8-wide BVH as Embree uses on AVX machines for single rays (issue 8, "beat
+/// Embree on the CPU"; Wald et al. 2014, "Embree: a kernel framework for
+/// efficient CPU ray tracing"), made by collapsing the binned-SAH binary
+/// tree of [`super::build`] into nodes of up to eight children (the
+/// largest-area inner child's children pulled up first), the leaves being
+/// the binary tree's.
+///
+/// A node holds its children's boxes in structure-of-arrays layout, padded
+/// exactly as [`super::Bvh2`]'s, and one ray is tested against all eight at
+/// once: with AVX where the CPU has AVX2 and FMA (detected once, at build;
+/// the whole traversal is then compiled for them), else with two SSE halves
+/// or a scalar loop ([`super::box8`]). Traversal is [`super::Bvh4`]'s:
+/// entered children near to far, the nearest next, the others pushed with
+/// their entry distances and skipped on pop when a nearer hit has been
+/// found; occlusion queries stop at the first hit without sorting. Over
+/// [`Moller`] the leaves are packs of four triangles tested with SSE
+/// ([`super::tri4`], Embree's `triangle4`).
+pub struct Bvh8<T: TriangleTest> {
+    nodes: Vec<Node8>,
+    root_box: NodeBox,
+    root: Child4,
+    leaves: Leaves<T>,
+    stats: AccelStats,
+    /// Whether traversal fits in [`SMALL_STACK`] entries.
+    small_stack: bool,
+    /// The box kernel, detected at build.
+    path: BoxPath,
+}
+
+impl<T: TriangleTest> Bvh8<T> {
+    /// Build over all triangles of `mesh`.
+    pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        let packed = TypeId::of::<T>() == TypeId::of::<Moller>();
+        // Packs of four: the SAH counts a leaf's pack tests.
+        let options = &BuildOptions {
+            leaf_block: if packed { 4 } else { options.leaf_block },
+            ..options.clone()
+        };
+        let tree = build(mesh, options);
+        let mut wide = collapse8(&tree.root, options.traversal_cost as f64);
+        let root_box = tree.root.bounds().into();
+        let node_bytes = std::mem::size_of_val(&wide.nodes[..]);
+        let (leaves, binary) = if packed {
+            let refs = std::iter::once(&mut wide.root)
+                .chain(wide.nodes.iter_mut().flat_map(|n| n.child.iter_mut()));
+            let packs = Tri4Leaves::from_refs(mesh, &tree.order, refs);
+            let stats = tree.stats(node_bytes, options);
+            let bytes = node_bytes + packs.bytes();
+            (Leaves::Packed(packs), AccelStats { bytes, ..stats })
+        } else {
+            let (tris, stats) = tree.into_leaves(mesh, node_bytes, options);
+            (Leaves::Single(tris), stats)
+        };
+        let stats = AccelStats {
+            nodes: wide.inner + wide.leaves,
+            leaves: wide.leaves,
+            depth: wide.depth,
+            sah_cost: wide.sah_cost,
+            ..binary
+        };
+        // The traversal writes its stack unchecked (see `traverse_with`).
+        assert!(wide.stack < STACK, "tree too deep for the traversal stack");
+        Bvh8 {
+            nodes: wide.nodes,
+            root_box,
+            root: wide.root,
+            leaves,
+            stats,
+            small_stack: wide.stack <= SMALL_STACK,
+            path: BoxPath::detect(),
+        }
+    }
+
+    /// Use the box kernel `path` instead of the detected one (for tests).
+    #[cfg(test)]
+    fn with_path(mut self, path: BoxPath) -> Self {
+        assert!(BoxPath::available().contains(&path));
+        self.path = path;
+        self
+    }
+
+    #[inline(always)]
+    fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
+        if self.stats.triangle_refs == 0 {
+            return (None, false);
+        }
+        match self.path {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `path` is Avx2 only where `BoxPath::detect` found AVX2
+            // and FMA on this CPU (`with_path` checks the same).
+            BoxPath::Avx2 => unsafe { self.traverse_avx2::<ANY>(ray) },
+            path => self.traverse_on::<ANY>(ray, path),
+        }
+    }
+
+    /// The traversal compiled for AVX2 and FMA, so that the AVX box kernel
+    /// and everything around it inline into one loop.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn traverse_avx2<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
+        self.traverse_on::<ANY>(ray, BoxPath::Avx2)
+    }
+
+    #[inline(always)]
+    fn traverse_on<const ANY: bool>(&self, ray: &Ray, path: BoxPath) -> (Option<Hit>, bool) {
+        match &self.leaves {
+            Leaves::Packed(packs) => {
+                let leaf = PackedLeaf {
+                    packs,
+                    ray,
+                    r4: Ray4::new(ray),
+                };
+                self.walk::<ANY>(ray, path, leaf)
+            }
+            Leaves::Single(tris) => {
+                let leaf = SingleLeaf {
+                    tris,
+                    ray,
+                    rd: T::prepare(ray),
+                };
+                self.walk::<ANY>(ray, path, leaf)
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn walk<const ANY: bool>(
+        &self,
+        ray: &Ray,
+        path: BoxPath,
+        leaf: impl LeafTest,
+    ) -> (Option<Hit>, bool) {
+        if self.small_stack {
+            self.traverse_with::<ANY, SMALL_STACK>(ray, path, leaf)
+        } else {
+            self.traverse_with::<ANY, STACK>(ray, path, leaf)
+        }
+    }
+
+    /// Traversal with an `N`-entry stack, enough for this tree.
+    #[inline(always)]
+    fn traverse_with<const ANY: bool, const N: usize>(
+        &self,
+        ray: &Ray,
+        path: BoxPath,
+        leaf: impl LeafTest,
+    ) -> (Option<Hit>, bool) {
+        let mut tfar = ray.tfar;
+        let mut best: Option<Hit> = None;
+        // No separate test of the root's box: the root node's test of its
+        // children's boxes culls the same rays (they lie inside it), and a
+        // root leaf's triangle test is exact. It cost 4% of a ray's
+        // instructions (callgrind, issue 8 step 3).
+        let rb = RayBox8::new(ray);
+        // Left uninitialised: only pushed entries are read. Written and read
+        // through a raw pointer: the bound checks and the copy of a sorted
+        // block cost about 4% of a ray's instructions (callgrind).
+        let mut stack = [const { MaybeUninit::<(Child4, f32)>::uninit() }; N];
+        let st = stack.as_mut_ptr() as *mut (Child4, f32);
+        let mut sp = 0usize;
+        let mut cur = self.root;
+        loop {
+            if cur.count > 0 {
+                let (first, count) = (cur.index as usize, cur.count as usize);
+                if leaf.test::<ANY>(first, count, &mut tfar, &mut best) {
+                    return (None, true);
+                }
+            } else {
+                debug_assert!((cur.index as usize) < self.nodes.len());
+                // SAFETY: inner references are made by `collapse8` from the
+                // index of a node it pushed, so they are in bounds.
+                let node = unsafe { self.nodes.get_unchecked(cur.index as usize) };
+                // SAFETY: `path` is a kernel this CPU runs (see `traverse`).
+                let h = unsafe { node.boxes.entries(path, &rb, ray.tnear, tfar) };
+                let mut mask = h.mask;
+                if mask != 0 {
+                    let i0 = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = node.child[i0];
+                        continue;
+                    }
+                    // SAFETY (every write and read through `st` below):
+                    // the stack never holds more than the unvisited siblings
+                    // of the current node's ancestors, at most `wide.stack`
+                    // entries, which `build` checked to be below `N`; reads
+                    // are of entries below `sp`, all written by a push.
+                    if ANY {
+                        // Any hit ends the query: no ordering needed.
+                        while mask != 0 {
+                            let i = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            unsafe { st.add(sp).write((node.child[i], h.t[i])) };
+                            sp += 1;
+                        }
+                        cur = node.child[i0];
+                        continue;
+                    }
+                    let i1 = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        let (near, far) = if h.t[i0] <= h.t[i1] {
+                            (i0, i1)
+                        } else {
+                            (i1, i0)
+                        };
+                        unsafe { st.add(sp).write((node.child[far], h.t[far])) };
+                        sp += 1;
+                        cur = node.child[near];
+                        continue;
+                    }
+                    // Three or more: insertion sort straight onto the stack,
+                    // farthest deepest, then take the nearest off the top.
+                    let base = sp;
+                    let mut push = |e: (Child4, f32)| unsafe {
+                        let mut j = sp;
+                        while j > base && (*st.add(j - 1)).1 < e.1 {
+                            st.add(j).write(st.add(j - 1).read());
+                            j -= 1;
+                        }
+                        st.add(j).write(e);
+                        sp += 1;
+                    };
+                    push((node.child[i0], h.t[i0]));
+                    push((node.child[i1], h.t[i1]));
+                    while mask != 0 {
+                        let i = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        push((node.child[i], h.t[i]));
+                    }
+                    sp -= 1;
+                    cur = unsafe { st.add(sp).read().0 };
+                    continue;
+                }
+            }
+            // Pop, skipping entries beyond the nearest hit found since they
+            // were pushed.
+            loop {
+                if sp == 0 {
+                    return (best, false);
+                }
+                sp -= 1;
+                // SAFETY: entry `sp` is below the stack pointer, written by
+                // a push.
+                let (c, t) = unsafe { st.add(sp).read() };
+                if t <= tfar {
+                    cur = c;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+impl<T: TriangleTest> Accel for Bvh8<T> {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.traverse::<false>(ray).0
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.traverse::<true>(ray).1
+    }
+
+    /// Depth first, slot 0 first; a child's box is read from its parent
+    /// node, the root's from `root_box`.
+    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+        let root = Aabb::new(self.root_box.min.into(), self.root_box.max.into());
+        if self.stats.triangle_refs == 0 || !enter(&root) {
+            return;
+        }
+        let mut stack = vec![self.root];
+        let mut accepted = Vec::with_capacity(8);
+        let mut prims = Vec::new();
+        while let Some(cur) = stack.pop() {
+            if cur.count > 0 {
+                let (first, count) = (cur.index as usize, cur.count as usize);
+                match &self.leaves {
+                    Leaves::Single(tris) => leaf(tris.prims(first, count)),
+                    Leaves::Packed(packs) => {
+                        prims.clear();
+                        packs.prims(cur, &mut prims);
+                        leaf(&prims);
+                    }
+                }
+                continue;
+            }
+            let node = &self.nodes[cur.index as usize];
+            accepted.clear();
+            for (slot, &child) in node.child.iter().enumerate() {
+                if child != Child4::EMPTY && enter(&node.boxes.get(slot)) {
+                    accepted.push(child);
+                }
+            }
+            stack.extend(accepted.iter().rev());
+        }
+    }
+
+    fn stats(&self) -> AccelStats {
+        self.stats.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::BruteForce;
+    use crate::rng::Pcg32;
+    use crate::tri::Plucker;
+    use glam::Vec3;
+
+    fn agree(a: Option<Hit>, b: Option<Hit>) -> bool {
+        match (a, b) {
+            (Some(x), Some(y)) => (x.t - y.t).abs() <= 1e-5 * x.t.abs().max(y.t.abs()).max(1e-6),
+            (x, y) => x.is_some() == y.is_some(),
+        }
+    }
+
+    /// Triangles shrinking geometrically towards the origin: a deep chain
+    /// whose traversal needs the large stack; every box kernel gives the
+    /// same answers, equal to brute force up to ties.
+    #[test]
+    fn deep_chain_every_kernel_agrees_with_brute_force() {
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for i in 0..200u32 {
+            let s = 0.8f32.powi(i as i32);
+            positions.extend([
+                Vec3::new(s, 0.0, 0.0),
+                Vec3::new(s * 1.1, s, 0.0),
+                Vec3::new(s, 0.0, s),
+            ]);
+            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let mesh = TriangleMesh::new(positions, indices);
+        let opts = BuildOptions {
+            max_leaf_size: 1,
+            ..Default::default()
+        };
+        let brute = BruteForce::<Moller>::new(&mesh);
+        let paths = BoxPath::available();
+        let trees: Vec<Bvh8<Moller>> = paths
+            .iter()
+            .map(|&p| Bvh8::<Moller>::build(&mesh, &opts).with_path(p))
+            .collect();
+        assert!(
+            !trees[0].small_stack,
+            "the chain should need the large stack"
+        );
+        let mut rng = Pcg32::new(8);
+        let mut hits = 0;
+        for _ in 0..5000 {
+            let target =
+                rng.in_box(Vec3::ZERO, Vec3::splat(0.3)) * 0.8f32.powi(rng.below(60) as i32);
+            let origin = target + rng.unit_vector() * 2.0;
+            let ray = Ray::new(origin, target - origin);
+            let want = brute.intersect(&ray);
+            let first = trees[0].intersect(&ray);
+            assert!(agree(first, want), "{ray:?} {first:?} {want:?}");
+            for t in &trees {
+                let got = t.intersect(&ray);
+                assert_eq!(
+                    got.map(|h| (h.t.to_bits(), h.prim)),
+                    first.map(|h| (h.t.to_bits(), h.prim)),
+                    "{:?} {ray:?}",
+                    t.path
+                );
+                assert_eq!(t.occluded(&ray), want.is_some(), "{ray:?}");
+            }
+            hits += want.is_some() as usize;
+        }
+        assert!(hits > 100, "{hits}");
+    }
+
+    /// A random soup, packed (Möller) and single-triangle (Plücker) leaves,
+    /// every kernel: the same answers as brute force up to ties, and the
+    /// kernels bit-identical to each other.
+    #[test]
+    fn random_soup_every_kernel_and_leaf_kind_agrees_with_brute_force() {
+        let mut rng = Pcg32::new(81);
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for i in 0..3000u32 {
+            let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
+            let size = 0.002 + 0.08 * rng.next_f32().powi(3);
+            for _ in 0..3 {
+                positions.push(c + rng.unit_vector() * size);
+            }
+            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let mesh = TriangleMesh::new(positions, indices);
+        let opts = BuildOptions::default();
+        let brute = BruteForce::<Moller>::new(&mesh);
+        let brute_p = BruteForce::<Plucker>::new(&mesh);
+        let paths = BoxPath::available();
+        let moller: Vec<Bvh8<Moller>> = paths
+            .iter()
+            .map(|&p| Bvh8::<Moller>::build(&mesh, &opts).with_path(p))
+            .collect();
+        let plucker: Vec<Bvh8<Plucker>> = paths
+            .iter()
+            .map(|&p| Bvh8::<Plucker>::build(&mesh, &opts).with_path(p))
+            .collect();
+        let mut hits = 0;
+        for i in 0..20_000 {
+            let target = rng.in_box(Vec3::ZERO, Vec3::ONE);
+            let origin = if i % 3 == 0 {
+                rng.in_box(Vec3::ZERO, Vec3::ONE)
+            } else {
+                Vec3::splat(0.5) + rng.unit_vector() * 2.0
+            };
+            let ray = if i % 5 == 0 {
+                Ray::segment(origin, target - origin, 0.1 * rng.next_f32(), 0.5)
+            } else {
+                Ray::new(origin, target - origin)
+            };
+            let want = brute.intersect(&ray);
+            let want_p = brute_p.intersect(&ray);
+            hits += want.is_some() as usize;
+            let m0 = moller[0].intersect(&ray);
+            let p0 = plucker[0].intersect(&ray);
+            assert!(agree(m0, want), "{ray:?} {m0:?} {want:?}");
+            assert!(agree(p0, want_p), "{ray:?} {p0:?} {want_p:?}");
+            for (m, p) in moller.iter().zip(&plucker) {
+                assert_eq!(
+                    m.intersect(&ray).map(|h| h.t.to_bits()),
+                    m0.map(|h| h.t.to_bits())
+                );
+                assert_eq!(
+                    p.intersect(&ray).map(|h| h.t.to_bits()),
+                    p0.map(|h| h.t.to_bits())
+                );
+                assert_eq!(m.occluded(&ray), want.is_some(), "{ray:?}");
+                assert_eq!(p.occluded(&ray), want_p.is_some(), "{ray:?}");
+            }
+        }
+        assert!(hits > 2000, "{hits}");
+    }
+}

@@ -1,0 +1,76 @@
+//! The leaves of the wide BVHs of issue 8 and their per-ray test, written
+//! once for both kinds: Embree-style packs of four Möller triangles
+//! ([`Tri4Leaves`], Wald et al. 2014's `triangle4`) or one triangle after
+//! the other for the other tests. Used by [`super::Bvh8`].
+
+use super::tri4::{Ray4, Tri4Leaves};
+use crate::accel::leaf::LeafTriangles;
+use crate::hit::Hit;
+use crate::ray::Ray;
+use crate::tri::TriangleTest;
+
+/// The leaves of a wide BVH: packs of four for [`crate::tri::Moller`],
+/// single triangles for the other tests.
+pub(crate) enum Leaves<T: TriangleTest> {
+    /// One triangle after the other; leaf references are triangle ranges.
+    Single(LeafTriangles<T>),
+    /// Packs of four; leaf references start at their first pack.
+    Packed(Tri4Leaves),
+}
+
+/// A leaf test for one ray, so that traversal is written once for both kinds
+/// of leaves (a trait rather than a closure, to force it inline).
+pub(crate) trait LeafTest {
+    /// Test the leaf `first`, `count` (see [`Tri4Leaves::test`]): the
+    /// nearest hit goes to `best` and shrinks `tfar`; true for an any-hit
+    /// query's hit.
+    fn test<const ANY: bool>(
+        &self,
+        first: usize,
+        count: usize,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool;
+}
+
+/// [`LeafTest`] over packs of four.
+pub(crate) struct PackedLeaf<'a> {
+    pub packs: &'a Tri4Leaves,
+    pub ray: &'a Ray,
+    pub r4: Ray4,
+}
+
+impl LeafTest for PackedLeaf<'_> {
+    #[inline(always)]
+    fn test<const ANY: bool>(
+        &self,
+        first: usize,
+        count: usize,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        self.packs
+            .test::<ANY>(first, count, self.ray, &self.r4, tfar, best)
+    }
+}
+
+/// [`LeafTest`] one triangle at a time.
+pub(crate) struct SingleLeaf<'a, T: TriangleTest> {
+    pub tris: &'a LeafTriangles<T>,
+    pub ray: &'a Ray,
+    pub rd: T::RayData,
+}
+
+impl<T: TriangleTest> LeafTest for SingleLeaf<'_, T> {
+    #[inline(always)]
+    fn test<const ANY: bool>(
+        &self,
+        first: usize,
+        count: usize,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        self.tris
+            .test::<ANY>(first, count, self.ray, &self.rd, tfar, best)
+    }
+}
