@@ -157,19 +157,6 @@ impl<T: TriangleTest> Bvh4<T> {
         }
     }
 
-    /// What the packet traversal of `bvh/packet.rs` reads: `None` unless
-    /// the leaves are `tri4` packs and the tree holds triangles.
-    pub(crate) fn packet_view(&self) -> Option<super::packet::View<'_>> {
-        match &self.leaves {
-            Leaves::Packed(packs) if self.stats.triangle_refs > 0 => Some(super::packet::View {
-                nodes: &self.nodes,
-                root: self.root,
-                leaves: packs,
-            }),
-            _ => None,
-        }
-    }
-
     #[inline(always)]
     fn traverse<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
         if self.stats.triangle_refs == 0 {
@@ -378,6 +365,54 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
     /// As [`Accel::intersect_batch`], for occlusion.
     fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
         super::packet::occluded_batch(self, rays, occluded);
+    }
+}
+
+/// The coherent packet path (issue 8, item 4; Wald et al. 2001, Benthin et
+/// al. 2012): `bvh/packet.rs`, handing over to its 4-wide single-ray subtree
+/// traversal.
+impl<T: TriangleTest> super::packet::PacketTree for Bvh4<T> {
+    type Node = Node4;
+
+    fn packet_view(&self) -> Option<super::packet::View<'_, Node4>> {
+        match &self.leaves {
+            Leaves::Packed(packs) if self.stats.triangle_refs > 0 => Some(super::packet::View {
+                nodes: &self.nodes,
+                root: self.root,
+                leaves: packs,
+            }),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn single_subtree<const ANY: bool>(
+        &self,
+        view: &super::packet::View<'_, Node4>,
+        start: Child4,
+        ray: &Ray,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        super::packet::single_subtree4::<ANY>(view, start, ray, tfar, best)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn traverse_packet<const ANY: bool>(
+        &self,
+        view: &super::packet::View<'_, Node4>,
+        rays: &[Ray],
+        p: &super::packet_avx2::Packet8,
+        switch: u32,
+        out: &mut super::packet_avx2::Hits8,
+    ) {
+        // SAFETY: the caller guarantees AVX2.
+        unsafe {
+            super::packet_avx2::traverse::<ANY, Self, { super::packet::STACK }>(
+                self, view, rays, p, switch, out,
+            )
+        }
     }
 }
 

@@ -110,12 +110,30 @@ impl<T: TriangleTest> Bvh8<T> {
         if self.stats.triangle_refs == 0 {
             return (None, false);
         }
+        let (mut tfar, mut best) = (ray.tfar, None);
+        let any = self.subtree::<ANY>(self.root, ray, &mut tfar, &mut best);
+        (best, any)
+    }
+
+    /// The single-ray traversal of the subtree `start`, from the ray's
+    /// current `tfar` and nearest hit `best` (both updated): from the root
+    /// for [`Accel::intersect`] and [`Accel::occluded`], from a packet's
+    /// node for the hand-over of the packet path (issue 8; Benthin et al.
+    /// 2012). Returns true for an any-hit query's hit (`ANY`).
+    #[inline(always)]
+    fn subtree<const ANY: bool>(
+        &self,
+        start: Child4,
+        ray: &Ray,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
         match self.path {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `path` is Avx2 only where `BoxPath::detect` found AVX2
             // and FMA on this CPU (`with_path` checks the same).
-            BoxPath::Avx2 => unsafe { self.traverse_avx2::<ANY>(ray) },
-            path => self.traverse_on::<ANY>(ray, path),
+            BoxPath::Avx2 => unsafe { self.traverse_avx2::<ANY>(start, ray, tfar, best) },
+            path => self.traverse_on::<ANY>(start, ray, path, tfar, best),
         }
     }
 
@@ -126,12 +144,25 @@ impl<T: TriangleTest> Bvh8<T> {
     /// The CPU must support AVX2 and FMA.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn traverse_avx2<const ANY: bool>(&self, ray: &Ray) -> (Option<Hit>, bool) {
-        self.traverse_on::<ANY>(ray, BoxPath::Avx2)
+    unsafe fn traverse_avx2<const ANY: bool>(
+        &self,
+        start: Child4,
+        ray: &Ray,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        self.traverse_on::<ANY>(start, ray, BoxPath::Avx2, tfar, best)
     }
 
     #[inline(always)]
-    fn traverse_on<const ANY: bool>(&self, ray: &Ray, path: BoxPath) -> (Option<Hit>, bool) {
+    fn traverse_on<const ANY: bool>(
+        &self,
+        start: Child4,
+        ray: &Ray,
+        path: BoxPath,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
         match &self.leaves {
             Leaves::Packed(packs) => {
                 let leaf = PackedLeaf {
@@ -139,7 +170,7 @@ impl<T: TriangleTest> Bvh8<T> {
                     ray,
                     r4: Ray4::new(ray),
                 };
-                self.walk::<ANY>(ray, path, leaf)
+                self.walk::<ANY>(start, ray, path, leaf, tfar, best)
             }
             Leaves::Single(tris) => {
                 let leaf = SingleLeaf {
@@ -147,7 +178,7 @@ impl<T: TriangleTest> Bvh8<T> {
                     ray,
                     rd: T::prepare(ray),
                 };
-                self.walk::<ANY>(ray, path, leaf)
+                self.walk::<ANY>(start, ray, path, leaf, tfar, best)
             }
         }
     }
@@ -155,27 +186,36 @@ impl<T: TriangleTest> Bvh8<T> {
     #[inline(always)]
     fn walk<const ANY: bool>(
         &self,
+        start: Child4,
         ray: &Ray,
         path: BoxPath,
         leaf: impl LeafTest,
-    ) -> (Option<Hit>, bool) {
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
         if self.small_stack {
-            self.traverse_with::<ANY, SMALL_STACK>(ray, path, leaf)
+            self.traverse_with::<ANY, SMALL_STACK>(start, ray, path, leaf, tfar, best)
         } else {
-            self.traverse_with::<ANY, STACK>(ray, path, leaf)
+            self.traverse_with::<ANY, STACK>(start, ray, path, leaf, tfar, best)
         }
     }
 
-    /// Traversal with an `N`-entry stack, enough for this tree.
+    /// Traversal of the subtree `start` with an `N`-entry stack, enough for
+    /// this tree (a subtree needs no more than the whole tree). `tfar` and
+    /// `best` are read at the start and written back at the end; the loop
+    /// works on local copies.
     #[inline(always)]
     fn traverse_with<const ANY: bool, const N: usize>(
         &self,
+        start: Child4,
         ray: &Ray,
         path: BoxPath,
         leaf: impl LeafTest,
-    ) -> (Option<Hit>, bool) {
-        let mut tfar = ray.tfar;
-        let mut best: Option<Hit> = None;
+        tfar_io: &mut f32,
+        best_io: &mut Option<Hit>,
+    ) -> bool {
+        let mut tfar = *tfar_io;
+        let mut best: Option<Hit> = *best_io;
         // No separate test of the root's box: the root node's test of its
         // children's boxes culls the same rays (they lie inside it), and a
         // root leaf's triangle test is exact. It cost 4% of a ray's
@@ -187,12 +227,13 @@ impl<T: TriangleTest> Bvh8<T> {
         let mut stack = [const { MaybeUninit::<(Child4, f32)>::uninit() }; N];
         let st = stack.as_mut_ptr() as *mut (Child4, f32);
         let mut sp = 0usize;
-        let mut cur = self.root;
+        let mut cur = start;
         loop {
             if cur.count > 0 {
                 let (first, count) = (cur.index as usize, cur.count as usize);
                 if leaf.test::<ANY>(first, count, &mut tfar, &mut best) {
-                    return (None, true);
+                    *tfar_io = tfar;
+                    return true;
                 }
             } else {
                 debug_assert!((cur.index as usize) < self.nodes.len());
@@ -266,7 +307,9 @@ impl<T: TriangleTest> Bvh8<T> {
             // were pushed.
             loop {
                 if sp == 0 {
-                    return (best, false);
+                    *tfar_io = tfar;
+                    *best_io = best;
+                    return false;
                 }
                 sp -= 1;
                 // SAFETY: entry `sp` is below the stack pointer, written by
@@ -326,6 +369,65 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
 
     fn stats(&self) -> AccelStats {
         self.stats.clone()
+    }
+
+    /// Coherent packets of eight over Möller (issue 8, item 4; Wald et al.
+    /// 2001, with Benthin et al. 2012's hand-over to single rays; see
+    /// `bvh/packet.rs`), single rays otherwise.
+    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        super::packet::intersect_batch(self, rays, hits);
+    }
+
+    /// As [`Accel::intersect_batch`], for occlusion.
+    fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
+        super::packet::occluded_batch(self, rays, occluded);
+    }
+}
+
+/// The coherent packet path over 8-wide nodes (issue 8, item 4; Wald et al.
+/// 2001, Benthin et al. 2012): `bvh/packet.rs`, the same kernel as
+/// [`super::Bvh4`]'s, handing over to this tree's own single-ray traversal.
+impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
+    type Node = Node8;
+
+    fn packet_view(&self) -> Option<super::packet::View<'_, Node8>> {
+        match &self.leaves {
+            Leaves::Packed(packs) if self.stats.triangle_refs > 0 => Some(super::packet::View {
+                nodes: &self.nodes,
+                root: self.root,
+                leaves: packs,
+            }),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn single_subtree<const ANY: bool>(
+        &self,
+        _view: &super::packet::View<'_, Node8>,
+        start: Child4,
+        ray: &Ray,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        self.subtree::<ANY>(start, ray, tfar, best)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn traverse_packet<const ANY: bool>(
+        &self,
+        view: &super::packet::View<'_, Node8>,
+        rays: &[Ray],
+        p: &super::packet_avx2::Packet8,
+        switch: u32,
+        out: &mut super::packet_avx2::Hits8,
+    ) {
+        // SAFETY: the caller guarantees AVX2. `build` checked that the
+        // tree's deepest stack is below `STACK`.
+        unsafe {
+            super::packet_avx2::traverse::<ANY, Self, STACK>(self, view, rays, p, switch, out)
+        }
     }
 }
 

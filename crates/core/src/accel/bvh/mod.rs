@@ -9,13 +9,14 @@
 //!   leaves are packs of four triangles tested at once (`tri4`, Embree's
 //!   `triangle4`).
 //! - `packet` (with `packet_avx2`): the coherent-ray path behind
-//!   [`Bvh4`]'s `intersect_batch` / `occluded_batch` over Möller (issue 8,
-//!   item 4): packets of eight rays of one octant traced together with AVX2
-//!   (Wald et al. 2001), handing their last rays to the single-ray
-//!   traversal (Benthin et al. 2012), with the single-ray answers.
+//!   [`Bvh4`]'s and [`Bvh8`]'s `intersect_batch` / `occluded_batch` over
+//!   Möller (issue 8, item 4): packets of eight rays of one octant traced
+//!   together with AVX2 (Wald et al. 2001), one kernel generic over the node
+//!   width, handing their last rays to the tree's own single-ray traversal
+//!   (Benthin et al. 2012), with the single-ray answers.
 //! - [`Bvh8`]: 8-wide BVH collapsed the same way (issue 8), eight box tests
 //!   at once with AVX (run-time detected; SSE and scalar fallbacks), the
-//!   same ordered traversal and leaves as [`Bvh4`].
+//!   same ordered traversal and leaves as [`Bvh4`], and the same packet path.
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
 //!   indices, traversed without a stack.
 

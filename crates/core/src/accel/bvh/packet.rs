@@ -1,9 +1,13 @@
-//! The coherent-ray path of [`super::Bvh4`] over Möller (issue 8, item 4):
-//! `intersect_batch` and `occluded_batch` cut the batch into packets of
+//! The coherent-ray path of [`super::Bvh4`] and [`super::Bvh8`] over Möller
+//! (issue 8, item 4): `intersect_batch` and `occluded_batch` cut the batch
+//! into packets of
 //! eight consecutive rays and trace each coherent packet together through
 //! the tree (Wald et al. 2001 coherent ray packets; Embree's packet
 //! kernels, Wald et al. 2014), with the AVX2 kernels of
-//! [`super::packet_avx2`].
+//! [`super::packet_avx2`]. The traversal is generic over the node width
+//! ([`WideNode`]: 4 or 8 children, boxes in structure-of-arrays layout) and
+//! over the tree ([`PacketTree`], which supplies the hand-over to its own
+//! single-ray traversal, Benthin et al. 2012).
 //!
 //! A packet is coherent when its eight rays share the signs of their
 //! reciprocal directions (one octant): the box test then uses the same near
@@ -20,8 +24,8 @@
 //! decides), and the same occlusion answer.
 
 use super::box4::RayBox4;
-use super::bvh4::Bvh4;
 use super::node4::{Child4, Node4};
+use super::node8::Node8;
 use super::tri4::{Ray4, Tri4Leaves};
 use super::MAX_DEPTH;
 use crate::accel::{Accel, BATCH_GRAIN};
@@ -35,7 +39,81 @@ use std::mem::MaybeUninit;
 pub(crate) const LANES: usize = 8;
 
 #[cfg(target_arch = "x86_64")]
-use super::packet_avx2::{traverse, Hits8, Packet8};
+use super::packet_avx2::{Hits8, Packet8};
+
+/// An inner node the packet traversal reads (issue 8, item 4): up to
+/// [`WideNode::WIDTH`] children (4 for [`Node4`], 8 for [`Node8`]), their
+/// boxes in structure-of-arrays plane rows (`2·axis` minima, `2·axis + 1`
+/// maxima) and their references, unused slots last.
+pub(crate) trait WideNode: Copy + Sync {
+    /// Child slots per node (at most 8).
+    const WIDTH: usize;
+    /// Plane row `row` of the box in slot `slot`.
+    fn plane(&self, row: usize, slot: usize) -> f32;
+    /// The child in slot `slot`.
+    fn child(&self, slot: usize) -> Child4;
+}
+
+impl WideNode for Node4 {
+    const WIDTH: usize = 4;
+    #[inline(always)]
+    fn plane(&self, row: usize, slot: usize) -> f32 {
+        self.boxes.planes[row][slot]
+    }
+    #[inline(always)]
+    fn child(&self, slot: usize) -> Child4 {
+        self.child[slot]
+    }
+}
+
+impl WideNode for Node8 {
+    const WIDTH: usize = 8;
+    #[inline(always)]
+    fn plane(&self, row: usize, slot: usize) -> f32 {
+        self.boxes.planes[row][slot]
+    }
+    #[inline(always)]
+    fn child(&self, slot: usize) -> Child4 {
+        self.child[slot]
+    }
+}
+
+/// A wide BVH that traces coherent packets of eight rays (issue 8, item 4;
+/// Wald et al. 2001): [`super::Bvh4`] and [`super::Bvh8`] over `tri4`
+/// leaves.
+pub(crate) trait PacketTree: Accel + Sync {
+    /// The inner node.
+    type Node: WideNode;
+    /// What the packet traversal reads: `None` unless the leaves are `tri4`
+    /// packs and the tree holds triangles.
+    fn packet_view(&self) -> Option<View<'_, Self::Node>>;
+    /// Traverse the subtree `start` with one ray exactly as the tree's own
+    /// single-ray traversal does from the root, from the ray's current
+    /// `tfar` and nearest hit `best` (the hybrid hand-over of Benthin,
+    /// Wald, Woop, Ernst, Mark 2012). Returns true for an any-hit query's
+    /// hit (`ANY`).
+    fn single_subtree<const ANY: bool>(
+        &self,
+        view: &View<'_, Self::Node>,
+        start: Child4,
+        ray: &Ray,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool;
+    /// [`super::packet_avx2::traverse`] with this tree's stack size.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn traverse_packet<const ANY: bool>(
+        &self,
+        view: &View<'_, Self::Node>,
+        rays: &[Ray],
+        p: &Packet8,
+        switch: u32,
+        out: &mut Hits8,
+    );
+}
 
 /// Active rays at or below which a packet hands its rays over to the
 /// single-ray traversal (Benthin et al. 2012's hybrid; measured on the full
@@ -45,18 +123,14 @@ const SWITCH: u32 = 2;
 /// Nearest hits of `rays` through `bvh`: coherent packets of eight together
 /// (Wald et al. 2001), the rest one by one; in parallel over the rayon
 /// pool.
-pub(crate) fn intersect_batch<T: TriangleTest>(
-    bvh: &Bvh4<T>,
-    rays: &[Ray],
-    hits: &mut [Option<Hit>],
-) {
+pub(crate) fn intersect_batch<B: PacketTree>(bvh: &B, rays: &[Ray], hits: &mut [Option<Hit>]) {
     intersect_batch_with(bvh, rays, hits, use_packets(bvh).then_some(SWITCH));
 }
 
 /// [`intersect_batch`] with packets handing over at `switch` active rays,
 /// or without packets (`None`; the caller has checked for AVX2 otherwise).
-fn intersect_batch_with<T: TriangleTest>(
-    bvh: &Bvh4<T>,
+fn intersect_batch_with<B: PacketTree>(
+    bvh: &B,
     rays: &[Ray],
     hits: &mut [Option<Hit>],
     switch: Option<u32>,
@@ -75,14 +149,14 @@ fn intersect_batch_with<T: TriangleTest>(
 }
 
 /// Occlusion of `rays` through `bvh`, packets as in [`intersect_batch`].
-pub(crate) fn occluded_batch<T: TriangleTest>(bvh: &Bvh4<T>, rays: &[Ray], occluded: &mut [bool]) {
+pub(crate) fn occluded_batch<B: PacketTree>(bvh: &B, rays: &[Ray], occluded: &mut [bool]) {
     occluded_batch_with(bvh, rays, occluded, use_packets(bvh).then_some(SWITCH));
 }
 
 /// [`occluded_batch`] with an explicit hand-over (see
 /// [`intersect_batch_with`]).
-fn occluded_batch_with<T: TriangleTest>(
-    bvh: &Bvh4<T>,
+fn occluded_batch_with<B: PacketTree>(
+    bvh: &B,
     rays: &[Ray],
     occluded: &mut [bool],
     switch: Option<u32>,
@@ -101,7 +175,7 @@ fn occluded_batch_with<T: TriangleTest>(
 }
 
 /// Whether this batch may use packets: packed leaves and AVX2.
-fn use_packets<T: TriangleTest>(bvh: &Bvh4<T>) -> bool {
+fn use_packets<B: PacketTree>(bvh: &B) -> bool {
     bvh.packet_view().is_some() && avx2()
 }
 
@@ -172,8 +246,8 @@ fn coherent(rays: &[Ray]) -> Option<u32> {
 
 /// Trace `rays` (at most eight) as one packet if coherent; false when not
 /// (nothing written).
-fn packet_intersect<T: TriangleTest>(
-    bvh: &Bvh4<T>,
+fn packet_intersect<B: PacketTree>(
+    bvh: &B,
     rays: &[Ray],
     hits: &mut [Option<Hit>],
     switch: u32,
@@ -187,7 +261,7 @@ fn packet_intersect<T: TriangleTest>(
         let mut out = Hits8::default();
         // SAFETY: packets are used only when `is_x86_feature_detected!`
         // found AVX2 (`use_packets`).
-        unsafe { traverse::<false>(&view, rays, &p, switch, &mut out) };
+        unsafe { bvh.traverse_packet::<false>(&view, rays, &p, switch, &mut out) };
         for (l, h) in hits.iter_mut().enumerate() {
             *h = (out.hit & (1 << l) != 0).then_some(Hit {
                 t: out.t[l],
@@ -206,8 +280,8 @@ fn packet_intersect<T: TriangleTest>(
 }
 
 /// As [`packet_intersect`], for occlusion.
-fn packet_occluded<T: TriangleTest>(
-    bvh: &Bvh4<T>,
+fn packet_occluded<B: PacketTree>(
+    bvh: &B,
     rays: &[Ray],
     occluded: &mut [bool],
     switch: u32,
@@ -220,7 +294,7 @@ fn packet_occluded<T: TriangleTest>(
         let p = packet(rays, oct);
         let mut out = Hits8::default();
         // SAFETY: as in `packet_intersect`.
-        unsafe { traverse::<true>(&view, rays, &p, switch, &mut out) };
+        unsafe { bvh.traverse_packet::<true>(&view, rays, &p, switch, &mut out) };
         for (l, o) in occluded.iter_mut().enumerate() {
             *o = out.hit & (1 << l) != 0;
         }
@@ -233,16 +307,16 @@ fn packet_occluded<T: TriangleTest>(
     }
 }
 
-/// What the packet traversal reads of a [`Bvh4`] over Möller (issue 8,
+/// What the packet traversal reads of a wide BVH over Möller (issue 8,
 /// item 4): the nodes, the root and the `tri4` leaves (Wald et al. 2014).
 #[derive(Clone, Copy)]
-pub(crate) struct View<'a> {
-    pub nodes: &'a [Node4],
+pub(crate) struct View<'a, N> {
+    pub nodes: &'a [N],
     pub root: Child4,
     pub leaves: &'a Tri4Leaves,
 }
 
-/// Traverse the subtree `start` with one ray, as [`Bvh4`]'s single-ray
+/// Traverse the subtree `start` with one ray, as [`super::Bvh4`]'s single-ray
 /// traversal does from the root (same box test, same leaf test, near to
 /// far), from the ray's current `tfar` and nearest hit `best`: the packet
 /// hands its last few active rays over to this, as the hybrid traversal of
@@ -250,8 +324,8 @@ pub(crate) struct View<'a> {
 /// tracing for arbitrary ray distributions on the Intel MIC architecture"
 /// (2012) does. Returns true for an any-hit query's hit (`ANY`).
 #[inline(always)]
-pub(crate) fn single_subtree<const ANY: bool>(
-    view: &View,
+pub(crate) fn single_subtree4<const ANY: bool>(
+    view: &View<'_, Node4>,
     start: Child4,
     ray: &Ray,
     tfar: &mut f32,
@@ -329,7 +403,7 @@ pub(crate) const STACK: usize = 3 * MAX_DEPTH + 1;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh::BuildOptions;
+    use crate::accel::bvh::{BuildOptions, Bvh4, Bvh8};
     use crate::accel::BruteForce;
     use crate::mesh::TriangleMesh;
     use crate::rng::Pcg32;
@@ -420,9 +494,15 @@ mod tests {
     /// (8): the same `t` bits, and the same triangle, `u` and `v` unless
     /// another triangle is hit at exactly the same `t` (a tie, checked with
     /// the scalar test on the packet's triangle); the same occlusion; and
-    /// agreement with brute force up to ties.
+    /// agreement with brute force up to ties. Over the 4-wide and the
+    /// 8-wide tree (the same kernel, generic over the node width).
     #[test]
     fn packets_equal_single_rays_and_brute_force() {
+        check_packets(|mesh| Bvh4::<Moller>::build(mesh, &BuildOptions::default()));
+        check_packets(|mesh| Bvh8::<Moller>::build(mesh, &BuildOptions::default()));
+    }
+
+    fn check_packets<B: PacketTree>(build: impl Fn(&TriangleMesh) -> B) {
         let mut rng = Pcg32::new(2001);
         let (mut packets, mut hits, mut ties) = (0usize, 0usize, 0usize);
         let modes: &[Option<u32>] = if avx2() {
@@ -433,7 +513,7 @@ mod tests {
         };
         for round in 0..6 {
             let mesh = scene(40 + 13 * round, round as u64);
-            let bvh = Bvh4::<Moller>::build(&mesh, &BuildOptions::default());
+            let bvh = build(&mesh);
             let brute = BruteForce::<Moller>::new(&mesh);
             let rays = rays(&mut rng, 5000 + 3 * round);
             packets += rays.chunks(LANES).filter(|c| coherent(c).is_some()).count();
@@ -488,6 +568,9 @@ mod tests {
         }
         assert!(packets > 1200, "too few coherent packets: {packets}");
         assert!(hits > 10_000, "too few hits: {hits}");
-        eprintln!("{packets} packets, {hits} hits, {ties} ties");
+        eprintln!(
+            "{}: {packets} packets, {hits} hits, {ties} ties",
+            std::any::type_name::<B>()
+        );
     }
 }

@@ -1,12 +1,13 @@
-//! The AVX2 kernels of the coherent-ray path of [`super::Bvh4`] (issue 8,
-//! item 4): eight rays in structure-of-arrays lanes traverse the 4-wide tree
-//! together, as in Wald, Slusallek, Benthin, Wagner, "Interactive rendering
+//! The AVX2 kernels of the coherent-ray path of [`super::Bvh4`] and
+//! [`super::Bvh8`] (issue 8, item 4): eight rays in structure-of-arrays
+//! lanes traverse the 4- or 8-wide tree together (one kernel, generic over
+//! the node width), as in Wald, Slusallek, Benthin, Wagner, "Interactive rendering
 //! with coherent ray tracing" (2001) and Embree's packet kernels (Wald et
 //! al. 2014).
 //!
 //! At an inner node each child box is tested against all active rays at
 //! once (the box broadcast, one ray per lane) with exactly the arithmetic
-//! of [`super::box4`] per lane: near plane by the sign of the reciprocal
+//! of [`super::box4`] (and [`super::box8`], the same) per lane: near plane by the sign of the reciprocal
 //! direction (shared by the packet, see [`super::packet`]), `z`, `y`, `x`
 //! in that order, `maxps`/`minps` with the same operand order, the exit
 //! widened by [`NodeBox::ROBUST_EXIT`]. So a ray enters a child here
@@ -26,7 +27,7 @@
 
 use super::node4::Child4;
 use super::node_box::NodeBox;
-use super::packet::{single_subtree, View, STACK};
+use super::packet::{PacketTree, View, WideNode};
 use super::tri4::{Tri4, CAP};
 use crate::hit::Hit;
 use crate::ray::Ray;
@@ -87,16 +88,23 @@ fn ld(row: &[f32; LANES]) -> __m256 {
     unsafe { _mm256_loadu_ps(row.as_ptr()) }
 }
 
-/// Traverse `view` with the packet `p` of `rays` (nearest hits for
+/// Most children of any node (the arrays below are sized for it).
+const MAX_WIDTH: usize = 8;
+
+/// Traverse `view` of `bvh` with the packet `p` of `rays` (nearest hits for
 /// `ANY = false`, occlusion for `ANY = true`), answers in `out`; at a node
-/// or leaf with `switch` or fewer active rays, they go on one by one.
+/// or leaf with `switch` or fewer active rays, they go on one by one with
+/// the tree's own single-ray traversal ([`PacketTree::single_subtree`]).
+/// `STACK` entries must hold the tree's deepest stack (each node pushes at
+/// most its width less one).
 ///
 /// # Safety
 /// The CPU must support AVX2 (checked by the caller with
 /// `is_x86_feature_detected!`).
 #[target_feature(enable = "avx2")]
-pub(crate) fn traverse<const ANY: bool>(
-    view: &View,
+pub(crate) fn traverse<const ANY: bool, B: PacketTree, const STACK: usize>(
+    bvh: &B,
+    view: &View<'_, B::Node>,
     rays: &[Ray],
     p: &Packet8,
     switch: u32,
@@ -127,7 +135,7 @@ pub(crate) fn traverse<const ANY: bool>(
             unsafe { _mm256_storeu_ps(tf.as_mut_ptr(), tfar) };
             if ANY {
                 for l in Lanes(am) {
-                    if single_subtree::<true>(view, cur, &rays[l], &mut tf[l], &mut None) {
+                    if bvh.single_subtree::<true>(view, cur, &rays[l], &mut tf[l], &mut None) {
                         tf[l] = f32::NAN;
                         occluded |= 1 << l;
                     }
@@ -153,7 +161,7 @@ pub(crate) fn traverse<const ANY: bool>(
                         v: spill.v[l],
                         prim: spill.prim[l],
                     });
-                    single_subtree::<false>(view, cur, &rays[l], &mut tf[l], &mut best);
+                    bvh.single_subtree::<false>(view, cur, &rays[l], &mut tf[l], &mut best);
                     if let Some(h) = best {
                         tf[l] = h.t;
                         spill.u[l] = h.u;
@@ -208,14 +216,14 @@ pub(crate) fn traverse<const ANY: bool>(
             }
         } else {
             let node = &view.nodes[cur.index as usize];
-            let mut ent = [nan; 4];
-            let mut near = [inf; 4];
+            let mut ent = [nan; MAX_WIDTH];
+            let mut near = [inf; MAX_WIDTH];
             let mut slots = 0u32;
-            for s in 0..4 {
-                if node.child[s] == Child4::EMPTY {
+            for s in 0..B::Node::WIDTH {
+                if node.child(s) == Child4::EMPTY {
                     break;
                 }
-                let (enter, m) = box_hits(&node.boxes.planes, s, &lanes, p, tfar, act);
+                let (enter, m) = box_hits(node, s, &lanes, p, tfar, act);
                 slots |= ((_mm256_movemask_ps(m) != 0) as u32) << s;
                 ent[s] = _mm256_blendv_ps(nan, enter, m);
                 near[s] = _mm256_blendv_ps(inf, enter, m);
@@ -224,14 +232,14 @@ pub(crate) fn traverse<const ANY: bool>(
                 let first = slots.trailing_zeros() as usize;
                 if slots & (slots - 1) == 0 {
                     // One child entered: no ordering.
-                    cur = node.child[first];
+                    cur = node.child(first);
                     act = _mm256_cmp_ps::<_CMP_LE_OQ>(ent[first], tfar);
                     continue;
                 }
                 // Entered children, farthest first by the packet's nearest
                 // entry.
-                let mut tmin = [0f32; 4];
-                let mut order = [0usize; 4];
+                let mut tmin = [0f32; MAX_WIDTH];
+                let mut order = [0usize; MAX_WIDTH];
                 let mut n = 0;
                 while slots != 0 {
                     let s = slots.trailing_zeros() as usize;
@@ -251,11 +259,11 @@ pub(crate) fn traverse<const ANY: bool>(
                     unsafe {
                         _mm256_storeu_ps(stack_t[sp].as_mut_ptr() as *mut f32, ent[s]);
                     }
-                    stack_c[sp].write(node.child[s]);
+                    stack_c[sp].write(node.child(s));
                     sp += 1;
                 }
                 let s = order[n - 1];
-                cur = node.child[s];
+                cur = node.child(s);
                 act = _mm256_cmp_ps::<_CMP_LE_OQ>(ent[s], tfar);
                 continue;
             }
@@ -348,7 +356,7 @@ impl RayLanes {
 #[inline]
 #[target_feature(enable = "avx2")]
 fn box_hits(
-    planes: &[[f32; 4]; 6],
+    node: &impl WideNode,
     s: usize,
     r: &RayLanes,
     p: &Packet8,
@@ -359,8 +367,8 @@ fn box_hits(
     let mut exit = _mm256_set1_ps(f32::INFINITY);
     for a in (0..3).rev() {
         let n = p.near[a];
-        let lo = _mm256_set1_ps(planes[n][s]);
-        let hi = _mm256_set1_ps(planes[n ^ 1][s]);
+        let lo = _mm256_set1_ps(node.plane(n, s));
+        let hi = _mm256_set1_ps(node.plane(n ^ 1, s));
         let tn = _mm256_mul_ps(_mm256_sub_ps(lo, r.o[a]), r.inv[a]);
         let tf = _mm256_mul_ps(_mm256_sub_ps(hi, r.o[a]), r.inv[a]);
         enter = _mm256_max_ps(tn, enter);
