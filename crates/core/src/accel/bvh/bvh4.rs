@@ -5,9 +5,9 @@ use super::build::{build, BuildOptions};
 use super::node4::{collapse, Child4, Node4};
 use super::node_box::NodeBox;
 use super::tri4::{Ray4, Tri4Leaves};
+use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
-use crate::accel::leaf::LeafTriangles;
 use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
@@ -51,68 +51,6 @@ pub struct Bvh4<T: TriangleTest> {
     stats: AccelStats,
     /// Whether traversal fits in [`SMALL_STACK`] entries.
     small_stack: bool,
-}
-
-/// The leaves of a [`Bvh4`]: packs of four for [`Moller`], single
-/// triangles for the other tests.
-enum Leaves<T: TriangleTest> {
-    /// One triangle after the other; leaf references are triangle ranges.
-    Single(LeafTriangles<T>),
-    /// Packs of four; leaf references start at their first pack.
-    Packed(Tri4Leaves),
-}
-
-/// A leaf test for one ray, so that traversal is written once for both kinds
-/// of leaves (a trait rather than a closure, to force it inline).
-trait LeafTest {
-    /// Test the leaf `first`, `count` (see [`Tri4Leaves::test`]).
-    fn test<const ANY: bool>(
-        &self,
-        first: usize,
-        count: usize,
-        tfar: &mut f32,
-        best: &mut Option<Hit>,
-    ) -> bool;
-}
-
-struct PackedLeaf<'a> {
-    packs: &'a Tri4Leaves,
-    ray: &'a Ray,
-    r4: Ray4,
-}
-
-impl LeafTest for PackedLeaf<'_> {
-    #[inline(always)]
-    fn test<const ANY: bool>(
-        &self,
-        first: usize,
-        count: usize,
-        tfar: &mut f32,
-        best: &mut Option<Hit>,
-    ) -> bool {
-        self.packs
-            .test::<ANY>(first, count, self.ray, &self.r4, tfar, best)
-    }
-}
-
-struct SingleLeaf<'a, T: TriangleTest> {
-    tris: &'a LeafTriangles<T>,
-    ray: &'a Ray,
-    rd: T::RayData,
-}
-
-impl<T: TriangleTest> LeafTest for SingleLeaf<'_, T> {
-    #[inline(always)]
-    fn test<const ANY: bool>(
-        &self,
-        first: usize,
-        count: usize,
-        tfar: &mut f32,
-        best: &mut Option<Hit>,
-    ) -> bool {
-        self.tris
-            .test::<ANY>(first, count, self.ray, &self.rd, tfar, best)
-    }
 }
 
 impl<T: TriangleTest> Bvh4<T> {

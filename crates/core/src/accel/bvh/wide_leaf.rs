@@ -1,7 +1,7 @@
 //! The leaves of the wide BVHs of issue 8 and their per-ray test, written
 //! once for both kinds: Embree-style packs of four Möller triangles
 //! ([`Tri4Leaves`], Wald et al. 2014's `triangle4`) or one triangle after
-//! the other for the other tests. Used by [`super::Bvh8`].
+//! the other for the other tests. Used by [`super::Bvh4`] and [`super::Bvh8`].
 
 use super::tri4::{Ray4, Tri4Leaves};
 use crate::accel::leaf::LeafTriangles;
