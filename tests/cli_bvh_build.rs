@@ -5,19 +5,11 @@
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::PathBuf;
 
-fn raykit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raykit"))
-        .args(args)
-        .output()
-        .expect("the raykit binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::{raykit, s, text};
 
 fn teapot() -> PathBuf {
     let dir = std::env::var_os("RAYKIT_SHARED_DATA")
@@ -30,10 +22,6 @@ fn teapot() -> PathBuf {
         p.display()
     );
     p
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 temp path")
 }
 
 #[test]
@@ -52,7 +40,7 @@ fn trace_with_the_fast_build_matches_brute_force() {
         "--out",
         s(&rays),
     ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.status.success(), "{}", text(&o.stderr));
     let mesh = raykit_io::load_mesh(&mesh_path).unwrap();
     let ray_list = raykit_io::read_rays(&rays).unwrap();
     let brute = build_accel(
@@ -78,7 +66,7 @@ fn trace_with_the_fast_build_matches_brute_force() {
             "--bvh-build",
             "fast",
         ]);
-        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(o.status.success(), "{}", text(&o.stderr));
         let got = raykit_io::read_hits(&hits).unwrap();
         assert_eq!(got.len(), ray_list.len());
         let mut n_hits = 0;
@@ -101,6 +89,6 @@ fn trace_with_the_fast_build_matches_brute_force() {
 fn unknown_builder_is_refused() {
     let o = raykit(&["bench", "--mesh", "builtin:cornell", "--bvh-build", "nope"]);
     assert!(!o.status.success());
-    let err = stderr(&o);
+    let err = text(&o.stderr);
     assert!(err.contains("nope") && err.contains("sah"), "{err}");
 }

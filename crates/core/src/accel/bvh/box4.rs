@@ -75,7 +75,7 @@ impl RayBox4 {
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 /// `maxps` on one lane: `b` when either operand is NaN.
 #[inline(always)]
-fn max_sse(a: f32, b: f32) -> f32 {
+pub(super) fn max_sse(a: f32, b: f32) -> f32 {
     if a > b {
         a
     } else {
@@ -86,7 +86,7 @@ fn max_sse(a: f32, b: f32) -> f32 {
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 /// `minps` on one lane: `b` when either operand is NaN.
 #[inline(always)]
-fn min_sse(a: f32, b: f32) -> f32 {
+pub(super) fn min_sse(a: f32, b: f32) -> f32 {
     if a < b {
         a
     } else {

@@ -18,6 +18,8 @@
 //! single rounding would change the distances, and the argument that they
 //! never cull a box whose triangle the triangle test reports hit.
 
+#[cfg_attr(target_arch = "x86_64", allow(unused_imports))]
+use super::box4::{max_sse, min_sse};
 use super::node_box::NodeBox;
 use crate::aabb::Aabb;
 use crate::ray::Ray;
@@ -113,28 +115,6 @@ impl BoxPath {
             }
         }
         v
-    }
-}
-
-#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-/// `maxps` on one lane: `b` when either operand is NaN.
-#[inline(always)]
-fn max_sse(a: f32, b: f32) -> f32 {
-    if a > b {
-        a
-    } else {
-        b
-    }
-}
-
-#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-/// `minps` on one lane: `b` when either operand is NaN.
-#[inline(always)]
-fn min_sse(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
     }
 }
 
