@@ -54,7 +54,8 @@ pub struct BenchArgs {
     /// the structures × tests that --accel/--test list (`all` means bvh4 and
     /// moller, our fastest); prints ours, Embree's and the ratio per cell,
     /// our SAH cost beside the build times, and checks that every answer
-    /// agrees.
+    /// agrees. The environment variable RAYKIT_EMBREE_CONFIG adds to
+    /// Embree's device configuration (e.g. `isa=avx2`, `verbose=1`).
     #[arg(long, value_name = "ENGINE")]
     compare: Option<String>,
     /// `gpu` measures the GPU kernels (kd-stack, bvh-threaded × plucker,

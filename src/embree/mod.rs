@@ -34,11 +34,22 @@ unsafe impl Sync for EmbreeDevice {}
 impl EmbreeDevice {
     /// A device with `threads` build threads (0: Embree's default, all cores).
     pub fn new(threads: usize) -> Result<Arc<EmbreeDevice>> {
-        let config = CString::new(if threads == 0 {
+        let mut config = if threads == 0 {
             String::new()
         } else {
             format!("threads={threads}")
-        })?;
+        };
+        // Extra settings for experiments, e.g. `isa=avx2` or `verbose=1`
+        // (Embree's device configuration string).
+        if let Ok(extra) = std::env::var("RAYKIT_EMBREE_CONFIG") {
+            if !extra.trim().is_empty() {
+                if !config.is_empty() {
+                    config.push(',');
+                }
+                config.push_str(extra.trim());
+            }
+        }
+        let config = CString::new(config)?;
         // SAFETY: a valid NUL-terminated configuration string.
         let raw = unsafe { ffi::rtcNewDevice(config.as_ptr()) };
         if raw.is_null() {

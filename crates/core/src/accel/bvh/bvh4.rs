@@ -4,6 +4,7 @@ use super::box4::RayBox4;
 use super::build::{build, BuildOptions};
 use super::node4::{collapse, Child4, Node4};
 use super::node_box::NodeBox;
+use super::prefetch::prefetch_entered;
 use super::tri4::{Ray4, Tri4Leaves};
 use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
 use super::MAX_DEPTH;
@@ -173,6 +174,9 @@ impl<T: TriangleTest> Bvh4<T> {
                         cur = node.child[i0];
                         continue;
                     }
+                    // Two or more entered: fetch them all now, the nearest
+                    // and the ones pushed for later (`prefetch.rs`).
+                    prefetch_entered(&self.nodes, &node.child, h.mask, &leaf);
                     // SAFETY (every write and read through `st` below):
                     // the stack never holds more than the unvisited siblings
                     // of the current node's ancestors, at most `wide.stack`

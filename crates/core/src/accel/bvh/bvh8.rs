@@ -5,6 +5,7 @@ use super::build::{build, BuildOptions};
 use super::node4::Child4;
 use super::node8::{collapse8, Node8};
 use super::node_box::NodeBox;
+use super::prefetch::prefetch_entered;
 use super::tri4::{Ray4, Tri4Leaves};
 use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
 use super::MAX_DEPTH;
@@ -250,6 +251,9 @@ impl<T: TriangleTest> Bvh8<T> {
                         cur = node.child[i0];
                         continue;
                     }
+                    // Two or more entered: fetch them all now, the nearest
+                    // and the ones pushed for later ([`super::prefetch`]).
+                    prefetch_entered(&self.nodes, &node.child, h.mask, &leaf);
                     // SAFETY (every write and read through `st` below):
                     // the stack never holds more than the unvisited siblings
                     // of the current node's ancestors, at most `wide.stack`

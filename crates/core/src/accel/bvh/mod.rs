@@ -34,6 +34,7 @@ mod node_box;
 mod packet;
 #[cfg(target_arch = "x86_64")]
 mod packet_avx2;
+mod prefetch;
 pub(crate) use node_box::NodeBox;
 mod threaded;
 mod tri4;

@@ -26,6 +26,7 @@
 use super::box4::RayBox4;
 use super::node4::{Child4, Node4};
 use super::node8::Node8;
+use super::prefetch::prefetch_child;
 use super::tri4::{Ray4, Tri4Leaves};
 use super::MAX_DEPTH;
 use crate::accel::{Accel, BATCH_GRAIN};
@@ -355,6 +356,7 @@ pub(crate) fn single_subtree4<const ANY: bool>(
                     mask &= mask - 1;
                     stack[sp].write((node.child[s], h.t[s]));
                     sp += 1;
+                    prefetch_child(view.nodes, view.leaves.packs(), node.child[s]);
                 }
                 continue;
             }
@@ -376,6 +378,8 @@ pub(crate) fn single_subtree4<const ANY: bool>(
                 for &s in &order[..n - 1] {
                     stack[sp].write((node.child[s], h.t[s]));
                     sp += 1;
+                    // Fetched now, visited later (`prefetch.rs`).
+                    prefetch_child(view.nodes, view.leaves.packs(), node.child[s]);
                 }
                 cur = node.child[order[n - 1]];
                 continue;

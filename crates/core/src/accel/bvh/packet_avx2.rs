@@ -28,6 +28,7 @@
 use super::node4::Child4;
 use super::node_box::NodeBox;
 use super::packet::{PacketTree, View, WideNode};
+use super::prefetch::prefetch_child;
 use super::tri4::{Tri4, CAP};
 use crate::hit::Hit;
 use crate::ray::Ray;
@@ -261,6 +262,8 @@ pub(crate) fn traverse<const ANY: bool, B: PacketTree, const STACK: usize>(
                     }
                     stack_c[sp].write(node.child(s));
                     sp += 1;
+                    // Fetched now, visited later (`prefetch.rs`).
+                    prefetch_child(view.nodes, view.leaves.packs(), node.child(s));
                 }
                 let s = order[n - 1];
                 cur = node.child(s);

@@ -31,6 +31,11 @@ pub(crate) trait LeafTest {
         tfar: &mut f32,
         best: &mut Option<Hit>,
     ) -> bool;
+
+    /// Start fetching the leaf whose data starts at `first` (a hint; the
+    /// one-triangle leaves do nothing).
+    #[inline(always)]
+    fn prefetch(&self, _first: usize) {}
 }
 
 /// [`LeafTest`] over packs of four.
@@ -41,6 +46,11 @@ pub(crate) struct PackedLeaf<'a> {
 }
 
 impl LeafTest for PackedLeaf<'_> {
+    #[inline(always)]
+    fn prefetch(&self, first: usize) {
+        super::prefetch::prefetch_pack(self.packs.packs(), first);
+    }
+
     #[inline(always)]
     fn test<const ANY: bool>(
         &self,
