@@ -9,6 +9,12 @@ pub struct BuildArgs {
     /// Most triangles per BVH leaf (1-31; 1 gives paper 001's one-triangle leaves).
     #[arg(long, default_value_t = BuildOptions::default().max_leaf_size as u32, value_parser = clap::value_parser!(u32).range(1..=31))]
     max_leaf: u32,
+    /// Most triangles per leaf of the wide BVHs with leaves of four-triangle
+    /// packs (bvh4 and bvh8 over moller), in place of --max-leaf (1-31). The
+    /// SAH, which counts a leaf's pack tests, picks smaller leaves below it,
+    /// as Embree's builders do. Issue 8, step 3r.
+    #[arg(long, default_value_t = BuildOptions::default().packed_leaf_size as u32, value_parser = clap::value_parser!(u32).range(1..=31))]
+    max_packed_leaf: u32,
     /// SAH bins per axis (2-256).
     #[arg(long, default_value_t = BuildOptions::default().bins as u32, value_parser = clap::value_parser!(u32).range(2..=256))]
     bins: u32,
@@ -39,6 +45,7 @@ impl BuildArgs {
     pub fn options(&self) -> BuildOptions {
         BuildOptions {
             max_leaf_size: self.max_leaf as usize,
+            packed_leaf_size: self.max_packed_leaf as usize,
             bins: self.bins as usize,
             traversal_cost: self.traversal_cost.clamp(0.0, 1e3),
             quality: self.bvh_build,

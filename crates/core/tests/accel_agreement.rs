@@ -282,6 +282,7 @@ fn bvhs_of_every_build_quality_agree_with_brute_force() {
             let opts = BuildOptions {
                 quality,
                 max_leaf_size,
+                packed_leaf_size: max_leaf_size,
                 ..BuildOptions::default()
             };
             for (i, mesh) in meshes.iter().enumerate() {
@@ -291,7 +292,12 @@ fn bvhs_of_every_build_quality_agree_with_brute_force() {
                     mesh,
                     &rays,
                     &opts,
-                    &[AccelKind::Bvh2, AccelKind::Bvh4, AccelKind::ThreadedBvh],
+                    &[
+                        AccelKind::Bvh2,
+                        AccelKind::Bvh4,
+                        AccelKind::Bvh8,
+                        AccelKind::ThreadedBvh,
+                    ],
                 );
             }
         }

@@ -6,7 +6,7 @@ use super::node4::{collapse, Child4, Node4};
 use super::node_box::NodeBox;
 use super::prefetch::prefetch_entered;
 use super::tri4::{Ray4, Tri4Leaves};
-use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
+use super::wide_leaf::{wide_build_options, LeafTest, Leaves, PackedLeaf, SingleLeaf};
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
 use crate::accel::{Accel, AccelStats};
@@ -58,12 +58,7 @@ impl<T: TriangleTest> Bvh4<T> {
     /// Build over all triangles of `mesh`.
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
         let packed = TypeId::of::<T>() == TypeId::of::<Moller>();
-        // Packs of four: the SAH counts a leaf's pack tests, not its
-        // triangles (the other tests keep the caller's setting).
-        let options = &BuildOptions {
-            leaf_block: if packed { 4 } else { options.leaf_block },
-            ..options.clone()
-        };
+        let options = &wide_build_options(options, packed);
         let tree = build(mesh, options);
         let mut wide = collapse(&tree.root, options.traversal_cost as f64);
         let root_box = tree.root.bounds().into();
@@ -385,6 +380,7 @@ mod tests {
         let mesh = TriangleMesh::new(positions, indices);
         let opts = BuildOptions {
             max_leaf_size: 1,
+            packed_leaf_size: 1,
             ..Default::default()
         };
         let wide = Bvh4::<Moller>::build(&mesh, &opts);

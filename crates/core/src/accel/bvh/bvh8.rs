@@ -5,9 +5,8 @@ use super::build::{build, BuildOptions};
 use super::node4::Child4;
 use super::node8::{collapse8, Node8};
 use super::node_box::NodeBox;
-use super::prefetch::prefetch_entered;
 use super::tri4::{Ray4, Tri4Leaves};
-use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
+use super::wide_leaf::{wide_build_options, LeafTest, Leaves, PackedLeaf, SingleLeaf};
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
 use crate::accel::{Accel, AccelStats};
@@ -21,6 +20,8 @@ use std::mem::MaybeUninit;
 /// Traversal stack entries for any tree: each 8-wide node visited pushes at
 /// most seven.
 const STACK: usize = 7 * MAX_DEPTH + 1;
+
+mod walk;
 
 /// The stack of trees that need no more (most do).
 const SMALL_STACK: usize = 64;
@@ -58,11 +59,7 @@ impl<T: TriangleTest> Bvh8<T> {
     /// Build over all triangles of `mesh`.
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
         let packed = TypeId::of::<T>() == TypeId::of::<Moller>();
-        // Packs of four: the SAH counts a leaf's pack tests.
-        let options = &BuildOptions {
-            leaf_block: if packed { 4 } else { options.leaf_block },
-            ..options.clone()
-        };
+        let options = &wide_build_options(options, packed);
         let tree = build(mesh, options);
         let mut wide = collapse8(&tree.root, options.traversal_cost as f64);
         let root_box = tree.root.bounds().into();
@@ -243,67 +240,9 @@ impl<T: TriangleTest> Bvh8<T> {
                 let node = unsafe { self.nodes.get_unchecked(cur.index as usize) };
                 // SAFETY: `path` is a kernel this CPU runs (see `traverse`).
                 let h = unsafe { node.boxes.entries(path, &rb, ray.tnear, tfar) };
-                let mut mask = h.mask;
-                if mask != 0 {
-                    let i0 = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        cur = node.child[i0];
-                        continue;
-                    }
-                    // Two or more entered: fetch them all now, the nearest
-                    // and the ones pushed for later ([`super::prefetch`]).
-                    prefetch_entered(&self.nodes, &node.child, h.mask, &leaf);
-                    // SAFETY (every write and read through `st` below):
-                    // the stack never holds more than the unvisited siblings
-                    // of the current node's ancestors, at most `wide.stack`
-                    // entries, which `build` checked to be below `N`; reads
-                    // are of entries below `sp`, all written by a push.
-                    if ANY {
-                        // Any hit ends the query: no ordering needed.
-                        while mask != 0 {
-                            let i = mask.trailing_zeros() as usize;
-                            mask &= mask - 1;
-                            unsafe { st.add(sp).write((node.child[i], h.t[i])) };
-                            sp += 1;
-                        }
-                        cur = node.child[i0];
-                        continue;
-                    }
-                    let i1 = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        let (near, far) = if h.t[i0] <= h.t[i1] {
-                            (i0, i1)
-                        } else {
-                            (i1, i0)
-                        };
-                        unsafe { st.add(sp).write((node.child[far], h.t[far])) };
-                        sp += 1;
-                        cur = node.child[near];
-                        continue;
-                    }
-                    // Three or more: insertion sort straight onto the stack,
-                    // farthest deepest, then take the nearest off the top.
-                    let base = sp;
-                    let mut push = |e: (Child4, f32)| unsafe {
-                        let mut j = sp;
-                        while j > base && (*st.add(j - 1)).1 < e.1 {
-                            st.add(j).write(st.add(j - 1).read());
-                            j -= 1;
-                        }
-                        st.add(j).write(e);
-                        sp += 1;
-                    };
-                    push((node.child[i0], h.t[i0]));
-                    push((node.child[i1], h.t[i1]));
-                    while mask != 0 {
-                        let i = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        push((node.child[i], h.t[i]));
-                    }
-                    sp -= 1;
-                    cur = unsafe { st.add(sp).read().0 };
+                // SAFETY: the stack bound of `build`, as for `st` above.
+                if let Some(next) = unsafe { self.enter::<ANY>(node, &h, st, &mut sp, &leaf) } {
+                    cur = next;
                     continue;
                 }
             }
@@ -417,6 +356,12 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
         self.subtree::<ANY>(start, ray, tfar, best)
     }
 
+    /// Two rays stepped in turn (`bvh8/walk.rs`).
+    #[inline(always)]
+    fn singles<const ANY: bool>(&self, rays: &[Ray], done: impl FnMut(usize, bool, Option<Hit>)) {
+        self.interleaved::<ANY>(rays, done);
+    }
+
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     unsafe fn traverse_packet<const ANY: bool>(
@@ -469,6 +414,7 @@ mod tests {
         let mesh = TriangleMesh::new(positions, indices);
         let opts = BuildOptions {
             max_leaf_size: 1,
+            packed_leaf_size: 1,
             ..Default::default()
         };
         let brute = BruteForce::<Moller>::new(&mesh);

@@ -101,6 +101,24 @@ pub(crate) trait PacketTree: Accel + Sync {
         tfar: &mut f32,
         best: &mut Option<Hit>,
     ) -> bool;
+    /// Trace `rays` from the root one by one (those that formed no packet):
+    /// `done(i, any, best)` receives ray `i`'s any-hit answer (`ANY`) or
+    /// nearest hit, exactly the single-ray traversal's. A tree may
+    /// interleave the rays ([`super::Bvh8`] steps two in turn).
+    #[inline(always)]
+    fn singles<const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        mut done: impl FnMut(usize, bool, Option<Hit>),
+    ) {
+        for (i, ray) in rays.iter().enumerate() {
+            if ANY {
+                done(i, self.occluded(ray), None);
+            } else {
+                done(i, false, self.intersect(ray));
+            }
+        }
+    }
     /// [`super::packet_avx2::traverse`] with this tree's stack size.
     ///
     /// # Safety
@@ -142,9 +160,7 @@ fn intersect_batch_with<B: PacketTree>(
         .with_min_len(BATCH_GRAIN / LANES)
         .for_each(|(r, h)| {
             if !switch.is_some_and(|s| packet_intersect(bvh, r, h, s)) {
-                for (ray, hit) in r.iter().zip(h) {
-                    *hit = bvh.intersect(ray);
-                }
+                bvh.singles::<false>(r, |i, _, best| h[i] = best);
             }
         });
 }
@@ -168,9 +184,7 @@ fn occluded_batch_with<B: PacketTree>(
         .with_min_len(BATCH_GRAIN / LANES)
         .for_each(|(r, o)| {
             if !switch.is_some_and(|s| packet_occluded(bvh, r, o, s)) {
-                for (ray, occ) in r.iter().zip(o) {
-                    *occ = bvh.occluded(ray);
-                }
+                bvh.singles::<true>(r, |i, any, _| o[i] = any);
             }
         });
 }

@@ -3,6 +3,7 @@
 //! ([`Tri4Leaves`], Wald et al. 2014's `triangle4`) or one triangle after
 //! the other for the other tests. Used by [`super::Bvh4`] and [`super::Bvh8`].
 
+use super::build::BuildOptions;
 use super::tri4::{Ray4, Tri4Leaves};
 use crate::accel::leaf::LeafTriangles;
 use crate::hit::Hit;
@@ -82,5 +83,21 @@ impl<T: TriangleTest> LeafTest for SingleLeaf<'_, T> {
     ) -> bool {
         self.tris
             .test::<ANY>(first, count, self.ray, &self.rd, tfar, best)
+    }
+}
+
+/// The build options of a wide BVH: over packs of four (`packed`) the SAH
+/// counts a leaf's pack tests (`leaf_block` 4, as Embree's builders for
+/// `triangle4`) and leaves hold up to [`BuildOptions::packed_leaf_size`]
+/// triangles; one-triangle leaves keep the caller's options.
+pub(crate) fn wide_build_options(options: &BuildOptions, packed: bool) -> BuildOptions {
+    if packed {
+        BuildOptions {
+            leaf_block: 4,
+            max_leaf_size: options.packed_leaf_size,
+            ..options.clone()
+        }
+    } else {
+        options.clone()
     }
 }
