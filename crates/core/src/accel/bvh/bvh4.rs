@@ -2,9 +2,9 @@
 
 use super::box4::RayBox4;
 use super::build::{build, BuildOptions};
+use super::enter::enter;
 use super::node4::{collapse, Child4, Node4};
 use super::node_box::NodeBox;
-use super::prefetch::prefetch_entered;
 use super::tri4::{Ray4, Tri4Leaves};
 use super::wide_leaf::{wide_build_options, LeafTest, Leaves, PackedLeaf, SingleLeaf};
 use super::MAX_DEPTH;
@@ -161,68 +161,12 @@ impl<T: TriangleTest> Bvh4<T> {
                 // index of a node it pushed, so they are in bounds.
                 let node = unsafe { self.nodes.get_unchecked(cur.index as usize) };
                 let h = node.boxes.entries(&rb, ray.tnear, tfar);
-                let mut mask = h.mask;
-                if mask != 0 {
-                    let i0 = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        cur = node.child[i0];
-                        continue;
-                    }
-                    // Two or more entered: fetch them all now, the nearest
-                    // and the ones pushed for later (`prefetch.rs`).
-                    prefetch_entered(&self.nodes, &node.child, h.mask, &leaf);
-                    // SAFETY (every write and read through `st` below):
-                    // the stack never holds more than the unvisited siblings
-                    // of the current node's ancestors, at most `wide.stack`
-                    // entries, which `build` checked to be below `N`; reads
-                    // are of entries below `sp`, all written by a push.
-                    if ANY {
-                        // Any hit ends the query: no ordering needed.
-                        while mask != 0 {
-                            let i = mask.trailing_zeros() as usize;
-                            mask &= mask - 1;
-                            unsafe { st.add(sp).write((node.child[i], h.t[i])) };
-                            sp += 1;
-                        }
-                        cur = node.child[i0];
-                        continue;
-                    }
-                    let i1 = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        let (near, far) = if h.t[i0] <= h.t[i1] {
-                            (i0, i1)
-                        } else {
-                            (i1, i0)
-                        };
-                        unsafe { st.add(sp).write((node.child[far], h.t[far])) };
-                        sp += 1;
-                        cur = node.child[near];
-                        continue;
-                    }
-                    // Three or four: insertion sort straight onto the
-                    // stack, farthest deepest, then take the nearest off the
-                    // top.
-                    let base = sp;
-                    let mut push = |e: (Child4, f32)| unsafe {
-                        let mut j = sp;
-                        while j > base && (*st.add(j - 1)).1 < e.1 {
-                            st.add(j).write(st.add(j - 1).read());
-                            j -= 1;
-                        }
-                        st.add(j).write(e);
-                        sp += 1;
-                    };
-                    push((node.child[i0], h.t[i0]));
-                    push((node.child[i1], h.t[i1]));
-                    while mask != 0 {
-                        let i = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        push((node.child[i], h.t[i]));
-                    }
-                    sp -= 1;
-                    cur = unsafe { st.add(sp).read().0 };
+                // SAFETY: the stack bound of `build`, as for `st` above.
+                let next = unsafe {
+                    enter::<ANY, _>(&self.nodes, &node.child, &h.t, h.mask, st, &mut sp, &leaf)
+                };
+                if let Some(next) = next {
+                    cur = next;
                     continue;
                 }
             }

@@ -2,6 +2,7 @@
 
 use super::box8::{BoxPath, RayBox8};
 use super::build::{build, BuildOptions};
+use super::enter::enter;
 use super::node4::Child4;
 use super::node8::{collapse8, Node8};
 use super::node_box::NodeBox;
@@ -241,7 +242,10 @@ impl<T: TriangleTest> Bvh8<T> {
                 // SAFETY: `path` is a kernel this CPU runs (see `traverse`).
                 let h = unsafe { node.boxes.entries(path, &rb, ray.tnear, tfar) };
                 // SAFETY: the stack bound of `build`, as for `st` above.
-                if let Some(next) = unsafe { self.enter::<ANY>(node, &h, st, &mut sp, &leaf) } {
+                let next = unsafe {
+                    enter::<ANY, _>(&self.nodes, &node.child, &h.t, h.mask, st, &mut sp, &leaf)
+                };
+                if let Some(next) = next {
                     cur = next;
                     continue;
                 }

@@ -27,6 +27,7 @@ pub mod build;
 mod bvh2;
 mod bvh4;
 mod bvh8;
+mod enter;
 pub mod lbvh;
 mod node4;
 mod node8;

@@ -37,14 +37,17 @@ pub(crate) fn prefetch_lines(p: *const u8, lines: usize) {
 #[inline(always)]
 pub(crate) fn prefetch_child<N>(nodes: &[N], packs: &[Tri4], c: Child4) {
     if c.count == 0 {
-        let lines = std::mem::size_of::<N>().div_ceil(64);
-        prefetch_lines(
-            nodes.as_ptr().wrapping_add(c.index as usize) as *const u8,
-            lines,
-        );
+        prefetch_node(nodes, c.index as usize);
     } else {
         prefetch_pack(packs, c.index as usize);
     }
+}
+
+/// Request the whole node `nodes[index]`.
+#[inline(always)]
+fn prefetch_node<N>(nodes: &[N], index: usize) {
+    let lines = std::mem::size_of::<N>().div_ceil(64);
+    prefetch_lines(nodes.as_ptr().wrapping_add(index) as *const u8, lines);
 }
 
 /// Request the pack `packs[first]` (three cache lines).
@@ -67,11 +70,7 @@ pub(crate) fn prefetch_entered<N>(
         let c = children[mask.trailing_zeros() as usize];
         mask &= mask - 1;
         if c.count == 0 {
-            let lines = std::mem::size_of::<N>().div_ceil(64);
-            prefetch_lines(
-                nodes.as_ptr().wrapping_add(c.index as usize) as *const u8,
-                lines,
-            );
+            prefetch_node(nodes, c.index as usize);
         } else {
             leaf.prefetch(c.index as usize);
         }

@@ -13,13 +13,12 @@
 //! Single rays (and the packet path's hand-over) keep the plain loop of
 //! `bvh8.rs`, whose state stays in registers: run through a `Walk`, shadow
 //! rays on the full dragon lost 6% (0.96× → 0.90× Embree). Both share
-//! [`Bvh8::enter`], the choice of the next child.
+//! `bvh/enter.rs`, the choice of the next child.
 
 use super::{Bvh8, Leaves, PackedLeaf, Ray4, SMALL_STACK, STACK};
-use crate::accel::bvh::box8::{BoxPath, Hits8, RayBox8};
+use crate::accel::bvh::box8::{BoxPath, RayBox8};
+use crate::accel::bvh::enter::enter;
 use crate::accel::bvh::node4::Child4;
-use crate::accel::bvh::node8::Node8;
-use crate::accel::bvh::prefetch::prefetch_entered;
 use crate::accel::bvh::wide_leaf::LeafTest;
 use crate::hit::Hit;
 use crate::ray::Ray;
@@ -111,7 +110,18 @@ impl<T: TriangleTest> Bvh8<T> {
             // SAFETY: `path` is a kernel this CPU runs (see `traverse`).
             let h = unsafe { node.boxes.entries(path, &w.rb, w.ray.tnear, w.tfar) };
             // SAFETY: as for `st` above.
-            if let Some(next) = unsafe { self.enter::<ANY>(node, &h, st, &mut w.sp, &w.leaf) } {
+            let next = unsafe {
+                enter::<ANY, _>(
+                    &self.nodes,
+                    &node.child,
+                    &h.t,
+                    h.mask,
+                    st,
+                    &mut w.sp,
+                    &w.leaf,
+                )
+            };
+            if let Some(next) = next {
                 w.cur = next;
                 return None;
             }
@@ -129,86 +139,6 @@ impl<T: TriangleTest> Bvh8<T> {
                 return None;
             }
         }
-    }
-
-    /// The child of `node` to visit next among those the ray entered (`h`),
-    /// the others pushed onto the stack at `st`, `sp`: near to far for
-    /// nearest-hit queries (the nearest next, the rest insertion-sorted
-    /// straight onto the stack, farthest deepest), in slot order for
-    /// any-hit queries (`ANY`); all of them fetched at once
-    /// ([`crate::accel::bvh::prefetch`]). `None` when none was entered.
-    /// Shared by the single-ray loop and [`Walk`]'s steps.
-    ///
-    /// # Safety
-    /// `st` must have room for the pushes: at most seven above `sp` (the
-    /// stack bound that `build` checked).
-    #[inline(always)]
-    pub(super) unsafe fn enter<const ANY: bool>(
-        &self,
-        node: &Node8,
-        h: &Hits8,
-        st: *mut (Child4, f32),
-        sp: &mut usize,
-        leaf: &impl LeafTest,
-    ) -> Option<Child4> {
-        let mut mask = h.mask;
-        if mask == 0 {
-            return None;
-        }
-        let i0 = mask.trailing_zeros() as usize;
-        mask &= mask - 1;
-        if mask == 0 {
-            return Some(node.child[i0]);
-        }
-        // Two or more entered: fetch them all now, the nearest and the ones
-        // pushed for later.
-        prefetch_entered(&self.nodes, &node.child, h.mask, leaf);
-        // SAFETY (every access through `st`): the caller's room; reads are
-        // of entries at or above the first push.
-        if ANY {
-            // Any hit ends the query: no ordering needed.
-            while mask != 0 {
-                let i = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                unsafe { st.add(*sp).write((node.child[i], h.t[i])) };
-                *sp += 1;
-            }
-            return Some(node.child[i0]);
-        }
-        let i1 = mask.trailing_zeros() as usize;
-        mask &= mask - 1;
-        if mask == 0 {
-            let (near, far) = if h.t[i0] <= h.t[i1] {
-                (i0, i1)
-            } else {
-                (i1, i0)
-            };
-            unsafe { st.add(*sp).write((node.child[far], h.t[far])) };
-            *sp += 1;
-            return Some(node.child[near]);
-        }
-        // Three or more: insertion sort straight onto the stack, farthest
-        // deepest, then take the nearest off the top.
-        let base = *sp;
-        let mut top = *sp;
-        let mut push = |e: (Child4, f32)| unsafe {
-            let mut j = top;
-            while j > base && (*st.add(j - 1)).1 < e.1 {
-                st.add(j).write(st.add(j - 1).read());
-                j -= 1;
-            }
-            st.add(j).write(e);
-            top += 1;
-        };
-        push((node.child[i0], h.t[i0]));
-        push((node.child[i1], h.t[i1]));
-        while mask != 0 {
-            let i = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            push((node.child[i], h.t[i]));
-        }
-        *sp = top - 1;
-        Some(unsafe { st.add(*sp).read().0 })
     }
 
     /// The answers of `rays` from the root, two rays stepped in turn (see
