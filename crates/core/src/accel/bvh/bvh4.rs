@@ -96,6 +96,24 @@ impl<T: TriangleTest> Bvh4<T> {
         if self.stats.triangle_refs == 0 {
             return (None, false);
         }
+        let (mut tfar, mut best) = (ray.tfar, None);
+        let any = self.subtree::<ANY>(self.root, ray, &mut tfar, &mut best);
+        (best, any)
+    }
+
+    /// The single-ray traversal of the subtree `start`, from the ray's
+    /// current `tfar` and nearest hit `best` (both updated): from the root
+    /// for [`Accel::intersect`] and [`Accel::occluded`], from a packet's
+    /// node for the hand-over of the packet path (issue 8; Benthin et al.
+    /// 2012). Returns true for an any-hit query's hit (`ANY`).
+    #[inline(always)]
+    fn subtree<const ANY: bool>(
+        &self,
+        start: Child4,
+        ray: &Ray,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
         match &self.leaves {
             Leaves::Packed(packs) => {
                 let leaf = PackedLeaf {
@@ -103,7 +121,7 @@ impl<T: TriangleTest> Bvh4<T> {
                     ray,
                     r4: Ray4::new(ray),
                 };
-                self.walk::<ANY>(ray, leaf)
+                self.walk::<ANY>(start, ray, leaf, tfar, best)
             }
             Leaves::Single(tris) => {
                 let leaf = SingleLeaf {
@@ -111,31 +129,44 @@ impl<T: TriangleTest> Bvh4<T> {
                     ray,
                     rd: T::prepare(ray),
                 };
-                self.walk::<ANY>(ray, leaf)
+                self.walk::<ANY>(start, ray, leaf, tfar, best)
             }
         }
     }
 
     #[inline(always)]
-    fn walk<const ANY: bool>(&self, ray: &Ray, leaf: impl LeafTest) -> (Option<Hit>, bool) {
+    fn walk<const ANY: bool>(
+        &self,
+        start: Child4,
+        ray: &Ray,
+        leaf: impl LeafTest,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
         if self.small_stack {
-            self.traverse_with::<ANY, SMALL_STACK>(ray, leaf)
+            self.traverse_with::<ANY, SMALL_STACK>(start, ray, leaf, tfar, best)
         } else {
-            self.traverse_with::<ANY, STACK>(ray, leaf)
+            self.traverse_with::<ANY, STACK>(start, ray, leaf, tfar, best)
         }
     }
 
-    /// Traversal with an `N`-entry stack, enough for this tree; `leaf` tests
+    /// Traversal of the subtree `start` with an `N`-entry stack, enough for
+    /// this tree (a subtree needs no more than the whole tree); `leaf` tests
     /// a leaf's triangles (`first`, `count`, the current `tfar` and nearest
-    /// hit) and returns true for an any-hit query's hit.
+    /// hit) and returns true for an any-hit query's hit. `tfar` and `best`
+    /// are read at the start and written back at the end; the loop works on
+    /// local copies.
     #[inline(always)]
     fn traverse_with<const ANY: bool, const N: usize>(
         &self,
+        start: Child4,
         ray: &Ray,
         leaf: impl LeafTest,
-    ) -> (Option<Hit>, bool) {
-        let mut tfar = ray.tfar;
-        let mut best: Option<Hit> = None;
+        tfar_io: &mut f32,
+        best_io: &mut Option<Hit>,
+    ) -> bool {
+        let mut tfar = *tfar_io;
+        let mut best: Option<Hit> = *best_io;
         // No separate test of the root's box: the root node's test of its
         // children's boxes culls the same rays (they lie inside it), and a
         // root leaf's triangle test is exact. It cost 4% of a ray's
@@ -148,12 +179,13 @@ impl<T: TriangleTest> Bvh4<T> {
         let mut stack = [const { MaybeUninit::<(Child4, f32)>::uninit() }; N];
         let st = stack.as_mut_ptr() as *mut (Child4, f32);
         let mut sp = 0usize;
-        let mut cur = self.root;
+        let mut cur = start;
         loop {
             if cur.count > 0 {
                 let (first, count) = (cur.index as usize, cur.count as usize);
                 if leaf.test::<ANY>(first, count, &mut tfar, &mut best) {
-                    return (None, true);
+                    *tfar_io = tfar;
+                    return true;
                 }
             } else {
                 debug_assert!((cur.index as usize) < self.nodes.len());
@@ -174,7 +206,9 @@ impl<T: TriangleTest> Bvh4<T> {
             // since they were pushed.
             loop {
                 if sp == 0 {
-                    return (best, false);
+                    *tfar_io = tfar;
+                    *best_io = best;
+                    return false;
                 }
                 sp -= 1;
                 // SAFETY: entry `sp` is below the stack pointer, written by
@@ -269,13 +303,13 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh4<T> {
     #[inline(always)]
     fn single_subtree<const ANY: bool>(
         &self,
-        view: &super::packet::View<'_, Node4>,
+        _view: &super::packet::View<'_, Node4>,
         start: Child4,
         ray: &Ray,
         tfar: &mut f32,
         best: &mut Option<Hit>,
     ) -> bool {
-        super::packet::single_subtree4::<ANY>(view, start, ray, tfar, best)
+        self.subtree::<ANY>(start, ray, tfar, best)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -290,9 +324,7 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh4<T> {
     ) {
         // SAFETY: the caller guarantees AVX2.
         unsafe {
-            super::packet_avx2::traverse::<ANY, Self, { super::packet::STACK }>(
-                self, view, rays, p, switch, out,
-            )
+            super::packet_avx2::traverse::<ANY, Self, STACK>(self, view, rays, p, switch, out)
         }
     }
 }

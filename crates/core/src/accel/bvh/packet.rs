@@ -23,18 +23,14 @@
 //! triangle only at exactly the same `t`, a tie the traversal order
 //! decides), and the same occlusion answer.
 
-use super::box4::RayBox4;
 use super::node4::{Child4, Node4};
 use super::node8::Node8;
-use super::prefetch::prefetch_child;
-use super::tri4::{Ray4, Tri4Leaves};
-use super::MAX_DEPTH;
+use super::tri4::Tri4Leaves;
 use crate::accel::{Accel, BATCH_GRAIN};
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::tri::{Moller, TriangleTest};
 use rayon::prelude::*;
-use std::mem::MaybeUninit;
 
 /// Rays per packet.
 pub(crate) const LANES: usize = 8;
@@ -330,93 +326,6 @@ pub(crate) struct View<'a, N> {
     pub root: Child4,
     pub leaves: &'a Tri4Leaves,
 }
-
-/// Traverse the subtree `start` with one ray, as [`super::Bvh4`]'s single-ray
-/// traversal does from the root (same box test, same leaf test, near to
-/// far), from the ray's current `tfar` and nearest hit `best`: the packet
-/// hands its last few active rays over to this, as the hybrid traversal of
-/// Benthin, Wald, Woop, Ernst, Mark, "Combining single and packet ray
-/// tracing for arbitrary ray distributions on the Intel MIC architecture"
-/// (2012) does. Returns true for an any-hit query's hit (`ANY`).
-#[inline(always)]
-pub(crate) fn single_subtree4<const ANY: bool>(
-    view: &View<'_, Node4>,
-    start: Child4,
-    ray: &Ray,
-    tfar: &mut f32,
-    best: &mut Option<Hit>,
-) -> bool {
-    let rb = RayBox4::new(ray);
-    let r4 = Ray4::new(ray);
-    let mut stack = [const { MaybeUninit::<(Child4, f32)>::uninit() }; STACK];
-    let mut sp = 0usize;
-    let mut cur = start;
-    loop {
-        if cur.count > 0 {
-            let (first, count) = (cur.index as usize, cur.count as usize);
-            if view.leaves.test::<ANY>(first, count, ray, &r4, tfar, best) {
-                return true;
-            }
-        } else {
-            let node = &view.nodes[cur.index as usize];
-            let h = node.boxes.entries(&rb, ray.tnear, *tfar);
-            let mut mask = h.mask;
-            if ANY && mask != 0 {
-                // Any hit ends the query: no ordering needed.
-                cur = node.child[mask.trailing_zeros() as usize];
-                mask &= mask - 1;
-                while mask != 0 {
-                    let s = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    stack[sp].write((node.child[s], h.t[s]));
-                    sp += 1;
-                    prefetch_child(view.nodes, view.leaves.packs(), node.child[s]);
-                }
-                continue;
-            }
-            if mask != 0 {
-                // Entered children, farthest first.
-                let mut order = [0usize; 4];
-                let mut n = 0;
-                while mask != 0 {
-                    let s = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let mut j = n;
-                    while j > 0 && h.t[order[j - 1]] < h.t[s] {
-                        order[j] = order[j - 1];
-                        j -= 1;
-                    }
-                    order[j] = s;
-                    n += 1;
-                }
-                for &s in &order[..n - 1] {
-                    stack[sp].write((node.child[s], h.t[s]));
-                    sp += 1;
-                    // Fetched now, visited later (`prefetch.rs`).
-                    prefetch_child(view.nodes, view.leaves.packs(), node.child[s]);
-                }
-                cur = node.child[order[n - 1]];
-                continue;
-            }
-        }
-        loop {
-            if sp == 0 {
-                return false;
-            }
-            sp -= 1;
-            // SAFETY: every entry below the stack pointer was written by a
-            // push above (`sp` grows only right after a write).
-            let (c, t) = unsafe { stack[sp].assume_init() };
-            if t <= *tfar {
-                cur = c;
-                break;
-            }
-        }
-    }
-}
-
-/// Traversal stack entries: each node pushes at most three.
-pub(crate) const STACK: usize = 3 * MAX_DEPTH + 1;
 
 #[cfg(test)]
 mod tests {
