@@ -55,7 +55,9 @@ pub struct BenchArgs {
     /// moller, our fastest); prints ours, Embree's and the ratio per cell,
     /// our SAH cost beside the build times, and checks that every answer
     /// agrees. The environment variable RAYKIT_EMBREE_CONFIG adds to
-    /// Embree's device configuration (e.g. `isa=avx2`, `verbose=1`).
+    /// Embree's device configuration (e.g. `isa=avx2`, `verbose=1`);
+    /// RAYKIT_EMBREE_TRACE_MEDIUM (any value) makes Embree trace its MEDIUM
+    /// build instead of its HIGH one.
     #[arg(long, value_name = "ENGINE")]
     compare: Option<String>,
     /// `gpu` measures the GPU kernels (kd-stack, bvh-threaded × plucker,

@@ -1,20 +1,20 @@
 //! 4-wide BVH with SIMD box tests and ordered stack traversal (issue 8).
 
 use super::box4::RayBox4;
-use super::build::{build, BuildOptions};
+use super::build::BuildOptions;
 use super::enter::enter;
-use super::node4::{collapse, Child4, Node4};
+use super::node4::{Child4, Node4};
 use super::node_box::NodeBox;
-use super::tri4::{Ray4, Tri4Leaves};
-use super::wide_leaf::{wide_build_options, LeafTest, Leaves, PackedLeaf, SingleLeaf};
+use super::tri4::Ray4;
+use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
+use super::wide_tree::build_wide;
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
 use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
-use crate::tri::{Moller, TriangleTest};
-use std::any::TypeId;
+use crate::tri::TriangleTest;
 use std::mem::MaybeUninit;
 
 /// Traversal stack entries for any tree: each wide node visited pushes at
@@ -57,36 +57,15 @@ pub struct Bvh4<T: TriangleTest> {
 impl<T: TriangleTest> Bvh4<T> {
     /// Build over all triangles of `mesh`.
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
-        let packed = TypeId::of::<T>() == TypeId::of::<Moller>();
-        let options = &wide_build_options(options, packed);
-        let tree = build(mesh, options);
-        let mut wide = collapse(&tree.root, options.traversal_cost as f64);
-        let root_box = tree.root.bounds().into();
-        let node_bytes = std::mem::size_of_val(&wide.nodes[..]);
-        let (leaves, binary) = if packed {
-            let packs = Tri4Leaves::new(mesh, &tree.order, &mut wide.nodes, &mut wide.root);
-            let stats = tree.stats(node_bytes, options);
-            let bytes = node_bytes + packs.bytes();
-            (Leaves::Packed(packs), AccelStats { bytes, ..stats })
-        } else {
-            let (tris, stats) = tree.into_leaves(mesh, node_bytes, options);
-            (Leaves::Single(tris), stats)
-        };
-        let stats = AccelStats {
-            nodes: wide.inner + wide.leaves,
-            leaves: wide.leaves,
-            depth: wide.depth,
-            sah_cost: wide.sah_cost,
-            ..binary
-        };
+        let wide = build_wide::<Node4, T>(mesh, options);
         // The traversal writes its stack unchecked (see `traverse_with`).
         assert!(wide.stack < STACK, "tree too deep for the traversal stack");
         Bvh4 {
             nodes: wide.nodes,
-            root_box,
+            root_box: wide.root_box,
             root: wide.root,
-            leaves,
-            stats,
+            leaves: wide.leaves,
+            stats: wide.stats,
             small_stack: wide.stack <= SMALL_STACK,
         }
     }

@@ -1,21 +1,21 @@
 //! 8-wide BVH with AVX box tests and ordered stack traversal (issue 8).
 
 use super::box8::{BoxPath, RayBox8};
-use super::build::{build, BuildOptions};
+use super::build::BuildOptions;
 use super::enter::enter;
 use super::node4::Child4;
-use super::node8::{collapse8, Node8};
+use super::node8::Node8;
 use super::node_box::NodeBox;
-use super::tri4::{Ray4, Tri4Leaves};
-use super::wide_leaf::{wide_build_options, LeafTest, Leaves, PackedLeaf, SingleLeaf};
+use super::tri4::Ray4;
+use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
+use super::wide_tree::build_wide;
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
 use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
-use crate::tri::{Moller, TriangleTest};
-use std::any::TypeId;
+use crate::tri::TriangleTest;
 use std::mem::MaybeUninit;
 
 /// Traversal stack entries for any tree: each 8-wide node visited pushes at
@@ -59,38 +59,15 @@ pub struct Bvh8<T: TriangleTest> {
 impl<T: TriangleTest> Bvh8<T> {
     /// Build over all triangles of `mesh`.
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
-        let packed = TypeId::of::<T>() == TypeId::of::<Moller>();
-        let options = &wide_build_options(options, packed);
-        let tree = build(mesh, options);
-        let mut wide = collapse8(&tree.root, options.traversal_cost as f64);
-        let root_box = tree.root.bounds().into();
-        let node_bytes = std::mem::size_of_val(&wide.nodes[..]);
-        let (leaves, binary) = if packed {
-            let refs = std::iter::once(&mut wide.root)
-                .chain(wide.nodes.iter_mut().flat_map(|n| n.child.iter_mut()));
-            let packs = Tri4Leaves::from_refs(mesh, &tree.order, refs);
-            let stats = tree.stats(node_bytes, options);
-            let bytes = node_bytes + packs.bytes();
-            (Leaves::Packed(packs), AccelStats { bytes, ..stats })
-        } else {
-            let (tris, stats) = tree.into_leaves(mesh, node_bytes, options);
-            (Leaves::Single(tris), stats)
-        };
-        let stats = AccelStats {
-            nodes: wide.inner + wide.leaves,
-            leaves: wide.leaves,
-            depth: wide.depth,
-            sah_cost: wide.sah_cost,
-            ..binary
-        };
+        let wide = build_wide::<Node8, T>(mesh, options);
         // The traversal writes its stack unchecked (see `traverse_with`).
         assert!(wide.stack < STACK, "tree too deep for the traversal stack");
         Bvh8 {
             nodes: wide.nodes,
-            root_box,
+            root_box: wide.root_box,
             root: wide.root,
-            leaves,
-            stats,
+            leaves: wide.leaves,
+            stats: wide.stats,
             small_stack: wide.stack <= SMALL_STACK,
             path: BoxPath::detect(),
         }
@@ -236,7 +213,7 @@ impl<T: TriangleTest> Bvh8<T> {
                 }
             } else {
                 debug_assert!((cur.index as usize) < self.nodes.len());
-                // SAFETY: inner references are made by `collapse8` from the
+                // SAFETY: inner references are made by `collapse` from the
                 // index of a node it pushed, so they are in bounds.
                 let node = unsafe { self.nodes.get_unchecked(cur.index as usize) };
                 // SAFETY: `path` is a kernel this CPU runs (see `traverse`).
@@ -389,7 +366,7 @@ mod tests {
     use super::*;
     use crate::accel::BruteForce;
     use crate::rng::Pcg32;
-    use crate::tri::Plucker;
+    use crate::tri::{Moller, Plucker};
     use glam::Vec3;
 
     fn agree(a: Option<Hit>, b: Option<Hit>) -> bool {

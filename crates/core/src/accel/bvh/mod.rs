@@ -27,6 +27,7 @@ pub mod build;
 mod bvh2;
 mod bvh4;
 mod bvh8;
+mod collapse;
 mod enter;
 pub mod lbvh;
 mod node4;
@@ -42,6 +43,7 @@ mod tri4;
 #[cfg(target_arch = "x86_64")]
 mod tri4_sse;
 mod wide_leaf;
+mod wide_tree;
 
 pub use build::{BuildNode, BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;

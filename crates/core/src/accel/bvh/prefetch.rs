@@ -45,7 +45,7 @@ pub(crate) fn prefetch_child<N>(nodes: &[N], packs: &[Tri4], c: Child4) {
 
 /// Request the whole node `nodes[index]`.
 #[inline(always)]
-fn prefetch_node<N>(nodes: &[N], index: usize) {
+pub(crate) fn prefetch_node<N>(nodes: &[N], index: usize) {
     let lines = std::mem::size_of::<N>().div_ceil(64);
     prefetch_lines(nodes.as_ptr().wrapping_add(index) as *const u8, lines);
 }

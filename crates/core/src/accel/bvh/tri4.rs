@@ -16,7 +16,7 @@
 //! pack hold a zero triangle, which the test never hits (its determinant is
 //! 0 or NaN for every ray) and which the lane mask excludes besides.
 
-use super::node4::{Child4, Node4};
+use super::node4::Child4;
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
@@ -169,20 +169,13 @@ pub(crate) struct Tri4Leaves {
 }
 
 impl Tri4Leaves {
-    /// Pack the leaves of a collapsed 4-wide tree: `order` is the build's
-    /// triangle order, and every leaf reference in `nodes` and `root`
-    /// (triangle range `index..index + count` of `order`) is rewritten to
-    /// start at its first pack instead; `count` stays the number of
-    /// triangles. Packs follow the nodes' order, so a node's leaves lie side
-    /// by side.
-    pub fn new(mesh: &TriangleMesh, order: &[u32], nodes: &mut [Node4], root: &mut Child4) -> Self {
-        let refs = std::iter::once(root).chain(nodes.iter_mut().flat_map(|n| n.child.iter_mut()));
-        Self::from_refs(mesh, order, refs)
-    }
-
-    /// [`Tri4Leaves::new`] for any tree: `refs` yields every child
-    /// reference (the root first, then node by node); the leaves among them
-    /// (`count > 0`) are packed in that order and rewritten.
+    /// Pack the leaves of a collapsed wide tree: `order` is the build's
+    /// triangle order, and `refs` yields every child reference (the root
+    /// first, then node by node); each leaf among them (`count > 0`,
+    /// triangle range `index..index + count` of `order`) is packed in that
+    /// order and rewritten to start at its first pack instead; `count` stays
+    /// the number of triangles. Packs follow the nodes' order, so a node's
+    /// leaves lie side by side.
     ///
     /// First the packs' triangle ranges (first position in `order`, lanes
     /// used) are assigned leaf by leaf, rewriting the references; then the
@@ -491,7 +484,7 @@ mod tests {
                 index: 0,
                 count: n as u32,
             };
-            let packed = Tri4Leaves::new(&mesh, &order, &mut [], &mut root);
+            let packed = Tri4Leaves::from_refs(&mesh, &order, std::iter::once(&mut root));
             assert_eq!(root.index, 0);
             let mut prims = Vec::new();
             packed.prims(root, &mut prims);

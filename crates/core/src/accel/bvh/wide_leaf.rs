@@ -49,6 +49,8 @@ pub(crate) struct PackedLeaf<'a> {
 impl LeafTest for PackedLeaf<'_> {
     #[inline(always)]
     fn prefetch(&self, first: usize) {
+        // The first pack only: fetching all of a leaf's packs was no
+        // faster (incoherent rays, full dragon).
         super::prefetch::prefetch_pack(self.packs.packs(), first);
     }
 

@@ -56,6 +56,22 @@ impl<'a, L: LeafTest, const N: usize> Walk<'a, L, N> {
         }
     }
 
+    /// Request child `c`'s first cache lines (a node, or a leaf's packs):
+    /// the walk visits it at its next step, after the other walk's step.
+    /// Requested when a node sends the ray into one child only (`enter`
+    /// fetches all of them when there are several): the load then overlaps
+    /// the other walk's step instead of waiting behind its mispredicted
+    /// branches (incoherent rays, full dragon: about +5%, three interleaved
+    /// runs).
+    #[inline(always)]
+    fn fetch<Nd>(&self, nodes: &[Nd], c: Child4) {
+        if c.count == 0 {
+            crate::accel::bvh::prefetch::prefetch_node(nodes, c.index as usize);
+        } else {
+            self.leaf.prefetch(c.index as usize);
+        }
+    }
+
     /// Start over with another ray from the root, keeping the stack's
     /// memory.
     #[inline(always)]
@@ -104,7 +120,7 @@ impl<T: TriangleTest> Bvh8<T> {
             }
         } else {
             debug_assert!((cur.index as usize) < self.nodes.len());
-            // SAFETY: inner references are made by `collapse8` from the
+            // SAFETY: inner references are made by `collapse` from the
             // index of a node it pushed, so they are in bounds.
             let node = unsafe { self.nodes.get_unchecked(cur.index as usize) };
             // SAFETY: `path` is a kernel this CPU runs (see `traverse`).
@@ -123,6 +139,9 @@ impl<T: TriangleTest> Bvh8<T> {
             };
             if let Some(next) = next {
                 w.cur = next;
+                if h.mask.count_ones() == 1 {
+                    w.fetch(&self.nodes, next);
+                }
                 return None;
             }
         }
@@ -181,7 +200,7 @@ impl<T: TriangleTest> Bvh8<T> {
         mut done: impl FnMut(usize, bool, Option<Hit>),
     ) {
         let packs = match &self.leaves {
-            Leaves::Packed(packs) if self.stats.triangle_refs > 0 && rays.len() >= 2 => packs,
+            Leaves::Packed(packs) if self.stats.triangle_refs > 0 && rays.len() >= WALKS => packs,
             _ => {
                 for (i, ray) in rays.iter().enumerate() {
                     let (best, any) = self.traverse::<ANY>(ray);
@@ -196,16 +215,16 @@ impl<T: TriangleTest> Bvh8<T> {
             r4: Ray4::new(ray),
         };
         if self.small_stack {
-            self.pair::<ANY, SMALL_STACK, _>(rays, path, leaf, done)
+            self.group::<ANY, SMALL_STACK, _>(rays, path, leaf, done)
         } else {
-            self.pair::<ANY, STACK, _>(rays, path, leaf, done)
+            self.group::<ANY, STACK, _>(rays, path, leaf, done)
         }
     }
 
-    /// Two walks over `rays` (at least two), each taking the next ray when
-    /// its own is done.
+    /// [`WALKS`] walks over `rays` (at least [`WALKS`]), each taking the
+    /// next ray when its own is done.
     #[inline(always)]
-    fn pair<'a, const ANY: bool, const N: usize, L: LeafTest>(
+    fn group<'a, const ANY: bool, const N: usize, L: LeafTest>(
         &self,
         rays: &'a [Ray],
         path: BoxPath,
@@ -213,12 +232,13 @@ impl<T: TriangleTest> Bvh8<T> {
         mut done: impl FnMut(usize, bool, Option<Hit>),
     ) {
         let start = |r: &'a Ray| Walk::<L, N>::new(r, self.root, r.tfar, None, leaf(r));
-        let mut walks = [start(&rays[0]), start(&rays[1])];
-        let mut index = [0, 1];
-        let mut live = [true, true];
-        let mut next = 2;
-        while live[0] || live[1] {
-            for k in 0..2 {
+        let mut walks: [Walk<L, N>; WALKS] = std::array::from_fn(|k| start(&rays[k]));
+        let mut index: [usize; WALKS] = std::array::from_fn(|k| k);
+        let mut live = [true; WALKS];
+        let mut next = WALKS;
+        let mut running = WALKS;
+        while running > 0 {
+            for k in 0..WALKS {
                 if !live[k] {
                     continue;
                 }
@@ -230,12 +250,17 @@ impl<T: TriangleTest> Bvh8<T> {
                         next += 1;
                     } else {
                         live[k] = false;
+                        running -= 1;
                     }
                 }
             }
         }
     }
 }
+
+/// How many rays are stepped in turn: three or four were no faster than
+/// two on the full dragon (incoherent rays, three interleaved runs each).
+const WALKS: usize = 2;
 
 #[cfg(test)]
 mod tests {

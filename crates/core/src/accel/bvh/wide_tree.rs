@@ -1,0 +1,95 @@
+//! The build shared by the wide BVHs of issue 8 ([`super::Bvh4`],
+//! [`super::Bvh8`]): the binned-SAH binary tree ([`super::build`]) collapsed
+//! into wide nodes ([`super::collapse`]), its leaves packed four triangles
+//! at a time over Möller (Embree's `triangle4`, Wald et al. 2014) or kept one
+//! triangle after the other for the other tests, and the shape figures of
+//! the wide tree.
+
+use super::build::{build, BuildNode, BuildOptions, BuildTree};
+use super::collapse::{collapse, WideSlots};
+use super::node4::Child4;
+use super::node_box::NodeBox;
+use super::tri4::Tri4Leaves;
+use super::wide_leaf::{wide_build_options, Leaves};
+use crate::accel::leaf::LeafTriangles;
+use crate::accel::AccelStats;
+use crate::mesh::TriangleMesh;
+use crate::tri::{Moller, TriangleTest};
+use std::any::TypeId;
+
+/// A wide tree ready for traversal.
+pub(crate) struct WideTree<N, T: TriangleTest> {
+    pub nodes: Vec<N>,
+    pub root_box: NodeBox,
+    pub root: Child4,
+    pub leaves: Leaves<T>,
+    /// Shape figures of the wide tree (nodes, leaves, depth and SAH cost as
+    /// collapsed; bytes of nodes and leaves).
+    pub stats: AccelStats,
+    /// Most traversal stack entries a ray can need.
+    pub stack: usize,
+}
+
+/// Build the wide tree of `N` nodes over all triangles of `mesh`.
+pub(crate) fn build_wide<N: WideSlots, T: TriangleTest>(
+    mesh: &TriangleMesh,
+    options: &BuildOptions,
+) -> WideTree<N, T> {
+    let packed = TypeId::of::<T>() == TypeId::of::<Moller>();
+    let options = &wide_build_options(options, packed);
+    let BuildTree { root, order } = build(mesh, options);
+    let mut wide = collapse::<N>(&root, options.traversal_cost as f64);
+    let root_box = root.bounds().into();
+    let node_bytes = std::mem::size_of_val(&wide.nodes[..]);
+    let triangle_refs = order.len();
+    // The binary tree is freed while the leaves are made (on one thread it
+    // took 6-7 ms of the 1M-triangle terrain's build).
+    let (_, leaves) = rayon::join(
+        || free(root, 0),
+        || {
+            if packed {
+                let refs = std::iter::once(&mut wide.root).chain(
+                    wide.nodes
+                        .iter_mut()
+                        .flat_map(|n| n.children_mut().iter_mut()),
+                );
+                Leaves::Packed(Tri4Leaves::from_refs(mesh, &order, refs))
+            } else {
+                Leaves::Single(LeafTriangles::new(mesh, order))
+            }
+        },
+    );
+    let leaf_bytes = match &leaves {
+        Leaves::Packed(p) => p.bytes(),
+        Leaves::Single(t) => t.bytes(),
+    };
+    let stats = AccelStats {
+        nodes: wide.inner + wide.leaves,
+        leaves: wide.leaves,
+        bytes: node_bytes + leaf_bytes,
+        node_bytes,
+        depth: wide.depth,
+        sah_cost: wide.sah_cost,
+        triangle_refs,
+    };
+    WideTree {
+        nodes: wide.nodes,
+        root_box,
+        root: wide.root,
+        leaves,
+        stats,
+        stack: wide.stack,
+    }
+}
+
+/// Free the binary tree below `node`, its top levels in parallel.
+fn free(node: BuildNode, depth: u32) {
+    if let BuildNode::Inner { children, .. } = node {
+        let [a, b] = *children;
+        if depth < 8 {
+            rayon::join(|| free(a, depth + 1), || free(b, depth + 1));
+        } else {
+            drop((a, b));
+        }
+    }
+}
