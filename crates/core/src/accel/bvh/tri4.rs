@@ -83,13 +83,14 @@ impl Tri4 {
 
     /// Test the lanes in `lanes` (bit `i` for lane `i`) against the ray over
     /// `[ray.tnear, tfar]`: with SSE on x86_64 (part of its baseline), one
-    /// lane after the other elsewhere.
+    /// lane after the other elsewhere. `EARLY` rejects certain misses
+    /// before the division (same answers; see `tri4_sse::hits`).
     #[inline(always)]
-    pub fn hits(&self, ray: &Ray, r: &Ray4, tfar: f32, lanes: u32) -> TriHits4 {
+    pub fn hits<const EARLY: bool>(&self, ray: &Ray, r: &Ray4, tfar: f32, lanes: u32) -> TriHits4 {
         #[cfg(target_arch = "x86_64")]
         {
             let _ = ray;
-            super::tri4_sse::hits(self, r, tfar, lanes)
+            super::tri4_sse::hits::<EARLY>(self, r, tfar, lanes)
         }
         #[cfg(not(target_arch = "x86_64"))]
         {
@@ -254,7 +255,11 @@ impl Tri4Leaves {
         for p in &self.packs[first..first + count.div_ceil(4)] {
             let lanes = if left >= 4 { 0xf } else { (1u32 << left) - 1 };
             left = left.saturating_sub(4);
-            let h = p.hits(ray, r, *tfar, lanes);
+            // Early rejection pays for nearest-hit queries only.
+            let h = match ANY {
+                true => p.hits::<false>(ray, r, *tfar, lanes),
+                false => p.hits::<true>(ray, r, *tfar, lanes),
+            };
             if h.mask == 0 {
                 continue;
             }
@@ -301,7 +306,13 @@ mod tests {
     /// degenerate one (all corners equal, two equal, or collinear), or one
     /// with a non-finite corner.
     fn corners(rng: &mut Pcg32) -> [Vec3; 3] {
-        let scale = 10f32.powf(rng.range_f32(-3.0, 3.0));
+        // Now and then tiny or huge, so that det nears the ends of the f32
+        // range (the early rejection's thresholds, `tri4_sse::early_miss`).
+        let scale = if rng.below(16) == 0 {
+            10f32.powf(rng.range_f32(-19.0, 19.0))
+        } else {
+            10f32.powf(rng.range_f32(-3.0, 3.0))
+        };
         let centre =
             rng.in_box(Vec3::splat(-1.0), Vec3::splat(1.0)) * 10f32.powf(rng.range_f32(-1.0, 4.0));
         let a = centre + rng.unit_vector() * scale;
@@ -379,6 +390,7 @@ mod tests {
                 // In the triangle's plane.
                 0 => (b - a) * rng.range_f32(-1.0, 1.0) + (c - a) * rng.range_f32(-1.0, 1.0),
                 1 => rng.unit_vector(),
+                2 => (target - origin) * 10f32.powf(rng.range_f32(-19.0, 19.0)),
                 _ => (target - origin) * rng.range_f32(0.1, 10.0),
             };
             if rng.below(32) == 0 {
@@ -408,7 +420,9 @@ mod tests {
                 }
             }
             let ray = Ray { tfar, ..ray };
-            let simd = pack.hits(&ray, &r, tfar, lanes);
+            let simd = pack.hits::<true>(&ray, &r, tfar, lanes);
+            let plain = pack.hits::<false>(&ray, &r, tfar, lanes);
+            assert_eq!(plain.mask, simd.mask);
             // The independent reference: the scalar test on each lane's own
             // precomputed record.
             for (lane, t) in pre.iter().enumerate() {
@@ -450,6 +464,64 @@ mod tests {
         assert!(
             edge_hits > 1000,
             "{edge_hits} rays hit both sides of an edge"
+        );
+    }
+
+    /// Rays that pass just beyond an edge of small triangles seen from far
+    /// away, where the edge tolerances reach their cap: `u` or `v` within
+    /// 1% of `-CAP`, or `u + v` within 1% of `1 + 2·CAP`. The SSE pack,
+    /// which rejects lanes early from the undivided barycentrics
+    /// (`tri4_sse::early_miss`), agrees with the scalar test on every lane,
+    /// including the hits that a margin of `2^-8` too small would reject
+    /// (counted, so the test fails if it stops reaching them).
+    #[test]
+    fn early_rejection_keeps_the_hits_at_the_capped_tolerance() {
+        let mut rng = Pcg32::new(256);
+        let (mut near_edge, mut near_sum) = (0, 0);
+        for n in 0..100_000 {
+            let mut pack = Tri4::EMPTY;
+            let mut pre = Vec::new();
+            let centre = rng.in_box(Vec3::splat(-100.0), Vec3::splat(100.0));
+            for lane in 0..4 {
+                let size = 10f32.powf(rng.range_f32(-3.0, -1.0));
+                let [a, b, c] = [0; 3].map(|_| centre + rng.unit_vector() * size);
+                let t = Moller::precompute(a, b, c);
+                pack.set(lane, &t, lane as u32);
+                pre.push((t, [a, b, c]));
+            }
+            let (_, [a, b, c]) = pre[rng.below(4) as usize];
+            let x = rng.range_f32(-0.01, 0.01);
+            let w = rng.range_f32(0.1, 0.8);
+            let (u, v) = match rng.below(3) {
+                0 => (-CAP * (1.0 + x), w),
+                1 => (w, -CAP * (1.0 + x)),
+                _ => {
+                    let sum = (1.0 + 2.0 * CAP) * (1.0 + x);
+                    (sum * w, sum * (1.0 - w))
+                }
+            };
+            let target = a + (b - a) * u + (c - a) * v;
+            let origin = target + rng.unit_vector() * 10f32.powf(rng.range_f32(2.0, 4.0));
+            let ray = Ray::new(origin, target - origin);
+            let r = Ray4::new(&ray);
+            let simd = pack.hits::<true>(&ray, &r, ray.tfar, 0xf);
+            for (lane, (t, _)) in pre.iter().enumerate() {
+                let want = Moller::intersect(t, &ray, &r.scale[0], ray.tfar);
+                assert_eq!(
+                    simd.mask & (1 << lane) != 0,
+                    want.is_some(),
+                    "ray {n} lane {lane}: {ray:?}"
+                );
+                if let Some(h) = want {
+                    let margin = 1.0 - 1.0 / 256.0;
+                    near_edge += (h.u.min(h.v) < -CAP * margin) as usize;
+                    near_sum += (h.u + h.v > (1.0 + 2.0 * CAP) * margin) as usize;
+                }
+            }
+        }
+        assert!(
+            near_edge > 100 && near_sum > 100,
+            "{near_edge} hits beyond -CAP·(1 - 2^-8), {near_sum} with u + v beyond (1 + 2·CAP)·(1 - 2^-8)"
         );
     }
 
