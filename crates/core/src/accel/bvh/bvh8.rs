@@ -337,10 +337,23 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
         self.subtree::<ANY>(start, ray, tfar, best)
     }
 
-    /// Two rays stepped in turn (`bvh8/walk.rs`).
+    /// Nearest hits: two rays stepped in turn (`bvh8/walk.rs`). Occlusion:
+    /// one ray after the other, the plain loop, which was 1.25–1.6× faster
+    /// than two walks on shadow rays (full dragon and scatter, 1 thread),
+    /// where interleaving made incoherent nearest-hit rays 1.2× faster.
     #[inline(always)]
-    fn singles<const ANY: bool>(&self, rays: &[Ray], done: impl FnMut(usize, bool, Option<Hit>)) {
-        self.interleaved::<ANY>(rays, done);
+    fn singles<const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        mut done: impl FnMut(usize, bool, Option<Hit>),
+    ) {
+        if ANY {
+            for (i, ray) in rays.iter().enumerate() {
+                done(i, self.occluded(ray), None);
+            }
+        } else {
+            self.interleaved::<ANY>(rays, done);
+        }
     }
 
     #[cfg(target_arch = "x86_64")]
