@@ -40,6 +40,32 @@ pub(crate) trait WideSlots: Copy + Send + Sync {
     fn slot(&self, slot: usize) -> (crate::aabb::Aabb, Child4);
 }
 
+/// [`WideSlots`] for a node type with fields `boxes` (a box row type with
+/// `EMPTY`, `set` and `get`) and `child` (`[Child4; WIDTH]`).
+macro_rules! wide_slots {
+    ($node:ty, $boxes:ident, $width:literal) => {
+        impl $crate::accel::bvh::collapse::WideSlots for $node {
+            const WIDTH: usize = $width;
+            const EMPTY: Self = Self {
+                boxes: $boxes::EMPTY,
+                child: [Child4::EMPTY; $width],
+            };
+            fn set_slot(&mut self, slot: usize, b: &NodeBox, child: Child4) {
+                self.boxes.set(slot, b);
+                self.child[slot] = child;
+            }
+            fn children_mut(&mut self) -> &mut [Child4] {
+                &mut self.child
+            }
+            #[cfg(test)]
+            fn slot(&self, slot: usize) -> ($crate::aabb::Aabb, Child4) {
+                (self.boxes.get(slot), self.child[slot])
+            }
+        }
+    };
+}
+pub(crate) use wide_slots;
+
 /// The inner nodes of a collapsed tree and its shape figures, defined as for
 /// the binary tree (see [`crate::accel::AccelStats`]).
 pub(crate) struct Collapsed<N> {

@@ -3,7 +3,6 @@
 //! by the wide trees.
 
 use super::box4::Box4;
-use super::collapse::WideSlots;
 use super::node_box::NodeBox;
 
 /// A reference to a child: an inner node (`count == 0`, `index` into the
@@ -33,21 +32,4 @@ pub(crate) struct Node4 {
     pub child: [Child4; 4],
 }
 
-impl WideSlots for Node4 {
-    const WIDTH: usize = 4;
-    const EMPTY: Self = Node4 {
-        boxes: Box4::EMPTY,
-        child: [Child4::EMPTY; 4],
-    };
-    fn set_slot(&mut self, slot: usize, b: &NodeBox, child: Child4) {
-        self.boxes.set(slot, b);
-        self.child[slot] = child;
-    }
-    fn children_mut(&mut self) -> &mut [Child4] {
-        &mut self.child
-    }
-    #[cfg(test)]
-    fn slot(&self, slot: usize) -> (crate::aabb::Aabb, Child4) {
-        (self.boxes.get(slot), self.child[slot])
-    }
-}
+super::collapse::wide_slots!(Node4, Box4, 4);
