@@ -1,6 +1,6 @@
-//! The 8-wide node of [`super::Bvh8`] and its construction by collapsing a
-//! binary build tree (issue 8): Embree's BVH8 layout on AVX machines (Wald
-//! et al. 2014), made the way [`super::node4`] makes the 4-wide tree.
+//! The 8-wide node of [`super::Bvh8`] (issue 8): Embree's BVH8 layout on
+//! AVX machines (Wald et al. 2014), made by collapsing a binary build tree
+//! ([`super::collapse`]) as the 4-wide one is.
 
 use super::box8::Box8;
 use super::node4::Child4;
