@@ -45,7 +45,7 @@ pub(crate) fn prefetch_child<N>(nodes: &[N], packs: &[Tri4], c: Child4) {
 
 /// Request the whole node `nodes[index]`.
 #[inline(always)]
-pub(crate) fn prefetch_node<N>(nodes: &[N], index: usize) {
+fn prefetch_node<N>(nodes: &[N], index: usize) {
     let lines = std::mem::size_of::<N>().div_ceil(64);
     prefetch_lines(nodes.as_ptr().wrapping_add(index) as *const u8, lines);
 }
@@ -67,12 +67,17 @@ pub(crate) fn prefetch_entered<N>(
     leaf: &impl LeafTest,
 ) {
     while mask != 0 {
-        let c = children[mask.trailing_zeros() as usize];
+        prefetch_with(nodes, children[mask.trailing_zeros() as usize], leaf);
         mask &= mask - 1;
-        if c.count == 0 {
-            prefetch_node(nodes, c.index as usize);
-        } else {
-            leaf.prefetch(c.index as usize);
-        }
+    }
+}
+
+/// Request child `c`: an inner node from `nodes`, a leaf through `leaf`.
+#[inline(always)]
+pub(crate) fn prefetch_with<N>(nodes: &[N], c: Child4, leaf: &impl LeafTest) {
+    if c.count == 0 {
+        prefetch_node(nodes, c.index as usize);
+    } else {
+        leaf.prefetch(c.index as usize);
     }
 }
