@@ -37,7 +37,7 @@ pub(crate) unsafe fn enter<const ANY: bool, N>(
     if rest == 0 {
         return Some(children[i0]);
     }
-    prefetch_entered(nodes, children, mask, leaf);
+    prefetch_entered::<ANY, _>(nodes, children, mask, leaf);
     // SAFETY (every access through `st`): the caller's room; reads are of
     // entries written by the pushes here.
     if ANY {

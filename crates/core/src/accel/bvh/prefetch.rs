@@ -58,26 +58,33 @@ pub(crate) fn prefetch_pack(packs: &[Tri4], first: usize) {
 }
 
 /// Request every child of `children` whose bit is set in `mask` (a node's
-/// entered children), inner nodes from `nodes`, leaves through `leaf`.
+/// entered children), inner nodes from `nodes`, leaves through `leaf`
+/// (for an any-hit query, `ANY`, a leaf's first pack only; see
+/// [`prefetch_with`]).
 #[inline(always)]
-pub(crate) fn prefetch_entered<N>(
+pub(crate) fn prefetch_entered<const ANY: bool, N>(
     nodes: &[N],
     children: &[Child4],
     mut mask: u32,
     leaf: &impl LeafTest,
 ) {
     while mask != 0 {
-        prefetch_with(nodes, children[mask.trailing_zeros() as usize], leaf);
+        prefetch_with::<ANY, N>(nodes, children[mask.trailing_zeros() as usize], leaf);
         mask &= mask - 1;
     }
 }
 
-/// Request child `c`: an inner node from `nodes`, a leaf through `leaf`.
+/// Request child `c`: an inner node from `nodes`, a leaf through `leaf`:
+/// all its packs for a nearest-hit query, the first for an any-hit query
+/// (`ANY`), which stops at the first pack with a hit.
 #[inline(always)]
-pub(crate) fn prefetch_with<N>(nodes: &[N], c: Child4, leaf: &impl LeafTest) {
+pub(crate) fn prefetch_with<const ANY: bool, N>(nodes: &[N], c: Child4, leaf: &impl LeafTest) {
     if c.count == 0 {
         prefetch_node(nodes, c.index as usize);
     } else {
-        leaf.prefetch(c.index as usize);
+        // Nearest-hit queries test every pack of a leaf: all are fetched.
+        // Any-hit queries stop at the first pack with a hit: only the first.
+        let count = if ANY { c.count.min(4) } else { c.count };
+        leaf.prefetch(c.index as usize, count as usize);
     }
 }

@@ -33,10 +33,10 @@ pub(crate) trait LeafTest {
         best: &mut Option<Hit>,
     ) -> bool;
 
-    /// Start fetching the leaf whose data starts at `first` (a hint; the
-    /// one-triangle leaves do nothing).
+    /// Start fetching the leaf `first`, `count` (a hint; the one-triangle
+    /// leaves do nothing).
     #[inline(always)]
-    fn prefetch(&self, _first: usize) {}
+    fn prefetch(&self, _first: usize, _count: usize) {}
 }
 
 /// [`LeafTest`] over packs of four.
@@ -48,10 +48,14 @@ pub(crate) struct PackedLeaf<'a> {
 
 impl LeafTest for PackedLeaf<'_> {
     #[inline(always)]
-    fn prefetch(&self, first: usize) {
-        // The first pack only: fetching all of a leaf's packs was no
-        // faster (incoherent rays, full dragon).
-        super::prefetch::prefetch_pack(self.packs.packs(), first);
+    fn prefetch(&self, first: usize, count: usize) {
+        // Every pack asked for (any-hit queries ask for the first only,
+        // `prefetch::prefetch_with`): on incoherent rays 1.07-1.15x faster
+        // on the scatter than the first pack alone, the dragon and the
+        // terrain within the noise (BENCHMARKS.md, step 3u).
+        for k in 0..count.div_ceil(4) {
+            super::prefetch::prefetch_pack(self.packs.packs(), first + k);
+        }
     }
 
     #[inline(always)]

@@ -130,7 +130,7 @@ impl<T: TriangleTest> Bvh8<T> {
                 // mispredicted branches (incoherent rays, full dragon:
                 // about +5%, three interleaved runs).
                 if h.mask.count_ones() == 1 {
-                    prefetch_with(&self.nodes, next, &w.leaf);
+                    prefetch_with::<ANY, _>(&self.nodes, next, &w.leaf);
                 }
                 return None;
             }
