@@ -21,9 +21,12 @@ pub struct BuildArgs {
     /// SAH cost of a node traversal relative to one triangle test.
     #[arg(long, default_value_t = BuildOptions::default().traversal_cost)]
     traversal_cost: f32,
-    /// BVH builder: `sah` (binned SAH, the better tree) or `fast` (linear
-    /// BVH after Karras 2012: Morton codes, radix sort; several times faster
-    /// to build, for dynamic scenes, a worse tree). Issue 8, step 3.
+    /// BVH builder: `sah` (binned SAH), `high` (the binned SAH, and bvh4 and
+    /// bvh8 over moller fill every node's free slots with the halves of their
+    /// largest children, as Embree's builders do: a few percent faster rays,
+    /// about 8% slower to build) or `fast` (linear BVH after Karras 2012:
+    /// Morton codes, radix sort; several times faster to build, for dynamic
+    /// scenes, a worse tree). Issue 8, steps 3 and 3v.
     #[arg(long, default_value = "sah", value_parser = BuildQuality::parse)]
     bvh_build: BuildQuality,
     /// kd-tree split rule: `sah` (Wald & Havran's O(N log N) SAH with perfect

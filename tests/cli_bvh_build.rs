@@ -1,7 +1,8 @@
 //! `--bvh-build fast` (issue 8, step 3: the linear BVH after Karras 2012)
-//! on a command that builds: `raykit trace` over bvh4 and bvh2 gives the
-//! hits of brute force computed in this process, and an unknown builder is
-//! refused cleanly.
+//! and `--bvh-build high` (step 3v: wide nodes filled) on a command that
+//! builds: `raykit trace` over bvh2, bvh4 and bvh8 gives the hits of brute
+//! force computed in this process, and an unknown builder is refused
+//! cleanly.
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
@@ -25,7 +26,7 @@ fn teapot() -> PathBuf {
 }
 
 #[test]
-fn trace_with_the_fast_build_matches_brute_force() {
+fn trace_with_the_fast_and_high_builds_matches_brute_force() {
     let dir = tempfile::tempdir().unwrap();
     let mesh_path = teapot();
     let rays = dir.path().join("r.bin");
@@ -49,8 +50,13 @@ fn trace_with_the_fast_build_matches_brute_force() {
         &mesh,
         &BuildOptions::default(),
     );
-    for accel in ["bvh4", "bvh2"] {
-        let hits = dir.path().join(format!("h-{accel}.bin"));
+    for (build, accel) in [
+        ("fast", "bvh4"),
+        ("fast", "bvh2"),
+        ("high", "bvh8"),
+        ("high", "bvh4"),
+    ] {
+        let hits = dir.path().join(format!("h-{build}-{accel}.bin"));
         let o = raykit(&[
             "trace",
             "--mesh",
@@ -64,7 +70,7 @@ fn trace_with_the_fast_build_matches_brute_force() {
             "--test",
             "moller",
             "--bvh-build",
-            "fast",
+            build,
         ]);
         assert!(o.status.success(), "{}", text(&o.stderr));
         let got = raykit_io::read_hits(&hits).unwrap();
@@ -72,9 +78,12 @@ fn trace_with_the_fast_build_matches_brute_force() {
         let mut n_hits = 0;
         for (r, g) in ray_list.iter().zip(&got) {
             let want = brute.intersect(r);
-            assert_eq!(want.is_some(), g.is_some(), "{accel}: {r:?}");
+            assert_eq!(want.is_some(), g.is_some(), "{build} {accel}: {r:?}");
             if let (Some(w), Some(g)) = (want, g) {
-                assert!((w.t - g.t).abs() <= 1e-5 * w.t, "{accel}: {w:?} vs {g:?}");
+                assert!(
+                    (w.t - g.t).abs() <= 1e-5 * w.t,
+                    "{build} {accel}: {w:?} vs {g:?}"
+                );
                 n_hits += 1;
             }
         }

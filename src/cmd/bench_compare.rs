@@ -10,7 +10,7 @@ use crate::embree::{EmbreeDevice, EmbreeScene, Quality};
 use crate::measure::{median_min_max, pool, timed};
 use crate::verify::{compare_hits, compare_occlusion, edge_grazes, occlusion_grazes, Verdict};
 use anyhow::Result;
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions, BuildQuality};
 use raykit_core::raysets::{self, RayKind};
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Hit, Ray, TriangleMesh};
@@ -75,6 +75,22 @@ fn trace_quality() -> Quality {
     }
 }
 
+/// The options of the structures we trace: the given ones, with the
+/// default binned SAH raised to [`BuildQuality::High`], since Embree traces
+/// its HIGH build (the build cells time each of ours against the Embree
+/// build of the same rung: these against HIGH, the given ones against
+/// MEDIUM).
+fn traced_options(options: &BuildOptions) -> BuildOptions {
+    let quality = match options.quality {
+        BuildQuality::Sah => BuildQuality::High,
+        q => q,
+    };
+    BuildOptions {
+        quality,
+        ..options.clone()
+    }
+}
+
 /// Our build's size and quality, shown beside its build time.
 #[derive(Serialize)]
 struct BuiltFigures {
@@ -88,6 +104,8 @@ struct BuiltFigures {
 struct Comparison {
     mesh: String,
     triangles: usize,
+    /// The builder of the structures traced (`--bvh-build`).
+    traced_build: String,
     ours: Vec<BuiltFigures>,
     builds_ms: Vec<Cell>,
     mrays: Vec<Cell>,
@@ -180,21 +198,28 @@ fn compare_mesh(
     });
     let mut builds = Vec::new();
     let mut ours: Vec<Box<dyn Accel>> = Vec::new();
+    let high = traced_options(&s.options);
     for (threads, p) in [(1, one), (n, all)] {
-        let mut timings = Vec::new();
-        for (i, &(kind, test)) in s.ours.iter().enumerate() {
-            let mut built = None;
-            let timing = time_median(s.reps, || {
-                built = Some(p.install(|| build_accel(kind, test, mesh, &s.options)));
-            });
-            if ours.len() == i {
-                ours.push(built.expect("built at least once"));
-            }
-            timings.push(timing);
-        }
         // The device (Embree's thread pool) is made outside the timing.
         let device = EmbreeDevice::new(threads)?;
         for quality in [Quality::High, Quality::Medium] {
+            // Our build at the same rung of the ladder: the traced (high)
+            // options against Embree HIGH, the given ones against MEDIUM.
+            let opts = match quality {
+                Quality::High => &high,
+                Quality::Medium => &s.options,
+            };
+            let mut timings = Vec::new();
+            for (i, &(kind, test)) in s.ours.iter().enumerate() {
+                let mut built = None;
+                let timing = time_median(s.reps, || {
+                    built = Some(p.install(|| build_accel(kind, test, mesh, opts)));
+                });
+                if quality == Quality::High && ours.len() == i {
+                    ours.push(built.expect("built at least once"));
+                }
+                timings.push(timing);
+            }
             let mut err = None;
             let (t_em, sp2) = time_median(s.reps, || {
                 if let Err(e) = EmbreeScene::build(&device, mesh, quality) {
@@ -281,6 +306,7 @@ fn compare_mesh(
     Ok(Comparison {
         mesh: name.to_string(),
         triangles: mesh.num_triangles(),
+        traced_build: format!("{:?}", high.quality).to_lowercase(),
         ours: s
             .ours
             .iter()
@@ -456,10 +482,11 @@ fn print_report(r: &Comparison, reps: usize) {
         })
         .collect();
     println!(
-        "{}: {} triangles; ours = {}; Embree 3 single-ray API ({} build) unless noted; median of {reps} runs",
+        "{}: {} triangles; ours = {} traced as built with --bvh-build {}; Embree 3 single-ray API ({} build) unless noted; median of {reps} runs",
         r.mesh,
         r.triangles,
         ours.join(", "),
+        r.traced_build,
         match trace_quality() {
             Quality::High => "HIGH",
             Quality::Medium => "MEDIUM",

@@ -268,7 +268,8 @@ fn stats_describe_the_tree() {
 }
 
 /// The BVH layouts over trees from every builder (issue 8, step 3: the
-/// binned SAH and the fast linear BVH) agree with brute force.
+/// binned SAH, with wide nodes filled (step 3v) or not, and the fast linear
+/// BVH) agree with brute force.
 #[test]
 fn bvhs_of_every_build_quality_agree_with_brute_force() {
     let meshes = [
@@ -277,7 +278,7 @@ fn bvhs_of_every_build_quality_agree_with_brute_force() {
         random_soup(40, 43),
         random_soup(1, 44),
     ];
-    for quality in [BuildQuality::Sah, BuildQuality::Fast] {
+    for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
         for max_leaf_size in [1, 4, 16] {
             let opts = BuildOptions {
                 quality,

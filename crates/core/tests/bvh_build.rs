@@ -83,7 +83,13 @@ fn check_tree(mesh: &TriangleMesh, tree: &BuildTree, opts: &BuildOptions) -> usi
                 bounds,
                 axis,
                 children,
+                leaf_ok,
             } => {
+                if *leaf_ok {
+                    assert!(opts.fill_wide_nodes, "marked only when filling");
+                    let (_, count) = node.triangle_range();
+                    assert!(count as usize <= opts.max_leaf_size, "a marked leaf fits");
+                }
                 assert!(*axis < 3);
                 let u = children[0].bounds().union(children[1].bounds());
                 assert_eq!(*bounds, u, "inner box is its children's union");
@@ -125,13 +131,21 @@ fn same_tree(a: &BuildNode, b: &BuildNode) -> bool {
                 bounds: b1,
                 axis: a1,
                 children: k1,
+                leaf_ok: o1,
             },
             BuildNode::Inner {
                 bounds: b2,
                 axis: a2,
                 children: k2,
+                leaf_ok: o2,
             },
-        ) => b1 == b2 && a1 == a2 && same_tree(&k1[0], &k2[0]) && same_tree(&k1[1], &k2[1]),
+        ) => {
+            b1 == b2
+                && a1 == a2
+                && o1 == o2
+                && same_tree(&k1[0], &k2[0])
+                && same_tree(&k1[1], &k2[1])
+        }
         _ => false,
     }
 }
@@ -148,11 +162,20 @@ fn every_builder_gives_valid_trees() {
         degenerate(3000),
     ];
     for quality in QUALITIES {
-        for (max_leaf_size, leaf_block) in [(1, 1), (4, 1), (4, 4), (8, 4), (31, 3)] {
+        for (max_leaf_size, leaf_block, fill_wide_nodes) in [
+            (1, 1, false),
+            (4, 1, false),
+            (4, 4, false),
+            (8, 4, false),
+            (31, 3, false),
+            (16, 4, true),
+            (31, 3, true),
+        ] {
             let opts = BuildOptions {
                 quality,
                 max_leaf_size,
                 leaf_block,
+                fill_wide_nodes,
                 ..BuildOptions::default()
             };
             for mesh in &meshes {
@@ -168,9 +191,16 @@ fn every_builder_gives_valid_trees() {
 #[test]
 fn builds_do_not_depend_on_threads() {
     let mesh = soup(200_000, 7);
-    for quality in QUALITIES {
+    for (quality, fill_wide_nodes) in QUALITIES
+        .map(|q| (q, false))
+        .into_iter()
+        .chain([(BuildQuality::Sah, true)])
+    {
         let opts = BuildOptions {
             quality,
+            fill_wide_nodes,
+            leaf_block: if fill_wide_nodes { 4 } else { 1 },
+            max_leaf_size: if fill_wide_nodes { 16 } else { 4 },
             ..BuildOptions::default()
         };
         let sequential = BuildOptions {

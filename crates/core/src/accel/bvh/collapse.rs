@@ -6,8 +6,11 @@
 //! Each wide node starts from the two children of a binary node and, while
 //! it has fewer than its width, replaces its largest-area inner child by
 //! that child's two children. Leaves are the binary tree's leaves, triangle
-//! ranges unchanged. Nodes are numbered in depth-first pre-order, the root
-//! first.
+//! ranges unchanged, and the inner nodes marked `leaf_ok` that a node has
+//! not opened (a tree built with [`super::BuildOptions::fill_wide_nodes`]:
+//! such a node is opened like any inner child while slots are free, which
+//! is Embree's rule, and otherwise becomes one leaf of its whole range).
+//! Nodes are numbered in depth-first pre-order, the root first.
 //!
 //! The top [`PAR_DEPTH`] levels collapse their children's subtrees in
 //! parallel, each into its own node array, concatenated afterwards in child
@@ -152,25 +155,34 @@ fn wide_children(node: &BuildNode, width: usize) -> ([&BuildNode; 8], usize) {
     let BuildNode::Inner { children, .. } = node else {
         unreachable!("only inner nodes have children")
     };
+    // Each kid's area, or -1 for a leaf (never opened): computed once.
+    let area = |k: &BuildNode| match k {
+        BuildNode::Inner { bounds, .. } => bounds.surface_area(),
+        BuildNode::Leaf { .. } => -1.0,
+    };
     let mut kids = [&children[0]; 8];
+    let mut areas = [-1.0f32; 8];
     kids[1] = &children[1];
+    areas[0] = area(kids[0]);
+    areas[1] = area(kids[1]);
     let mut n = 2;
     while n < width.min(8) {
-        let largest = (0..n)
-            .filter(|&i| matches!(kids[i], BuildNode::Inner { .. }))
-            .max_by(|&a, &b| {
-                let (sa, sb) = (
-                    kids[a].bounds().surface_area(),
-                    kids[b].bounds().surface_area(),
-                );
-                sa.total_cmp(&sb)
-            });
-        let Some(i) = largest else { break };
+        let mut i = 0;
+        for j in 1..n {
+            if areas[j] >= areas[i] {
+                i = j;
+            }
+        }
+        if areas[i] < 0.0 {
+            break;
+        }
         let BuildNode::Inner { children, .. } = kids[i] else {
-            unreachable!()
+            unreachable!("only inner kids have a non-negative area")
         };
         kids[i] = &children[0];
         kids[n] = &children[1];
+        areas[i] = area(kids[i]);
+        areas[n] = area(kids[n]);
         n += 1;
     }
     (kids, n)
@@ -195,12 +207,13 @@ impl Walk {
     ) -> Child4 {
         c.depth = c.depth.max(depth);
         let rel = node.bounds().surface_area() as f64 / self.root_area;
-        if let BuildNode::Leaf { first, count, .. } = node {
+        if let BuildNode::Leaf { .. } | BuildNode::Inner { leaf_ok: true, .. } = node {
+            let (first, count) = node.triangle_range();
             c.leaves += 1;
-            c.sah_cost += rel * *count as f64;
+            c.sah_cost += rel * count as f64;
             return Child4 {
-                index: *first,
-                count: *count,
+                index: first,
+                count,
             };
         }
         c.inner += 1;
@@ -268,26 +281,42 @@ mod tests {
     /// has at least two children, unused slots last with inverted boxes;
     /// each child's box contains its own children's boxes; the shape figures
     /// agree with the walk (inner nodes) and bound the stack.
+    ///
+    /// With [`BuildOptions::fill_wide_nodes`] (leaf blocks of four, as the
+    /// packed leaves build) the leaves are the marked subtrees instead, no
+    /// larger than the leaf bound, and a node keeps a free slot only when
+    /// every child is a leaf of one block, which cannot be split further.
     fn keeps_every_triangle_exactly_once<N: WideSlots>() {
-        for (n, leaf) in [
-            (1, 4),
-            (2, 1),
-            (5, 1),
-            (9, 1),
-            (1000, 4),
-            (20_000, 1),
-            (20_000, 8),
+        for (n, leaf, fill) in [
+            (1, 4, false),
+            (2, 1, false),
+            (5, 1, false),
+            (9, 1, false),
+            (1000, 4, false),
+            (20_000, 1, false),
+            (20_000, 8, false),
+            (1, 16, true),
+            (7, 16, true),
+            (1000, 16, true),
+            (20_000, 16, true),
+            (20_000, 8, true),
         ] {
             let mesh = soup(n, n as u64);
             let opts = BuildOptions {
                 max_leaf_size: leaf,
+                leaf_block: if fill { 4 } else { 1 },
+                fill_wide_nodes: fill,
                 ..Default::default()
             };
             let tree = build(&mesh, &opts);
             let (bin_nodes, bin_leaves, bin_depth, _) =
                 crate::accel::bvh::build::tree_shape(&tree.root, 1.0);
             let c = collapse::<N>(&tree.root, 1.0);
-            assert_eq!(c.leaves, bin_leaves, "same leaves as the binary tree");
+            if fill {
+                assert!(c.leaves <= bin_leaves, "marked subtrees are leaves");
+            } else {
+                assert_eq!(c.leaves, bin_leaves, "same leaves as the binary tree");
+            }
             assert!(c.inner + c.leaves <= bin_nodes);
             assert!(c.depth <= bin_depth);
             assert!(c.stack <= (N::WIDTH - 1) * c.depth as usize);
@@ -297,6 +326,7 @@ mod tests {
             let mut inner_seen = 0;
             while let Some(r) = stack.pop() {
                 if r.count > 0 {
+                    assert!(r.count as usize <= leaf, "leaf within the bound");
                     for s in &mut seen[r.index as usize..(r.index + r.count) as usize] {
                         *s += 1;
                     }
@@ -308,6 +338,12 @@ mod tests {
                     .filter(|&s| node.slot(s).1 != Child4::EMPTY)
                     .count();
                 assert!(used >= 2, "every wide node has at least two children");
+                if fill && used < N::WIDTH {
+                    assert!(
+                        (0..used).all(|s| (1..=4).contains(&node.slot(s).1.count)),
+                        "a free slot only beside leaves of one block (n = {n})"
+                    );
+                }
                 for s in 0..N::WIDTH {
                     let (outer, k) = node.slot(s);
                     if s >= used {
@@ -350,7 +386,8 @@ mod tests {
     /// The parallel collapse gives the serial walk's node array, node for
     /// node (boxes and references), and the same shape figures (the SAH
     /// cost summed in another order, so equal up to rounding), for both
-    /// widths and trees from one leaf to many levels of parallel subtrees.
+    /// widths, trees from one leaf to many levels of parallel subtrees, and
+    /// with filled nodes or not.
     #[test]
     fn parallel_collapse_equals_serial_walk() {
         fn check<N: WideSlots>(tree: &BuildNode, same: impl Fn(&N, &N) -> bool) {
@@ -370,9 +407,17 @@ mod tests {
         }
         for n in [1, 2, 7, 300, 20_000] {
             let mesh = soup(n, 5 + n as u64);
-            let tree = build(&mesh, &BuildOptions::default());
-            check::<Node4>(&tree.root, |a, b| a.boxes == b.boxes && a.child == b.child);
-            check::<Node8>(&tree.root, |a, b| a.boxes == b.boxes && a.child == b.child);
+            for fill in [false, true] {
+                let opts = BuildOptions {
+                    fill_wide_nodes: fill,
+                    leaf_block: if fill { 4 } else { 1 },
+                    max_leaf_size: if fill { 16 } else { 4 },
+                    ..BuildOptions::default()
+                };
+                let tree = build(&mesh, &opts);
+                check::<Node4>(&tree.root, |a, b| a.boxes == b.boxes && a.child == b.child);
+                check::<Node8>(&tree.root, |a, b| a.boxes == b.boxes && a.child == b.child);
+            }
         }
     }
 }

@@ -211,6 +211,7 @@ impl Ctx<'_> {
             bounds: b.aabb(),
             axis,
             children: Box::new([l, r]),
+            leaf_ok: false,
         };
         (node, b)
     }

@@ -37,6 +37,7 @@ mod packet;
 #[cfg(target_arch = "x86_64")]
 mod packet_avx2;
 mod prefetch;
+mod sweep;
 pub(crate) use node_box::NodeBox;
 mod threaded;
 mod tri4;

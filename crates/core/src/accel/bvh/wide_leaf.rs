@@ -3,7 +3,7 @@
 //! ([`Tri4Leaves`], Wald et al. 2014's `triangle4`) or one triangle after
 //! the other for the other tests. Used by [`super::Bvh4`] and [`super::Bvh8`].
 
-use super::build::BuildOptions;
+use super::build::{BuildOptions, BuildQuality};
 use super::tri4::{Ray4, Tri4Leaves};
 use crate::accel::leaf::LeafTriangles;
 use crate::hit::Hit;
@@ -94,13 +94,16 @@ impl<T: TriangleTest> LeafTest for SingleLeaf<'_, T> {
 
 /// The build options of a wide BVH: over packs of four (`packed`) the SAH
 /// counts a leaf's pack tests (`leaf_block` 4, as Embree's builders for
-/// `triangle4`) and leaves hold up to [`BuildOptions::packed_leaf_size`]
-/// triangles; one-triangle leaves keep the caller's options.
+/// `triangle4`), leaves hold up to [`BuildOptions::packed_leaf_size`]
+/// triangles and [`BuildQuality::High`] fills every node
+/// ([`BuildOptions::fill_wide_nodes`]); one-triangle leaves keep the
+/// caller's options.
 pub(crate) fn wide_build_options(options: &BuildOptions, packed: bool) -> BuildOptions {
     if packed {
         BuildOptions {
             leaf_block: 4,
             max_leaf_size: options.packed_leaf_size,
+            fill_wide_nodes: options.quality == BuildQuality::High,
             ..options.clone()
         }
     } else {
