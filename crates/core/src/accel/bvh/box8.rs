@@ -11,6 +11,10 @@
 //! - scalar: one box after the other, spelling out the `minps`/`maxps`
 //!   semantics (the second operand when either is NaN).
 //!
+//! On CPUs with AVX-512 the AVX kernel runs inside a traversal compiled for
+//! AVX-512 as well ([`BoxPath::Avx512`]): the same instructions' results,
+//! with twice the vector registers and compares into mask registers.
+//!
 //! The slab test is [`super::box4`]'s, term for term (see its docs for why
 //! it is conservative with respect to the triangle tests: the boxes are
 //! padded as [`NodeBox`]'s, the exit is widened by [`NodeBox::ROBUST_EXIT`],
@@ -79,6 +83,12 @@ pub(crate) enum BoxPath {
     /// 256-bit AVX (with AVX2 and FMA present, as the traversal is compiled
     /// for them).
     Avx2,
+    /// The AVX kernel, the traversal around it compiled for AVX-512 (F, VL,
+    /// BW, DQ) besides: the same 256-bit arithmetic, bit for bit, with 32
+    /// vector registers and compares into mask registers, as Embree runs its
+    /// AVX-512 kernels on such CPUs (issue 8, step 3v: single incoherent
+    /// rays 1.09x faster on the scatter).
+    Avx512,
     /// Two 128-bit SSE halves.
     Sse,
     /// One box after the other (off x86_64; on it, only in tests).
@@ -91,7 +101,9 @@ impl BoxPath {
     pub fn detect() -> BoxPath {
         #[cfg(target_arch = "x86_64")]
         {
-            if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+            if avx512() {
+                BoxPath::Avx512
+            } else if avx2() {
                 BoxPath::Avx2
             } else {
                 BoxPath::Sse
@@ -110,12 +122,38 @@ impl BoxPath {
         #[cfg(target_arch = "x86_64")]
         {
             v.push(BoxPath::Sse);
-            if BoxPath::detect() == BoxPath::Avx2 {
+            if avx2() {
                 v.push(BoxPath::Avx2);
+            }
+            if avx512() {
+                v.push(BoxPath::Avx512);
+            } else {
+                eprintln!("note: no AVX-512 on this CPU: the Avx512 traversal is not tested here");
             }
         }
         v
     }
+}
+
+/// AVX2 and FMA, which [`BoxPath::Avx2`]'s traversal is compiled for.
+#[cfg(target_arch = "x86_64")]
+fn avx2() -> bool {
+    is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
+}
+
+/// Every feature [`BoxPath::Avx512`]'s traversal is compiled for (what its
+/// `target_feature` attributes name).
+#[cfg(target_arch = "x86_64")]
+fn avx512() -> bool {
+    avx2()
+        && is_x86_feature_detected!("avx512f")
+        && is_x86_feature_detected!("avx512vl")
+        && is_x86_feature_detected!("avx512bw")
+        && is_x86_feature_detected!("avx512dq")
+        && is_x86_feature_detected!("bmi1")
+        && is_x86_feature_detected!("bmi2")
+        && is_x86_feature_detected!("lzcnt")
+        && is_x86_feature_detected!("popcnt")
 }
 
 impl Box8 {
@@ -158,7 +196,7 @@ impl Box8 {
         match path {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the caller guarantees AVX2 (hence AVX) is present.
-            BoxPath::Avx2 => unsafe { self.entries_avx(r, tnear, tfar) },
+            BoxPath::Avx2 | BoxPath::Avx512 => unsafe { self.entries_avx(r, tnear, tfar) },
             #[cfg(target_arch = "x86_64")]
             BoxPath::Sse => self.entries_sse(r, tnear, tfar),
             _ => self.entries_scalar(r, tnear, tfar),

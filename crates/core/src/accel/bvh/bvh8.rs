@@ -109,8 +109,30 @@ impl<T: TriangleTest> Bvh8<T> {
             // SAFETY: `path` is Avx2 only where `BoxPath::detect` found AVX2
             // and FMA on this CPU (`with_path` checks the same).
             BoxPath::Avx2 => unsafe { self.traverse_avx2::<ANY>(start, ray, tfar, best) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `path` is Avx512 only where `BoxPath::detect` found
+            // every feature `traverse_avx512` is compiled for.
+            BoxPath::Avx512 => unsafe { self.traverse_avx512::<ANY>(start, ray, tfar, best) },
             path => self.traverse_on::<ANY>(start, ray, path, tfar, best),
         }
+    }
+
+    /// The traversal compiled for AVX-512 (F, VL, BW, DQ) besides AVX2 and
+    /// FMA: the code and arithmetic of [`Bvh8::traverse_avx2`], with 32
+    /// vector registers and mask compares.
+    ///
+    /// # Safety
+    /// The CPU must support every feature named (`BoxPath::Avx512`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn traverse_avx512<const ANY: bool>(
+        &self,
+        start: Child4,
+        ray: &Ray,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        self.traverse_on::<ANY>(start, ray, BoxPath::Avx512, tfar, best)
     }
 
     /// The traversal compiled for AVX2 and FMA, so that the AVX box kernel

@@ -164,8 +164,26 @@ impl<T: TriangleTest> Bvh8<T> {
             // SAFETY: `path` is Avx2 only where `BoxPath::detect` found AVX2
             // and FMA on this CPU.
             BoxPath::Avx2 => unsafe { self.interleaved_avx2::<ANY>(rays, done) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `path` is Avx512 only where `BoxPath::detect` found
+            // every feature `interleaved_avx512` is compiled for.
+            BoxPath::Avx512 => unsafe { self.interleaved_avx512::<ANY>(rays, done) },
             path => self.interleaved_on::<ANY>(rays, path, done),
         }
+    }
+
+    /// [`Bvh8::interleaved`] compiled for AVX-512 (see `BoxPath::Avx512`).
+    ///
+    /// # Safety
+    /// The CPU must support every feature named.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn interleaved_avx512<const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        done: impl FnMut(usize, bool, Option<Hit>),
+    ) {
+        self.interleaved_on::<ANY>(rays, BoxPath::Avx512, done)
     }
 
     /// [`Bvh8::interleaved`] compiled for AVX2 and FMA.
