@@ -75,7 +75,7 @@ impl<T: TriangleTest> Bvh8<T> {
 
     /// Use the box kernel `path` instead of the detected one (for tests).
     #[cfg(test)]
-    fn with_path(mut self, path: BoxPath) -> Self {
+    pub(crate) fn with_path(mut self, path: BoxPath) -> Self {
         assert!(BoxPath::available().contains(&path));
         self.path = path;
         self

@@ -422,11 +422,20 @@ mod tests {
     /// another triangle is hit at exactly the same `t` (a tie, checked with
     /// the scalar test on the packet's triangle); the same occlusion; and
     /// agreement with brute force up to ties. Over the 4-wide and the
-    /// 8-wide tree (the same kernel, generic over the node width).
+    /// 8-wide tree (the same kernel, generic over the node width), the
+    /// latter with each AVX path this CPU has for the single-ray traversal
+    /// that packets hand their last rays to (AVX2, and AVX-512 besides).
     #[test]
     fn packets_equal_single_rays_and_brute_force() {
+        use super::super::box8::BoxPath;
         check_packets(|mesh| Bvh4::<Moller>::build(mesh, &BuildOptions::default()));
-        check_packets(|mesh| Bvh8::<Moller>::build(mesh, &BuildOptions::default()));
+        for path in BoxPath::available() {
+            if matches!(path, BoxPath::Avx2 | BoxPath::Avx512) {
+                check_packets(|mesh| {
+                    Bvh8::<Moller>::build(mesh, &BuildOptions::default()).with_path(path)
+                });
+            }
+        }
     }
 
     fn check_packets<B: PacketTree>(build: impl Fn(&TriangleMesh) -> B) {
