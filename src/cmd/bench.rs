@@ -54,7 +54,11 @@ pub struct BenchArgs {
     /// the structures × tests that --accel/--test list (`all` means bvh4 and
     /// moller, our fastest); prints ours, Embree's and the ratio per cell,
     /// our SAH cost beside the build times, and checks that every answer
-    /// agrees. The environment variable RAYKIT_EMBREE_CONFIG adds to
+    /// agrees. Builds are timed rung for rung: ours as --bvh-build says
+    /// (default `sah`) against Embree MEDIUM, and the trees we trace (`high`
+    /// where --bvh-build is `sah`, else the builder given) against Embree
+    /// HIGH, whose tree Embree traces. The environment variable
+    /// RAYKIT_EMBREE_CONFIG adds to
     /// Embree's device configuration (e.g. `isa=avx2`, `verbose=1`);
     /// RAYKIT_EMBREE_TRACE_MEDIUM (any value) makes Embree trace its MEDIUM
     /// build instead of its HIGH one.
