@@ -339,7 +339,9 @@ impl Bins {
     /// The cheapest bin boundary over the three axes under the SAH with
     /// `cost(n)` per leaf of `n` triangles and `c_trav` per node, relative
     /// to `parent_half_area`; `None` when no boundary has references on both
-    /// sides. Ties go to the lower axis, then the lower boundary.
+    /// sides. Ties go to the lower axis, then the lower boundary. Kept out
+    /// of line (see [`partition`]).
+    #[inline(never)]
     pub fn best_split(
         &mut self,
         nb: usize,
@@ -421,6 +423,12 @@ fn add(boxes: &mut [[Box4f; 3]], counts: &mut [[u32; 3]], k: usize, a: usize, p:
 /// branch predictor near the top of the tree: with the two-ended version's
 /// branches (and the axis a variable) the full dragon's build took 15% longer
 /// on one thread (issue 8, step 3r).
+///
+/// Kept out of line, as [`Bins::best_split`]: inlined into the build's node
+/// step, which happened when an unrelated module changed how the crate's
+/// code was split into codegen units, the scatter's build took 7% longer
+/// (one thread; issue 8, step 3w).
+#[inline(never)]
 pub(crate) fn partition(refs: &mut [PrimRef], map: &Mapping, split: &Split) -> (Box4f, Box4f) {
     // One loop per axis, so that the axis is a constant inside it.
     match split.axis {

@@ -317,8 +317,8 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
         self.stats.clone()
     }
 
-    /// Coherent packets of eight over Möller (issue 8, item 4; Wald et al.
-    /// 2001, with Benthin et al. 2012's hand-over to single rays; see
+    /// Coherent packets over Möller, sixteen rays with AVX-512, else eight
+    /// (issue 8, item 4; Wald et al. 2001, with Benthin et al. 2012's hand-over to single rays; see
     /// `bvh/packet.rs`), single rays otherwise.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         super::packet::intersect_batch(self, rays, hits);
@@ -380,19 +380,21 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
 
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn traverse_packet<const ANY: bool>(
+    unsafe fn traverse_packet<
+        const ANY: bool,
+        const L: usize,
+        W: super::packet_kernel::Width<L>,
+    >(
         &self,
         view: &super::packet::View<'_, Node8>,
         rays: &[Ray],
-        p: &super::packet_avx2::Packet8,
+        p: &super::packet_kernel::Packet<L>,
         switch: u32,
-        out: &mut super::packet_avx2::Hits8,
+        out: &mut super::packet_kernel::PacketHits<L>,
     ) {
-        // SAFETY: the caller guarantees AVX2. `build` checked that the
-        // tree's deepest stack is below `STACK`.
-        unsafe {
-            super::packet_avx2::traverse::<ANY, Self, STACK>(self, view, rays, p, switch, out)
-        }
+        // SAFETY: the caller guarantees the width's features. `build`
+        // checked that the tree's deepest stack is below `STACK`.
+        unsafe { W::traverse::<ANY, Self, STACK>(self, view, rays, p, switch, out) }
     }
 }
 

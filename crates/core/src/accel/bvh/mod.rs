@@ -8,11 +8,11 @@
 //!   box tests at once with SSE, ordered stack traversal; over Möller its
 //!   leaves are packs of four triangles tested at once (`tri4`, Embree's
 //!   `triangle4`).
-//! - `packet` (with `packet_avx2`): the coherent-ray path behind
-//!   [`Bvh4`]'s and [`Bvh8`]'s `intersect_batch` / `occluded_batch` over
-//!   Möller (issue 8, item 4): packets of eight rays of one octant traced
-//!   together with AVX2 (Wald et al. 2001), one kernel generic over the node
-//!   width, handing their last rays to the tree's own single-ray traversal
+//! - `packet` (with `packet_kernel` and `lanes`): the coherent-ray path
+//!   behind [`Bvh4`]'s and [`Bvh8`]'s `intersect_batch` / `occluded_batch`
+//!   over Möller (issue 8, item 4): packets of rays of one octant traced
+//!   together (Wald et al. 2001), sixteen with AVX-512 or eight with AVX2,
+//!   one kernel generic over the node width and the packet width, handing their last rays to the tree's own single-ray traversal
 //!   (Benthin et al. 2012), with the single-ray answers.
 //! - [`Bvh8`]: 8-wide BVH collapsed the same way (issue 8), eight box tests
 //!   at once with AVX (run-time detected; SSE and scalar fallbacks), the
@@ -29,13 +29,15 @@ mod bvh4;
 mod bvh8;
 mod collapse;
 mod enter;
+#[cfg(target_arch = "x86_64")]
+mod lanes;
 pub mod lbvh;
 mod node4;
 mod node8;
 mod node_box;
 mod packet;
 #[cfg(target_arch = "x86_64")]
-mod packet_avx2;
+mod packet_kernel;
 mod prefetch;
 mod sweep;
 pub(crate) use node_box::NodeBox;
