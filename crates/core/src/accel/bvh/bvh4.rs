@@ -5,6 +5,7 @@ use super::build::BuildOptions;
 use super::enter::enter;
 use super::node4::{Child4, Node4};
 use super::node_box::NodeBox;
+use super::stack::Stack;
 use super::tri4::Ray4;
 use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
 use super::wide_tree::build_wide;
@@ -15,7 +16,6 @@ use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
-use std::mem::MaybeUninit;
 
 /// Traversal stack entries for any tree: each wide node visited pushes at
 /// most three.
@@ -151,12 +151,8 @@ impl<T: TriangleTest> Bvh4<T> {
         // root leaf's triangle test is exact. It cost 4% of a ray's
         // instructions (callgrind, issue 8 step 3).
         let rb = RayBox4::new(ray);
-        // Left uninitialised: zeroing it cost about 5% of a ray's
-        // instructions (a memset per ray), and only pushed entries are read.
-        // Written and read through a raw pointer: bound checks and the copy
-        // of a sorted block cost about 5% more (callgrind, issue 8 step 3).
-        let mut stack = [const { MaybeUninit::<(Child4, f32)>::uninit() }; N];
-        let st = stack.as_mut_ptr() as *mut (Child4, f32);
+        let mut stack = Stack::<N>::new();
+        let st = stack.ptr();
         let mut sp = 0usize;
         let mut cur = start;
         loop {
@@ -174,7 +170,16 @@ impl<T: TriangleTest> Bvh4<T> {
                 let h = node.boxes.entries(&rb, ray.tnear, tfar);
                 // SAFETY: the stack bound of `build`, as for `st` above.
                 let next = unsafe {
-                    enter::<ANY, _>(&self.nodes, &node.child, &h.t, h.mask, st, &mut sp, &leaf)
+                    enter::<ANY, _>(
+                        &self.nodes,
+                        &node.child,
+                        &h.t,
+                        h.mask,
+                        st,
+                        &mut sp,
+                        &leaf,
+                        false,
+                    )
                 };
                 if let Some(next) = next {
                     cur = next;
@@ -192,7 +197,7 @@ impl<T: TriangleTest> Bvh4<T> {
                 sp -= 1;
                 // SAFETY: entry `sp` is below the stack pointer, written by
                 // a push.
-                let (c, t) = unsafe { st.add(sp).read() };
+                let (c, t) = unsafe { st.read(sp) };
                 if t <= tfar {
                     cur = c;
                     break;

@@ -6,6 +6,7 @@ use super::enter::enter;
 use super::node4::Child4;
 use super::node8::Node8;
 use super::node_box::NodeBox;
+use super::stack::Stack;
 use super::tri4::Ray4;
 use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
 use super::wide_tree::build_wide;
@@ -16,7 +17,6 @@ use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
-use std::mem::MaybeUninit;
 
 /// Traversal stack entries for any tree: each 8-wide node visited pushes at
 /// most seven.
@@ -219,11 +219,8 @@ impl<T: TriangleTest> Bvh8<T> {
         // root leaf's triangle test is exact. It cost 4% of a ray's
         // instructions (callgrind, issue 8 step 3).
         let rb = RayBox8::new(ray);
-        // Left uninitialised: only pushed entries are read. Written and read
-        // through a raw pointer: the bound checks and the copy of a sorted
-        // block cost about 4% of a ray's instructions (callgrind).
-        let mut stack = [const { MaybeUninit::<(Child4, f32)>::uninit() }; N];
-        let st = stack.as_mut_ptr() as *mut (Child4, f32);
+        let mut stack = Stack::<N>::new();
+        let st = stack.ptr();
         let mut sp = 0usize;
         let mut cur = start;
         loop {
@@ -240,9 +237,19 @@ impl<T: TriangleTest> Bvh8<T> {
                 let node = unsafe { self.nodes.get_unchecked(cur.index as usize) };
                 // SAFETY: `path` is a kernel this CPU runs (see `traverse`).
                 let h = unsafe { node.boxes.entries(path, &rb, ray.tnear, tfar) };
-                // SAFETY: the stack bound of `build`, as for `st` above.
+                // SAFETY: the stack bound of `build` (the stack has its slack
+                // beyond); AVX-512 where `path` says so (see `traverse`).
                 let next = unsafe {
-                    enter::<ANY, _>(&self.nodes, &node.child, &h.t, h.mask, st, &mut sp, &leaf)
+                    enter::<ANY, _>(
+                        &self.nodes,
+                        &node.child,
+                        &h.t,
+                        h.mask,
+                        st,
+                        &mut sp,
+                        &leaf,
+                        path == BoxPath::Avx512 && !ANY,
+                    )
                 };
                 if let Some(next) = next {
                     cur = next;
@@ -260,7 +267,7 @@ impl<T: TriangleTest> Bvh8<T> {
                 sp -= 1;
                 // SAFETY: entry `sp` is below the stack pointer, written by
                 // a push.
-                let (c, t) = unsafe { st.add(sp).read() };
+                let (c, t) = unsafe { st.read(sp) };
                 if t <= tfar {
                     cur = c;
                     break;

@@ -4,6 +4,7 @@
 
 use super::node4::Child4;
 use super::prefetch::prefetch_entered;
+use super::stack::StackPtr;
 use super::wide_leaf::LeafTest;
 
 /// The child to visit next among `children` whose bit is set in `mask`
@@ -15,18 +16,26 @@ use super::wide_leaf::LeafTest;
 /// fetched at once ([`super::prefetch`]; inner nodes from `nodes`, leaves
 /// through `leaf`). `None` when none was entered.
 ///
+/// With `vector_sort` (8-wide nodes on CPUs with AVX-512), three or more
+/// entered children of a nearest-hit query are ordered by the sorting
+/// network of [`super::sort8`] instead of the insertion sort.
+///
 /// # Safety
 /// `st` must have room for `children.len() - 1` pushes above `sp` (the
-/// stack bound that the builds check).
+/// stack bound that the builds check), and its [`super::stack::SLACK`]
+/// beyond. `vector_sort` only where the CPU has the features of
+/// [`super::sort8::push_sorted`].
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub(crate) unsafe fn enter<const ANY: bool, N>(
     nodes: &[N],
     children: &[Child4],
     t: &[f32],
     mask: u32,
-    st: *mut (Child4, f32),
+    st: StackPtr,
     sp: &mut usize,
     leaf: &impl LeafTest,
+    vector_sort: bool,
 ) -> Option<Child4> {
     let mut rest = mask;
     if rest == 0 {
@@ -51,7 +60,7 @@ pub(crate) unsafe fn enter<const ANY: bool, N>(
         while m != 0 {
             let i = m.trailing_zeros() as usize;
             m &= m - 1;
-            unsafe { st.add(*sp).write((children[i], t[i])) };
+            unsafe { st.write(*sp, children[i], t[i]) };
             *sp += 1;
         }
         return Some(children[last]);
@@ -60,21 +69,30 @@ pub(crate) unsafe fn enter<const ANY: bool, N>(
     rest &= rest - 1;
     if rest == 0 {
         let (near, far) = if t[i0] <= t[i1] { (i0, i1) } else { (i1, i0) };
-        unsafe { st.add(*sp).write((children[far], t[far])) };
+        unsafe { st.write(*sp, children[far], t[far]) };
         *sp += 1;
         return Some(children[near]);
     }
+    #[cfg(target_arch = "x86_64")]
+    if vector_sort {
+        if let (Ok(c), Ok(d)) = (<&[Child4; 8]>::try_from(children), <&[f32; 8]>::try_from(t)) {
+            // SAFETY: the caller's features and room.
+            return Some(unsafe { super::sort8::push_sorted(c, d, mask, st, sp) });
+        }
+    }
+    let _ = vector_sort;
     // Three or more: insertion sort straight onto the stack, farthest
     // deepest, then take the nearest off the top.
     let base = *sp;
     let mut top = *sp;
     let mut push = |e: (Child4, f32)| unsafe {
         let mut j = top;
-        while j > base && (*st.add(j - 1)).1 < e.1 {
-            st.add(j).write(st.add(j - 1).read());
+        while j > base && *st.t.add(j - 1) < e.1 {
+            let (c, d) = st.read(j - 1);
+            st.write(j, c, d);
             j -= 1;
         }
-        st.add(j).write(e);
+        st.write(j, e.0, e.1);
         top += 1;
     };
     push((children[i0], t[i0]));
@@ -85,5 +103,5 @@ pub(crate) unsafe fn enter<const ANY: bool, N>(
         push((children[i], t[i]));
     }
     *sp = top - 1;
-    Some(unsafe { st.add(*sp).read().0 })
+    Some(unsafe { st.read(*sp).0 })
 }

@@ -39,6 +39,9 @@ mod packet;
 #[cfg(target_arch = "x86_64")]
 mod packet_kernel;
 mod prefetch;
+#[cfg(target_arch = "x86_64")]
+mod sort8;
+mod stack;
 mod sweep;
 pub(crate) use node_box::NodeBox;
 mod threaded;

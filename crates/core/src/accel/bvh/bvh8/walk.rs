@@ -20,11 +20,11 @@ use crate::accel::bvh::box8::{BoxPath, RayBox8};
 use crate::accel::bvh::enter::enter;
 use crate::accel::bvh::node4::Child4;
 use crate::accel::bvh::prefetch::prefetch_with;
+use crate::accel::bvh::stack::Stack;
 use crate::accel::bvh::wide_leaf::LeafTest;
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
-use std::mem::MaybeUninit;
 
 /// One ray's traversal state: its box-test data, leaf test, nearest hit so
 /// far, the node or leaf to visit next and an `N`-entry stack.
@@ -36,8 +36,7 @@ pub(super) struct Walk<'a, L: LeafTest, const N: usize> {
     pub best: Option<Hit>,
     cur: Child4,
     sp: usize,
-    /// Left uninitialised: only pushed entries are read.
-    stack: [MaybeUninit<(Child4, f32)>; N],
+    stack: Stack<N>,
 }
 
 impl<'a, L: LeafTest, const N: usize> Walk<'a, L, N> {
@@ -53,7 +52,7 @@ impl<'a, L: LeafTest, const N: usize> Walk<'a, L, N> {
             best,
             cur: start,
             sp: 0,
-            stack: [const { MaybeUninit::uninit() }; N],
+            stack: Stack::new(),
         }
     }
 
@@ -89,14 +88,12 @@ impl<T: TriangleTest> Bvh8<T> {
         w: &mut Walk<'_, impl LeafTest, N>,
         path: BoxPath,
     ) -> Option<bool> {
-        // The stack is written and read through a raw pointer: the bound
-        // checks and the copy of a sorted block cost about 4% of a ray's
-        // instructions (callgrind). SAFETY (every access through `st`): the
+        // SAFETY (every access through `st`): the
         // stack never holds more than the unvisited siblings of the current
         // node's ancestors, at most `wide.stack` entries, which `build`
         // checked to be below `N`; reads are of entries below `sp`, all
         // written by a push.
-        let st = w.stack.as_mut_ptr() as *mut (Child4, f32);
+        let st = w.stack.ptr();
         let cur = w.cur;
         if cur.count > 0 {
             let (first, count) = (cur.index as usize, cur.count as usize);
@@ -120,6 +117,7 @@ impl<T: TriangleTest> Bvh8<T> {
                     st,
                     &mut w.sp,
                     &w.leaf,
+                    path == BoxPath::Avx512 && !ANY,
                 )
             };
             if let Some(next) = next {
@@ -142,7 +140,7 @@ impl<T: TriangleTest> Bvh8<T> {
                 return Some(false);
             }
             w.sp -= 1;
-            let (c, t) = unsafe { st.add(w.sp).read() };
+            let (c, t) = unsafe { st.read(w.sp) };
             if t <= w.tfar {
                 w.cur = c;
                 return None;
