@@ -1,14 +1,15 @@
 //! [`Bvh8`]'s single-ray traversal as a state advanced one node or leaf at
-//! a time, and batches that interleave two rays (issue 8, step 3r).
+//! a time, and batches that interleave [`WALKS`] rays (issue 8, steps 3r
+//! and 3w).
 //!
 //! An incoherent ray's traversal is one long chain of dependent loads: the
 //! next node's address comes out of the current node's box test. A core
-//! that runs one such chain waits on memory most of the time. Two rays
-//! stepped in turn give it two independent chains to overlap, as the
+//! that runs one such chain waits on memory most of the time. Rays
+//! stepped in turn give it independent chains to overlap, as the
 //! software-pipelined traversals of Aila & Laine (2009, "Understanding the
 //! efficiency of ray traversal on GPUs") overlap rays on a GPU. Each ray
 //! gets exactly the single-ray answer: the steps are the same, only their
-//! order between the two rays changes.
+//! order between the rays changes.
 //!
 //! Single rays (and the packet path's hand-over) keep the plain loop of
 //! `bvh8.rs`, whose state stays in registers: run through a `Walk`, shadow
@@ -148,7 +149,7 @@ impl<T: TriangleTest> Bvh8<T> {
         }
     }
 
-    /// The answers of `rays` from the root, two rays stepped in turn (see
+    /// The answers of `rays` from the root, [`WALKS`] rays stepped in turn (see
     /// the module notes): `done(i, any, best)` receives ray `i`'s any-hit
     /// answer (`ANY`) or nearest hit. Needs packed leaves and a tree with
     /// triangles; one ray at a time otherwise.
@@ -264,9 +265,13 @@ impl<T: TriangleTest> Bvh8<T> {
     }
 }
 
-/// How many rays are stepped in turn: three or four were no faster than
-/// two on the full dragon (incoherent rays, three interleaved runs each).
-const WALKS: usize = 2;
+/// How many rays are stepped in turn. On the AMD EPYC of step 3r three or
+/// four were no faster than two on the full dragon; on the Intel Xeon of
+/// step 3w (AVX-512, the sorted child order of `sort8.rs`) six were
+/// 1.1-1.3x faster than two on the dragon, the terrain and the scatter,
+/// one thread and two, and eight no faster than six (incoherent rays,
+/// interleaved runs; BENCHMARKS.md, step 3w).
+const WALKS: usize = 6;
 
 #[cfg(test)]
 mod tests {
@@ -282,7 +287,7 @@ mod tests {
         h.map(|h| (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim))
     }
 
-    /// Two rays stepped in turn give every ray exactly its single-ray
+    /// Rays stepped in turn give every ray exactly its single-ray
     /// answer (the same `t`, `u`, `v` bits and triangle; the same
     /// occlusion), each ray answered once, for batches of 0 to 9 and 1500
     /// rays (full and bounded), with every box kernel this CPU runs and both
