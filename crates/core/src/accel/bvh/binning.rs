@@ -416,13 +416,13 @@ fn add(boxes: &mut [[Box4f; 3]], counts: &mut [[u32; 3]], k: usize, a: usize, p:
 /// The front then holds exactly `split.left_count` references (the sweep
 /// counted them with the same mapping).
 ///
-/// Branch-free (Lomuto's scheme with the side as an integer): every
-/// reference is swapped with the first one past the left side, which then
-/// grows by one exactly when the reference goes left; the centroid bounds
-/// grow through masks. Which side a reference goes to is a coin toss for the
-/// branch predictor near the top of the tree: with the two-ended version's
-/// branches (and the axis a variable) the full dragon's build took 15% longer
-/// on one thread (issue 8, step 3r).
+/// Branch-free: blocks of references from both ends are classified
+/// without branches and only the misplaced ones are swapped (see
+/// `partition_on`); the centroid bounds grow through masks. Which side a
+/// reference goes to is a coin toss for the branch predictor near the top
+/// of the tree: with the two-ended version's branches (and the axis a
+/// variable) the full dragon's build took 15% longer on one thread (issue
+/// 8, step 3r).
 ///
 /// Kept out of line, as [`Bins::best_split`]: inlined into the build's node
 /// step, which happened when an unrelated module changed how the crate's
@@ -444,21 +444,75 @@ fn partition_on<const AXIS: usize>(
     map: &Mapping,
     split: &Split,
 ) -> (Box4f, Box4f) {
-    let axis = AXIS;
+    let is_left = |r: &PrimRef| map.bin(r, AXIS) < split.bin;
     let mut lc = Box4f::EMPTY;
     let mut rc = Box4f::EMPTY;
-    let mut j = 0;
-    for i in 0..refs.len() {
-        let r = refs[i];
-        let left = map.bin(&r, axis) < split.bin;
-        refs[i] = refs[j];
-        refs[j] = r;
-        j += left as usize;
-        // All ones for a left reference, zero for a right one.
+    // The centroid of `r` into its side's bounds, without a branch.
+    let mut grow = |r: &PrimRef, left: bool| {
         let m = (left as u32).wrapping_neg();
         let c = r.center2();
         lc.grow_masked(c, m);
         rc.grow_masked(c, !m);
+    };
+    // Block partition (Edelkamp & Weiß 2016, "BlockQuicksort"): a block of
+    // `BLOCK` references from each end is classified without branches,
+    // the offsets of those on the wrong side recorded, and as many pairs
+    // swapped as both blocks have. Every reference is read once to be
+    // classified, and only misplaced ones move: Lomuto's scheme wrote every
+    // reference twice.
+    const BLOCK: usize = 64;
+    let mut off_l = [0u8; BLOCK];
+    let mut off_r = [0u8; BLOCK];
+    let (mut start_l, mut num_l, mut start_r, mut num_r) = (0, 0, 0, 0);
+    // `refs[..l]` hold left references but the unswapped offsets of the
+    // block at `l`; `refs[r..]` right ones but those of the block ending
+    // at `r`.
+    let (mut l, mut r) = (0, refs.len());
+    while r - l >= 2 * BLOCK {
+        if num_l == 0 {
+            start_l = 0;
+            for (i, p) in refs[l..l + BLOCK].iter().enumerate() {
+                let left = is_left(p);
+                off_l[num_l] = i as u8;
+                num_l += !left as usize;
+                grow(p, left);
+            }
+        }
+        if num_r == 0 {
+            start_r = 0;
+            for (i, p) in refs[r - BLOCK..r].iter().rev().enumerate() {
+                let left = is_left(p);
+                off_r[num_r] = i as u8;
+                num_r += left as usize;
+                grow(p, left);
+            }
+        }
+        let m = num_l.min(num_r);
+        for k in 0..m {
+            let a = l + off_l[start_l + k] as usize;
+            let b = r - 1 - off_r[start_r + k] as usize;
+            refs.swap(a, b);
+        }
+        (num_l, num_r) = (num_l - m, num_r - m);
+        (start_l, start_r) = (start_l + m, start_r + m);
+        if num_l == 0 {
+            l += BLOCK;
+        }
+        if num_r == 0 {
+            r -= BLOCK;
+        }
+    }
+    // The rest (under two blocks, pending offsets included) by Lomuto's
+    // scheme; growing the bounds again by a reference already counted
+    // changes nothing (min and max).
+    let mut j = l;
+    for i in l..r {
+        let p = refs[i];
+        let left = is_left(&p);
+        refs[i] = refs[j];
+        refs[j] = p;
+        j += left as usize;
+        grow(&p, left);
     }
     debug_assert_eq!(j, split.left_count);
     (lc, rc)
@@ -527,7 +581,15 @@ mod tests {
     /// centroid bounds as computed directly from the sides.
     #[test]
     fn partition_splits_by_bin_and_bounds_both_sides() {
-        for (n, seed) in [(2usize, 1u64), (9, 2), (1000, 3), (5000, 4)] {
+        for (n, seed) in [
+            (2usize, 1u64),
+            (9, 2),
+            (127, 5),
+            (128, 6),
+            (129, 7),
+            (1000, 3),
+            (5000, 4),
+        ] {
             let r = refs(n, seed);
             let info = RangeInfo::of(&r);
             let nb = 16;
