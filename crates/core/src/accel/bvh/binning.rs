@@ -444,15 +444,17 @@ fn partition_on<const AXIS: usize>(
     map: &Mapping,
     split: &Split,
 ) -> (Box4f, Box4f) {
-    let is_left = |r: &PrimRef| map.bin(r, AXIS) < split.bin;
     let mut lc = Box4f::EMPTY;
     let mut rc = Box4f::EMPTY;
-    // The centroid of `r` into its side's bounds, without a branch.
-    let mut grow = |r: &PrimRef, left: bool| {
+    // Whether `r` goes left; its centroid into its side's bounds, without
+    // a branch.
+    let mut classify = |r: &PrimRef| {
+        let left = map.bin(r, AXIS) < split.bin;
         let m = (left as u32).wrapping_neg();
         let c = r.center2();
         lc.grow_masked(c, m);
         rc.grow_masked(c, !m);
+        left
     };
     // Block partition (Edelkamp & Weiß 2016, "BlockQuicksort"): a block of
     // `BLOCK` references from each end is classified without branches,
@@ -471,21 +473,16 @@ fn partition_on<const AXIS: usize>(
     while r - l >= 2 * BLOCK {
         if num_l == 0 {
             start_l = 0;
-            for (i, p) in refs[l..l + BLOCK].iter().enumerate() {
-                let left = is_left(p);
-                off_l[num_l] = i as u8;
-                num_l += !left as usize;
-                grow(p, left);
-            }
+            num_l = scan(refs[l..l + BLOCK].iter(), true, &mut off_l, &mut classify);
         }
         if num_r == 0 {
             start_r = 0;
-            for (i, p) in refs[r - BLOCK..r].iter().rev().enumerate() {
-                let left = is_left(p);
-                off_r[num_r] = i as u8;
-                num_r += left as usize;
-                grow(p, left);
-            }
+            num_r = scan(
+                refs[r - BLOCK..r].iter().rev(),
+                false,
+                &mut off_r,
+                &mut classify,
+            );
         }
         let m = num_l.min(num_r);
         for k in 0..m {
@@ -508,14 +505,31 @@ fn partition_on<const AXIS: usize>(
     let mut j = l;
     for i in l..r {
         let p = refs[i];
-        let left = is_left(&p);
+        let left = classify(&p);
         refs[i] = refs[j];
         refs[j] = p;
         j += left as usize;
-        grow(&p, left);
     }
     debug_assert_eq!(j, split.left_count);
     (lc, rc)
+}
+
+/// Classify the references of `block` (one of [`partition_on`]'s blocks,
+/// in scan order) and record in `off` the offsets of those that do not
+/// belong on the block's side (`left_side`); returns their number.
+#[inline(always)]
+fn scan<'a, const BLOCK: usize>(
+    block: impl Iterator<Item = &'a PrimRef>,
+    left_side: bool,
+    off: &mut [u8; BLOCK],
+    classify: &mut impl FnMut(&PrimRef) -> bool,
+) -> usize {
+    let mut num = 0;
+    for (i, p) in block.enumerate() {
+        off[num] = i as u8;
+        num += (classify(p) != left_side) as usize;
+    }
+    num
 }
 
 #[cfg(test)]

@@ -248,7 +248,7 @@ impl<T: TriangleTest> Bvh8<T> {
                         st,
                         &mut sp,
                         &leaf,
-                        path == BoxPath::Avx512 && !ANY,
+                        path == BoxPath::Avx512,
                     )
                 };
                 if let Some(next) = next {

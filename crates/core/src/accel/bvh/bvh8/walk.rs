@@ -89,11 +89,11 @@ impl<T: TriangleTest> Bvh8<T> {
         w: &mut Walk<'_, impl LeafTest, N>,
         path: BoxPath,
     ) -> Option<bool> {
-        // SAFETY (every access through `st`): the
-        // stack never holds more than the unvisited siblings of the current
-        // node's ancestors, at most `wide.stack` entries, which `build`
-        // checked to be below `N`; reads are of entries below `sp`, all
-        // written by a push.
+        // SAFETY (every access through `st`): the stack never holds more
+        // than the unvisited siblings of the current node's ancestors, at
+        // most `wide.stack` entries, which `build` checked to be below `N`
+        // (vector pushes use the stack's slack beyond); reads are of
+        // entries below `sp`, all written by a push.
         let st = w.stack.ptr();
         let cur = w.cur;
         if cur.count > 0 {
@@ -118,7 +118,7 @@ impl<T: TriangleTest> Bvh8<T> {
                     st,
                     &mut w.sp,
                     &w.leaf,
-                    path == BoxPath::Avx512 && !ANY,
+                    path == BoxPath::Avx512,
                 )
             };
             if let Some(next) = next {
