@@ -307,6 +307,7 @@ impl Bins {
         let mut pairs = refs.chunks_exact(2);
         for pair in &mut pairs {
             let (p, q) = (&pair[0], &pair[1]);
+            prefetch_ref(p, BIN_AHEAD as isize);
             let (kp, kq) = (map.bins(p), map.bins(q));
             for a in 0..3 {
                 add(boxes, counts, kp[a], a, p);
@@ -400,6 +401,27 @@ impl Bins {
     }
 }
 
+/// References ahead of the one being binned that [`Bins::bin`] asks the
+/// cache for (2 KiB). The references of a node above the caches stream from
+/// memory, and the hardware prefetcher alone left the build waiting on
+/// them: with the software prefetch in both loops the 1M-triangle terrain
+/// and the full dragon built 1.20-1.25x faster on one thread (issue 8, step
+/// 3x; 16, 32, 48, 64 and 96 references tried).
+const BIN_AHEAD: usize = 64;
+
+/// References ahead of the one being classified that [`partition`]'s
+/// blocks ask the cache for, in the direction each end moves (4 KiB; 64,
+/// 128, 192 and 256 tried).
+const PARTITION_AHEAD: usize = 128;
+
+/// Ask the cache for the reference `ahead` places after `p` (before it
+/// when negative); a hint, which never faults.
+#[inline(always)]
+fn prefetch_ref(p: &PrimRef, ahead: isize) {
+    let at = (p as *const PrimRef).wrapping_offset(ahead);
+    super::prefetch::prefetch_lines(at as *const u8, 1);
+}
+
 /// Grow bin `k` of axis `a` by the reference `p`.
 #[inline(always)]
 fn add(boxes: &mut [[Box4f; 3]], counts: &mut [[u32; 3]], k: usize, a: usize, p: &PrimRef) {
@@ -473,13 +495,20 @@ fn partition_on<const AXIS: usize>(
     while r - l >= 2 * BLOCK {
         if num_l == 0 {
             start_l = 0;
-            num_l = scan(refs[l..l + BLOCK].iter(), true, &mut off_l, &mut classify);
+            num_l = scan(
+                refs[l..l + BLOCK].iter(),
+                true,
+                PARTITION_AHEAD as isize,
+                &mut off_l,
+                &mut classify,
+            );
         }
         if num_r == 0 {
             start_r = 0;
             num_r = scan(
                 refs[r - BLOCK..r].iter().rev(),
                 false,
+                -(PARTITION_AHEAD as isize),
                 &mut off_r,
                 &mut classify,
             );
@@ -521,11 +550,13 @@ fn partition_on<const AXIS: usize>(
 fn scan<'a, const BLOCK: usize>(
     block: impl Iterator<Item = &'a PrimRef>,
     left_side: bool,
+    ahead: isize,
     off: &mut [u8; BLOCK],
     classify: &mut impl FnMut(&PrimRef) -> bool,
 ) -> usize {
     let mut num = 0;
     for (i, p) in block.enumerate() {
+        prefetch_ref(p, ahead);
         off[num] = i as u8;
         num += (classify(p) != left_side) as usize;
     }

@@ -14,7 +14,7 @@
 //! number of threads. [`BuildQuality::Fast`] selects the linear BVH of
 //! [`super::lbvh`] instead.
 
-use super::binning::{partition, Bins, Mapping, PrimRef, RangeInfo};
+use super::binning::{partition, Bins, Mapping, PrimRef, RangeInfo, Split};
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
 use crate::accel::leaf::LeafTriangles;
@@ -191,15 +191,21 @@ pub struct BuildTree {
 /// equal) are split at the object median so the depth stays logarithmic.
 /// The result does not depend on the number of threads.
 pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> BuildTree {
-    let opts = BuildOptions {
+    let opts = clamped(options);
+    match opts.quality {
+        BuildQuality::Sah | BuildQuality::High => sah_build(mesh, &opts),
+        BuildQuality::Fast => super::lbvh::build(mesh, &opts),
+    }
+}
+
+/// `options` with the leaf bound, the bins and the leaf block within the
+/// builders' limits.
+pub(crate) fn clamped(options: &BuildOptions) -> BuildOptions {
+    BuildOptions {
         max_leaf_size: options.max_leaf_size.clamp(1, 31),
         bins: options.bins.clamp(2, 256),
         leaf_block: options.leaf_block.clamp(1, 16),
         ..options.clone()
-    };
-    match opts.quality {
-        BuildQuality::Sah | BuildQuality::High => sah_build(mesh, &opts),
-        BuildQuality::Fast => super::lbvh::build(mesh, &opts),
     }
 }
 
@@ -222,7 +228,7 @@ pub(crate) fn prim_refs(mesh: &TriangleMesh) -> (Vec<PrimRef>, RangeInfo) {
 }
 
 /// Bounds of `refs`, in parallel chunks when there are many.
-fn range_info(refs: &[PrimRef]) -> RangeInfo {
+pub(crate) fn range_info(refs: &[PrimRef]) -> RangeInfo {
     if refs.len() > PAR_BIN {
         refs.par_chunks(CHUNK)
             .map(RangeInfo::of)
@@ -239,12 +245,16 @@ fn sah_build(mesh: &TriangleMesh, opts: &BuildOptions) -> BuildTree {
     let root = sah_node(&mut refs, info, 0, 0, opts, &mut bins);
     BuildTree {
         root,
-        order: refs
-            .par_iter()
-            .with_min_len(4096)
-            .map(|r| r.prim())
-            .collect(),
+        order: order_of(&refs),
     }
+}
+
+/// The mesh triangle indices of `refs`, in their order.
+pub(crate) fn order_of(refs: &[PrimRef]) -> Vec<u32> {
+    refs.par_iter()
+        .with_min_len(4096)
+        .map(|r| r.prim())
+        .collect()
 }
 
 /// Bins of a node of `n` references: `4 + n / 20`, at most `max`, as
@@ -255,30 +265,43 @@ fn bins_for(n: usize, max: usize) -> usize {
     (4 + n / 20).min(max)
 }
 
-/// Build the subtree over `refs` (at `first` in the final order), whose
-/// bounds `info` the caller knows; `bins` is this thread's scratch.
-fn sah_node(
-    refs: &mut [PrimRef],
-    info: RangeInfo,
-    first: usize,
+/// What the SAH build does with a node, decided from its references
+/// before any of them moves: the binary build ([`sah_node`]) carries it out
+/// at once, the direct wide build ([`super::wide_build`]) when it opens the
+/// node.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Plan {
+    /// A leaf of all the node's references.
+    Leaf,
+    /// Split at the binned SAH's cheapest boundary; `leaf_ok` when one leaf
+    /// would be cheaper (only with [`BuildOptions::fill_wide_nodes`]: the
+    /// halves are then split by [`super::sweep`]).
+    Binned {
+        split: Split,
+        map: Mapping,
+        leaf_ok: bool,
+    },
+    /// No useful SAH split (coincident centroids, or too deep): split at
+    /// the object median along the widest centroid axis.
+    Median { axis: usize },
+}
+
+/// The plan for the node over `refs`, whose bounds `info` the caller knows,
+/// at `depth` in the binary tree; `bins` is this thread's scratch.
+pub(crate) fn plan(
+    refs: &[PrimRef],
+    info: &RangeInfo,
     depth: usize,
     opts: &BuildOptions,
     bins: &mut Bins,
-) -> BuildNode {
+) -> Plan {
     let n = refs.len();
-    let bounds = info.bounds.aabb();
-    let leaf = || BuildNode::Leaf {
-        bounds,
-        first: first as u32,
-        count: n as u32,
-    };
     let leaf_cost = blocks(n as u32, opts);
     // Any split costs at least one traversal, so a small node whose leaf
     // cost is no more is a leaf without binning (the same decision).
     if n <= 1 || (n <= opts.max_leaf_size && leaf_cost <= opts.traversal_cost) {
-        return leaf();
+        return Plan::Leaf;
     }
-    let mut leaf_ok = false;
     let split = if depth + 40 < MAX_DEPTH {
         let nb = bins_for(n, opts.bins);
         let map = Mapping::new(&info.centers, nb);
@@ -304,38 +327,82 @@ fn sah_node(
     } else {
         None
     };
-    let (axis, mid, linfo, rinfo) = match split {
-        Some((s, map)) => {
-            if s.cost >= leaf_cost && n <= opts.max_leaf_size {
-                if !opts.fill_wide_nodes {
-                    return leaf();
-                }
-                leaf_ok = true;
+    match split {
+        Some((split, map)) => {
+            let leaf_ok = split.cost >= leaf_cost && n <= opts.max_leaf_size;
+            if leaf_ok && !opts.fill_wide_nodes {
+                return Plan::Leaf;
             }
-            let (lc, rc) = partition(refs, &map, &s);
+            Plan::Binned {
+                split,
+                map,
+                leaf_ok,
+            }
+        }
+        None if n <= opts.max_leaf_size => Plan::Leaf,
+        None => Plan::Median {
+            axis: info.centers.aabb().largest_axis(),
+        },
+    }
+}
+
+/// The two halves of a node split as `plan` says (not [`Plan::Leaf`]):
+/// the references reordered, left half first; returns the split axis, the
+/// left half's length and both halves' bounds.
+pub(crate) fn split_refs(
+    refs: &mut [PrimRef],
+    plan: &Plan,
+) -> (usize, usize, RangeInfo, RangeInfo) {
+    match *plan {
+        Plan::Binned { split, map, .. } => {
+            let (lc, rc) = partition(refs, &map, &split);
             let l = RangeInfo {
-                bounds: s.left,
+                bounds: split.left,
                 centers: lc,
             };
             let r = RangeInfo {
-                bounds: s.right,
+                bounds: split.right,
                 centers: rc,
             };
-            (s.axis, s.left_count, l.clean(), r.clean())
+            (split.axis, split.left_count, l.clean(), r.clean())
         }
-        None if n <= opts.max_leaf_size => return leaf(),
-        None => {
-            // No useful SAH split (coincident centroids, or too deep): split
-            // at the object median along the widest centroid axis.
-            let axis = info.centers.aabb().largest_axis();
-            let mid = n / 2;
+        Plan::Median { axis } => {
+            let mid = refs.len() / 2;
             refs.select_nth_unstable_by(mid, |a, b| {
                 (a.lo[axis] + a.hi[axis]).total_cmp(&(b.lo[axis] + b.hi[axis]))
             });
             let (l, r) = refs.split_at(mid);
             (axis, mid, range_info(l), range_info(r))
         }
+        Plan::Leaf => unreachable!("a leaf is not split"),
+    }
+}
+
+/// Build the subtree over `refs` (at `first` in the final order), whose
+/// bounds `info` the caller knows; `bins` is this thread's scratch.
+fn sah_node(
+    refs: &mut [PrimRef],
+    info: RangeInfo,
+    first: usize,
+    depth: usize,
+    opts: &BuildOptions,
+    bins: &mut Bins,
+) -> BuildNode {
+    let bounds = info.bounds.aabb();
+    let plan = plan(refs, &info, depth, opts, bins);
+    let leaf_ok = match plan {
+        Plan::Leaf => {
+            return BuildNode::Leaf {
+                bounds,
+                first: first as u32,
+                count: refs.len() as u32,
+            }
+        }
+        Plan::Binned { leaf_ok, .. } => leaf_ok,
+        Plan::Median { .. } => false,
     };
+    let n = refs.len();
+    let (axis, mid, linfo, rinfo) = split_refs(refs, &plan);
     let (left, right) = refs.split_at_mut(mid);
     let (l, r) = if leaf_ok {
         // Only seen when a wide node has slots to fill: swept, not binned.

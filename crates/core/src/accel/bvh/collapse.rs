@@ -1,7 +1,10 @@
 //! The collapse of a binary build tree into the wide nodes of
 //! [`super::Bvh4`] and [`super::Bvh8`] (issue 8): the usual way to get an
-//! Embree-style wide BVH out of a binned-SAH binary build (Wald et al.
-//! 2014), written once for both widths.
+//! Embree-style wide BVH out of a binary build (Wald et al. 2014), written
+//! once for both widths. The linear BVH ([`super::lbvh`]) goes through it;
+//! the SAH builds make the same wide nodes directly
+//! ([`super::wide_build`], which follows these rules step for step and is
+//! tested against this walk).
 //!
 //! Each wide node starts from the two children of a binary node and, while
 //! it has fewer than its width, replaces its largest-area inner child by
@@ -25,7 +28,7 @@ use rayon::prelude::*;
 
 /// Levels of wide nodes whose subtrees are collapsed in parallel (up to
 /// `WIDTH^PAR_DEPTH` tasks).
-const PAR_DEPTH: u32 = 2;
+pub(crate) const PAR_DEPTH: u32 = 2;
 
 /// A wide inner node the collapse fills: [`super::node4::Node4`] or
 /// [`super::node8::Node8`].
@@ -85,7 +88,7 @@ pub(crate) struct Collapsed<N> {
 }
 
 impl<N> Collapsed<N> {
-    fn empty() -> Self {
+    pub(crate) fn empty() -> Self {
         Collapsed {
             nodes: Vec::new(),
             root: Child4::EMPTY,
@@ -100,7 +103,7 @@ impl<N> Collapsed<N> {
     /// Append `sub`, collapsed on its own, and return its root `r` with the
     /// shifted index: its inner references move up by the nodes already
     /// here.
-    fn append(&mut self, r: Child4, mut sub: Collapsed<N>) -> Child4
+    pub(crate) fn append(&mut self, r: Child4, mut sub: Collapsed<N>) -> Child4
     where
         N: WideSlots,
     {
@@ -253,7 +256,7 @@ impl Walk {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::accel::bvh::build::{build, BuildOptions};
     use crate::accel::bvh::node4::Node4;
@@ -262,7 +265,8 @@ mod tests {
     use crate::rng::Pcg32;
     use glam::Vec3;
 
-    fn soup(n: usize, seed: u64) -> TriangleMesh {
+    /// `n` small random triangles in the unit cube.
+    pub(crate) fn soup(n: usize, seed: u64) -> TriangleMesh {
         let mut rng = Pcg32::new(seed);
         let mut positions = Vec::new();
         let mut indices = Vec::new();

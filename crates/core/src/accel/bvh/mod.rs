@@ -4,7 +4,8 @@
 //!   layouts, parallel over subtrees with rayon.
 //! - [`Bvh2`]: binary BVH in depth-first order with sibling pairs side by side,
 //!   traversed with a per-ray stack, nearest child first.
-//! - [`Bvh4`]: 4-wide BVH collapsed from the binary build (issue 8), four
+//! - [`Bvh4`]: 4-wide BVH made directly by the SAH build (`wide_build`) or
+//!   collapsed from the linear BVH's binary tree (issue 8), four
 //!   box tests at once with SSE, ordered stack traversal; over Möller its
 //!   leaves are packs of four triangles tested at once (`tri4`, Embree's
 //!   `triangle4`).
@@ -14,7 +15,7 @@
 //!   together (Wald et al. 2001), sixteen with AVX-512 or eight with AVX2,
 //!   one kernel generic over the node width and the packet width, handing their last rays to the tree's own single-ray traversal
 //!   (Benthin et al. 2012), with the single-ray answers.
-//! - [`Bvh8`]: 8-wide BVH collapsed the same way (issue 8), eight box tests
+//! - [`Bvh8`]: 8-wide BVH built the same way (issue 8), eight box tests
 //!   at once with AVX (run-time detected; SSE and scalar fallbacks), the
 //!   same ordered traversal and leaves as [`Bvh4`], and the same packet path.
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
@@ -48,6 +49,7 @@ mod threaded;
 mod tri4;
 #[cfg(target_arch = "x86_64")]
 mod tri4_sse;
+mod wide_build;
 mod wide_leaf;
 mod wide_tree;
 

@@ -17,24 +17,49 @@ use super::build::{blocks, BuildNode, BuildOptions};
 const MAX_SWEEP: usize = 32;
 
 /// Build the subtree over `refs` (at `first` in the final order): a leaf
-/// when its cost is no more than a traversal's, else split where the sweep
-/// finds the cheapest SAH, marked `leaf_ok` when a leaf would still be
-/// cheaper than that split.
+/// when its cost is no more than a traversal's, else split where
+/// [`sweep_plan`] says.
 ///
 /// `refs` must hold at most [`MAX_SWEEP`] references (the caller's leaf
 /// bound, at most 31).
 pub(crate) fn sweep_node(refs: &mut [PrimRef], first: usize, opts: &BuildOptions) -> BuildNode {
-    let n = refs.len();
-    debug_assert!((1..=MAX_SWEEP).contains(&n));
     let info = RangeInfo::of(refs).clean();
     let bounds = info.bounds.aabb();
-    let leaf_cost = blocks(n as u32, opts);
-    if n <= 1 || leaf_cost <= opts.traversal_cost {
+    let Some((best, leaf_ok)) = sweep_plan(refs, &info, opts) else {
         return BuildNode::Leaf {
             bounds,
             first: first as u32,
-            count: n as u32,
+            count: refs.len() as u32,
         };
+    };
+    let axis = info.centers.aabb().largest_axis();
+    let (l, r) = refs.split_at_mut(best);
+    BuildNode::Inner {
+        bounds,
+        axis: axis as u8,
+        children: Box::new([
+            sweep_node(l, first, opts),
+            sweep_node(r, first + best, opts),
+        ]),
+        leaf_ok,
+    }
+}
+
+/// How the sweep splits the node over `refs`, whose bounds are `info`:
+/// `None` for a leaf (cost no more than a traversal's), else the length of
+/// the left half after `refs` are sorted along the axis of widest centroid
+/// spread, where the sweep finds the cheapest SAH, and whether a leaf would
+/// still be cheaper than that split (`leaf_ok`).
+pub(crate) fn sweep_plan(
+    refs: &mut [PrimRef],
+    info: &RangeInfo,
+    opts: &BuildOptions,
+) -> Option<(usize, bool)> {
+    let n = refs.len();
+    debug_assert!((1..=MAX_SWEEP).contains(&n));
+    let leaf_cost = blocks(n as u32, opts);
+    if n <= 1 || leaf_cost <= opts.traversal_cost {
+        return None;
     }
     let axis = info.centers.aabb().largest_axis();
     refs.sort_unstable_by(|a, b| (a.lo[axis] + a.hi[axis]).total_cmp(&(b.lo[axis] + b.hi[axis])));
@@ -57,14 +82,5 @@ pub(crate) fn sweep_node(refs: &mut [PrimRef], first: usize, opts: &BuildOptions
             (best, best_cost) = (k, c);
         }
     }
-    let (l, r) = refs.split_at_mut(best);
-    BuildNode::Inner {
-        bounds,
-        axis: axis as u8,
-        children: Box::new([
-            sweep_node(l, first, opts),
-            sweep_node(r, first + best, opts),
-        ]),
-        leaf_ok: best_cost >= leaf_cost,
-    }
+    Some((best, best_cost >= leaf_cost))
 }

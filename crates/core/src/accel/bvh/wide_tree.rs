@@ -1,15 +1,17 @@
 //! The build shared by the wide BVHs of issue 8 ([`super::Bvh4`],
-//! [`super::Bvh8`]): the binned-SAH binary tree ([`super::build`]) collapsed
-//! into wide nodes ([`super::collapse`]), its leaves packed four triangles
+//! [`super::Bvh8`]): the binned SAH making wide nodes directly
+//! ([`super::wide_build`]), or the linear BVH's binary tree
+//! ([`super::lbvh`]) collapsed into wide nodes ([`super::collapse`]); its leaves packed four triangles
 //! at a time over Möller (Embree's `triangle4`, Wald et al. 2014) or kept one
 //! triangle after the other for the other tests, and the shape figures of
 //! the wide tree.
 
-use super::build::{build, BuildNode, BuildOptions, BuildTree};
+use super::build::{build, clamped, BuildNode, BuildOptions, BuildQuality, BuildTree};
 use super::collapse::{collapse, WideSlots};
 use super::node4::Child4;
 use super::node_box::NodeBox;
 use super::tri4::Tri4Leaves;
+use super::wide_build::build_direct;
 use super::wide_leaf::{wide_build_options, Leaves};
 use crate::accel::leaf::LeafTriangles;
 use crate::accel::AccelStats;
@@ -37,15 +39,26 @@ pub(crate) fn build_wide<N: WideSlots, T: TriangleTest>(
 ) -> WideTree<N, T> {
     let packed = TypeId::of::<T>() == TypeId::of::<Moller>();
     let options = &wide_build_options(options, packed);
-    let BuildTree { root, order } = build(mesh, options);
-    let mut wide = collapse::<N>(&root, options.traversal_cost as f64);
-    let root_box = root.bounds().into();
+    // The SAH builds make the wide nodes directly; the linear BVH is
+    // collapsed from its binary tree, which is freed while the leaves are
+    // made (on one thread it took 6-7 ms of the 1M-triangle terrain's
+    // build).
+    let (mut wide, root_box, order, binary) = match options.quality {
+        BuildQuality::Sah | BuildQuality::High => {
+            let (wide, root_box, order) = build_direct::<N>(mesh, &clamped(options));
+            (wide, root_box, order, None)
+        }
+        BuildQuality::Fast => {
+            let BuildTree { root, order } = build(mesh, options);
+            let wide = collapse::<N>(&root, options.traversal_cost as f64);
+            (wide, root.bounds(), order, Some(root))
+        }
+    };
+    let root_box = root_box.into();
     let node_bytes = std::mem::size_of_val(&wide.nodes[..]);
     let triangle_refs = order.len();
-    // The binary tree is freed while the leaves are made (on one thread it
-    // took 6-7 ms of the 1M-triangle terrain's build).
     let (_, leaves) = rayon::join(
-        || free(root, 0),
+        || binary.map(|root| free(root, 0)),
         || {
             if packed {
                 let refs = std::iter::once(&mut wide.root).chain(
