@@ -433,10 +433,18 @@ fn sah_node(
 }
 
 /// The SAH's intersection cost of `n` triangles: the number of leaf tests,
-/// `ceil(n / leaf_block)`.
+/// `ceil(n / leaf_block)`. A shift where the block is a power of two (1
+/// and 4, the usual ones): the sweep evaluates this twice per candidate
+/// split, and the integer division was a tenth of its time (issue 8, step
+/// 3x).
 #[inline]
 pub(crate) fn blocks(n: u32, opts: &BuildOptions) -> f32 {
-    n.div_ceil(opts.leaf_block as u32) as f32
+    let b = opts.leaf_block as u32;
+    if b.is_power_of_two() {
+        ((n >> b.trailing_zeros()) + (n & (b - 1) != 0) as u32) as f32
+    } else {
+        n.div_ceil(b) as f32
+    }
 }
 
 /// Shape figures of a build tree: node and leaf counts, depth and SAH cost

@@ -210,11 +210,18 @@ impl Build<'_> {
                 .zip(kids.par_iter())
                 .map(|(part, k)| {
                     let mut sub = Collapsed::empty();
+                    // Room for more than the usual node count (an inner
+                    // node per 20-25 triangles on the terrain and the
+                    // dragon), so that the array is rarely copied as it
+                    // grows.
+                    sub.nodes.reserve(k.len / 16 + 1);
                     let mut own = Bins::new(self.opts.bins);
                     let r = self.emit(part, k, depth + 1, pending, &mut sub, &mut own);
                     (r, sub)
                 })
                 .collect();
+            c.nodes
+                .reserve(subs.iter().map(|(_, s)| s.nodes.len()).sum());
             subs.into_iter().map(|(r, sub)| c.append(r, sub)).collect()
         } else {
             kids.iter()
