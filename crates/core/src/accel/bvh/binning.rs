@@ -235,7 +235,7 @@ impl Mapping {
     /// `index` does; `minps` its second, `last`, at equality). Written out
     /// because the portable form compiled to a compare and a branch for the
     /// clamp and to sign extensions for the indices, and binning took 1.1x
-    /// longer (issue 8, step 3x).
+    /// longer (issue 8, step 3y).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     unsafe fn bins_sse(&self, p: &PrimRef) -> [usize; 3] {
@@ -443,7 +443,7 @@ impl Bins {
 /// memory, and the hardware prefetcher alone left the build waiting on
 /// them: with the software prefetch in both loops the 1M-triangle terrain
 /// and the full dragon built 1.20-1.25x faster on one thread (issue 8, step
-/// 3x; 16, 32, 48, 64 and 96 references tried).
+/// 3y; 16, 32, 48, 64 and 96 references tried).
 const BIN_AHEAD: usize = 64;
 
 /// References ahead of the one being classified that [`partition`]'s
@@ -579,7 +579,7 @@ fn partition_on<const AXIS: usize>(
 /// The (doubled) centroid bounds of a partition's two sides, grown one
 /// reference at a time without a branch: [`Box4f::grow_masked`] on each
 /// side, in SSE registers on x86_64 (the portable form compiled to lane
-/// shuffles, and the partition took 1.1x longer; issue 8, step 3x).
+/// shuffles, and the partition took 1.1x longer; issue 8, step 3y).
 struct SideCentroids {
     #[cfg(target_arch = "x86_64")]
     v: [std::arch::x86_64::__m128; 4],

@@ -436,7 +436,7 @@ fn sah_node(
 /// `ceil(n / leaf_block)`. A shift where the block is a power of two (1
 /// and 4, the usual ones): the sweep evaluates this twice per candidate
 /// split, and the integer division was a tenth of its time (issue 8, step
-/// 3x).
+/// 3y).
 #[inline]
 pub(crate) fn blocks(n: u32, opts: &BuildOptions) -> f32 {
     let b = opts.leaf_block as u32;

@@ -170,15 +170,9 @@ fn wide_children(node: &BuildNode, width: usize) -> ([&BuildNode; 8], usize) {
     areas[1] = area(kids[1]);
     let mut n = 2;
     while n < width.min(8) {
-        let mut i = 0;
-        for j in 1..n {
-            if areas[j] >= areas[i] {
-                i = j;
-            }
-        }
-        if areas[i] < 0.0 {
+        let Some(i) = to_open(&areas[..n]) else {
             break;
-        }
+        };
         let BuildNode::Inner { children, .. } = kids[i] else {
             unreachable!("only inner kids have a non-negative area")
         };
@@ -189,6 +183,20 @@ fn wide_children(node: &BuildNode, width: usize) -> ([&BuildNode; 8], usize) {
         n += 1;
     }
     (kids, n)
+}
+
+/// Which of a wide node's children to open next, given their areas (-1
+/// for a leaf): the largest, the later one at equal areas; `None` when
+/// every child is a leaf. The rule the collapse and the direct wide build
+/// ([`super::wide_build`]) share.
+pub(crate) fn to_open(areas: &[f32]) -> Option<usize> {
+    let mut i = 0;
+    for j in 1..areas.len() {
+        if areas[j] >= areas[i] {
+            i = j;
+        }
+    }
+    (areas[i] >= 0.0).then_some(i)
 }
 
 /// The constants of one collapse.
