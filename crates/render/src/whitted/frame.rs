@@ -13,7 +13,6 @@ use crate::tiles::map_pixels;
 use raykit_core::glam::Vec3;
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Camera, Hit, Light, Ray, TriangleMesh};
-use rayon::prelude::*;
 use std::time::Instant;
 
 /// The scene a frame is rendered from.
@@ -186,22 +185,18 @@ pub fn render_whitted(
 }
 
 /// The nearest hit of every pixel's camera ray (from `ray_of`), row-major,
-/// through [`raykit_core::Accel::intersect_batch`]: consecutive pixels of a
-/// row go together, so a `bvh4` over Möller traces them as coherent packets
-/// (issue 8, item 4; Wald et al. 2001), with the single-ray answers.
+/// through [`raykit_core::Accel::intersect_batch`] in 4 × 4 pixel blocks
+/// ([`crate::primary::trace_primaries`]), so that a wide BVH over Möller
+/// traces them as coherent packets (issue 8, item 4; Wald et al. 2001),
+/// with the single-ray answers.
 fn traced_primaries(
     tracer: &Tracer,
     width: u32,
     height: u32,
     ray_of: &(dyn Fn(u32, u32) -> Ray + Sync),
 ) -> Vec<Option<Hit>> {
-    let rays: Vec<Ray> = (0..height)
-        .into_par_iter()
-        .flat_map_iter(|y| (0..width).map(move |x| ray_of(x, y)))
-        .collect();
-    let mut hits = vec![None; rays.len()];
-    tracer.accel.intersect_batch(&rays, &mut hits);
-    tracer.counts.primary.add(rays.len() as u64);
+    let hits = crate::primary::trace_primaries(tracer.accel, width, height, ray_of);
+    tracer.counts.primary.add(hits.len() as u64);
     hits
 }
 
