@@ -131,22 +131,27 @@ pub(crate) trait PacketTree: Accel + Sync {
 }
 
 /// Active rays at or below which a packet hands its rays over to the
-/// single-ray traversal (Benthin et al. 2012's hybrid; measured on the full
-/// dragon: 2 beat 0 and 3 on shadow rays, all equal on primaries).
-const SWITCH: u32 = 2;
+/// single-ray traversal (Benthin et al. 2012's hybrid), for nearest-hit
+/// queries and for occlusion. Step 3p measured 2 best for shadow rays with
+/// packets of eight (full dragon, AMD host); with packets of sixteen on the
+/// Intel host (step 3y; whole 1024² batches through `bvh8`, 1 thread), 1
+/// beat 2 on primaries by 2.5–3.3% (terrain, dragon) and 0.5–1.5%
+/// (scatter), and 2 stayed best for shadow rays (terrain +3–4% over 1).
+const SWITCH: [u32; 2] = [1, 2];
 
 /// How a batch is traced: one ray at a time, or in packets of `lanes`
-/// rays (8 or 16) that hand over to single rays at `switch` active rays.
+/// rays (8 or 16) that hand over to single rays at `switch[0]` active rays
+/// for nearest hits, `switch[1]` for occlusion.
 #[derive(Clone, Copy, Debug)]
 struct Mode {
     lanes: usize,
-    switch: u32,
+    switch: [u32; 2],
 }
 
 impl Mode {
     const SINGLES: Mode = Mode {
         lanes: 0,
-        switch: 0,
+        switch: [0; 2],
     };
 }
 
@@ -167,8 +172,8 @@ fn intersect_batch_with<B: PacketTree>(
     assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
     #[cfg(target_arch = "x86_64")]
     match mode.lanes {
-        16 => return intersect_packets::<16, L16, B>(bvh, rays, hits, mode.switch),
-        8 => return intersect_packets::<8, L8, B>(bvh, rays, hits, mode.switch),
+        16 => return intersect_packets::<16, L16, B>(bvh, rays, hits, mode.switch[0]),
+        8 => return intersect_packets::<8, L8, B>(bvh, rays, hits, mode.switch[0]),
         _ => {}
     }
     let _ = mode;
@@ -206,8 +211,8 @@ fn occluded_batch_with<B: PacketTree>(bvh: &B, rays: &[Ray], occluded: &mut [boo
     assert_eq!(rays.len(), occluded.len(), "one result per ray");
     #[cfg(target_arch = "x86_64")]
     match mode.lanes {
-        16 => return occluded_packets::<16, L16, B>(bvh, rays, occluded, mode.switch),
-        8 => return occluded_packets::<8, L8, B>(bvh, rays, occluded, mode.switch),
+        16 => return occluded_packets::<16, L16, B>(bvh, rays, occluded, mode.switch[1]),
+        8 => return occluded_packets::<8, L8, B>(bvh, rays, occluded, mode.switch[1]),
         _ => {}
     }
     let _ = mode;
@@ -470,9 +475,10 @@ mod tests {
 
     /// Every ray gets the single-ray traversal's answer from the batch:
     /// without packets, and with packets of each width this CPU runs (eight
-    /// with AVX2, sixteen with AVX-512) handing over to single rays at 2
-    /// active rays (the default), never (0: pure packets) or at once (the
-    /// width): the same `t` bits, and the same triangle, `u` and `v` unless
+    /// with AVX2, sixteen with AVX-512) handing over to single rays at the
+    /// default counts (1 for nearest hits, 2 for occlusion), the other way
+    /// round, never (0: pure packets) or at once (the width): the same `t`
+    /// bits, and the same triangle, `u` and `v` unless
     /// another triangle is hit at exactly the same `t` (a tie, checked with
     /// the scalar test on the packet's triangle); the same occlusion; and
     /// agreement with brute force up to ties. Over the 4-wide and the
@@ -497,7 +503,7 @@ mod tests {
         let (mut packets, mut hits, mut ties) = (0usize, 0usize, 0usize);
         let mut modes = vec![Mode::SINGLES];
         for lanes in widths() {
-            for switch in [SWITCH, 0, lanes as u32] {
+            for switch in [SWITCH, [0; 2], [lanes as u32; 2], [2, 1]] {
                 modes.push(Mode { lanes, switch });
             }
         }
