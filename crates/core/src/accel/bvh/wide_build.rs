@@ -19,7 +19,7 @@ use super::binning::{Bins, PrimRef, RangeInfo};
 use super::build::{order_of, plan, prim_refs, split_refs, BuildOptions, Plan};
 use super::collapse::{to_open, Collapsed, WideSlots, PAR_DEPTH};
 use super::node4::Child4;
-use super::sweep::{sweep_node, sweep_plan};
+use super::sweep::sweep_plan;
 use rayon::prelude::*;
 
 /// A child-to-be of a wide node: a range of the references, its bounds,
@@ -106,7 +106,7 @@ impl Build<'_> {
     }
 
     /// The kid over `refs` (at `first`) below a `leaf_ok` node: swept (its
-    /// references sorted now, as [`sweep_node`] does on entry).
+    /// references sorted now, as [`super::sweep::sweep_node`] does on entry).
     fn swept_kid(&self, refs: &mut [PrimRef], first: usize, depth: usize) -> Kid {
         let info = RangeInfo::of(refs).clean();
         Kid {
@@ -156,18 +156,21 @@ impl Build<'_> {
         }
     }
 
-    /// Order the references of a `leaf_ok` kid that stays one leaf as the
-    /// binary build does: it builds the subtree below (which the collapse
-    /// then ignores), and that reorders the leaf's triangles.
-    fn settle(&self, refs: &mut [PrimRef], kid: &Kid) {
-        let at = match kid.step {
+    /// Order the references of a `leaf_ok` kid that stays one leaf (its
+    /// `step`) as the binary build does: it builds the subtree below, which
+    /// the collapse then ignores, and that reorders the leaf's triangles.
+    /// The same splits and sorts, without the subtree's nodes.
+    fn settle(&self, refs: &mut [PrimRef], step: Step) {
+        let at = match step {
             Step::Sah(p) => split_refs(refs, &p).1,
             Step::Swept(Some((at, _))) => at,
             Step::Swept(None) | Step::Later => return,
         };
         let (left, right) = refs.split_at_mut(at);
-        sweep_node(left, 0, self.opts);
-        sweep_node(right, 0, self.opts);
+        for half in [left, right] {
+            let k = self.swept_kid(half, 0, 0);
+            self.settle(half, k.step);
+        }
     }
 
     /// Emit `kid`, whose references are `refs` (at wide depth `depth`,
@@ -186,7 +189,7 @@ impl Build<'_> {
         let rel = kid.info.bounds.aabb().surface_area() as f64 / self.root_area;
         if kid.is_leaf() || kid.leaf_ok() {
             if kid.leaf_ok() {
-                self.settle(refs, kid);
+                self.settle(refs, kid.step);
             }
             c.leaves += 1;
             c.sah_cost += rel * kid.len as f64;

@@ -1,10 +1,10 @@
 //! The build shared by the wide BVHs of issue 8 ([`super::Bvh4`],
 //! [`super::Bvh8`]): the binned SAH making wide nodes directly
 //! ([`super::wide_build`]), or the linear BVH's binary tree
-//! ([`super::lbvh`]) collapsed into wide nodes ([`super::collapse`]); its leaves packed four triangles
-//! at a time over Möller (Embree's `triangle4`, Wald et al. 2014) or kept one
-//! triangle after the other for the other tests, and the shape figures of
-//! the wide tree.
+//! ([`super::lbvh`]) collapsed into wide nodes ([`super::collapse`]); the
+//! leaves packed four triangles at a time over Möller (Embree's
+//! `triangle4`, Wald et al. 2014) or kept one triangle after the other for
+//! the other tests; and the shape figures of the wide tree.
 
 use super::build::{build, clamped, BuildNode, BuildOptions, BuildQuality, BuildTree};
 use super::collapse::{collapse, WideSlots};
