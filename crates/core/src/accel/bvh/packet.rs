@@ -177,10 +177,7 @@ fn intersect_batch_with<B: PacketTree>(
         _ => {}
     }
     let _ = mode;
-    rays.par_chunks(8)
-        .zip(hits.par_chunks_mut(8))
-        .with_min_len(BATCH_GRAIN / 8)
-        .for_each(|(r, h)| bvh.singles::<false>(r, |i, _, best| h[i] = best));
+    in_groups::<false, 1, _, _>(bvh, rays, hits, |_, _| false, |h, _, best| *h = best);
 }
 
 /// [`intersect_batch_with`] in packets of `L` rays.
@@ -191,14 +188,13 @@ fn intersect_packets<const L: usize, W: Width<L>, B: PacketTree>(
     hits: &mut [Option<Hit>],
     switch: u32,
 ) {
-    rays.par_chunks(L)
-        .zip(hits.par_chunks_mut(L))
-        .with_min_len(BATCH_GRAIN / L)
-        .for_each(|(r, h)| {
-            if !packet_intersect::<L, W, B>(bvh, r, h, switch) {
-                bvh.singles::<false>(r, |i, _, best| h[i] = best);
-            }
-        });
+    in_groups::<false, L, _, _>(
+        bvh,
+        rays,
+        hits,
+        |r, h| packet_intersect::<L, W, B>(bvh, r, h, switch),
+        |h, _, best| *h = best,
+    );
 }
 
 /// Occlusion of `rays` through `bvh`, packets as in [`intersect_batch`].
@@ -216,10 +212,7 @@ fn occluded_batch_with<B: PacketTree>(bvh: &B, rays: &[Ray], occluded: &mut [boo
         _ => {}
     }
     let _ = mode;
-    rays.par_chunks(8)
-        .zip(occluded.par_chunks_mut(8))
-        .with_min_len(BATCH_GRAIN / 8)
-        .for_each(|(r, o)| bvh.singles::<true>(r, |i, any, _| o[i] = any));
+    in_groups::<true, 1, _, _>(bvh, rays, occluded, |_, _| false, |o, any, _| *o = any);
 }
 
 /// [`occluded_batch_with`] in packets of `L` rays.
@@ -230,12 +223,53 @@ fn occluded_packets<const L: usize, W: Width<L>, B: PacketTree>(
     occluded: &mut [bool],
     switch: u32,
 ) {
-    rays.par_chunks(L)
-        .zip(occluded.par_chunks_mut(L))
-        .with_min_len(BATCH_GRAIN / L)
+    in_groups::<true, L, _, _>(
+        bvh,
+        rays,
+        occluded,
+        |r, o| packet_occluded::<L, W, B>(bvh, r, o, switch),
+        |o, any, _| *o = any,
+    );
+}
+
+/// Trace `rays` in parallel, [`BATCH_GRAIN`] rays per task: within a task
+/// every `L` consecutive rays are offered to `packet` (which traces them
+/// and returns true when they form a packet), and the rays of the chunks
+/// that form none are then traced together by the tree's
+/// [`PacketTree::singles`], their answers given to `set`.
+///
+/// Together, because [`super::Bvh8`]'s singles step six rays in turn: handed
+/// a chunk of sixteen, its walks ran dry at the end of every chunk and
+/// started over (about a third of the rays traced with fewer than six
+/// walks in flight, and the six walks' set-up each time). Over a whole
+/// task of incoherent rays, the walks stay full until its last rays.
+fn in_groups<const ANY: bool, const L: usize, B: PacketTree, R: Send>(
+    bvh: &B,
+    rays: &[Ray],
+    out: &mut [R],
+    packet: impl Fn(&[Ray], &mut [R]) -> bool + Sync,
+    set: impl Fn(&mut R, bool, Option<Hit>) + Sync,
+) {
+    rays.par_chunks(BATCH_GRAIN)
+        .zip(out.par_chunks_mut(BATCH_GRAIN))
         .for_each(|(r, o)| {
-            if !packet_occluded::<L, W, B>(bvh, r, o, switch) {
-                bvh.singles::<true>(r, |i, any, _| o[i] = any);
+            // The chunks that formed no packet, by their first ray.
+            let mut left = Vec::new();
+            for (k, (rc, oc)) in r.chunks(L).zip(o.chunks_mut(L)).enumerate() {
+                if !packet(rc, oc) {
+                    left.push(k * L);
+                }
+            }
+            if left.len() == r.len().div_ceil(L) {
+                // None formed a packet (incoherent rays): no copy.
+                bvh.singles::<ANY>(r, |i, any, best| set(&mut o[i], any, best));
+            } else if !left.is_empty() {
+                let index: Vec<usize> = left
+                    .iter()
+                    .flat_map(|&first| first..(first + L).min(r.len()))
+                    .collect();
+                let rest: Vec<Ray> = index.iter().map(|&i| r[i]).collect();
+                bvh.singles::<ANY>(&rest, |i, any, best| set(&mut o[index[i]], any, best));
             }
         });
 }

@@ -268,10 +268,13 @@ impl<T: TriangleTest> Bvh8<T> {
 /// How many rays are stepped in turn. On the AMD EPYC of step 3r three or
 /// four were no faster than two on the full dragon; on the Intel Xeon of
 /// step 3w (AVX-512, the sorted child order of `sort8.rs`) six were
-/// 1.1-1.3x faster than two on the dragon, the terrain and the scatter,
-/// one thread and two, and eight no faster than six (incoherent rays,
-/// interleaved runs; BENCHMARKS.md, step 3w).
-const WALKS: usize = 6;
+/// 1.1-1.3x faster than two. Those batches handed the walks sixteen rays at
+/// a time, so that they ran dry every sixteen rays; since step 3z they get
+/// a whole task's rays (`packet::in_groups`), and twelve were faster than
+/// six by 11% on the dragon, 18% on the terrain and 3% on the scatter
+/// (incoherent rays, 1 and 2 threads; 8, 10 and 16 in between or below;
+/// BENCHMARKS.md, step 3z).
+const WALKS: usize = 12;
 
 #[cfg(test)]
 mod tests {
@@ -326,7 +329,18 @@ mod tests {
             };
             for path in BoxPath::available() {
                 let bvh = Bvh8::<Moller>::build(&mesh, &opts).with_path(path);
-                for n in [0, 1, 2, 3, 4, 5, 8, 9, 1500] {
+                for n in [
+                    0,
+                    1,
+                    2,
+                    3,
+                    5,
+                    WALKS - 1,
+                    WALKS,
+                    WALKS + 1,
+                    2 * WALKS + 3,
+                    1500,
+                ] {
                     let rs = &rays[..n];
                     let mut got = vec![None; n];
                     let mut occ = vec![false; n];
