@@ -238,11 +238,13 @@ fn occluded_packets<const L: usize, W: Width<L>, B: PacketTree>(
 /// that form none are then traced together by the tree's
 /// [`PacketTree::singles`], their answers given to `set`.
 ///
-/// Together, because [`super::Bvh8`]'s singles step six rays in turn: handed
-/// a chunk of sixteen, its walks ran dry at the end of every chunk and
-/// started over (about a third of the rays traced with fewer than six
-/// walks in flight, and the six walks' set-up each time). Over a whole
-/// task of incoherent rays, the walks stay full until its last rays.
+/// Together, because [`super::Bvh8`]'s singles step several rays in turn
+/// (`bvh8/walk.rs`): handed a chunk of sixteen, its walks ran dry at the
+/// end of every chunk and started over (with six walks, about a third of
+/// the rays traced with fewer in flight, and the walks' set-up each time;
+/// BENCHMARKS.md, step 3z). Over a whole task of incoherent rays, the walks
+/// stay full until its last rays. Without packets (`L` = 1, `packet`
+/// always false) every task goes to the singles whole.
 fn in_groups<const ANY: bool, const L: usize, B: PacketTree, R: Send>(
     bvh: &B,
     rays: &[Ray],
