@@ -135,6 +135,17 @@ fn time_median(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
     (m, if m > 0.0 { (hi - lo) / m } else { 0.0 })
 }
 
+/// [`time_median`] of a trace cell after one untimed pass, for each engine
+/// alike. The first pass after the builds, or after the other engine's
+/// cell, ran while the host settled (freed pages, idle threads): the first
+/// trace cells of a run showed spreads of 75–90% where the others showed
+/// under 10% (BENCHMARKS.md, step 4a). The median of the timed passes is
+/// then the steady state, as a renderer tracing frame after frame sees it.
+fn time_traces(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
+    f();
+    time_median(reps, f)
+}
+
 fn trace(accel: &dyn Accel, rays: &[Ray], shadow: bool) {
     if shadow {
         let mut o = vec![false; rays.len()];
@@ -264,9 +275,9 @@ fn compare_mesh(
         for (threads, p) in [(1, one), (n, all)] {
             let times: Vec<(f64, f64)> = ours
                 .iter()
-                .map(|o| time_median(s.reps, || p.install(|| trace(o.as_ref(), rays, shadow))))
+                .map(|o| time_traces(s.reps, || p.install(|| trace(o.as_ref(), rays, shadow))))
                 .collect();
-            let (b, sb) = time_median(s.reps, || p.install(|| trace(&embree, rays, shadow)));
+            let (b, sb) = time_traces(s.reps, || p.install(|| trace(&embree, rays, shadow)));
             for (i, &(a, sa)) in times.iter().enumerate() {
                 push(set.name(), threads, i, a, sa, b, sb, m);
             }
@@ -278,9 +289,9 @@ fn compare_mesh(
     for (threads, p) in [(1, one), (n, all)] {
         let times: Vec<(f64, f64)> = ours
             .iter()
-            .map(|o| time_median(s.reps, || p.install(|| trace(o.as_ref(), primary, false))))
+            .map(|o| time_traces(s.reps, || p.install(|| trace(o.as_ref(), primary, false))))
             .collect();
-        let (b, sb) = time_median(s.reps, || {
+        let (b, sb) = time_traces(s.reps, || {
             p.install(|| {
                 let mut hits: Vec<Option<Hit>> = vec![None; primary.len()];
                 primary
@@ -482,7 +493,7 @@ fn print_report(r: &Comparison, reps: usize) {
         })
         .collect();
     println!(
-        "{}: {} triangles; ours = {} traced as built with --bvh-build {}; Embree 3 single-ray API ({} build) unless noted; median of {reps} runs",
+        "{}: {} triangles; ours = {} traced as built with --bvh-build {}; Embree 3 single-ray API ({} build) unless noted; median of {reps} runs (traces after one untimed pass)",
         r.mesh,
         r.triangles,
         ours.join(", "),
