@@ -136,10 +136,10 @@ fn time_median(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
 }
 
 /// [`time_median`] of a trace cell after one untimed pass, for each engine
-/// alike. The first pass after the builds, or after the other engine's
-/// cell, ran while the host settled (freed pages, idle threads): the first
-/// trace cells of a run showed spreads of 75–90% where the others showed
-/// under 10% (BENCHMARKS.md, step 4a). The median of the timed passes is
+/// alike. Without it, the first trace cells after the builds showed
+/// spreads of 75–90% in some runs where every later cell showed under 10%
+/// (BENCHMARKS.md, step 4a): the first pass runs while the host is still
+/// settling from the builds. The median of the timed passes is
 /// then the steady state, as a renderer tracing frame after frame sees it.
 fn time_traces(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
     f();
