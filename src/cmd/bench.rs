@@ -19,8 +19,10 @@ use std::process::ExitCode;
 #[derive(Args)]
 #[command(
     after_help = "Each figure is the median of --reps runs; the spread (max-min)/median is\n\
-reported so noisy machines show. With --compare, every trace cell (ours and\n\
-Embree's alike) runs one untimed pass before its timed ones. Brute force is\n\
+reported so noisy machines show. With --compare, the engines of a cell are\n\
+timed in turn (each repetition times ours, then Embree's), so that a burst of\n\
+host noise falls on both, and every trace cell runs one untimed round before\n\
+its timed ones. Brute force is\n\
 timed on a sample of each ray set sized to take about a second. The ray sets\n\
 are those of `raykit rays`."
 )]

@@ -128,22 +128,37 @@ struct SummaryRow {
     best: Vec<Best>,
 }
 
-/// Median seconds of `reps` runs of `f`, and the spread (max−min)/median.
-fn time_median(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
-    let t: Vec<f64> = (0..reps.max(1)).map(|_| timed(&mut f).1).collect();
-    let (m, lo, hi) = median_min_max(&t);
-    (m, if m > 0.0 { (hi - lo) / m } else { 0.0 })
-}
+/// One timed thing of a cell: an engine's build or trace.
+type Run<'a> = Box<dyn FnMut() + 'a>;
 
-/// [`time_median`] of a trace cell after one untimed pass, for each engine
-/// alike. Without it, the first trace cells after the builds showed
-/// spreads of 75–90% in some runs where every later cell showed under 10%
-/// (BENCHMARKS.md, step 4a): the first pass runs while the host is still
-/// settling from the builds. The median of the timed passes is
-/// then the steady state, as a renderer tracing frame after frame sees it.
-fn time_traces(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
-    f();
-    time_median(reps, f)
+/// Median seconds and spread (max−min)/median of each of `runs`, timed in
+/// turn: each of `reps` rounds times every run once, in order, after one
+/// untimed round where `warm_up` is set. Host noise comes in bursts of a
+/// second or more; timed one engine after the other, a burst could fall on
+/// all of one engine's samples and move its median alone (one 2-thread cell
+/// read 0.93× where five other runs read 1.20–1.30×, BENCHMARKS.md, step
+/// 4b). In turn, a burst falls on both engines' samples alike. The warm-up
+/// round is for the trace cells: without it the first cells after the
+/// builds showed spreads of 75–90% in some runs where every later cell
+/// showed under 10% (step 4a); the medians are then the steady state, as a
+/// renderer tracing frame after frame sees it.
+fn time_in_turn(reps: usize, warm_up: bool, runs: &mut [Run]) -> Vec<(f64, f64)> {
+    if warm_up {
+        runs.iter_mut().for_each(|f| f());
+    }
+    let mut samples = vec![Vec::new(); runs.len()];
+    for _ in 0..reps.max(1) {
+        for (f, t) in runs.iter_mut().zip(&mut samples) {
+            t.push(timed(&mut *f).1);
+        }
+    }
+    samples
+        .iter()
+        .map(|t| {
+            let (m, lo, hi) = median_min_max(t);
+            (m, if m > 0.0 { (hi - lo) / m } else { 0.0 })
+        })
+        .collect()
 }
 
 fn trace(accel: &dyn Accel, rays: &[Ray], shadow: bool) {
@@ -220,25 +235,37 @@ fn compare_mesh(
                 Quality::High => &high,
                 Quality::Medium => &s.options,
             };
-            let mut timings = Vec::new();
-            for (i, &(kind, test)) in s.ours.iter().enumerate() {
-                let mut built = None;
-                let timing = time_median(s.reps, || {
-                    built = Some(p.install(|| build_accel(kind, test, mesh, opts)));
-                });
-                if quality == Quality::High && ours.len() == i {
-                    ours.push(built.expect("built at least once"));
-                }
-                timings.push(timing);
-            }
+            // Ours and Embree's in turn (`time_in_turn`); each rep's tree
+            // replaces (frees) the previous one inside the timing, as
+            // Embree's scene is released inside its own.
+            let mut built: Vec<Option<Box<dyn Accel>>> = s.ours.iter().map(|_| None).collect();
             let mut err = None;
-            let (t_em, sp2) = time_median(s.reps, || {
-                if let Err(e) = EmbreeScene::build(&device, mesh, quality) {
-                    err = Some(e);
-                }
-            });
+            let mut timings = {
+                let mut runs: Vec<Run> = built
+                    .iter_mut()
+                    .zip(&s.ours)
+                    .map(|(slot, &(kind, test))| -> Run {
+                        Box::new(move || {
+                            *slot = Some(p.install(|| build_accel(kind, test, mesh, opts)))
+                        })
+                    })
+                    .collect();
+                runs.push(Box::new(|| {
+                    if let Err(e) = EmbreeScene::build(&device, mesh, quality) {
+                        err = Some(e);
+                    }
+                }));
+                time_in_turn(s.reps, false, &mut runs)
+            };
             if let Some(e) = err {
                 return Err(e);
+            }
+            let (t_em, sp2) = timings.pop().expect("Embree's build was timed");
+            if quality == Quality::High {
+                ours = built
+                    .into_iter()
+                    .map(|b| b.expect("built at least once"))
+                    .collect();
             }
             for (&(kind, test), &(t_ours, sp)) in s.ours.iter().zip(&timings) {
                 builds.push(Cell {
@@ -273,11 +300,13 @@ fn compare_mesh(
         let shadow = set == RayKind::Shadow;
         let m = rays.len() as f64 / 1e6;
         for (threads, p) in [(1, one), (n, all)] {
-            let times: Vec<(f64, f64)> = ours
+            let mut runs: Vec<Run> = ours
                 .iter()
-                .map(|o| time_traces(s.reps, || p.install(|| trace(o.as_ref(), rays, shadow))))
+                .map(|o| -> Run { Box::new(move || p.install(|| trace(o.as_ref(), rays, shadow))) })
                 .collect();
-            let (b, sb) = time_traces(s.reps, || p.install(|| trace(&embree, rays, shadow)));
+            runs.push(Box::new(|| p.install(|| trace(&embree, rays, shadow))));
+            let mut times = time_in_turn(s.reps, true, &mut runs);
+            let (b, sb) = times.pop().expect("Embree's cell was timed");
             for (i, &(a, sa)) in times.iter().enumerate() {
                 push(set.name(), threads, i, a, sa, b, sb, m);
             }
@@ -287,11 +316,11 @@ fn compare_mesh(
     let primary = &sets[0];
     let m = primary.len() as f64 / 1e6;
     for (threads, p) in [(1, one), (n, all)] {
-        let times: Vec<(f64, f64)> = ours
+        let mut runs: Vec<Run> = ours
             .iter()
-            .map(|o| time_traces(s.reps, || p.install(|| trace(o.as_ref(), primary, false))))
+            .map(|o| -> Run { Box::new(move || p.install(|| trace(o.as_ref(), primary, false))) })
             .collect();
-        let (b, sb) = time_traces(s.reps, || {
+        runs.push(Box::new(|| {
             p.install(|| {
                 let mut hits: Vec<Option<Hit>> = vec![None; primary.len()];
                 primary
@@ -299,7 +328,9 @@ fn compare_mesh(
                     .zip(hits.par_chunks_mut(STREAM_PACKET * 16))
                     .for_each(|(r, h)| embree.intersect_stream(r, h, STREAM_PACKET));
             })
-        });
+        }));
+        let mut times = time_in_turn(s.reps, true, &mut runs);
+        let (b, sb) = times.pop().expect("Embree's cell was timed");
         for (i, &(a, sa)) in times.iter().enumerate() {
             push(
                 "primary, Embree stream (rtcIntersect1M)",
@@ -493,7 +524,7 @@ fn print_report(r: &Comparison, reps: usize) {
         })
         .collect();
     println!(
-        "{}: {} triangles; ours = {} traced as built with --bvh-build {}; Embree 3 single-ray API ({} build) unless noted; median of {reps} runs (traces after one untimed pass)",
+        "{}: {} triangles; ours = {} traced as built with --bvh-build {}; Embree 3 single-ray API ({} build) unless noted; median of {reps} runs, the engines timed in turn (traces after one untimed round)",
         r.mesh,
         r.triangles,
         ours.join(", "),
