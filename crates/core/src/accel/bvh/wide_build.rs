@@ -183,9 +183,10 @@ impl Build<'_> {
     /// other, about three binary levels whose partitions ran on one core
     /// (their binning was already parallel); opened ahead, every level
     /// below the root's own split runs on all cores. Two threads, builds
-    /// alternated in one process, medians of 15: the 1M-triangle terrain
-    /// 1.04× faster, the full dragon 1.03×, the 500k scatter 1.02–1.03×;
-    /// one thread unchanged within 1.5% (issue 8, step 4b).
+    /// alternated in one process: the 1M-triangle terrain 1.04× faster,
+    /// the full dragon 1.03×, the 500k scatter 2% slower in one round and
+    /// 2.5% faster in another; one thread alike within 2.6% (issue 8,
+    /// step 4b).
     fn open_early(
         &self,
         refs: &mut [PrimRef],
