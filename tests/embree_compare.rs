@@ -22,7 +22,7 @@ fn embree_and_ours_agree_on_every_ray_and_the_table_has_every_cell() {
         "--mesh",
         meshes[1],
         "--accel",
-        "bvh4,bvh2",
+        "bvh8,bvh2",
         "--size",
         "96",
         "--reps",
@@ -46,7 +46,7 @@ fn embree_and_ours_agree_on_every_ray_and_the_table_has_every_cell() {
         "build vs Embree High",
         "build vs Embree Medium",
     ] {
-        for accel in ["bvh4", "bvh2"] {
+        for accel in ["bvh8", "bvh2"] {
             let row = format!("{cell} [{accel}] ");
             assert_eq!(
                 tables.lines().filter(|l| l.starts_with(&row)).count(),

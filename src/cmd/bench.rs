@@ -55,7 +55,7 @@ pub struct BenchArgs {
     json: bool,
     /// Compare with another engine in the same process: `embree` (needs a
     /// build with `--features embree` and Debian's libembree-dev). Ours are
-    /// the structures × tests that --accel/--test list (`all` means bvh4 and
+    /// the structures × tests that --accel/--test list (`all` means bvh8 and
     /// moller, our fastest); prints ours, Embree's and the ratio per cell,
     /// our SAH cost beside the build times, and checks that every answer
     /// agrees. Builds are timed rung for rung: ours as --bvh-build says
@@ -443,7 +443,7 @@ fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
             }
         };
         let kinds = parse_list(
-            &one(&args.accel, "bvh4"),
+            &one(&args.accel, "bvh8"),
             &AccelKind::ALL,
             AccelKind::name,
             "--accel",
