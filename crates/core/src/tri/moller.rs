@@ -99,6 +99,11 @@ const U: f32 = f32::EPSILON * 0.5;
 /// second-order terms.
 const K_BARY: f32 = 64.0;
 
+/// What [`Moller`]'s per-ray constant multiplies the largest direction
+/// component's magnitude by (`K_BARY · u`; exact, a power of two), for
+/// the packet path that forms eight of them at once (`accel/bvh/packet.rs`).
+pub(crate) const PREPARE_FACTOR: f32 = K_BARY * U;
+
 /// Möller–Trumbore (Möller & Trumbore 1997, paper 001) with a conservative
 /// tolerance: per triangle the first corner, the two edge vectors and their
 /// max norms (11 floats, 44 bytes); per ray the tolerance scale
@@ -235,7 +240,7 @@ impl TriangleTest for Moller {
 
     #[inline]
     fn prepare(ray: &Ray) -> f32 {
-        K_BARY * U * max_abs(ray.dir)
+        PREPARE_FACTOR * max_abs(ray.dir)
     }
 
     #[inline]

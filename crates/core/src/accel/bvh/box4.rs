@@ -67,7 +67,12 @@ impl RayBox4 {
         RayBox4 {
             origin: ray.origin.to_array(),
             inv_dir: id,
-            near: [0, 1, 2].map(|a| 2 * a + id[a].is_sign_negative() as usize),
+            // Spelled out, as `RayBox8::new`.
+            near: [
+                id[0].is_sign_negative() as usize,
+                2 + id[1].is_sign_negative() as usize,
+                4 + id[2].is_sign_negative() as usize,
+            ],
         }
     }
 }

@@ -71,7 +71,13 @@ impl RayBox8 {
         RayBox8 {
             origin: ray.origin.to_array(),
             inv_dir: id,
-            near: [0, 1, 2].map(|a| 2 * a + id[a].is_sign_negative() as usize),
+            // Spelled out: `array::map`'s closure became a call inside
+            // the traversals compiled for AVX2 (BENCHMARKS.md, step 4e).
+            near: [
+                id[0].is_sign_negative() as usize,
+                2 + id[1].is_sign_negative() as usize,
+                4 + id[2].is_sign_negative() as usize,
+            ],
         }
     }
 }

@@ -311,8 +311,18 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh4<T> {
         out: &mut super::packet_kernel::PacketHits<L>,
     ) {
         // SAFETY: the caller guarantees the width's features. `build`
-        // checked that the tree's deepest stack is below `STACK`.
-        unsafe { W::traverse::<ANY, Self, STACK>(self, view, rays, p, switch, out) }
+        // checked that the tree's deepest stack is below `STACK`, and
+        // `small_stack` says whether it fits `SMALL_STACK`. The small stack
+        // where it fits: the kernel's frame with the large one is 48 KB,
+        // whose pages were probed on every packet (44 instructions per
+        // packet; BENCHMARKS.md, step 4e).
+        unsafe {
+            if self.small_stack {
+                W::traverse::<ANY, Self, SMALL_STACK>(self, view, rays, p, switch, out)
+            } else {
+                W::traverse::<ANY, Self, STACK>(self, view, rays, p, switch, out)
+            }
+        }
     }
 }
 

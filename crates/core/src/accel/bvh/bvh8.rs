@@ -113,8 +113,25 @@ impl<T: TriangleTest> Bvh8<T> {
             // SAFETY: `path` is Avx512 only where `BoxPath::detect` found
             // every feature `traverse_avx512` is compiled for.
             BoxPath::Avx512 => unsafe { self.traverse_avx512::<ANY>(start, ray, tfar, best) },
-            path => self.traverse_on::<ANY>(start, ray, path, tfar, best),
+            path => self.traverse_portable::<ANY>(start, ray, path, tfar, best),
         }
+    }
+
+    /// The traversal for CPUs without AVX2 (and the scalar kernel in
+    /// tests), kept out of line: inlined, it sat in the packet kernel's
+    /// hand-over and made the kernel's code worse (1M terrain primaries
+    /// took 5% fewer instructions with it out of line; BENCHMARKS.md,
+    /// step 4e).
+    #[inline(never)]
+    fn traverse_portable<const ANY: bool>(
+        &self,
+        start: Child4,
+        ray: &Ray,
+        path: BoxPath,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        self.traverse_on::<ANY>(start, ray, path, tfar, best)
     }
 
     /// The traversal compiled for AVX-512 (F, VL, BW, DQ) besides AVX2 and
@@ -400,8 +417,18 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
         out: &mut super::packet_kernel::PacketHits<L>,
     ) {
         // SAFETY: the caller guarantees the width's features. `build`
-        // checked that the tree's deepest stack is below `STACK`.
-        unsafe { W::traverse::<ANY, Self, STACK>(self, view, rays, p, switch, out) }
+        // checked that the tree's deepest stack is below `STACK`, and
+        // `small_stack` says whether it fits `SMALL_STACK`. The small stack
+        // where it fits: the kernel's frame with the large one is 48 KB,
+        // whose pages were probed on every packet (44 instructions per
+        // packet; BENCHMARKS.md, step 4e).
+        unsafe {
+            if self.small_stack {
+                W::traverse::<ANY, Self, SMALL_STACK>(self, view, rays, p, switch, out)
+            } else {
+                W::traverse::<ANY, Self, STACK>(self, view, rays, p, switch, out)
+            }
+        }
     }
 }
 

@@ -56,7 +56,8 @@ pub(crate) trait Lanes<const L: usize>: Copy {
     fn ordered(self) -> Self::Mask;
     /// `b` where `m` is set, else `self`.
     fn blend(self, b: Self, m: Self::Mask) -> Self;
-    /// The smallest lane (of lanes that are not NaN).
+    /// The smallest lane (no lane may be NaN: `minps` passes a NaN on
+    /// depending on its position).
     fn hmin(self) -> f32;
     /// The mask's lanes as bits, lane 0 lowest.
     fn bits(m: Self::Mask) -> u32;

@@ -38,6 +38,8 @@ mod node8;
 mod node_box;
 mod packet;
 #[cfg(target_arch = "x86_64")]
+mod packet_gather;
+#[cfg(target_arch = "x86_64")]
 mod packet_kernel;
 mod prefetch;
 #[cfg(target_arch = "x86_64")]

@@ -150,10 +150,13 @@ impl Ray4 {
         let scale = Moller::prepare(ray);
         let o = ray.origin.to_array();
         let d = ray.dir.to_array();
+        // Spelled out: `array::map`'s closures became calls inside the
+        // traversals compiled for AVX2 (BENCHMARKS.md, step 4e).
+        let a = [d[0].abs(), d[1].abs(), d[2].abs()];
         Ray4 {
-            origin: o.map(|x| [x; 4]),
-            dir: d.map(|x| [x; 4]),
-            dir_abs: d.map(|x| [x.abs(); 4]),
+            origin: [[o[0]; 4], [o[1]; 4], [o[2]; 4]],
+            dir: [[d[0]; 4], [d[1]; 4], [d[2]; 4]],
+            dir_abs: [[a[0]; 4], [a[1]; 4], [a[2]; 4]],
             scale: [scale; 4],
             // The scalar test's `0.75 * scale * e1_max * e2_max` multiplies
             // left to right, so this first product is the same.
