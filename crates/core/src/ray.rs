@@ -50,6 +50,21 @@ impl Ray {
         self.origin + self.dir * t
     }
 
+    /// The `tfar` a traversal starts from: the ray's own, or NaN when its
+    /// origin or direction is not finite. A NaN `tfar` fails every box and
+    /// triangle test, so such a ray hits nothing; without it, a NaN from
+    /// its slab arithmetic is dropped by the `min`/`max` that drop `0·∞`,
+    /// and it entered the inverted boxes of the wide BVHs' unused slots
+    /// (issue 8, step 4e).
+    #[inline(always)]
+    pub(crate) fn traversal_tfar(&self) -> f32 {
+        if self.origin.is_finite() && self.dir.is_finite() {
+            self.tfar
+        } else {
+            f32::NAN
+        }
+    }
+
     /// True when origin, direction and interval are finite numbers (tfar may be
     /// +inf) and the direction is not zero.
     pub fn is_valid(&self) -> bool {

@@ -304,3 +304,56 @@ fn bvhs_of_every_build_quality_agree_with_brute_force() {
         }
     }
 }
+
+/// Rays whose origin or direction is not finite (NaN or infinite
+/// components) hit nothing on every structure, one by one and in
+/// batches (packets and interleaved walks), as brute force says: such a
+/// ray's slab arithmetic gives NaNs, which the box tests' `min`/`max` drop,
+/// and the wide BVHs once entered their unused slots' inverted boxes with
+/// them (a crash; issue 8, step 4e).
+#[test]
+fn rays_that_are_not_finite_hit_nothing_on_every_structure() {
+    let mesh = random_soup(3000, 17);
+    let (nan, inf) = (f32::NAN, f32::INFINITY);
+    let bad = [
+        Ray::new(Vec3::new(0.5, 0.5, -2.0), Vec3::new(nan, nan, nan)),
+        Ray::new(Vec3::new(0.5, 0.5, -2.0), Vec3::new(0.1, nan, 1.0)),
+        Ray::new(Vec3::new(0.5, 0.5, -2.0), Vec3::new(inf, 1.0, 1.0)),
+        Ray::new(Vec3::new(nan, 0.5, -2.0), Vec3::Z),
+        Ray::new(Vec3::new(0.5, inf, -2.0), Vec3::Z),
+        Ray::new(Vec3::new(-inf, 0.5, 0.5), Vec3::X),
+    ];
+    // Each bad ray alone, in a full packet of its copies, and among good
+    // rays (a batch long enough for the interleaved walks).
+    let good = random_rays(&mesh, 200, 5);
+    let mut mixed = good.clone();
+    for (i, r) in bad.iter().enumerate() {
+        mixed[7 + 31 * i] = *r;
+    }
+    let brute = build_accel(
+        AccelKind::Brute,
+        TestKind::Moller,
+        &mesh,
+        &BuildOptions::default(),
+    );
+    for kind in AccelKind::ALL {
+        let accel = build_accel(kind, TestKind::Moller, &mesh, &BuildOptions::default());
+        for r in &bad {
+            assert_eq!(brute.intersect(r), None);
+            assert_eq!(accel.intersect(r), None, "{kind:?}: {r:?}");
+            assert!(!accel.occluded(r), "{kind:?}: {r:?}");
+        }
+        let copies: Vec<Ray> = bad.iter().flat_map(|r| [*r; 16]).collect();
+        for rays in [&copies, &mixed] {
+            let mut hits = vec![None; rays.len()];
+            accel.intersect_batch(rays, &mut hits);
+            let mut occ = vec![false; rays.len()];
+            accel.occluded_batch(rays, &mut occ);
+            for (i, r) in rays.iter().enumerate() {
+                let want = brute.intersect(r);
+                assert!(agree(hits[i], want), "{kind:?}: batch ray {i} {r:?}");
+                assert_eq!(occ[i], want.is_some(), "{kind:?}: batch ray {i} {r:?}");
+            }
+        }
+    }
+}

@@ -75,7 +75,7 @@ impl<T: TriangleTest> Bvh4<T> {
         if self.stats.triangle_refs == 0 {
             return (None, false);
         }
-        let (mut tfar, mut best) = (ray.tfar, None);
+        let (mut tfar, mut best) = (ray.traversal_tfar(), None);
         let any = self.subtree::<ANY>(self.root, ray, &mut tfar, &mut best);
         (best, any)
     }

@@ -375,7 +375,7 @@ fn packet<const L: usize>(rays: &[Ray], oct: u32) -> Packet<L> {
         p.inv_dir[2][l] = id.z;
         p.scale[l] = Moller::prepare(ray);
         p.tnear[l] = ray.tnear;
-        p.tfar[l] = ray.tfar;
+        p.tfar[l] = ray.traversal_tfar();
     }
     p
 }
@@ -439,7 +439,23 @@ unsafe fn gathered<const L: usize>(rays: &[Ray]) -> Option<Packet<L>> {
                 *sign |= (_mm256_movemask_ps(r.inv_dir[a]) as u32) << (8 * h);
             }
             _mm256_storeu_ps(row!((*q).tnear), r.tnear);
-            _mm256_storeu_ps(row!((*q).tfar), r.tfar);
+            // `Ray::traversal_tfar` in lanes: NaN where the origin or
+            // direction is not finite (`x - x` is 0 only for finite `x`).
+            let zero = _mm256_setzero_ps();
+            let mut finite = _mm256_cmp_ps::<_CMP_EQ_OQ>(zero, zero);
+            for x in [
+                r.origin[0],
+                r.origin[1],
+                r.origin[2],
+                r.dir[0],
+                r.dir[1],
+                r.dir[2],
+            ] {
+                let ok = _mm256_cmp_ps::<_CMP_EQ_OQ>(_mm256_sub_ps(x, x), zero);
+                finite = _mm256_and_ps(finite, ok);
+            }
+            let tfar = _mm256_blendv_ps(_mm256_set1_ps(f32::NAN), r.tfar, finite);
+            _mm256_storeu_ps(row!((*q).tfar), tfar);
             let ax = _mm256_and_ps(r.dir[0], magnitude);
             let ay = _mm256_and_ps(r.dir[1], magnitude);
             let az = _mm256_and_ps(r.dir[2], magnitude);
@@ -638,7 +654,21 @@ mod tests {
             (formed, refused)
         }
         let mut rng = Pcg32::new(44);
-        let rays = rays(&mut rng, 3000);
+        let mut rays = rays(&mut rng, 3000);
+        // Rays whose origin or direction is not finite get a NaN `tfar`.
+        let (nan, inf) = (f32::NAN, f32::INFINITY);
+        for (i, (o, d)) in [
+            (Vec3::new(nan, 0.5, 0.5), Vec3::Y),
+            (Vec3::new(0.5, -inf, 0.5), Vec3::Y),
+            (Vec3::ZERO, Vec3::new(0.3, nan, 0.1)),
+            (Vec3::ZERO, Vec3::new(inf, 1.0, 1.0)),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            rays[100 + 40 * i].origin = o;
+            rays[100 + 40 * i].dir = d;
+        }
         for (formed, refused) in [check::<8>(&rays), check::<16>(&rays)] {
             assert!(
                 formed > 500 && refused > 500,

@@ -64,7 +64,7 @@ impl<'a, L: LeafTest, const N: usize> Walk<'a, L, N> {
         self.ray = ray;
         self.rb = RayBox8::new(ray);
         self.leaf = leaf;
-        self.tfar = ray.tfar;
+        self.tfar = ray.traversal_tfar();
         self.best = None;
         self.cur = root;
         self.sp = 0;
@@ -238,7 +238,7 @@ impl<T: TriangleTest> Bvh8<T> {
         leaf: impl Fn(&'a Ray) -> L,
         mut done: impl FnMut(usize, bool, Option<Hit>),
     ) {
-        let start = |r: &'a Ray| Walk::<L, N>::new(r, self.root, r.tfar, None, leaf(r));
+        let start = |r: &'a Ray| Walk::<L, N>::new(r, self.root, r.traversal_tfar(), None, leaf(r));
         let mut walks: [Walk<L, N>; WALKS] = std::array::from_fn(|k| start(&rays[k]));
         let mut index: [usize; WALKS] = std::array::from_fn(|k| k);
         let mut live = [true; WALKS];
