@@ -1,6 +1,7 @@
 //! The inner loops of the binned SAH build (issue 8, step 3): primitive
 //! references as two 4-float corners, one binning pass for all three axes,
-//! the SAH sweep over the bins, and the in-place partition.
+//! and the in-place partition (the SAH sweep over the bins is
+//! [`super::sah_sweep`]).
 //!
 //! This is the layout of Wald 2007 ("On fast construction of SAH-based
 //! bounding volume hierarchies") as Embree's builders use it (Wald et al.
@@ -58,18 +59,6 @@ impl Box4f {
     pub fn grow(&mut self, p: V4) {
         self.lo = vmin(self.lo, p);
         self.hi = vmax(self.hi, p);
-    }
-
-    /// [`Box4f::grow`] by `p` where `mask` is all ones; no change where it
-    /// is zero (the point is replaced by the empty box's corners), without
-    /// a branch. (On x86_64 the partition does this in SSE registers.)
-    #[cfg(not(target_arch = "x86_64"))]
-    #[inline(always)]
-    pub fn grow_masked(&mut self, p: V4, mask: u32) {
-        let pick =
-            |v: f32, empty: f32| f32::from_bits((v.to_bits() & mask) | (empty.to_bits() & !mask));
-        self.lo = vmin(self.lo, p.map(|v| pick(v, f32::INFINITY)));
-        self.hi = vmax(self.hi, p.map(|v| pick(v, f32::NEG_INFINITY)));
     }
 
     /// Half the surface area (the SAH only needs ratios); 0 when empty.
@@ -284,17 +273,18 @@ impl Mapping {
 /// Per-bin bounds and counts of the three axes (bins × 3 of each).
 #[derive(Clone, Debug)]
 pub(crate) struct Bins {
-    boxes: Vec<[Box4f; 3]>,
-    counts: Vec<[u32; 3]>,
+    pub(super) boxes: Vec<[Box4f; 3]>,
+    /// Counts of the three axes; the fourth lane stays 0 (so that the
+    /// sweep loads a bin's counts as one vector).
+    pub(super) counts: Vec<[u32; 4]>,
     /// A second set of bins for every other reference while binning, merged
     /// into the first at the end: consecutive references often fall in the
     /// same bin (a partitioned range is spatially sorted), and two sets halve
     /// the chain of dependent read-modify-writes through memory.
     odd_boxes: Vec<[Box4f; 3]>,
-    odd_counts: Vec<[u32; 3]>,
-    /// Sweep scratch: area and count of the bins at and above each bin.
-    right_area: Vec<[f32; 3]>,
-    right_count: Vec<[u32; 3]>,
+    odd_counts: Vec<[u32; 4]>,
+    /// Sweep scratch (see [`super::sah_sweep`]).
+    pub(super) scratch: Vec<super::sah_sweep::SweepBin>,
 }
 
 /// The best split found by the sweep.
@@ -314,11 +304,10 @@ impl Bins {
     pub fn new(n: usize) -> Bins {
         Bins {
             boxes: vec![[Box4f::EMPTY; 3]; n],
-            counts: vec![[0; 3]; n],
+            counts: vec![[0; 4]; n],
             odd_boxes: vec![[Box4f::EMPTY; 3]; n],
-            odd_counts: vec![[0; 3]; n],
-            right_area: vec![[0.0; 3]; n],
-            right_count: vec![[0; 3]; n],
+            odd_counts: vec![[0; 4]; n],
+            scratch: vec![super::sah_sweep::SweepBin::default(); n],
         }
     }
 
@@ -327,9 +316,9 @@ impl Bins {
             *self = Bins::new(n);
         }
         self.boxes[..n].fill([Box4f::EMPTY; 3]);
-        self.counts[..n].fill([0; 3]);
+        self.counts[..n].fill([0; 4]);
         self.odd_boxes[..n].fill([Box4f::EMPTY; 3]);
-        self.odd_counts[..n].fill([0; 3]);
+        self.odd_counts[..n].fill([0; 4]);
     }
 
     /// Bin `refs` under `map` (the first `map.num_bins()` bins are reset):
@@ -373,69 +362,6 @@ impl Bins {
             }
         }
     }
-
-    /// The cheapest bin boundary over the three axes under the SAH with
-    /// `cost(n)` per leaf of `n` triangles and `c_trav` per node, relative
-    /// to `parent_half_area`; `None` when no boundary has references on both
-    /// sides. Ties go to the lower axis, then the lower boundary. Kept out
-    /// of line (see [`partition`]).
-    #[inline(never)]
-    pub fn best_split(
-        &mut self,
-        nb: usize,
-        parent_half_area: f32,
-        c_trav: f32,
-        cost: impl Fn(u32) -> f32,
-    ) -> Option<Split> {
-        let right_area = &mut self.right_area[..nb];
-        let right_count = &mut self.right_count[..nb];
-        let mut acc = [Box4f::EMPTY; 3];
-        let mut cnt = [0u32; 3];
-        for i in (1..nb).rev() {
-            for a in 0..3 {
-                acc[a] = acc[a].union(self.boxes[i][a]);
-                cnt[a] += self.counts[i][a];
-                right_area[i][a] = acc[a].half_area();
-                right_count[i][a] = cnt[a];
-            }
-        }
-        let inv = 1.0 / parent_half_area.max(f32::MIN_POSITIVE);
-        let mut best: Option<(usize, usize, f32, u32)> = None;
-        for a in 0..3 {
-            let mut acc = Box4f::EMPTY;
-            let mut cnt = 0u32;
-            for i in 1..nb {
-                acc = acc.union(self.boxes[i - 1][a]);
-                cnt += self.counts[i - 1][a];
-                let rc = right_count[i][a];
-                if cnt == 0 || rc == 0 {
-                    continue;
-                }
-                let c = c_trav + (acc.half_area() * cost(cnt) + right_area[i][a] * cost(rc)) * inv;
-                if best.is_none_or(|b| c < b.2) {
-                    best = Some((a, i, c, cnt));
-                }
-            }
-        }
-        let (axis, bin, cost, left_count) = best?;
-        let mut left = Box4f::EMPTY;
-        let mut right = Box4f::EMPTY;
-        for i in 0..nb {
-            if i < bin {
-                left = left.union(self.boxes[i][axis]);
-            } else {
-                right = right.union(self.boxes[i][axis]);
-            }
-        }
-        Some(Split {
-            axis,
-            bin,
-            cost,
-            left_count: left_count as usize,
-            left,
-            right,
-        })
-    }
 }
 
 /// References ahead of the one being binned that [`Bins::bin`] asks the
@@ -461,7 +387,7 @@ fn prefetch_ref(p: &PrimRef, ahead: isize) {
 
 /// Grow bin `k` of axis `a` by the reference `p`.
 #[inline(always)]
-fn add(boxes: &mut [[Box4f; 3]], counts: &mut [[u32; 3]], k: usize, a: usize, p: &PrimRef) {
+fn add(boxes: &mut [[Box4f; 3]], counts: &mut [[u32; 4]], k: usize, a: usize, p: &PrimRef) {
     // SAFETY: `Mapping::bins` clamps to `last = nb - 1`, and both slices
     // hold `nb` bins (`Bins::bin`).
     let (b, c) = unsafe { (boxes.get_unchecked_mut(k), counts.get_unchecked_mut(k)) };
@@ -483,7 +409,7 @@ fn add(boxes: &mut [[Box4f; 3]], counts: &mut [[u32; 3]], k: usize, a: usize, p:
 /// variable) the full dragon's build took 15% longer on one thread (issue
 /// 8, step 3r).
 ///
-/// Kept out of line, as [`Bins::best_split`]: inlined into the build's node
+/// Kept out of line, as `Bins::best_split`: inlined into the build's node
 /// step, which happened when an unrelated module changed how the crate's
 /// code was split into codegen units, the scatter's build took 7% longer
 /// (one thread; issue 8, step 3w).
@@ -577,30 +503,18 @@ fn partition_on<const AXIS: usize>(
 }
 
 /// The (doubled) centroid bounds of a partition's two sides, grown one
-/// reference at a time without a branch: [`Box4f::grow_masked`] on each
-/// side, in SSE registers on x86_64 (the portable form compiled to lane
-/// shuffles, and the partition took 1.1x longer; issue 8, step 3y).
+/// reference at a time without a branch: the side's box is picked by
+/// index (`v[1]` left, `v[0]` right) and grown in memory. Picking the
+/// centroid or the empty box's corners for both sides by mask, in
+/// registers, took about 20 instructions per reference where this takes
+/// 9 (issue 8, step 4f).
 struct SideCentroids {
-    #[cfg(target_arch = "x86_64")]
-    v: [std::arch::x86_64::__m128; 4],
-    #[cfg(not(target_arch = "x86_64"))]
     v: [Box4f; 2],
 }
 
 impl SideCentroids {
     #[inline(always)]
     fn new() -> SideCentroids {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::x86_64::*;
-            // SAFETY: SSE is part of x86_64.
-            let (inf, ninf) =
-                unsafe { (_mm_set1_ps(f32::INFINITY), _mm_set1_ps(f32::NEG_INFINITY)) };
-            SideCentroids {
-                v: [inf, ninf, inf, ninf],
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
         SideCentroids {
             v: [Box4f::EMPTY; 2],
         }
@@ -610,59 +524,29 @@ impl SideCentroids {
     /// the right side's.
     #[inline(always)]
     fn add(&mut self, r: &PrimRef, left: bool) {
+        let b = &mut self.v[left as usize];
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: SSE2 is part of x86_64; the loads read `r`'s corners.
+        // SAFETY: SSE is part of x86_64; the loads and stores access `r`'s
+        // corners and `b`'s, 16-byte arrays.
         unsafe {
             use std::arch::x86_64::*;
             let c = _mm_add_ps(_mm_loadu_ps(r.lo.as_ptr()), _mm_loadu_ps(r.hi.as_ptr()));
-            let m = _mm_castsi128_ps(_mm_set1_epi32(-(left as i32)));
-            let inf = _mm_set1_ps(f32::INFINITY);
-            let ninf = _mm_set1_ps(f32::NEG_INFINITY);
-            // `c` where the mask is set, the empty box's corner elsewhere:
-            // minps/maxps then keep the first operand exactly where
-            // `vmin`/`vmax` do.
-            let pick =
-                |m: __m128, empty: __m128| _mm_or_ps(_mm_and_ps(m, c), _mm_andnot_ps(m, empty));
-            let n = _mm_xor_ps(m, _mm_castsi128_ps(_mm_set1_epi32(-1)));
-            self.v[0] = _mm_min_ps(self.v[0], pick(m, inf));
-            self.v[1] = _mm_max_ps(self.v[1], pick(m, ninf));
-            self.v[2] = _mm_min_ps(self.v[2], pick(n, inf));
-            self.v[3] = _mm_max_ps(self.v[3], pick(n, ninf));
+            _mm_storeu_ps(
+                b.lo.as_mut_ptr(),
+                _mm_min_ps(_mm_loadu_ps(b.lo.as_ptr()), c),
+            );
+            _mm_storeu_ps(
+                b.hi.as_mut_ptr(),
+                _mm_max_ps(_mm_loadu_ps(b.hi.as_ptr()), c),
+            );
         }
         #[cfg(not(target_arch = "x86_64"))]
-        {
-            let m = (left as u32).wrapping_neg();
-            let c = r.center2();
-            self.v[0].grow_masked(c, m);
-            self.v[1].grow_masked(c, !m);
-        }
+        b.grow(r.center2());
     }
 
     /// The left and right sides' bounds.
     fn bounds(self) -> (Box4f, Box4f) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            let a = |v: std::arch::x86_64::__m128| -> V4 {
-                // SAFETY: `__m128` and `[f32; 4]` have the same size, and
-                // every bit pattern is a valid f32.
-                unsafe { std::mem::transmute(v) }
-            };
-            let [ll, lh, rl, rh] = self.v;
-            (
-                Box4f {
-                    lo: a(ll),
-                    hi: a(lh),
-                },
-                Box4f {
-                    lo: a(rl),
-                    hi: a(rh),
-                },
-            )
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            (self.v[0], self.v[1])
-        }
+        (self.v[1], self.v[0])
     }
 }
 
@@ -764,8 +648,7 @@ mod tests {
             let map = Mapping::new(&info.centers, nb);
             let mut bins = Bins::new(nb);
             bins.bin(&r, &map);
-            let Some(split) = bins.best_split(nb, info.bounds.half_area(), 1.0, |c| c as f32)
-            else {
+            let Some(split) = bins.best_split(nb, info.bounds.half_area(), 1.0, 1) else {
                 continue;
             };
             let mut moved = r.clone();

@@ -218,11 +218,12 @@ const CHUNK: usize = 16 * 1024;
 /// parallel; the bounds are exact, so the result does not depend on how the
 /// work is split).
 pub(crate) fn prim_refs(mesh: &TriangleMesh) -> (Vec<PrimRef>, RangeInfo) {
-    let refs: Vec<PrimRef> = (0..mesh.num_triangles())
+    let mut refs = super::huge_pages::with_capacity(mesh.num_triangles());
+    (0..mesh.num_triangles())
         .into_par_iter()
         .with_min_len(4096)
         .map(|i| PrimRef::new(&mesh.triangle_bounds(i), i as u32))
-        .collect();
+        .collect_into_vec(&mut refs);
     let info = range_info(&refs);
     (refs, info)
 }
@@ -322,7 +323,7 @@ pub(crate) fn plan(
             bins.bin(refs, &map);
         }
         let area = info.bounds.half_area();
-        bins.best_split(nb, area, opts.traversal_cost, |c| blocks(c, opts))
+        bins.best_split(nb, area, opts.traversal_cost, opts.leaf_block as u32)
             .map(|s| (s, map))
     } else {
         None
@@ -433,18 +434,10 @@ fn sah_node(
 }
 
 /// The SAH's intersection cost of `n` triangles: the number of leaf tests,
-/// `ceil(n / leaf_block)`. A shift where the block is a power of two (1
-/// and 4, the usual ones): the sweep evaluates this twice per candidate
-/// split, and with the integer division it took 7% more samples (issue 8,
-/// step 3y).
+/// `ceil(n / leaf_block)` ([`super::sah_sweep::leaf_tests`]).
 #[inline]
 pub(crate) fn blocks(n: u32, opts: &BuildOptions) -> f32 {
-    let b = opts.leaf_block as u32;
-    if b.is_power_of_two() {
-        ((n >> b.trailing_zeros()) + (n & (b - 1) != 0) as u32) as f32
-    } else {
-        n.div_ceil(b) as f32
-    }
+    super::sah_sweep::leaf_tests(n, opts.leaf_block as u32)
 }
 
 /// Shape figures of a build tree: node and leaf counts, depth and SAH cost

@@ -30,6 +30,7 @@ mod bvh4;
 mod bvh8;
 mod collapse;
 mod enter;
+mod huge_pages;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 pub mod lbvh;
@@ -42,6 +43,7 @@ mod packet_gather;
 #[cfg(target_arch = "x86_64")]
 mod packet_kernel;
 mod prefetch;
+mod sah_sweep;
 #[cfg(target_arch = "x86_64")]
 mod sort8;
 mod stack;

@@ -200,7 +200,8 @@ impl Tri4Leaves {
                 ranges.push((start as u32, (first + count - start).min(4) as u32));
             }
         }
-        let packs = ranges
+        let mut packs = super::huge_pages::with_capacity(ranges.len());
+        ranges
             .par_iter()
             .with_min_len(1024)
             .map(|&(start, lanes)| {
@@ -212,7 +213,7 @@ impl Tri4Leaves {
                 }
                 p
             })
-            .collect();
+            .collect_into_vec(&mut packs);
         Tri4Leaves { packs }
     }
 
