@@ -34,8 +34,10 @@ pub(crate) fn vmax(a: V4, b: V4) -> V4 {
 }
 
 /// A box as two 4-float corners; the empty box has `lo = +inf`,
-/// `hi = -inf`.
+/// `hi = -inf`. Laid out as the two corners in order (the AVX binning
+/// pass reads a box as one 8-float vector).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub(crate) struct Box4f {
     pub lo: V4,
     pub hi: V4,
@@ -229,6 +231,22 @@ impl Mapping {
     #[inline(always)]
     unsafe fn bins_sse(&self, p: &PrimRef) -> [usize; 3] {
         use std::arch::x86_64::*;
+        let k = self.bin_lanes(p);
+        let lane = |k: __m128i| _mm_cvtsi128_si32(k) as u32 as usize;
+        [
+            lane(k),
+            lane(_mm_shuffle_epi32::<0b01_01_01_01>(k)),
+            lane(_mm_shuffle_epi32::<0b10_10_10_10>(k)),
+        ]
+    }
+
+    /// The bins of `p` along the three axes in lanes 0–2 of a vector
+    /// (lane 3 within `[0, last]` too): [`Mapping::bins`] before the
+    /// indices leave the vector.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub(super) unsafe fn bin_lanes(&self, p: &PrimRef) -> std::arch::x86_64::__m128i {
+        use std::arch::x86_64::*;
         let c = _mm_add_ps(_mm_loadu_ps(p.lo.as_ptr()), _mm_loadu_ps(p.hi.as_ptr()));
         let v = _mm_mul_ps(
             _mm_sub_ps(c, _mm_loadu_ps(self.lo.as_ptr())),
@@ -236,13 +254,7 @@ impl Mapping {
         );
         let v = _mm_max_ps(v, _mm_setzero_ps());
         let v = _mm_min_ps(v, _mm_set1_ps(self.last as f32));
-        let k = _mm_cvttps_epi32(v);
-        let lane = |k: __m128i| _mm_cvtsi128_si32(k) as u32 as usize;
-        [
-            lane(k),
-            lane(_mm_shuffle_epi32::<0b01_01_01_01>(k)),
-            lane(_mm_shuffle_epi32::<0b10_10_10_10>(k)),
-        ]
+        _mm_cvttps_epi32(v)
     }
 
     /// Bin of a reference along one axis (the same arithmetic as
@@ -270,19 +282,33 @@ impl Mapping {
     }
 }
 
-/// Per-bin bounds and counts of the three axes (bins × 3 of each).
+/// One bin of a node: its box along each axis and the counts of the three
+/// axes, the fourth lane 0 (so that the sweep loads them as one vector).
+/// 112 bytes, the boxes first (the AVX binning pass addresses a bin's box
+/// and count of one axis from one offset).
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub(crate) struct Bin {
+    pub boxes: [Box4f; 3],
+    pub counts: [u32; 4],
+}
+
+impl Bin {
+    pub const EMPTY: Bin = Bin {
+        boxes: [Box4f::EMPTY; 3],
+        counts: [0; 4],
+    };
+}
+
+/// The bins of a node (bounds and counts of the three axes per bin).
 #[derive(Clone, Debug)]
 pub(crate) struct Bins {
-    pub(super) boxes: Vec<[Box4f; 3]>,
-    /// Counts of the three axes; the fourth lane stays 0 (so that the
-    /// sweep loads a bin's counts as one vector).
-    pub(super) counts: Vec<[u32; 4]>,
+    pub(super) bins: Vec<Bin>,
     /// A second set of bins for every other reference while binning, merged
     /// into the first at the end: consecutive references often fall in the
     /// same bin (a partitioned range is spatially sorted), and two sets halve
     /// the chain of dependent read-modify-writes through memory.
-    odd_boxes: Vec<[Box4f; 3]>,
-    odd_counts: Vec<[u32; 4]>,
+    pub(super) odd: Vec<Bin>,
     /// Sweep scratch (see [`super::sah_sweep`]).
     pub(super) scratch: Vec<super::sah_sweep::SweepBin>,
 }
@@ -303,74 +329,22 @@ pub(crate) struct Split {
 impl Bins {
     pub fn new(n: usize) -> Bins {
         Bins {
-            boxes: vec![[Box4f::EMPTY; 3]; n],
-            counts: vec![[0; 4]; n],
-            odd_boxes: vec![[Box4f::EMPTY; 3]; n],
-            odd_counts: vec![[0; 4]; n],
+            bins: vec![Bin::EMPTY; n],
+            odd: vec![Bin::EMPTY; n],
             scratch: vec![super::sah_sweep::SweepBin::default(); n],
-        }
-    }
-
-    fn clear(&mut self, n: usize) {
-        if self.boxes.len() < n {
-            *self = Bins::new(n);
-        }
-        self.boxes[..n].fill([Box4f::EMPTY; 3]);
-        self.counts[..n].fill([0; 4]);
-        self.odd_boxes[..n].fill([Box4f::EMPTY; 3]);
-        self.odd_counts[..n].fill([0; 4]);
-    }
-
-    /// Bin `refs` under `map` (the first `map.num_bins()` bins are reset):
-    /// even references into the first set of bins, odd ones into the
-    /// second, then the second merged into the first (exact: min, max and
-    /// integer sums do not depend on the order).
-    pub fn bin(&mut self, refs: &[PrimRef], map: &Mapping) {
-        let nb = map.num_bins();
-        self.clear(nb);
-        let (boxes, counts) = (&mut self.boxes[..nb], &mut self.counts[..nb]);
-        let (odd_boxes, odd_counts) = (&mut self.odd_boxes[..nb], &mut self.odd_counts[..nb]);
-        let mut pairs = refs.chunks_exact(2);
-        for pair in &mut pairs {
-            let (p, q) = (&pair[0], &pair[1]);
-            prefetch_ref(p, BIN_AHEAD as isize);
-            let (kp, kq) = (map.bins(p), map.bins(q));
-            for a in 0..3 {
-                add(boxes, counts, kp[a], a, p);
-                add(odd_boxes, odd_counts, kq[a], a, q);
-            }
-        }
-        if let [p] = pairs.remainder() {
-            for (a, k) in map.bins(p).into_iter().enumerate() {
-                add(boxes, counts, k, a, p);
-            }
-        }
-        for i in 0..nb {
-            for a in 0..3 {
-                boxes[i][a] = boxes[i][a].union(odd_boxes[i][a]);
-                counts[i][a] += odd_counts[i][a];
-            }
         }
     }
 
     /// Add `other`'s first `nb` bins to this one's (exact: min, max, sums).
     pub fn merge(&mut self, other: &Bins, nb: usize) {
-        for i in 0..nb {
+        for (b, o) in self.bins[..nb].iter_mut().zip(&other.bins[..nb]) {
             for a in 0..3 {
-                self.boxes[i][a] = self.boxes[i][a].union(other.boxes[i][a]);
-                self.counts[i][a] += other.counts[i][a];
+                b.boxes[a] = b.boxes[a].union(o.boxes[a]);
+                b.counts[a] += o.counts[a];
             }
         }
     }
 }
-
-/// References ahead of the one being binned that [`Bins::bin`] asks the
-/// cache for (2 KiB). The references of a node above the caches stream from
-/// memory, and the hardware prefetcher alone left the build waiting on
-/// them: with the software prefetch in both loops the 1M-triangle terrain
-/// and the full dragon built 1.20-1.25x faster on one thread (issue 8, step
-/// 3y; 16, 32, 48, 64 and 96 references tried).
-const BIN_AHEAD: usize = 64;
 
 /// References ahead of the one being classified that [`partition`]'s
 /// blocks ask the cache for, in the direction each end moves (4 KiB; 64,
@@ -380,20 +354,9 @@ const PARTITION_AHEAD: usize = 128;
 /// Ask the cache for the reference `ahead` places after `p` (before it
 /// when negative); a hint, which never faults.
 #[inline(always)]
-fn prefetch_ref(p: &PrimRef, ahead: isize) {
+pub(super) fn prefetch_ref(p: &PrimRef, ahead: isize) {
     let at = (p as *const PrimRef).wrapping_offset(ahead);
     super::prefetch::prefetch_lines(at as *const u8, 1);
-}
-
-/// Grow bin `k` of axis `a` by the reference `p`.
-#[inline(always)]
-fn add(boxes: &mut [[Box4f; 3]], counts: &mut [[u32; 4]], k: usize, a: usize, p: &PrimRef) {
-    // SAFETY: `Mapping::bins` clamps to `last = nb - 1`, and both slices
-    // hold `nb` bins (`Bins::bin`).
-    let (b, c) = unsafe { (boxes.get_unchecked_mut(k), counts.get_unchecked_mut(k)) };
-    b[a].lo = vmin(b[a].lo, p.lo);
-    b[a].hi = vmax(b[a].hi, p.hi);
-    c[a] += 1;
 }
 
 /// Move the references whose bin along the split's axis is below the
@@ -591,41 +554,6 @@ mod tests {
             }
         }
         out
-    }
-
-    /// Binning with the even/odd sets gives exactly the bins of one plain
-    /// pass: per bin and axis the union of the boxes and the count.
-    #[test]
-    fn two_set_binning_equals_one_pass() {
-        for (n, nb, seed) in [
-            (1, 4, 1),
-            (2, 4, 2),
-            (7, 5, 3),
-            (1000, 32, 4),
-            (4097, 17, 5),
-        ] {
-            let r = refs(n, seed);
-            let map = Mapping::new(&RangeInfo::of(&r).centers, nb);
-            let mut bins = Bins::new(32);
-            bins.bin(&r, &map);
-            let mut boxes = vec![[Box4f::EMPTY; 3]; nb];
-            let mut counts = vec![[0u32; 3]; nb];
-            for p in &r {
-                for a in 0..3 {
-                    let k = map.bin(p, a);
-                    boxes[k][a] = boxes[k][a].union(p.bounds());
-                    counts[k][a] += 1;
-                }
-            }
-            for k in 0..nb {
-                for a in 0..3 {
-                    assert_eq!(bins.counts[k][a], counts[k][a], "n {n}, bin {k}, axis {a}");
-                    let (got, want) = (bins.boxes[k][a], boxes[k][a]);
-                    assert_eq!(got.lo[..3], want.lo[..3], "n {n}, bin {k}, axis {a}");
-                    assert_eq!(got.hi[..3], want.hi[..3], "n {n}, bin {k}, axis {a}");
-                }
-            }
-        }
     }
 
     /// The branch-free partition puts exactly the references of the lower

@@ -21,6 +21,7 @@
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
 //!   indices, traversed without a stack.
 
+mod bin_pass;
 mod binning;
 mod box4;
 mod box8;

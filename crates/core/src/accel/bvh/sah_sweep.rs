@@ -74,9 +74,9 @@ impl Bins {
         let mut right = Box4f::EMPTY;
         for i in 0..nb {
             if i < bin {
-                left = left.union(self.boxes[i][axis]);
+                left = left.union(self.bins[i].boxes[axis]);
             } else {
-                right = right.union(self.boxes[i][axis]);
+                right = right.union(self.bins[i].boxes[axis]);
             }
         }
         Some(Split {
@@ -104,8 +104,8 @@ impl Bins {
         let mut cnt = [0u32; 3];
         for i in (1..nb).rev() {
             for a in 0..3 {
-                acc[a] = acc[a].union(self.boxes[i][a]);
-                cnt[a] += self.counts[i][a];
+                acc[a] = acc[a].union(self.bins[i].boxes[a]);
+                cnt[a] += self.bins[i].counts[a];
                 scratch[i].right_area[a] = acc[a].half_area();
                 scratch[i].right_count[a] = cnt[a];
             }
@@ -115,8 +115,8 @@ impl Bins {
             let mut acc = Box4f::EMPTY;
             let mut cnt = 0u32;
             for (i, right) in scratch.iter().enumerate().skip(1) {
-                acc = acc.union(self.boxes[i - 1][a]);
-                cnt += self.counts[i - 1][a];
+                acc = acc.union(self.bins[i - 1].boxes[a]);
+                cnt += self.bins[i - 1].counts[a];
                 let rc = right.right_count[a];
                 if cnt == 0 || rc == 0 {
                     continue;
@@ -147,8 +147,7 @@ impl Bins {
         shift: u32,
     ) -> Option<(usize, usize, f32, u32)> {
         use std::arch::x86_64::*;
-        let boxes = &self.boxes[..nb];
-        let counts = &self.counts[..nb];
+        let bins = &self.bins[..nb];
         let scratch = &mut self.scratch[..nb];
         let ld = |v: &[f32; 4]| _mm_loadu_ps(v.as_ptr());
         let zero = _mm_setzero_ps();
@@ -168,7 +167,7 @@ impl Bins {
         let (mut acc_lo, mut acc_hi) = ([inf; 3], [ninf; 3]);
         let mut rc = _mm_setzero_si128();
         for i in (0..nb).rev() {
-            let b = &boxes[i];
+            let b = &bins[i].boxes;
             let lo = transpose3(ld(&b[0].lo), ld(&b[1].lo), ld(&b[2].lo));
             let hi = transpose3(ld(&b[0].hi), ld(&b[1].hi), ld(&b[2].hi));
             let s = &mut scratch[i];
@@ -183,7 +182,7 @@ impl Bins {
                 acc_lo[c] = _mm_min_ps(acc_lo[c], lo[c]);
                 acc_hi[c] = _mm_max_ps(acc_hi[c], hi[c]);
             }
-            rc = _mm_add_epi32(rc, _mm_loadu_si128(counts[i].as_ptr().cast()));
+            rc = _mm_add_epi32(rc, _mm_loadu_si128(bins[i].counts.as_ptr().cast()));
             _mm_storeu_ps(s.right_area.as_mut_ptr(), area(&acc_lo, &acc_hi));
             _mm_storeu_si128(s.right_count.as_mut_ptr().cast(), rc);
         }
@@ -210,7 +209,7 @@ impl Bins {
                 acc_lo[c] = _mm_min_ps(acc_lo[c], ld(&below.lo[c]));
                 acc_hi[c] = _mm_max_ps(acc_hi[c], ld(&below.hi[c]));
             }
-            lc = _mm_add_epi32(lc, _mm_loadu_si128(counts[i - 1].as_ptr().cast()));
+            lc = _mm_add_epi32(lc, _mm_loadu_si128(bins[i - 1].counts.as_ptr().cast()));
             let s = &scratch[i];
             let rcount = _mm_loadu_si128(s.right_count.as_ptr().cast());
             let cost = _mm_add_ps(
@@ -360,8 +359,8 @@ mod tests {
                     let side = |r: std::ops::Range<usize>| {
                         let b = r
                             .clone()
-                            .fold(Box4f::EMPTY, |b, k| b.union(bins.boxes[k][a]));
-                        let n: u32 = r.map(|k| bins.counts[k][a]).sum();
+                            .fold(Box4f::EMPTY, |b, k| b.union(bins.bins[k].boxes[a]));
+                        let n: u32 = r.map(|k| bins.bins[k].counts[a]).sum();
                         (b.half_area() as f64, n)
                     };
                     let ((la, ln), (ra, rn)) = (side(0..i), side(i..nb));
@@ -386,7 +385,7 @@ mod tests {
                 rel(got.cost as f64) < 1e-5,
                 "round {round}: {got:?} vs {a} {i} {c}"
             );
-            let left: u32 = (0..got.bin).map(|k| bins.counts[k][got.axis]).sum();
+            let left: u32 = (0..got.bin).map(|k| bins.bins[k].counts[got.axis]).sum();
             assert_eq!(got.left_count, left as usize, "round {round}");
         }
     }
