@@ -166,27 +166,7 @@ impl Bins {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::aabb::Aabb;
-    use crate::accel::bvh::binning::RangeInfo;
-    use crate::rng::Pcg32;
-    use glam::Vec3;
-
-    /// References with random boxes; runs of equal boxes (the same bin many
-    /// times in a row) and a few degenerate ones.
-    fn refs(n: usize, seed: u64) -> Vec<PrimRef> {
-        let mut rng = Pcg32::new(seed);
-        let mut out = Vec::with_capacity(n);
-        while out.len() < n {
-            let a = rng.in_box(Vec3::ZERO, Vec3::splat(10.0));
-            let size = rng.range_f32(0.0, 2.0);
-            let b = a + rng.in_box(Vec3::ZERO, Vec3::splat(size));
-            let run = 1 + rng.below(6) as usize;
-            for _ in 0..run.min(n - out.len()) {
-                out.push(PrimRef::new(&Aabb::new(a, b), out.len() as u32));
-            }
-        }
-        out
-    }
+    use crate::accel::bvh::binning::{tests::refs, RangeInfo};
 
     /// Every pass this CPU can run gives exactly the bins of one plain
     /// pass: per bin and axis the union of the boxes (`Box4f::union`,

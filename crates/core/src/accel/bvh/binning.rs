@@ -534,14 +534,14 @@ fn scan<'a, const BLOCK: usize>(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::rng::Pcg32;
     use glam::Vec3;
 
     /// References with random boxes; runs of equal boxes (the same bin many
     /// times in a row) and a few degenerate ones.
-    fn refs(n: usize, seed: u64) -> Vec<PrimRef> {
+    pub(in crate::accel::bvh) fn refs(n: usize, seed: u64) -> Vec<PrimRef> {
         let mut rng = Pcg32::new(seed);
         let mut out = Vec::with_capacity(n);
         while out.len() < n {
