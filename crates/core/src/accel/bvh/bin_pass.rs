@@ -7,9 +7,8 @@
 //! box by a reference is one minimum over both corners (the reference's
 //! upper corner negated once): with AVX a bin's box and a reference are
 //! one 8-float vector each, and a bin grows by one `vminps` where two
-//! 4-float operations and their loads and stores were needed (Embree's
-//! binner keeps its corners the same way in its 8-wide builds; Wald et al.
-//! 2014). The corners are turned back when the pass ends, so the sweep
+//! 4-float operations and their loads and stores were needed (issue 8,
+//! step 4f). The corners are turned back when the pass ends, so the sweep
 //! ([`super::sah_sweep`]) and the merge see plain boxes. Negation is exact
 //! and `min(-a, -b) = -max(a, b)` holds for the compare-and-pick forms
 //! used here, NaN included, so the bins are the same to the bit.
