@@ -31,6 +31,8 @@ mod bvh4;
 mod bvh8;
 mod collapse;
 mod enter;
+#[cfg(target_arch = "x86_64")]
+mod frustum;
 mod huge_pages;
 #[cfg(target_arch = "x86_64")]
 mod lanes;

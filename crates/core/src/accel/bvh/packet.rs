@@ -35,6 +35,8 @@ use crate::tri::{Moller, TriangleTest};
 use rayon::prelude::*;
 
 #[cfg(target_arch = "x86_64")]
+use super::frustum::Frustum;
+#[cfg(target_arch = "x86_64")]
 use super::lanes::{L16, L8};
 #[cfg(target_arch = "x86_64")]
 use super::packet_kernel::{Packet, PacketHits, Width};
@@ -50,6 +52,17 @@ pub(crate) trait WideNode: Copy + Sync {
     fn plane(&self, row: usize, slot: usize) -> f32;
     /// The child in slot `slot`.
     fn child(&self, slot: usize) -> Child4;
+    /// The slots that some ray within `f` may enter (a bit mask, see
+    /// [`Frustum`]); every slot unless the node has a culling kernel.
+    ///
+    /// # Safety
+    /// The CPU must have AVX (the packet kernels' widths all have it).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn slots_within(&self, f: &Frustum, near: [usize; 3]) -> u32 {
+        let _ = (f, near);
+        (1 << Self::WIDTH) - 1
+    }
 }
 
 impl WideNode for Node4 {
@@ -66,6 +79,12 @@ impl WideNode for Node4 {
 
 impl WideNode for Node8 {
     const WIDTH: usize = 8;
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn slots_within(&self, f: &Frustum, near: [usize; 3]) -> u32 {
+        // SAFETY: the caller's AVX.
+        unsafe { f.slots8(&self.boxes.planes, near) }
+    }
     #[inline(always)]
     fn plane(&self, row: usize, slot: usize) -> f32 {
         self.boxes.planes[row][slot]
