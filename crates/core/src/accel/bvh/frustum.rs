@@ -10,11 +10,11 @@
 //! `fl(fl(p - o) · i)`; rounding is monotone, so the interval bounds of
 //! `(p - o) · i`, formed from the extremes with the same two operations,
 //! bound every lane's value as computed (the smallest for the entry
-//! planes, the largest for the exit planes). A slot whose largest entry
-//! bound lies beyond its smallest exit bound (widened as the lanes widen
-//! it, capped by the largest `tfar`) is entered by no lane, and its
-//! ray-by-ray test would return an empty mask: skipping it changes
-//! nothing but the work.
+//! planes, the largest for the exit planes). A slot where the smallest
+//! entry any lane can have lies beyond the largest exit any lane can have
+//! (widened as the lanes widen it, capped by the largest `tfar`) is
+//! entered by no lane, and its ray-by-ray test would return an empty
+//! mask: skipping it changes nothing but the work.
 //!
 //! Bounds are only formed where every reciprocal direction in play is
 //! finite and non-zero: then no product is NaN (an unused slot's infinite

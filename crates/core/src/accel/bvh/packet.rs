@@ -48,12 +48,17 @@ use super::packet_kernel::{Packet, PacketHits, Width};
 pub(crate) trait WideNode: Copy + Sync {
     /// Child slots per node (at most 8).
     const WIDTH: usize;
+    /// Whether the packet kernel bounds its packets and tests only the
+    /// slots within the bounds ([`WideNode::slots_within`], step 4h); the
+    /// others test every slot, unrolled.
+    const BUNDLED: bool = false;
     /// Plane row `row` of the box in slot `slot`.
     fn plane(&self, row: usize, slot: usize) -> f32;
     /// The child in slot `slot`.
     fn child(&self, slot: usize) -> Child4;
     /// The slots that some ray within `f` may enter (a bit mask, see
-    /// [`Frustum`]); every slot unless the node has a culling kernel.
+    /// [`Frustum`]); every slot where the node is not
+    /// [`WideNode::BUNDLED`].
     ///
     /// # Safety
     /// The CPU must have AVX (the packet kernels' widths all have it).
@@ -79,6 +84,9 @@ impl WideNode for Node4 {
 
 impl WideNode for Node8 {
     const WIDTH: usize = 8;
+    // Four slots a node were too few for the bounds to pay (step 4h), eight
+    // are not.
+    const BUNDLED: bool = true;
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     unsafe fn slots_within(&self, f: &Frustum, near: [usize; 3]) -> u32 {

@@ -167,8 +167,8 @@ fn traverse<const ANY: bool, const L: usize, V: Lanes<L>, B: PacketTree, const S
     let mut stack_c = [const { MaybeUninit::<Child4>::uninit() }; STACK];
     let mut sp = 0usize;
     let lanes = RayLanes::<L, V>::load(p);
-    // The packet's bounds, for 8-wide nodes (see the node test below).
-    let bundle = if B::Node::WIDTH == 8 {
+    // The packet's bounds, for nodes that use them (see the node test).
+    let bundle = if B::Node::BUNDLED {
         Some(Frustum::of::<L, V>(
             &lanes.o,
             &lanes.inv,
@@ -256,9 +256,9 @@ fn traverse<const ANY: bool, const L: usize, V: Lanes<L>, B: PacketTree, const S
             }
         } else {
             let node = &view.nodes[cur.index as usize];
-            // No check for the first unused slot: the bundle's test below
-            // drops unused slots (inverted boxes) with the others no lane
-            // enters. One blend per slot (the `near` copy went: 1M terrain
+            // No check for the first unused slot: no lane enters its
+            // inverted box (and the bundle's test drops it). One blend per
+            // slot (the `near` copy went: 1M terrain
             // primaries took 4% fewer instructions, BENCHMARKS.md, step
             // 4e).
             let mut ent = [nan; MAX_WIDTH];
@@ -281,7 +281,7 @@ fn traverse<const ANY: bool, const L: usize, V: Lanes<L>, B: PacketTree, const S
                     ent[s] = nan.blend(enter, m);
                 }
             } else {
-                // Four slots: all tested, unrolled, as before step 4h (a
+                // Not bundled (`bvh4`): every slot tested, unrolled, as before step 4h (a
                 // loop over set bits was 1% slower on `bvh4`, and bounds
                 // for four boxes were not faster).
                 for (s, e) in ent.iter_mut().enumerate().take(B::Node::WIDTH) {
