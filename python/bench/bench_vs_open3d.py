@@ -1,0 +1,142 @@
+"""raykit, Open3D and embreex from Python on the same rays, in one process.
+
+    python python/bench/bench_vs_open3d.py [MESH] [--rays N] [--reps R] [--threads 1,2]
+
+Default mesh: the full Stanford dragon (871,414 triangles) from
+/work/data-cache/package/models/dragon_vrip.ply.gz (or RAYKIT_DRAGON).
+Ray sets: `primary` (a 1024 × 1024 pinhole camera framing the mesh, as
+Open3D's create_rays_pinhole makes them) and `incoherent` (from a sphere
+around the mesh towards random points of its bounding box). Queries:
+nearest hit (cast_rays) and occlusion (test_occlusions). Thread counts:
+raykit's and Open3D's nthreads per call; embreex's run() traces in the
+calling thread, so it appears in the 1-thread rows only. Every time is the
+median of R runs after one warm-up, the build excluded (timed apart);
+the answers are checked against each other (hit/miss agreement).
+
+The machine's load is printed with the table (`uptime`): on a shared
+machine rerun when it is quiet.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import subprocess
+import time
+
+import numpy as np
+
+import raykit
+
+DRAGON = os.environ.get("RAYKIT_DRAGON", "/work/data-cache/package/models/dragon_vrip.ply.gz")
+
+
+def timed(fn, reps):
+    fn()
+    times = []
+    for _ in range(reps):
+        start = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times), out
+
+
+def ray_sets(vertices, n, seed=7):
+    lo, hi = vertices.min(axis=0).astype(np.float64), vertices.max(axis=0).astype(np.float64)
+    centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
+    side = int(round(np.sqrt(n)))
+    primary = raykit.RaycastingScene.create_rays_pinhole(
+        fov_deg=40, center=centre.tolist(), eye=(centre + np.array([0.3, 0.4, 2.6]) * radius).tolist(),
+        up=[0, 1, 0], width_px=side, height_px=side,
+    ).numpy().reshape(-1, 6)
+    rng = np.random.default_rng(seed)
+    u = rng.normal(size=(n, 3))
+    origins = centre + 2 * radius * u / np.linalg.norm(u, axis=1, keepdims=True)
+    targets = lo + rng.random((n, 3)) * (hi - lo)
+    d = targets - origins
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    incoherent = np.concatenate([origins, d], axis=1).astype(np.float32)
+    return {"primary": np.ascontiguousarray(primary, dtype=np.float32), "incoherent": incoherent}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("mesh", nargs="?", default=DRAGON)
+    ap.add_argument("--rays", type=int, default=1 << 20)
+    ap.add_argument("--reps", type=int, default=5)
+    ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--no-embree", action="store_true")
+    args = ap.parse_args()
+    thread_counts = [int(x) for x in args.threads.split(",")]
+
+    import open3d as o3d
+
+    v, f, _ = raykit.load_mesh(args.mesh)
+    print(f"{os.path.basename(args.mesh)}: {len(f):,} triangles, {args.rays:,} rays per set, median of {args.reps}")
+    rays = ray_sets(v, args.rays)
+
+    ours = raykit.RaycastingScene()
+    ours.add_triangles(v, f)
+    start = time.perf_counter()
+    ours._built()
+    build_ours = time.perf_counter() - start
+
+    theirs = o3d.t.geometry.RaycastingScene()
+    theirs.add_triangles(o3d.core.Tensor(v), o3d.core.Tensor(f))
+    start = time.perf_counter()
+    theirs.test_occlusions(o3d.core.Tensor(rays["primary"][:1]))  # Open3D builds at its first query
+    build_theirs = time.perf_counter() - start
+
+    embree = None
+    if not args.no_embree:
+        from embreex import rtcore_scene
+        from embreex.mesh_construction import TriangleMesh
+
+        start = time.perf_counter()
+        embree = rtcore_scene.EmbreeScene()
+        TriangleMesh(scene=embree, vertices=v, indices=f.astype(np.int32))
+        embree.run(rays["primary"][:1, :3].copy(), rays["primary"][:1, 3:].copy())
+        build_embree = time.perf_counter() - start
+    print(f"build: raykit bvh8 {build_ours:.2f} s (all cores), Open3D {build_theirs:.2f} s"
+          + (f", embreex {build_embree:.2f} s" if embree else ""))
+
+    rows = []
+    for name, r in rays.items():
+        tensor = o3d.core.Tensor(r)
+        o, d = np.ascontiguousarray(r[:, :3]), np.ascontiguousarray(r[:, 3:])
+        for threads in thread_counts:
+            t_ours, a = timed(lambda: ours.cast_rays(r, nthreads=threads), args.reps)
+            t_o3d, b = timed(lambda: theirs.cast_rays(tensor, nthreads=threads), args.reps)
+            agree = (np.isfinite(a["t_hit"]) == np.isfinite(b["t_hit"].numpy())).mean()
+            row = {"rays": name, "query": "cast_rays", "threads": threads, "raykit": t_ours, "open3d": t_o3d, "agree": agree}
+            if embree is not None and threads == 1:
+                t_emb, c = timed(lambda: embree.run(o, d), args.reps)
+                row["embreex"] = t_emb
+                row["agree"] = min(agree, ((c >= 0) == np.isfinite(a["t_hit"])).mean())
+            rows.append(row)
+            t_ours, a = timed(lambda: ours.test_occlusions(r, nthreads=threads), args.reps)
+            t_o3d, b = timed(lambda: theirs.test_occlusions(tensor, nthreads=threads), args.reps)
+            row = {"rays": name, "query": "test_occlusions", "threads": threads, "raykit": t_ours, "open3d": t_o3d,
+                   "agree": (a == b.numpy()).mean()}
+            if embree is not None and threads == 1:
+                t_emb, c = timed(lambda: embree.run(o, d, query="OCCLUDED"), args.reps)
+                row["embreex"] = t_emb
+                row["agree"] = min(row["agree"], ((np.asarray(c) != -1) == a).mean())
+            rows.append(row)
+
+    n = args.rays
+    print()
+    print("| rays | query | threads | raykit Mrays/s | Open3D Mrays/s | raykit / Open3D | embreex Mrays/s | hit/miss agreement |")
+    print("|---|---|---|---|---|---|---|---|")
+    for row in rows:
+        emb = f"{len(rays[row['rays']]) / row['embreex'] / 1e6:.2f}" if "embreex" in row else "–"
+        m = len(rays[row["rays"]])
+        print(f"| {row['rays']} | {row['query']} | {row['threads']} | {m / row['raykit'] / 1e6:.2f} | "
+              f"{m / row['open3d'] / 1e6:.2f} | {row['open3d'] / row['raykit']:.2f}x | {emb} | {row['agree']:.5f} |")
+    print()
+    print("uptime:", subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
+
+
+if __name__ == "__main__":
+    main()

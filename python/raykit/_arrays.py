@@ -1,0 +1,84 @@
+"""numpy arrays in and out: dtype and shape checks shared by every wrapper.
+
+Inputs may be numpy arrays, nested lists, or objects with a ``.numpy()``
+method (Open3D tensors). Floats of any width and integers are accepted for
+coordinates and converted to float32 (no copy when they already are
+contiguous float32); anything else is a ValueError naming the argument.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class Array(np.ndarray):
+    """A numpy array that also answers Open3D's ``Tensor.numpy()``.
+
+    RaycastingScene returns these so that code written for Open3D, which
+    calls ``.numpy()`` on every result, runs unchanged. Everything else is
+    plain numpy; ``.numpy()`` returns a plain ``numpy.ndarray`` view.
+    """
+
+    def numpy(self) -> np.ndarray:
+        """This array as a plain ``numpy.ndarray`` (a view, no copy)."""
+        return self.view(np.ndarray)
+
+
+def result(a: np.ndarray) -> Array:
+    """``a`` viewed as :class:`Array` (no copy)."""
+    return a.view(Array)
+
+
+def to_numpy(a) -> np.ndarray:
+    """``a`` as a numpy array: Open3D tensors through their ``.numpy()``."""
+    if isinstance(a, np.ndarray):
+        return a.view(np.ndarray)
+    if hasattr(a, "numpy") and callable(a.numpy):
+        return np.asarray(a.numpy())
+    return np.asarray(a)
+
+
+def _check_real(a: np.ndarray, name: str) -> None:
+    if a.dtype.kind not in "fiu":
+        raise ValueError(
+            f"{name} must hold real numbers (float32, float64 or integers), got dtype {a.dtype}"
+        )
+
+
+def floats(a, name: str, last: int | None = None, min_ndim: int = 1) -> np.ndarray:
+    """``a`` as C-contiguous float32 whose last axis has ``last`` entries."""
+    a = to_numpy(a)
+    _check_real(a, name)
+    if a.ndim < min_ndim:
+        raise ValueError(f"{name} must have at least {min_ndim} dimensions, got shape {a.shape}")
+    if last is not None and (a.ndim == 0 or a.shape[-1] != last):
+        raise ValueError(f"the last dimension of {name} must be {last}, got shape {a.shape}")
+    return np.ascontiguousarray(a, dtype=np.float32)
+
+
+def rows(a, name: str, width: int, min_ndim: int = 2) -> tuple[np.ndarray, tuple[int, ...]]:
+    """``a`` of shape ``(..., width)`` as ``(n, width)`` float32 and the leading shape."""
+    a = floats(a, name, last=width, min_ndim=min_ndim)
+    lead = a.shape[:-1]
+    return a.reshape(-1, width), lead
+
+
+def indices(a, name: str) -> np.ndarray:
+    """Triangle corners: ``(m, 3)`` non-negative integers as C-contiguous uint32."""
+    a = to_numpy(a)
+    if a.dtype.kind not in "iu":
+        raise ValueError(f"{name} must hold integers, got dtype {a.dtype}")
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (m, 3), got {a.shape}")
+    if a.size and (a.min() < 0 or int(a.max()) > np.iinfo(np.uint32).max):
+        raise ValueError(f"{name} must lie between 0 and {np.iinfo(np.uint32).max}")
+    return np.ascontiguousarray(a, dtype=np.uint32)
+
+
+def threads(n) -> int:
+    """A thread count: 0 or None for all cores."""
+    if n is None:
+        return 0
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise ValueError(f"threads must be an integer (0 for all cores), got {n!r}")
+    return int(n)

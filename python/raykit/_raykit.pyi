@@ -1,0 +1,108 @@
+"""Type stubs of the extension module ``raykit._raykit`` (Rust, pyo3).
+
+The public interface is the Python package around it (``raykit``); these
+low-level calls take arrays already converted to the dtypes named here.
+"""
+
+import os
+from typing import Any, Optional, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+INVALID_ID: int
+
+Transform = Tuple[float, float, float, float, float, float]
+
+class Scene:
+    """A triangle mesh (geometries concatenated) with its acceleration structure."""
+
+    def __init__(
+        self,
+        vertices: npt.NDArray[np.float32],
+        triangles: npt.NDArray[np.uint32],
+        offsets: npt.NDArray[np.uint32],
+        accel: str = "bvh8",
+        test: str = "moller",
+        threads: int = 0,
+    ) -> None: ...
+    def cast_rays(
+        self, rays: npt.NDArray[np.float32], threads: int = 0
+    ) -> Tuple[
+        npt.NDArray[np.float32],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.float32],
+        npt.NDArray[np.float32],
+    ]: ...
+    def test_occlusions(
+        self, rays: npt.NDArray[np.float32], tnear: float = 0.0, tfar: float = ..., threads: int = 0
+    ) -> npt.NDArray[np.bool_]: ...
+    def all_hits(
+        self,
+        origins: npt.NDArray[np.float32],
+        directions: npt.NDArray[np.float32],
+        min_gap: float,
+        max_hits: int,
+        threads: int = 0,
+    ) -> Tuple[
+        npt.NDArray[np.uint32], npt.NDArray[np.uint32], npt.NDArray[np.float32], npt.NDArray[np.float32]
+    ]: ...
+    @property
+    def num_triangles(self) -> int: ...
+    @property
+    def accel(self) -> str: ...
+    @property
+    def test(self) -> str: ...
+    def stats(self) -> dict[str, Any]: ...
+
+def load_mesh(
+    path: str | os.PathLike[str],
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32], npt.NDArray[np.uint32]]: ...
+def load_dem(
+    path: str | os.PathLike[str],
+) -> Tuple[npt.NDArray[np.float32], Transform, bool, Optional[float]]: ...
+def shadow(
+    heights: npt.NDArray[np.float32],
+    transform: Transform,
+    geographic: bool = False,
+    sun: Optional[Tuple[float, float]] = None,
+    light: Optional[Tuple[float, float, float]] = None,
+    light_elevation: bool = False,
+    method: str = "fast",
+    threads: int = 0,
+) -> npt.NDArray[np.uint8]: ...
+def cast(
+    heights: npt.NDArray[np.float32],
+    transform: Transform,
+    eye: Tuple[float, float, float] | list[float],
+    target: Tuple[float, float, float] | list[float],
+    geographic: bool = False,
+    fov: float = 50.0,
+    width: int = 1600,
+    height: int = 900,
+    caster: str = "boxes",
+    tau: float = 16.0,
+    threads: int = 0,
+) -> dict[str, Any]: ...
+def render(
+    scene: Scene,
+    width: int = 800,
+    height: int = 600,
+    eye: Optional[Tuple[float, float, float]] = None,
+    target: Optional[Tuple[float, float, float]] = None,
+    up: Tuple[float, float, float] = (0.0, 1.0, 0.0),
+    fov: float = 40.0,
+    samples_per_pixel: int = 1,
+    shadows: bool = True,
+    threads: int = 0,
+) -> npt.NDArray[np.uint8]: ...
+def cull(
+    vertices: npt.NDArray[np.float32],
+    triangles: npt.NDArray[np.uint32],
+    parts: Optional[npt.NDArray[np.uint32]] = None,
+    resolution: int = 128,
+    conservative: bool = True,
+    threads: int = 0,
+) -> Tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_], dict[str, Any]]: ...

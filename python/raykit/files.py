@@ -1,0 +1,26 @@
+"""Mesh files through raykit-io's loaders."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from . import _raykit
+
+
+def load_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Load a triangle mesh: OBJ (+MTL), PLY (ASCII or binary, also
+    ``.ply.gz``), STL, OFF, glTF or GLB, chosen by the extension.
+
+    Returns ``(vertices, triangles, parts)``: ``(n, 3)`` float32 positions
+    (glTF node transforms applied), ``(m, 3)`` uint32 corner indices and
+    ``(m,)`` uint32 part index per triangle (glTF node, OBJ object or group;
+    all 0 when the file has no parts).
+
+    A file that cannot be read raises ``FileNotFoundError`` or ``OSError``;
+    one whose contents are wrong raises ``ValueError``. Messages name the
+    file and the line, byte offset or JSON element, as ``raykit`` prints
+    them.
+    """
+    return _raykit.load_mesh(os.fspath(path))

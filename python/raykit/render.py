@@ -1,0 +1,60 @@
+"""Pictures of a scene through raykit-render's renderer."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import _arrays, _raykit
+from .raycasting import RaycastingScene
+
+
+def _vec(x, name):
+    if x is None:
+        return None
+    a = np.asarray(_arrays.to_numpy(x), dtype=np.float64).reshape(-1)
+    if a.shape != (3,):
+        raise ValueError(f"{name} must be three numbers, got {x!r}")
+    return tuple(float(c) for c in a)
+
+
+def render(
+    scene,
+    width: int = 800,
+    height: int = 600,
+    *,
+    eye=None,
+    target=None,
+    up=(0.0, 1.0, 0.0),
+    fov: float = 40.0,
+    samples_per_pixel: int = 1,
+    shadows: bool = True,
+    threads: int = 0,
+) -> np.ndarray:
+    """Render ``scene`` to an ``(height, width, 3)`` uint8 sRGB image.
+
+    ``scene``: a :class:`raykit.RaycastingScene` (its acceleration structure
+    is reused) or any mesh ``RaycastingScene.add_triangles`` takes. The
+    camera is a pinhole at ``eye`` looking at ``target`` (default: the
+    bounding box centre) with ``up`` and vertical field of view ``fov``
+    degrees; without ``eye`` it frames the triangles as ``raykit render``
+    frames a mesh file. Shading: Blinn-Phong of the triangles' normals lit
+    by one white point light above the scene, hard shadows by shadow rays
+    (``shadows=False`` turns them off), ``samples_per_pixel`` jittered
+    samples; the same renderer ``raykit serve`` streams.
+    """
+    if not isinstance(scene, RaycastingScene):
+        mesh = scene
+        scene = RaycastingScene()
+        scene.add_triangles(mesh)
+    return _raykit.render(
+        scene._built(),
+        int(width),
+        int(height),
+        _vec(eye, "eye"),
+        _vec(target, "target"),
+        _vec(up, "up"),
+        float(fov),
+        int(samples_per_pixel),
+        bool(shadows),
+        _arrays.threads(threads),
+    )

@@ -1,0 +1,33 @@
+//! numpy arrays in: shape checks and borrowed slices. The Python layer
+//! (`raykit/_arrays.py`) has already converted dtypes and made arrays
+//! contiguous; these checks keep a direct caller of `_raykit` from
+//! reaching a panic.
+
+use crate::errors::value_error;
+use numpy::{Element, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::PyResult;
+
+/// The rows of an `(n, width)` array as one contiguous slice, and `n`.
+pub fn rows<'a, T: Element>(
+    a: &'a PyReadonlyArray2<'_, T>,
+    width: usize,
+    what: &str,
+) -> PyResult<(&'a [T], usize)> {
+    let shape = a.shape();
+    if shape[1] != width {
+        return Err(value_error(format!(
+            "{what} must have shape (n, {width}), got ({}, {})",
+            shape[0], shape[1]
+        )));
+    }
+    let s = a
+        .as_slice()
+        .map_err(|_| value_error(format!("{what} must be C-contiguous")))?;
+    Ok((s, shape[0]))
+}
+
+/// A one-dimensional array as a slice.
+pub fn flat<'a, T: Element>(a: &'a PyReadonlyArray1<'_, T>, what: &str) -> PyResult<&'a [T]> {
+    a.as_slice()
+        .map_err(|_| value_error(format!("{what} must be C-contiguous")))
+}

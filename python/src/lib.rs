@@ -1,0 +1,31 @@
+//! `raykit._raykit`: the extension module under the `raykit` Python
+//! package. Each function converts numpy arrays, releases the GIL and
+//! makes one call into the raykit crates; the Open3D- and trimesh-shaped
+//! classes are written in Python on top of it (`python/raykit/`).
+
+mod arrays;
+mod cull;
+mod errors;
+mod mesh_io;
+mod render;
+mod scene;
+mod terrain;
+mod threads;
+
+use pyo3::prelude::*;
+
+/// The raykit engine: scenes and ray queries, mesh files, terrain,
+/// culling and rendering.
+#[pymodule]
+fn _raykit(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<scene::Scene>()?;
+    m.add("INVALID_ID", scene::INVALID_ID)?;
+    m.add_function(wrap_pyfunction!(mesh_io::load_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(terrain::load_dem, m)?)?;
+    m.add_function(wrap_pyfunction!(terrain::shadow, m)?)?;
+    m.add_function(wrap_pyfunction!(terrain::cast, m)?)?;
+    m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add_function(wrap_pyfunction!(cull::cull, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,93 @@
+//! `render`: a scene's triangles through raykit-render's one-bounce
+//! Blinn-Phong renderer with shadow rays, as an `(h, w, 3)` uint8 image.
+
+use crate::errors::value_error;
+use crate::scene::Scene;
+use crate::threads::detached;
+use numpy::ndarray::Array3;
+use numpy::{IntoPyArray, PyArray3};
+use pyo3::prelude::*;
+use raykit_core::raysets::standard_light;
+use raykit_core::{Camera, Light, PointLight, Vec3};
+use raykit_render::RenderOptions;
+
+/// Render `scene` (its structure is reused) through a pinhole camera at
+/// `eye` looking at `target` (default: the scene's bounding box centre)
+/// with vertical field of view `fov` degrees; without `eye`, the camera
+/// frames the triangles as `raykit render` frames a mesh. One white point
+/// light above the scene, as the command line's default.
+#[pyfunction]
+#[pyo3(signature = (scene, width=800, height=600, eye=None, target=None, up=(0.0, 1.0, 0.0), fov=40.0, samples_per_pixel=1, shadows=true, threads=0))]
+#[allow(clippy::too_many_arguments)]
+pub fn render<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    eye: Option<(f32, f32, f32)>,
+    target: Option<(f32, f32, f32)>,
+    up: (f32, f32, f32),
+    fov: f32,
+    samples_per_pixel: u32,
+    shadows: bool,
+    threads: i64,
+) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    let Some(accel) = &scene.accel else {
+        return Err(value_error("the scene has no triangles to render"));
+    };
+    if width == 0 || width > 16384 || height == 0 || height > 16384 {
+        return Err(value_error(format!(
+            "width and height must be between 1 and 16384, got {width} x {height}"
+        )));
+    }
+    if !(fov >= 1.0 && fov < 179.0) {
+        return Err(value_error(format!(
+            "fov must be between 1 and 179 degrees, got {fov}"
+        )));
+    }
+    if !(1..=4096).contains(&samples_per_pixel) {
+        return Err(value_error(format!(
+            "samples_per_pixel must be between 1 and 4096, got {samples_per_pixel}"
+        )));
+    }
+    let mesh = &scene.mesh;
+    let bounds = mesh.bounds();
+    let v = |t: (f32, f32, f32)| Vec3::new(t.0, t.1, t.2);
+    let camera = match eye {
+        Some(e) => Camera {
+            eye: v(e),
+            target: target.map_or(bounds.center(), v),
+            up: v(up),
+            vfov_deg: fov,
+        },
+        None => {
+            let mut c =
+                Camera::fit_points(&bounds, &mesh.positions, fov, width as f32 / height as f32);
+            if let Some(t) = target {
+                c.target = v(t);
+            }
+            c
+        }
+    };
+    if !(camera.eye.is_finite() && camera.target.is_finite() && camera.eye != camera.target) {
+        return Err(value_error(
+            "eye and target must be finite and differ (the camera needs a direction to look in)",
+        ));
+    }
+    let p = standard_light(&bounds);
+    let lights: Vec<Light> =
+        vec![PointLight::with_irradiance_at(p, Vec3::ONE, p.distance(bounds.center())).into()];
+    let options = RenderOptions {
+        width,
+        height,
+        samples_per_pixel,
+        shadows,
+        ..RenderOptions::default()
+    };
+    let image = detached(py, threads, || {
+        raykit_render::render(mesh, &lights, accel.as_ref(), &camera, &options, &|_| {})
+    })?;
+    let rgb = Array3::from_shape_vec((height as usize, width as usize, 3), image.rgb)
+        .expect("three bytes a pixel");
+    Ok(rgb.into_pyarray(py))
+}

@@ -1,0 +1,314 @@
+//! `_raykit.Scene`: one triangle mesh made of the geometries added to a
+//! `RaycastingScene`, its acceleration structure, and the ray queries.
+//!
+//! Geometries are concatenated into one mesh; `offsets[g]` is the first
+//! triangle of geometry `g`, so a hit's triangle maps back to the geometry
+//! and its own triangle index by a binary search.
+
+use crate::arrays::{flat, rows};
+use crate::errors::value_error;
+use crate::threads::detached;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::tri::TestKind;
+use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, Vec3};
+use rayon::prelude::*;
+
+/// Rays per rayon task when converting rays and answers.
+const GRAIN: usize = 4096;
+
+/// The value of `geometry_ids` and `primitive_ids` for a ray that hits
+/// nothing (Open3D's `RaycastingScene.INVALID_ID`).
+pub const INVALID_ID: u32 = u32::MAX;
+
+/// A triangle mesh with its acceleration structure, built once.
+#[pyclass(module = "raykit._raykit", frozen)]
+pub struct Scene {
+    pub(crate) mesh: TriangleMesh,
+    offsets: Vec<u32>,
+    pub(crate) accel: Option<Box<dyn Accel>>,
+    kind: AccelKind,
+    test: TestKind,
+}
+
+/// `n` rays from rows of `[ox, oy, oz, dx, dy, dz]` over `[tnear, tfar]`.
+fn make_rays(rays: &[f32], tnear: f32, tfar: f32) -> Vec<Ray> {
+    rays.par_chunks_exact(6)
+        .with_min_len(GRAIN)
+        .map(|r| {
+            Ray::segment(
+                Vec3::new(r[0], r[1], r[2]),
+                Vec3::new(r[3], r[4], r[5]),
+                tnear,
+                tfar,
+            )
+        })
+        .collect()
+}
+
+impl Scene {
+    /// Geometry id and the triangle's index within it.
+    fn split(&self, prim: u32) -> (u32, u32) {
+        let g = self.offsets.partition_point(|&o| o <= prim) - 1;
+        (g as u32, prim - self.offsets[g])
+    }
+
+    fn nearest(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
+        let mut hits = vec![None; rays.len()];
+        if let Some(a) = &self.accel {
+            a.intersect_batch(rays, &mut hits);
+        }
+        hits
+    }
+}
+
+#[pymethods]
+impl Scene {
+    /// Build the structure `accel` with triangle test `test` over the
+    /// triangles (`(m, 3)` uint32) of the vertices (`(n, 3)` float32);
+    /// `offsets` (uint32) holds the first triangle of each geometry.
+    #[new]
+    #[pyo3(signature = (vertices, triangles, offsets, accel="bvh8", test="moller", threads=0))]
+    fn new(
+        py: Python<'_>,
+        vertices: PyReadonlyArray2<'_, f32>,
+        triangles: PyReadonlyArray2<'_, u32>,
+        offsets: PyReadonlyArray1<'_, u32>,
+        accel: &str,
+        test: &str,
+        threads: i64,
+    ) -> PyResult<Scene> {
+        let kind = AccelKind::from_name(accel).ok_or_else(|| {
+            let names: Vec<_> = AccelKind::ALL.iter().map(|k| k.name()).collect();
+            value_error(format!(
+                "unknown accel '{accel}'; expected one of {}",
+                names.join(", ")
+            ))
+        })?;
+        let test_kind = TestKind::from_name(test).ok_or_else(|| {
+            let names: Vec<_> = TestKind::ALL.iter().map(|k| k.name()).collect();
+            value_error(format!(
+                "unknown test '{test}'; expected one of {}",
+                names.join(", ")
+            ))
+        })?;
+        let (v, _) = rows(&vertices, 3, "vertices")?;
+        let (t, m) = rows(&triangles, 3, "triangles")?;
+        let offsets = flat(&offsets, "offsets")?.to_vec();
+        if offsets.first() != Some(&0)
+            || offsets.windows(2).any(|w| w[0] > w[1])
+            || *offsets.last().unwrap_or(&0) as usize != m
+        {
+            return Err(value_error(
+                "offsets must rise from 0 to the number of triangles",
+            ));
+        }
+        let mesh = TriangleMesh::new(
+            v.chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect(),
+            t.chunks_exact(3).map(|i| [i[0], i[1], i[2]]).collect(),
+        );
+        match mesh.validate() {
+            Ok(()) | Err(MeshError::Empty) => {}
+            Err(e) => return Err(value_error(e.to_string())),
+        }
+        let options = BuildOptions::default();
+        let (mesh, accel) = detached(py, threads, move || {
+            let accel =
+                (mesh.num_triangles() > 0).then(|| build_accel(kind, test_kind, &mesh, &options));
+            (mesh, accel)
+        })?;
+        Ok(Scene {
+            mesh,
+            offsets,
+            accel,
+            kind,
+            test: test_kind,
+        })
+    }
+
+    /// Nearest hits of `(n, 6)` float32 rays: `(t_hit, geometry_ids,
+    /// primitive_ids, primitive_uvs, primitive_normals)`.
+    #[pyo3(signature = (rays, threads=0))]
+    #[allow(clippy::type_complexity)]
+    fn cast_rays<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        threads: i64,
+    ) -> PyResult<(
+        Bound<'py, PyArray1<f32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray2<f32>>,
+        Bound<'py, PyArray2<f32>>,
+    )> {
+        let (r, n) = rows(&rays, 6, "rays")?;
+        let (t, g, p, uv, nrm) = detached(py, threads, || {
+            let hits = self.nearest(&make_rays(r, 0.0, f32::INFINITY));
+            let mut t = vec![f32::INFINITY; n];
+            let mut g = vec![INVALID_ID; n];
+            let mut p = vec![INVALID_ID; n];
+            let mut uv = vec![0.0f32; 2 * n];
+            let mut nrm = vec![0.0f32; 3 * n];
+            hits.par_iter()
+                .zip(t.par_iter_mut())
+                .zip(g.par_iter_mut())
+                .zip(p.par_iter_mut())
+                .zip(uv.par_chunks_exact_mut(2))
+                .zip(nrm.par_chunks_exact_mut(3))
+                .with_min_len(GRAIN)
+                .for_each(|(((((h, t), g), p), uv), nrm)| {
+                    if let Some(h) = h {
+                        *t = h.t;
+                        (*g, *p) = self.split(h.prim);
+                        uv.copy_from_slice(&[h.u, h.v]);
+                        let normal = self.mesh.face_normal(h.prim as usize).normalize_or_zero();
+                        nrm.copy_from_slice(&normal.to_array());
+                    }
+                });
+            (t, g, p, uv, nrm)
+        })?;
+        let uv = Array2::from_shape_vec((n, 2), uv).expect("two per ray");
+        let nrm = Array2::from_shape_vec((n, 3), nrm).expect("three per ray");
+        Ok((
+            t.into_pyarray(py),
+            g.into_pyarray(py),
+            p.into_pyarray(py),
+            uv.into_pyarray(py),
+            nrm.into_pyarray(py),
+        ))
+    }
+
+    /// Whether each `(n, 6)` float32 ray meets a triangle with `t` in
+    /// `[tnear, tfar]`.
+    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, threads=0))]
+    fn test_occlusions<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        tnear: f32,
+        tfar: f32,
+        threads: i64,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let (r, n) = rows(&rays, 6, "rays")?;
+        let occluded = detached(py, threads, || {
+            let mut occluded = vec![false; n];
+            if let Some(a) = &self.accel {
+                a.occluded_batch(&make_rays(r, tnear, tfar), &mut occluded);
+            }
+            occluded
+        })?;
+        Ok(occluded.into_pyarray(py))
+    }
+
+    /// Every hit along each ray, by repeated nearest-hit queries: after a
+    /// hit at `t` the ray continues from `t + min_gap` (at least the next
+    /// float above `t`), so a ray crossing a shared edge or vertex reports
+    /// it once, and surfaces closer than `min_gap` along the ray merge.
+    /// At most `max_hits` per ray. Returns `(ray_ids, primitive_ids, t_hit,
+    /// primitive_uvs)` ordered by ray, then distance.
+    #[pyo3(signature = (origins, directions, min_gap, max_hits, threads=0))]
+    #[allow(clippy::type_complexity)]
+    fn all_hits<'py>(
+        &self,
+        py: Python<'py>,
+        origins: PyReadonlyArray2<'py, f32>,
+        directions: PyReadonlyArray2<'py, f32>,
+        min_gap: f32,
+        max_hits: usize,
+        threads: i64,
+    ) -> PyResult<(
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<f32>>,
+        Bound<'py, PyArray2<f32>>,
+    )> {
+        let (o, n) = rows(&origins, 3, "origins")?;
+        let (d, nd) = rows(&directions, 3, "directions")?;
+        if n != nd {
+            return Err(value_error(format!(
+                "origins and directions must have the same shape, got ({n}, 3) and ({nd}, 3)"
+            )));
+        }
+        if !(min_gap >= 0.0) {
+            return Err(value_error(format!("min_gap must be >= 0, got {min_gap}")));
+        }
+        let hits: Vec<(u32, Hit)> = detached(py, threads, || {
+            let Some(accel) = &self.accel else {
+                return Vec::new();
+            };
+            (0..n)
+                .into_par_iter()
+                .with_min_len(64)
+                .flat_map_iter(|i| {
+                    let origin = Vec3::from_slice(&o[3 * i..3 * i + 3]);
+                    let dir = Vec3::from_slice(&d[3 * i..3 * i + 3]);
+                    let mut found = Vec::new();
+                    let mut tnear = 0.0f32;
+                    while found.len() < max_hits && tnear < f32::INFINITY {
+                        let Some(h) =
+                            accel.intersect(&Ray::segment(origin, dir, tnear, f32::INFINITY))
+                        else {
+                            break;
+                        };
+                        found.push((i as u32, h));
+                        tnear = (h.t + min_gap).max(h.t.next_up());
+                    }
+                    found
+                })
+                .collect()
+        })?;
+        let k = hits.len();
+        let ray_ids: Vec<u32> = hits.iter().map(|(i, _)| *i).collect();
+        let prims: Vec<u32> = hits.iter().map(|(_, h)| h.prim).collect();
+        let t: Vec<f32> = hits.iter().map(|(_, h)| h.t).collect();
+        let uv: Vec<f32> = hits.iter().flat_map(|(_, h)| [h.u, h.v]).collect();
+        let uv = Array2::from_shape_vec((k, 2), uv).expect("two per hit");
+        Ok((
+            ray_ids.into_pyarray(py),
+            prims.into_pyarray(py),
+            t.into_pyarray(py),
+            uv.into_pyarray(py),
+        ))
+    }
+
+    /// Triangles in the scene.
+    #[getter]
+    fn num_triangles(&self) -> usize {
+        self.mesh.num_triangles()
+    }
+
+    /// The structure's name (`--accel`).
+    #[getter]
+    fn accel(&self) -> &'static str {
+        self.kind.name()
+    }
+
+    /// The triangle test's name (`--test`).
+    #[getter]
+    fn test(&self) -> &'static str {
+        self.test.name()
+    }
+
+    /// Size and quality figures of the structure (`raykit bench`'s
+    /// columns); empty for a scene without triangles.
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        if let Some(a) = &self.accel {
+            let s = a.stats();
+            d.set_item("nodes", s.nodes)?;
+            d.set_item("leaves", s.leaves)?;
+            d.set_item("bytes", s.bytes)?;
+            d.set_item("node_bytes", s.node_bytes)?;
+            d.set_item("depth", s.depth)?;
+            d.set_item("sah_cost", s.sah_cost)?;
+            d.set_item("triangle_refs", s.triangle_refs)?;
+        }
+        Ok(d)
+    }
+}

@@ -1,0 +1,310 @@
+//! Terrain from numpy height grids: the DEM with its affine transform
+//! (rasterio's `Affine(a, b, c, d, e, f)`: x = a·col + b·row + c,
+//! y = d·col + e·row + f at pixel corners), shadow masks and ray-cast
+//! images (raykit-terrain).
+
+use crate::errors::{dem_error, value_error};
+use crate::threads::detached;
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use raykit_terrain::io::{load_dem as read_dem, LoadOptions};
+use raykit_terrain::shadow::{shadow_mask, Light, ShadowMethod};
+use raykit_terrain::view::{cast_image, Caster};
+use raykit_terrain::{Dem, GeoRef, HeightField, MaxMipmap, TerrainCamera};
+use std::path::PathBuf;
+
+/// The six terms of rasterio's affine transform.
+type Transform = (f64, f64, f64, f64, f64, f64);
+
+/// A DEM file's heights (NaN where no data), transform, whether its map
+/// units are degrees, and its nodata value.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub fn load_dem(
+    py: Python<'_>,
+    path: PathBuf,
+) -> PyResult<(Bound<'_, PyArray2<f32>>, Transform, bool, Option<f64>)> {
+    let dem = py
+        .detach(|| read_dem(&path, &LoadOptions::default()))
+        .map_err(dem_error)?;
+    let g = &dem.georef;
+    let transform = (
+        g.pixel_width,
+        0.0,
+        g.origin_x,
+        0.0,
+        g.pixel_height,
+        g.origin_y,
+    );
+    let (geographic, nodata) = (g.geographic, dem.nodata);
+    let heights = Array2::from_shape_vec((dem.height, dem.width), dem.heights)
+        .expect("width × height samples");
+    Ok((heights.into_pyarray(py), transform, geographic, nodata))
+}
+
+/// The DEM of a `(rows, cols)` height grid placed by `transform`.
+fn dem(heights: &PyReadonlyArray2<'_, f32>, t: Transform, geographic: bool) -> PyResult<Dem> {
+    let (a, b, c, d, e, f) = t;
+    if b != 0.0 || d != 0.0 {
+        return Err(value_error(format!(
+            "rotated or sheared transform (terms b = {b}, d = {d}); expected a north-up \
+             transformation with zero rotation terms"
+        )));
+    }
+    if !(a > 0.0 && e < 0.0 && a.is_finite() && e.is_finite() && c.is_finite() && f.is_finite()) {
+        return Err(value_error(format!(
+            "transform ({a}, {b}, {c}, {d}, {e}, {f}): expected a north-up raster, a > 0 and \
+             e < 0 (columns east, rows south)"
+        )));
+    }
+    let shape = heights.shape();
+    let (rows, cols) = (shape[0], shape[1]);
+    let values = heights
+        .as_slice()
+        .map_err(|_| value_error("heights must be C-contiguous"))?
+        .to_vec();
+    let mut dem = Dem::from_heights(cols, rows, values);
+    dem.georef = GeoRef {
+        origin_x: c,
+        origin_y: f,
+        pixel_width: a,
+        pixel_height: e,
+        geographic,
+        ..GeoRef::default()
+    };
+    Ok(dem)
+}
+
+fn field_of(dem: &Dem) -> PyResult<HeightField> {
+    HeightField::new(dem).map_err(value_error)
+}
+
+/// Map position → world metres of the field (x east, y north), refused
+/// outside the grid (the command line's `--light` check).
+fn world_of(dem: &Dem, field: &HeightField, x: f64, y: f64, what: &str) -> PyResult<[f64; 2]> {
+    let (col, row) = dem.map_to_grid(x, y);
+    let (w, h) = ((dem.width - 1) as f64, (dem.height - 1) as f64);
+    if !(0.0..=w).contains(&col) || !(0.0..=h).contains(&row) {
+        let (x0, y0) = dem.grid_to_map(0.0, 0.0);
+        let (x1, y1) = dem.grid_to_map(w, h);
+        return Err(value_error(format!(
+            "{what}: ({x}, {y}) lies outside the DEM, whose grid points span x {x0}..{x1}, y {y1}..{y0}"
+        )));
+    }
+    Ok([col * field.sx, -row * field.sy])
+}
+
+/// Map coordinates (x, y, z) → world metres.
+fn to_world(dem: &Dem, field: &HeightField, m: [f64; 3]) -> [f64; 3] {
+    let (c, r) = dem.map_to_grid(m[0], m[1]);
+    [c * field.sx, -r * field.sy, m[2]]
+}
+
+/// Per grid point 1 where the light is visible from the surface, 0 in
+/// shadow, 255 where the DEM has no data (NaN), as `raykit terrain
+/// shadow` writes it. Exactly one of `sun` (azimuth, elevation in
+/// degrees) and `light` (map x, y and the height above the ground, or
+/// with `light_elevation` the absolute elevation).
+#[pyfunction]
+#[pyo3(signature = (heights, transform, geographic=false, sun=None, light=None, light_elevation=false, method="fast", threads=0))]
+#[allow(clippy::too_many_arguments)]
+pub fn shadow<'py>(
+    py: Python<'py>,
+    heights: PyReadonlyArray2<'py, f32>,
+    transform: Transform,
+    geographic: bool,
+    sun: Option<(f64, f64)>,
+    light: Option<(f64, f64, f64)>,
+    light_elevation: bool,
+    method: &str,
+    threads: i64,
+) -> PyResult<Bound<'py, PyArray2<u8>>> {
+    let method = match method {
+        "fast" => ShadowMethod::Fast,
+        "brute" => ShadowMethod::BruteForce,
+        _ => {
+            return Err(value_error(format!(
+                "unknown method '{method}'; expected fast or brute"
+            )))
+        }
+    };
+    let dem = dem(&heights, transform, geographic)?;
+    let field = field_of(&dem)?;
+    let light = match (sun, light) {
+        (Some((az, el)), None) => {
+            if light_elevation {
+                return Err(value_error("light_elevation applies to light only"));
+            }
+            if !(0.0..=90.0).contains(&el) {
+                return Err(value_error(format!(
+                    "sun: the elevation must be between 0 and 90 degrees, got {el}"
+                )));
+            }
+            Light::Sun {
+                azimuth_deg: az,
+                elevation_deg: el,
+            }
+        }
+        (None, Some((x, y, h))) => {
+            let [wx, wy] = world_of(&dem, &field, x, y, "light")?;
+            let z = if light_elevation {
+                h
+            } else {
+                if !(h >= 0.0) {
+                    return Err(value_error(format!(
+                        "light ({x}, {y}, {h}): the height above the ground must be >= 0 \
+                         (use light_elevation=True for an absolute elevation)"
+                    )));
+                }
+                field.height_at(wx / field.sx, -wy / field.sy) + h
+            };
+            Light::Point([wx, wy, z])
+        }
+        _ => return Err(value_error("give exactly one of sun, light")),
+    };
+    let mask = detached(py, threads, || {
+        let pyramid = MaxMipmap::new(&field);
+        let mut mask = shadow_mask(&field, &pyramid, &light, method);
+        for (m, h) in mask.iter_mut().zip(&dem.heights) {
+            if h.is_nan() {
+                *m = 255;
+            }
+        }
+        mask
+    })?;
+    let mask = Array2::from_shape_vec((dem.height, dem.width), mask).expect("one per sample");
+    Ok(mask.into_pyarray(py))
+}
+
+/// One ray per pixel of a pinhole camera at map position `eye` looking at
+/// `target` (z in metres), cast on the declared surface: a dict of `t`
+/// (metres, inf on a miss), `col` and `row` of the hit cell (-1 on a
+/// miss), `steps` per ray, the unit world `directions` (x east, y north,
+/// z up), the eye in world metres from grid point (0, 0) and the cell size.
+#[pyfunction]
+#[pyo3(signature = (heights, transform, eye, target, geographic=false, fov=50.0, width=1600, height=900, caster="boxes", tau=16.0, threads=0))]
+#[allow(clippy::too_many_arguments)]
+pub fn cast<'py>(
+    py: Python<'py>,
+    heights: PyReadonlyArray2<'py, f32>,
+    transform: Transform,
+    eye: [f64; 3],
+    target: [f64; 3],
+    geographic: bool,
+    fov: f64,
+    width: u32,
+    height: u32,
+    caster: &str,
+    tau: f64,
+    threads: i64,
+) -> PyResult<Bound<'py, PyDict>> {
+    if width == 0 || width > 16384 || height == 0 || height > 16384 {
+        return Err(value_error(format!(
+            "width and height must be between 1 and 16384, got {width} x {height}"
+        )));
+    }
+    if !(fov >= 1.0 && fov < 179.0) {
+        return Err(value_error(format!(
+            "fov must be between 1 and 179 degrees, got {fov}"
+        )));
+    }
+    let caster = match caster {
+        "march" => Caster::March,
+        "maxmip" => Caster::MaxMipmap,
+        "boxes" if tau > 0.0 && tau <= 4096.0 => Caster::Boxes { tau },
+        "boxes" => {
+            return Err(value_error(format!(
+                "tau must be a number of pixels in (0, 4096], got {tau}"
+            )))
+        }
+        _ => {
+            return Err(value_error(format!(
+                "unknown caster '{caster}'; expected march, maxmip or boxes"
+            )))
+        }
+    };
+    let dem = dem(&heights, transform, geographic)?;
+    let field = field_of(&dem)?;
+    let camera = TerrainCamera {
+        eye: to_world(&dem, &field, eye),
+        target: to_world(&dem, &field, target),
+        vfov_deg: fov,
+        width,
+        height,
+    };
+    let d = [
+        camera.target[0] - camera.eye[0],
+        camera.target[1] - camera.eye[1],
+        camera.target[2] - camera.eye[2],
+    ];
+    if !(camera
+        .eye
+        .iter()
+        .chain(&camera.target)
+        .all(|c| c.is_finite())
+        && d.iter().any(|&c| c != 0.0))
+    {
+        return Err(value_error(
+            "eye and target must be finite and differ (the camera needs a direction to look in)",
+        ));
+    }
+    let (w, h) = (width as usize, height as usize);
+    let (t, col, row, steps, dirs) = detached(py, threads, || {
+        let pyramid = MaxMipmap::new(&field);
+        let image = cast_image(&field, &pyramid, &camera, caster);
+        let frame = camera.frame();
+        let t: Vec<f64> = image
+            .hits
+            .iter()
+            .map(|h| h.map_or(f64::INFINITY, |h| h.t))
+            .collect();
+        let col: Vec<i64> = image
+            .hits
+            .iter()
+            .map(|h| h.map_or(-1, |h| h.col as i64))
+            .collect();
+        let row: Vec<i64> = image
+            .hits
+            .iter()
+            .map(|h| h.map_or(-1, |h| h.row as i64))
+            .collect();
+        let steps: Vec<u32> = image.steps.iter().map(|s| s.cells + s.nodes).collect();
+        let dirs: Vec<f64> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .flat_map(|(x, y)| frame.direction(x as u32, y as u32))
+            .collect();
+        (t, col, row, steps, dirs)
+    })?;
+    let grid = |v| Array2::from_shape_vec((h, w), v).expect("one per pixel");
+    let out = PyDict::new(py);
+    out.set_item("t", grid(t).into_pyarray(py))?;
+    out.set_item(
+        "col",
+        Array2::from_shape_vec((h, w), col)
+            .expect("one per pixel")
+            .into_pyarray(py),
+    )?;
+    out.set_item(
+        "row",
+        Array2::from_shape_vec((h, w), row)
+            .expect("one per pixel")
+            .into_pyarray(py),
+    )?;
+    out.set_item(
+        "steps",
+        Array2::from_shape_vec((h, w), steps)
+            .expect("one per pixel")
+            .into_pyarray(py),
+    )?;
+    out.set_item(
+        "directions",
+        Array3::from_shape_vec((h, w, 3), dirs)
+            .expect("three per pixel")
+            .into_pyarray(py),
+    )?;
+    out.set_item("eye", camera.eye.to_vec())?;
+    out.set_item("cell_size", (field.sx, field.sy))?;
+    Ok(out)
+}

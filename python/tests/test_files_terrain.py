@@ -1,0 +1,155 @@
+"""load_mesh against trimesh's loaders; terrain shadows, viewsheds and casts
+against GDAL's reading of the same GeoTIFF (rasterio), the other exact
+method, and a BVH over the same surface as triangles."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import rasterio
+import trimesh
+from rasterio.transform import Affine
+
+import raykit
+import raykit.terrain
+
+
+def test_load_mesh_matches_trimesh(data):
+    for name in ("bunny_3674.obj", "teapot_992.obj", "bearing.stl"):
+        v, f, parts = raykit.load_mesh(data / "meshes" / name)
+        assert v.dtype == np.float32 and f.dtype == np.uint32 and parts.dtype == np.uint32
+        assert v.shape[1] == 3 and f.shape[1] == 3 and parts.shape == (len(f),)
+        ref = trimesh.load(data / "meshes" / name, process=False, force="mesh")
+        assert len(f) == len(ref.faces)
+        # Same triangles corner by corner (STL loaders may share vertices differently).
+        np.testing.assert_allclose(v[f], ref.vertices[ref.faces], rtol=1e-6, atol=1e-6 * ref.scale)
+    v, f, parts = raykit.load_mesh(str(data / "meshes" / "2CylinderEngine.glb"))
+    assert parts.max() > 10  # one part per glTF node
+
+
+def test_load_mesh_errors_name_the_file(tmp_path):
+    with pytest.raises(FileNotFoundError, match="missing.obj"):
+        raykit.load_mesh(tmp_path / "missing.obj")
+    bad = tmp_path / "bad.obj"
+    bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 abc\nf 1 2 3\n")
+    with pytest.raises(ValueError, match=r"bad\.obj:3: "):
+        raykit.load_mesh(bad)
+    with pytest.raises(ValueError, match="unknown mesh file extension"):
+        raykit.load_mesh(tmp_path / "x.xyz")
+    truncated = tmp_path / "t.ply"
+    truncated.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nend_header\n\x00")
+    with pytest.raises(ValueError, match=r"t\.ply"):
+        raykit.load_mesh(truncated)
+
+
+def read_with_gdal(path):
+    with rasterio.open(path) as src:
+        return src.read(1).astype(np.float32), src.transform, src.nodata
+
+
+def test_shadow_of_a_geotiff_equals_shadow_of_gdals_arrays(data):
+    path = data / "terrain" / "lidar_dem_400.tif"
+    heights, transform, nodata = read_with_gdal(path)
+    from_file = raykit.terrain.shadow(path, sun=(135, 8))
+    from_arrays = raykit.terrain.shadow(heights, transform, sun=(135, 8), nodata=nodata)
+    assert from_file.shape == heights.shape and from_file.dtype == np.uint8
+    np.testing.assert_array_equal(from_file, from_arrays)
+    assert 0.05 < (from_file == 0).mean() < 0.95, (from_file == 0).mean()
+    # The two exact algorithms give identical masks.
+    brute = raykit.terrain.shadow(heights, transform, sun=(135, 8), method="brute", threads=1)
+    np.testing.assert_array_equal(brute, from_arrays)
+    # A point light, and the viewshed of an observer at the same place.
+    x, y = transform * (200.5, 150.5)
+    lit = raykit.terrain.shadow(path, light=(x, y, 30.0))
+    np.testing.assert_array_equal(raykit.terrain.viewshed(path, observer=(x, y), observer_height=30.0), lit)
+    assert lit[150, 200] == 1
+
+
+def test_shadow_agrees_with_rays_on_the_same_triangles():
+    rng = np.random.default_rng(3)
+    rows, cols = 48, 64
+    heights = np.cumsum(np.cumsum(rng.normal(size=(rows, cols)), axis=0), axis=1).astype(np.float32)
+    transform = Affine(2.0, 0, 1000.0, 0, -3.0, 5000.0)
+    mask = raykit.terrain.shadow(heights, transform, sun=(250, 25))
+    # The declared surface as a mesh: grid point (c, r) at map (c·a + c0 + a/2, ...).
+    c, r = np.meshgrid(np.arange(cols), np.arange(rows))
+    x, y = transform * (c + 0.5, r + 0.5)
+    v = np.stack([x, y, heights], axis=-1).reshape(-1, 3)
+    i = (r * cols + c)[:-1, :-1].reshape(-1)
+    upper = np.stack([i, i + 1, i + cols + 1], axis=1)
+    lower = np.stack([i, i + cols + 1, i + cols], axis=1)
+    scene = raykit.RaycastingScene()
+    scene.add_triangles(v.astype(np.float64), np.concatenate([upper, lower]))
+    az, el = np.radians(250), np.radians(25)
+    d = np.array([np.sin(az) * np.cos(el), np.cos(az) * np.cos(el), np.sin(el)])
+    rays = np.concatenate([v, np.broadcast_to(d, v.shape)], axis=1)
+    occluded = scene.test_occlusions(rays, tnear=1e-3).reshape(rows, cols)
+    differ = (occluded == (mask == 1)).sum()
+    # Only grazing segments, where f32 rounding decides, may differ.
+    assert differ <= 0.003 * mask.size, differ
+
+
+def test_transforms_and_bad_grids():
+    h = np.zeros((5, 6), np.float32)
+    h[2, 3] = 10.0
+    h[0, 0] = np.nan
+    base = raykit.terrain.shadow(h, (1, 0, 0, 0, -1, 0), sun=(90, 30))
+    assert base[0, 0] == 255 and base[2, 3] == 1
+    np.testing.assert_array_equal(raykit.terrain.shadow(h, Affine.identity() * Affine.scale(1, -1), sun=(90, 30)), base)
+    np.testing.assert_array_equal(raykit.terrain.shadow(h.astype(np.float64), sun=(90, 30)), base)
+    with pytest.raises(ValueError, match="rotated or sheared"):
+        raykit.terrain.shadow(h, (1, 0.1, 0, 0, -1, 0), sun=(90, 30))
+    with pytest.raises(ValueError, match="north-up"):
+        raykit.terrain.shadow(h, (1, 0, 0, 0, 1, 0), sun=(90, 30))
+    with pytest.raises(ValueError, match="exactly one of sun, light"):
+        raykit.terrain.shadow(h)
+    with pytest.raises(ValueError, match="elevation must be between 0 and 90"):
+        raykit.terrain.shadow(h, sun=(90, 95))
+    with pytest.raises(ValueError, match="lies outside the DEM"):
+        raykit.terrain.shadow(h, light=(100, 100, 5))
+    with pytest.raises(ValueError, match="at least 2x2"):
+        raykit.terrain.shadow(h[:1], sun=(0, 10))
+    with pytest.raises(ValueError, match=r"shape \(rows, cols\)"):
+        raykit.terrain.shadow(h[0], sun=(0, 10))
+    with pytest.raises(ValueError, match="no valid height"):
+        raykit.terrain.shadow(np.full((3, 3), np.nan), sun=(0, 10))
+    with pytest.raises(FileNotFoundError, match="nowhere.tif"):
+        raykit.terrain.shadow("nowhere.tif", sun=(0, 10))
+    with pytest.raises(ValueError, match="own transform"):
+        raykit.terrain.shadow("nowhere.tif", (1, 0, 0, 0, -1, 0), sun=(0, 10))
+
+
+def test_casters_agree_and_match_a_bvh(data):
+    heights, transform, nodata = read_with_gdal(data / "terrain" / "lidar_dem_400.tif")
+    x0, y0 = transform * (20, 380)
+    x1, y1 = transform * (200, 200)
+    eye, target = (x0, y0, float(np.nanmax(heights)) + 40.0), (x1, y1, float(np.nanmean(heights)))
+    casts = [
+        raykit.terrain.cast(heights, transform, eye=eye, target=target, width=64, height=40, caster=c)
+        for c in ("march", "maxmip", "boxes")
+    ]
+    for other in casts[1:]:
+        np.testing.assert_array_equal(other["t"], casts[0]["t"])
+        np.testing.assert_array_equal(other["col"], casts[0]["col"])
+    t = casts[0]["t"]
+    # The same surface as triangles in world metres, through the BVH.
+    rows, cols = heights.shape
+    sx, sy = casts[0]["cell_size"]
+    c, r = np.meshgrid(np.arange(cols), np.arange(rows))
+    v = np.stack([c * sx, -r * sy, heights], axis=-1).reshape(-1, 3)
+    i = (r * cols + c)[:-1, :-1].reshape(-1)
+    tris = np.concatenate([np.stack([i, i + 1, i + cols + 1], 1), np.stack([i, i + cols + 1, i + cols], 1)])
+    scene = raykit.RaycastingScene()
+    scene.add_triangles(v.astype(np.float64), tris)
+    d = casts[0]["directions"]
+    rays = np.concatenate([np.broadcast_to(casts[0]["eye"], d.shape), d], axis=-1)
+    t_bvh = scene.cast_rays(rays)["t_hit"]
+    assert (np.isfinite(t_bvh) == np.isfinite(t)).all()
+    np.testing.assert_allclose(t_bvh[np.isfinite(t)], t[np.isfinite(t)], rtol=1e-4)
+    assert np.isfinite(t).mean() > 0.5 and np.isinf(t[0]).any()  # terrain and sky
+    image = raykit.terrain.render(heights, transform, eye=eye, target=target, width=64, height=40)
+    assert image.shape == (40, 64, 3) and image.dtype == np.uint8
+    sky = np.isinf(t)
+    assert image[sky].std(axis=0).max() < image[~sky].std(axis=0).max()
+    default = raykit.terrain.render(data / "terrain" / "lidar_dem_400.tif", width=32, height=18, sun=(300, 20))
+    assert default.shape == (18, 32, 3)

@@ -1,0 +1,293 @@
+"""RaycastingScene against a float64 brute force, against Open3D's own
+RaycastingScene on the same rays, and on bad input."""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+
+import numpy as np
+import open3d as o3d
+import pytest
+
+import raykit
+from conftest import brute_force, rays_at, ties
+
+
+def scene_of(vertices, triangles, **kw):
+    s = raykit.RaycastingScene(**kw)
+    s.add_triangles(vertices, triangles)
+    return s
+
+
+def test_nearest_hits_match_a_float64_brute_force(bunny):
+    v, f, _ = bunny
+    rays = rays_at(v, 1500, seed=1)
+    ans = scene_of(v, f).cast_rays(rays)
+    ref_t, ref_i = brute_force(v, f, rays)
+    hit = np.isfinite(ref_t)
+    assert hit.sum() > 300 and (~hit).sum() > 100
+    # Hit or miss agrees except for rays that graze an edge within f32 rounding.
+    agree = np.isfinite(ans["t_hit"]) == hit
+    assert agree.mean() > 0.998, np.flatnonzero(~agree)
+    both = hit & np.isfinite(ans["t_hit"])
+    np.testing.assert_allclose(ans["t_hit"][both], ref_t[both], rtol=1e-4)
+    # A different triangle only next to the reference's, near their shared edge.
+    assert ties(f, ans["primitive_ids"][both], ref_i[both]).all()
+    # uvs and normals describe the hit triangle.
+    idx = np.flatnonzero(both)
+    tri = f[ans["primitive_ids"][idx]].astype(np.int64)
+    uv = ans["primitive_uvs"][idx].astype(np.float64)
+    corners = v[tri].astype(np.float64)
+    point = (1 - uv[:, :1] - uv[:, 1:]) * corners[:, 0] + uv[:, :1] * corners[:, 1] + uv[:, 1:] * corners[:, 2]
+    along = rays[idx, :3] + ans["t_hit"][idx, None] * rays[idx, 3:]
+    np.testing.assert_allclose(point, along, atol=1e-4 * np.ptp(v))
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    np.testing.assert_allclose(ans["primitive_normals"][idx], normal, atol=1e-5)
+    miss = ~np.isfinite(ans["t_hit"])
+    assert (ans["primitive_ids"][miss] == raykit.RaycastingScene.INVALID_ID).all()
+    assert (ans["geometry_ids"][miss] == raykit.INVALID_ID).all()
+    assert (ans["primitive_normals"][miss] == 0).all() and (ans["primitive_uvs"][miss] == 0).all()
+
+
+def test_same_answers_as_open3d(dragon):
+    v, f, _ = dragon
+    rays = rays_at(v, 20000, seed=2)
+    mine = scene_of(v, f)
+    theirs = o3d.t.geometry.RaycastingScene()
+    theirs.add_triangles(o3d.core.Tensor(v), o3d.core.Tensor(f))
+    a = mine.cast_rays(rays)
+    b = {k: x.numpy() for k, x in theirs.cast_rays(o3d.core.Tensor(rays)).items()}
+    assert set(a) == set(b)
+    for k in a:
+        assert a[k].shape == b[k].shape and a[k].dtype == b[k].dtype, k
+    hit_a, hit_b = np.isfinite(a["t_hit"]), np.isfinite(b["t_hit"])
+    assert (hit_a != hit_b).sum() <= 2  # edge grazes that f32 rounding decides
+    both = hit_a & hit_b
+    # A ray grazing a silhouette may pass one side of it in one engine and
+    # hit it in the other: then the distances differ.
+    close = np.isclose(a["t_hit"][both], b["t_hit"][both], rtol=1e-4)
+    assert (~close).sum() <= 2
+    same = a["primitive_ids"][both] == b["primitive_ids"][both]
+    # Where the triangles differ they are neighbours, the ray near their shared edge.
+    assert ties(f, a["primitive_ids"][both][close], b["primitive_ids"][both][close]).all()
+    # Barycentrics in float32 differ by the hit point's rounding over the
+    # (small) triangle's size.
+    np.testing.assert_allclose(a["primitive_uvs"][both][same], b["primitive_uvs"][both][same], atol=2e-3)
+    np.testing.assert_allclose(a["primitive_normals"][both][same], b["primitive_normals"][both][same], atol=5e-4)
+    occ = mine.test_occlusions(rays)
+    np.testing.assert_array_equal(occ, hit_a)
+    assert (occ != theirs.test_occlusions(o3d.core.Tensor(rays)).numpy()).sum() <= 2
+    tfar = np.float32(np.nanmedian(b["t_hit"][both]))
+    occ = mine.test_occlusions(rays, tfar=tfar)
+    ref = theirs.test_occlusions(o3d.core.Tensor(rays), tfar=float(tfar)).numpy()
+    assert (occ != ref).sum() <= 2
+
+
+def test_geometry_ids_of_several_meshes(bunny):
+    v, f, _ = bunny
+    shift = np.array([np.ptp(v[:, 0]) * 1.5, 0, 0], dtype=np.float32)
+    scene = raykit.RaycastingScene()
+    assert scene.add_triangles(v, f) == 0
+    assert scene.add_triangles(v + shift, f[:1000]) == 1
+    assert scene.add_triangles(v + 2 * shift, f) == 2
+    rays = np.concatenate([rays_at(v, 500, 3), rays_at(v + 2 * shift, 500, 4)])
+    ans = scene.cast_rays(rays)
+    alone0 = scene_of(v, f).cast_rays(rays[:500])
+    alone2 = scene_of(v + 2 * shift, f).cast_rays(rays[500:])
+    for part, alone, gid in ((slice(0, 500), alone0, 0), (slice(500, 1000), alone2, 2)):
+        hit = np.isfinite(alone["t_hit"])
+        near = ans["t_hit"][part][hit] <= alone["t_hit"][hit]
+        assert near.all()
+        own = ans["geometry_ids"][part][hit] == gid
+        # Rays towards one copy that meet another copy first are rare and nearer.
+        assert own.mean() > 0.9
+        np.testing.assert_array_equal(ans["primitive_ids"][part][hit][own], alone["primitive_ids"][hit][own])
+
+
+def test_leading_shapes_dtypes_and_conversions(bunny):
+    v, f, _ = bunny
+    scene = scene_of(v.astype(np.float64), f.astype(np.int64))
+    rays = rays_at(v, 24, 5)
+    flat = scene.cast_rays(rays)
+    for shape in [(24, 6), (4, 6, 6), (2, 3, 4, 6), (1, 24, 6)]:
+        ans = scene.cast_rays(rays.reshape(shape))
+        lead = shape[:-1]
+        assert ans["t_hit"].shape == lead and ans["t_hit"].dtype == np.float32
+        assert ans["geometry_ids"].shape == lead and ans["geometry_ids"].dtype == np.uint32
+        assert ans["primitive_ids"].dtype == np.uint32
+        assert ans["primitive_uvs"].shape == lead + (2,) and ans["primitive_normals"].shape == lead + (3,)
+        np.testing.assert_array_equal(ans["t_hit"].reshape(-1), flat["t_hit"])
+        assert scene.test_occlusions(rays.reshape(shape)).shape == lead
+    # float64 and lists give the float32 answers; .numpy() gives plain arrays.
+    np.testing.assert_array_equal(scene.cast_rays(rays.astype(np.float64))["t_hit"], flat["t_hit"])
+    np.testing.assert_array_equal(scene.cast_rays(rays.tolist())["primitive_ids"], flat["primitive_ids"])
+    assert type(flat["t_hit"].numpy()) is np.ndarray
+    # Non-contiguous input.
+    wide = np.zeros((24, 12), np.float32)
+    wide[:, ::2] = rays
+    np.testing.assert_array_equal(scene.cast_rays(wide[:, ::2])["t_hit"], flat["t_hit"])
+    empty = scene.cast_rays(np.zeros((0, 6), np.float32))
+    assert empty["t_hit"].shape == (0,) and empty["primitive_uvs"].shape == (0, 2)
+
+
+def test_bad_rays_raise_or_miss(bunny):
+    v, f, _ = bunny
+    scene = scene_of(v, f)
+    for bad, words in [
+        (np.zeros(6, np.float32), "at least 2 dimensions"),
+        (np.zeros((3, 5), np.float32), "last dimension of rays must be 6"),
+        (np.zeros((3, 6), np.complex64), "dtype complex64"),
+        (np.array([["a"] * 6]), "dtype <U1"),
+        (np.zeros((3, 6), bool), "dtype bool"),
+    ]:
+        with pytest.raises(ValueError, match=words):
+            scene.cast_rays(bad)
+        with pytest.raises(ValueError):
+            scene.test_occlusions(bad)
+    centre = (v.min(0) + v.max(0)) / 2
+    weird = np.array(
+        [
+            [np.nan, 0, 0, 0, 0, -1],
+            [*centre + [0, 0, 10], 0, 0, np.nan],
+            [*centre + [0, 0, 10], 0, 0, 0],
+            [np.inf, 0, 0, -1, 0, 0],
+            [*centre + [0, 0, 10], 0, 0, -np.inf],
+            [1e38, 1e38, 1e38, 1, 1, 1],
+        ],
+        np.float32,
+    )
+    ans = scene.cast_rays(weird)
+    assert np.isinf(ans["t_hit"]).all() and (ans["primitive_ids"] == raykit.INVALID_ID).all()
+    assert not scene.test_occlusions(weird).any()
+    with pytest.raises(ValueError, match="tnear and tfar"):
+        scene.test_occlusions(weird, tnear=np.nan)
+    assert not scene.test_occlusions(rays_at(v, 50, 6), tnear=2.0, tfar=1.0).any()
+    with pytest.raises(ValueError, match="threads"):
+        scene.cast_rays(weird, nthreads=-1)
+
+
+def test_bad_meshes_raise(bunny):
+    v, f, _ = bunny
+    s = raykit.RaycastingScene()
+    with pytest.raises(ValueError, match="refers to vertex 99, but there are only 3 vertices"):
+        s.add_triangles(v[:3], np.array([[0, 1, 99]]))
+    bad = v.copy()
+    bad[7, 1] = np.nan
+    with pytest.raises(ValueError, match="vertex 7 has a NaN or infinite coordinate"):
+        s.add_triangles(bad, f)
+    with pytest.raises(ValueError, match="must hold integers"):
+        s.add_triangles(v, f.astype(np.float32))
+    with pytest.raises(ValueError, match="between 0 and"):
+        s.add_triangles(v, -np.ones((1, 3), np.int64))
+    with pytest.raises(ValueError, match=r"shape \(m, 3\)"):
+        s.add_triangles(v, f[:, :2])
+    with pytest.raises(ValueError, match="last dimension of vertex_positions must be 3"):
+        s.add_triangles(v[:, :2], f)
+    with pytest.raises(ValueError, match="add_triangles takes"):
+        s.add_triangles("not a mesh")
+    with pytest.raises(ValueError, match="unknown accel 'bvh9'"):
+        raykit.RaycastingScene(accel="bvh9")
+    with pytest.raises(ValueError, match="unknown test"):
+        raykit.RaycastingScene(test="nope")
+    # Nothing added, or empty geometry: every ray misses.
+    for scene in (raykit.RaycastingScene(), scene_of(np.zeros((0, 3)), np.zeros((0, 3), np.int32))):
+        ans = scene.cast_rays(rays_at(v, 10, 7))
+        assert np.isinf(ans["t_hit"]).all() and (ans["geometry_ids"] == raykit.INVALID_ID).all()
+        assert not scene.test_occlusions(rays_at(v, 10, 7)).any()
+
+
+def test_meshes_of_open3d_and_trimesh(bunny):
+    import trimesh
+
+    v, f, _ = bunny
+    rays = rays_at(v, 200, 8)
+    ref = scene_of(v, f).cast_rays(rays)["t_hit"]
+    legacy = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(v.astype(np.float64)), o3d.utility.Vector3iVector(f.astype(np.int32)))
+    for mesh in (legacy, o3d.t.geometry.TriangleMesh.from_legacy(legacy), trimesh.Trimesh(v, f, process=False)):
+        s = raykit.RaycastingScene()
+        assert s.add_triangles(mesh) == 0
+        np.testing.assert_array_equal(s.cast_rays(rays)["t_hit"], ref)
+
+
+def test_every_structure_and_test_and_thread_count_agree(bunny):
+    v, f, _ = bunny
+    rays = rays_at(v, 400, 9)
+    ref = scene_of(v, f, accel="brute").cast_rays(rays)
+    for accel in ["bvh2", "bvh4", "bvh8", "bvh-threaded", "kd-stack", "kd-ropes"]:
+        for test in ["moller", "plucker", "projection"]:
+            for nthreads in (0, 1, 2):
+                s = scene_of(v, f, accel=accel, test=test, nthreads=nthreads)
+                a = s.cast_rays(rays, nthreads=nthreads)
+                assert (np.isfinite(a["t_hit"]) == np.isfinite(ref["t_hit"])).mean() > 0.99
+                hit = np.isfinite(a["t_hit"]) & np.isfinite(ref["t_hit"])
+                np.testing.assert_allclose(a["t_hit"][hit], ref["t_hit"][hit], rtol=1e-5)
+    assert scene_of(v, f).stats()["nodes"] > 0
+
+
+def test_queries_waiting_for_the_scene_model_say_so(bunny):
+    v, f, _ = bunny
+    s = scene_of(v, f)
+    pts = np.zeros((2, 3), np.float32)
+    rays = rays_at(v, 2, 10)
+    for call in (
+        lambda: s.count_intersections(rays),
+        lambda: s.list_intersections(rays),
+        lambda: s.compute_closest_points(pts),
+        lambda: s.compute_distance(pts),
+        lambda: s.compute_signed_distance(pts, nsamples=3),
+        lambda: s.compute_occupancy(pts),
+    ):
+        with pytest.raises(NotImplementedError, match="not available in this version"):
+            call()
+
+
+def test_pinhole_rays_match_open3d():
+    rng = np.random.default_rng(11)
+    for _ in range(5):
+        eye, centre = rng.normal(size=3) * 5, rng.normal(size=3)
+        up = rng.normal(size=3)
+        args = dict(fov_deg=float(rng.uniform(20, 120)), center=centre.tolist(), eye=eye.tolist(), up=up.tolist(), width_px=7, height_px=5)
+        mine = raykit.RaycastingScene.create_rays_pinhole(**args)
+        theirs = o3d.t.geometry.RaycastingScene.create_rays_pinhole(**args).numpy()
+        assert mine.shape == theirs.shape == (5, 7, 6) and mine.dtype == theirs.dtype
+        np.testing.assert_allclose(mine, theirs, rtol=1e-4, atol=1e-4)
+    k = np.array([[300.0, 0, 160], [0, 310, 120], [0, 0, 1]])
+    e = np.eye(4)
+    e[:3, :3] = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    e[:3, 3] = rng.normal(size=3)
+    mine = raykit.RaycastingScene.create_rays_pinhole(k, e, 320, 240)
+    theirs = o3d.t.geometry.RaycastingScene.create_rays_pinhole(o3d.core.Tensor(k), o3d.core.Tensor(e), 320, 240).numpy()
+    np.testing.assert_allclose(mine, theirs, rtol=1e-4, atol=1e-4)
+
+
+def test_the_gil_is_released_during_a_query(dragon):
+    v, f, _ = dragon
+    scene = scene_of(v, f)
+    rays = rays_at(v, 400_000, 12)
+    scene.cast_rays(rays[:10])  # build first
+    started, done = threading.Event(), threading.Event()
+
+    def work():
+        started.set()
+        scene.cast_rays(rays)
+        done.set()
+
+    old = sys.getswitchinterval()
+    # With a long switch interval the main thread runs only while the
+    # worker releases the GIL (or blocks).
+    sys.setswitchinterval(30.0)
+    try:
+        worker = threading.Thread(target=work)
+        worker.start()
+        started.wait()
+        spins = 0
+        while not done.is_set():
+            spins += 1
+            time.sleep(0)
+        worker.join()
+    finally:
+        sys.setswitchinterval(old)
+    assert spins > 10

@@ -1,0 +1,68 @@
+"""render and cull: images of a scene, and culling of an assembly whose
+hidden part is known by construction."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+import raykit
+from conftest import rays_at
+
+
+def box(centre, half):
+    b = trimesh.creation.box(extents=np.full(3, 2 * half))
+    return b.vertices + centre, b.faces
+
+
+def test_render_shows_the_mesh_where_rays_hit(bunny):
+    v, f, _ = bunny
+    scene = raykit.RaycastingScene()
+    scene.add_triangles(v, f)
+    image = raykit.render(scene, 96, 64)
+    assert image.shape == (64, 96, 3) and image.dtype == np.uint8
+    # The same picture from a mesh, and from one thread.
+    np.testing.assert_array_equal(raykit.render(trimesh.Trimesh(v, f, process=False), 96, 64, threads=1), image)
+    # A camera looking away sees only the background.
+    centre = (v.min(0) + v.max(0)) / 2
+    away = raykit.render(scene, 32, 24, eye=centre + [0, 0, 1], target=centre + [0, 0, 2])
+    assert (away == away[0, 0]).all()
+    # Pixels differ from the background where the mesh is.
+    looking = raykit.render(scene, 32, 24, eye=centre + [0, 0, 1], target=centre, shadows=False)
+    assert (looking != looking[0, 0]).any(axis=-1).mean() > 0.2
+    with pytest.raises(ValueError, match="no triangles"):
+        raykit.render(raykit.RaycastingScene())
+    with pytest.raises(ValueError, match="fov"):
+        raykit.render(scene, fov=0)
+    with pytest.raises(ValueError, match="width and height"):
+        raykit.render(scene, 0, 10)
+
+
+def test_cull_removes_a_box_sealed_inside_another():
+    outer_v, outer_f = box(np.zeros(3), 1.0)
+    inner_v, inner_f = box(np.zeros(3), 0.3)
+    v = np.concatenate([outer_v, inner_v])
+    f = np.concatenate([outer_f, inner_f + len(outer_v)])
+    parts = np.repeat([0, 1], [len(outer_f), len(inner_f)])
+    for conservative in (True, False):
+        result = raykit.cull(v, f, parts, resolution=32, conservative=conservative)
+        np.testing.assert_array_equal(result.keep, np.repeat([True, False], [len(outer_f), len(inner_f)]))
+        np.testing.assert_array_equal(result.part_keep, [True, False])
+        assert result.stats["triangles_removed"] == len(inner_f)
+    # A box beside the first instead of inside it stays.
+    beside = np.concatenate([outer_v, inner_v + [3.0, 0, 0]])
+    assert raykit.cull(beside, f, resolution=32).keep.all()
+    with pytest.raises(ValueError, match="resolution"):
+        raykit.cull(v, f, resolution=1)
+    with pytest.raises(ValueError, match="one per triangle"):
+        raykit.cull(v, f, parts[:3])
+    with pytest.raises(ValueError, match="refers to vertex"):
+        raykit.cull(v[:4], f)
+
+
+def test_cull_a_mesh_file(data):
+    result = raykit.cull(data / "meshes" / "2CylinderEngine.glb", resolution=48)
+    v, f, parts = raykit.load_mesh(data / "meshes" / "2CylinderEngine.glb")
+    assert result.keep.shape == (len(f),) and result.part_keep.shape == (parts.max() + 1,)
+    assert 0 < result.keep.mean() <= 1
