@@ -32,14 +32,18 @@ import raykit
 DRAGON = os.environ.get("RAYKIT_DRAGON", "/work/data-cache/package/models/dragon_vrip.ply.gz")
 
 
-def timed(fn, reps):
-    fn()
-    times = []
+def interleaved(engines: dict, reps: int) -> tuple[dict, dict]:
+    """Median seconds of each engine's call and its last answer, the
+    engines taking turns within each repetition (after one warm-up call
+    each), so that a change in the machine's load falls on all of them."""
+    answers = {name: fn() for name, fn in engines.items()}
+    times = {name: [] for name in engines}
     for _ in range(reps):
-        start = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), out
+        for name, fn in engines.items():
+            start = time.perf_counter()
+            answers[name] = fn()
+            times[name].append(time.perf_counter() - start)
+    return {name: statistics.median(t) for name, t in times.items()}, answers
 
 
 def ray_sets(vertices, n, seed=7):
@@ -106,24 +110,23 @@ def main():
         tensor = o3d.core.Tensor(r)
         o, d = np.ascontiguousarray(r[:, :3]), np.ascontiguousarray(r[:, 3:])
         for threads in thread_counts:
-            t_ours, a = timed(lambda: ours.cast_rays(r, nthreads=threads), args.reps)
-            t_o3d, b = timed(lambda: theirs.cast_rays(tensor, nthreads=threads), args.reps)
-            agree = (np.isfinite(a["t_hit"]) == np.isfinite(b["t_hit"].numpy())).mean()
-            row = {"rays": name, "query": "cast_rays", "threads": threads, "raykit": t_ours, "open3d": t_o3d, "agree": agree}
-            if embree is not None and threads == 1:
-                t_emb, c = timed(lambda: embree.run(o, d), args.reps)
-                row["embreex"] = t_emb
-                row["agree"] = min(agree, ((c >= 0) == np.isfinite(a["t_hit"])).mean())
-            rows.append(row)
-            t_ours, a = timed(lambda: ours.test_occlusions(r, nthreads=threads), args.reps)
-            t_o3d, b = timed(lambda: theirs.test_occlusions(tensor, nthreads=threads), args.reps)
-            row = {"rays": name, "query": "test_occlusions", "threads": threads, "raykit": t_ours, "open3d": t_o3d,
-                   "agree": (a == b.numpy()).mean()}
-            if embree is not None and threads == 1:
-                t_emb, c = timed(lambda: embree.run(o, d, query="OCCLUDED"), args.reps)
-                row["embreex"] = t_emb
-                row["agree"] = min(row["agree"], ((np.asarray(c) != -1) == a).mean())
-            rows.append(row)
+            with_embree = embree is not None and threads == 1
+            cast = {
+                "raykit": lambda: ours.cast_rays(r, nthreads=threads)["t_hit"],
+                "open3d": lambda: theirs.cast_rays(tensor, nthreads=threads)["t_hit"].numpy(),
+            }
+            occlusion = {
+                "raykit": lambda: ours.test_occlusions(r, nthreads=threads),
+                "open3d": lambda: theirs.test_occlusions(tensor, nthreads=threads).numpy(),
+            }
+            if with_embree:
+                cast["embreex"] = lambda: embree.run(o, d) != -1
+                occlusion["embreex"] = lambda: np.asarray(embree.run(o, d, query="OCCLUDED")) != -1
+            for query, engines in (("cast_rays", cast), ("test_occlusions", occlusion)):
+                times, answers = interleaved(engines, args.reps)
+                hits = {k: (np.isfinite(a) if a.dtype.kind == "f" else a) for k, a in answers.items()}
+                agree = min((hits[k] == hits["raykit"]).mean() for k in hits)
+                rows.append({"rays": name, "query": query, "threads": threads, "agree": agree, **times})
 
     n = args.rays
     print()
