@@ -40,7 +40,7 @@ pub fn render<'py>(
             "width and height must be between 1 and 16384, got {width} x {height}"
         )));
     }
-    if !(fov >= 1.0 && fov < 179.0) {
+    if !(1.0..179.0).contains(&fov) {
         return Err(value_error(format!(
             "fov must be between 1 and 179 degrees, got {fov}"
         )));

@@ -235,7 +235,7 @@ impl Scene {
                 "origins and directions must have the same shape, got ({n}, 3) and ({nd}, 3)"
             )));
         }
-        if !(min_gap >= 0.0) {
+        if min_gap.is_nan() || min_gap < 0.0 {
             return Err(value_error(format!("min_gap must be >= 0, got {min_gap}")));
         }
         let hits: Vec<(u32, Hit)> = detached(py, threads, || {

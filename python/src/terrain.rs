@@ -152,7 +152,7 @@ pub fn shadow<'py>(
             let z = if light_elevation {
                 h
             } else {
-                if !(h >= 0.0) {
+                if h.is_nan() || h < 0.0 {
                     return Err(value_error(format!(
                         "light ({x}, {y}, {h}): the height above the ground must be >= 0 \
                          (use light_elevation=True for an absolute elevation)"
@@ -205,7 +205,7 @@ pub fn cast<'py>(
             "width and height must be between 1 and 16384, got {width} x {height}"
         )));
     }
-    if !(fov >= 1.0 && fov < 179.0) {
+    if !(1.0..179.0).contains(&fov) {
         return Err(value_error(format!(
             "fov must be between 1 and 179 degrees, got {fov}"
         )));
