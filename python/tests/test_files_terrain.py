@@ -42,6 +42,12 @@ def test_load_mesh_errors_name_the_file(tmp_path):
         raykit.load_mesh(truncated)
 
 
+def at(transform, col, row):
+    """Map coordinates of pixel position (col, row) by rasterio's transform."""
+    a, b, c, d, e, f = tuple(transform)[:6]
+    return a * col + b * row + c, d * col + e * row + f
+
+
 def read_with_gdal(path):
     with rasterio.open(path) as src:
         return src.read(1).astype(np.float32), src.transform, src.nodata
@@ -59,7 +65,7 @@ def test_shadow_of_a_geotiff_equals_shadow_of_gdals_arrays(data):
     brute = raykit.terrain.shadow(heights, transform, sun=(135, 8), method="brute", threads=1)
     np.testing.assert_array_equal(brute, from_arrays)
     # A point light, and the viewshed of an observer at the same place.
-    x, y = transform * (200.5, 150.5)
+    x, y = at(transform, 200.5, 150.5)
     lit = raykit.terrain.shadow(path, light=(x, y, 30.0))
     np.testing.assert_array_equal(raykit.terrain.viewshed(path, observer=(x, y), observer_height=30.0), lit)
     assert lit[150, 200] == 1
@@ -73,7 +79,7 @@ def test_shadow_agrees_with_rays_on_the_same_triangles():
     mask = raykit.terrain.shadow(heights, transform, sun=(250, 25))
     # The declared surface as a mesh: grid point (c, r) at map (c·a + c0 + a/2, ...).
     c, r = np.meshgrid(np.arange(cols), np.arange(rows))
-    x, y = transform * (c + 0.5, r + 0.5)
+    x, y = at(transform, c + 0.5, r + 0.5)
     v = np.stack([x, y, heights], axis=-1).reshape(-1, 3)
     i = (r * cols + c)[:-1, :-1].reshape(-1)
     upper = np.stack([i, i + 1, i + cols + 1], axis=1)
@@ -121,8 +127,8 @@ def test_transforms_and_bad_grids():
 
 def test_casters_agree_and_match_a_bvh(data):
     heights, transform, nodata = read_with_gdal(data / "terrain" / "lidar_dem_400.tif")
-    x0, y0 = transform * (20, 380)
-    x1, y1 = transform * (200, 200)
+    x0, y0 = at(transform, 20, 380)
+    x1, y1 = at(transform, 200, 200)
     eye, target = (x0, y0, float(np.nanmax(heights)) + 40.0), (x1, y1, float(np.nanmean(heights)))
     casts = [
         raykit.terrain.cast(heights, transform, eye=eye, target=target, width=64, height=40, caster=c)

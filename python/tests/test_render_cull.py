@@ -59,6 +59,12 @@ def test_cull_removes_a_box_sealed_inside_another():
         raykit.cull(v, f, parts[:3])
     with pytest.raises(ValueError, match="refers to vertex"):
         raykit.cull(v[:4], f)
+    nan = v.copy()
+    nan[0, 0] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        raykit.cull(nan, f)
+    empty = raykit.cull(np.zeros((0, 3)), np.zeros((0, 3), np.int32))
+    assert empty.keep.shape == (0,)
 
 
 def test_cull_a_mesh_file(data):
