@@ -32,18 +32,23 @@ import raykit
 DRAGON = os.environ.get("RAYKIT_DRAGON", "/work/data-cache/package/models/dragon_vrip.ply.gz")
 
 
-def interleaved(engines: dict, reps: int) -> tuple[dict, dict]:
-    """Median seconds of each engine's call and its last answer, the
-    engines taking turns within each repetition (after one warm-up call
-    each), so that a change in the machine's load falls on all of them."""
+def interleaved(engines: dict, reps: int) -> tuple[dict, dict, dict]:
+    """Median wall-clock and CPU seconds (all the process's threads) of each
+    engine's call and its last answer, the engines taking turns within each
+    repetition (after one warm-up call each), so that a change in the
+    machine's load falls on all of them. On a loaded machine the CPU time
+    of a 1-thread call is the steadier measure of its work."""
     answers = {name: fn() for name, fn in engines.items()}
-    times = {name: [] for name in engines}
+    wall = {name: [] for name in engines}
+    cpu = {name: [] for name in engines}
     for _ in range(reps):
         for name, fn in engines.items():
-            start = time.perf_counter()
+            start, start_cpu = time.perf_counter(), time.process_time()
             answers[name] = fn()
-            times[name].append(time.perf_counter() - start)
-    return {name: statistics.median(t) for name, t in times.items()}, answers
+            cpu[name].append(time.process_time() - start_cpu)
+            wall[name].append(time.perf_counter() - start)
+    median = lambda d: {name: statistics.median(t) for name, t in d.items()}  # noqa: E731
+    return median(wall), median(cpu), answers
 
 
 def ray_sets(vertices, n, seed=7):
@@ -123,20 +128,27 @@ def main():
                 cast["embreex"] = lambda: embree.run(o, d) != -1
                 occlusion["embreex"] = lambda: np.asarray(embree.run(o, d, query="OCCLUDED")) != -1
             for query, engines in (("cast_rays", cast), ("test_occlusions", occlusion)):
-                times, answers = interleaved(engines, args.reps)
+                times, cpu, answers = interleaved(engines, args.reps)
                 hits = {k: (np.isfinite(a) if a.dtype.kind == "f" else a) for k, a in answers.items()}
                 agree = min((hits[k] == hits["raykit"]).mean() for k in hits)
-                rows.append({"rays": name, "query": query, "threads": threads, "agree": agree, **times})
+                rows.append({"rays": name, "query": query, "threads": threads, "agree": agree, **times,
+                             **{f"{k}_cpu": c for k, c in cpu.items()}})
 
     n = args.rays
     print()
-    print("| rays | query | threads | raykit Mrays/s | Open3D Mrays/s | raykit / Open3D | embreex Mrays/s | hit/miss agreement |")
+    print("Mrays/s by wall-clock time (by CPU time of the whole process in brackets)")
+    print()
+    print("| rays | query | threads | raykit | Open3D | raykit / Open3D | embreex | hit/miss agreement |")
     print("|---|---|---|---|---|---|---|---|")
     for row in rows:
-        emb = f"{len(rays[row['rays']]) / row['embreex'] / 1e6:.2f}" if "embreex" in row else "–"
         m = len(rays[row["rays"]])
-        print(f"| {row['rays']} | {row['query']} | {row['threads']} | {m / row['raykit'] / 1e6:.2f} | "
-              f"{m / row['open3d'] / 1e6:.2f} | {row['open3d'] / row['raykit']:.2f}x | {emb} | {row['agree']:.5f} |")
+
+        def rate(k):
+            return f"{m / row[k] / 1e6:.2f} ({m / max(row[k + '_cpu'], 1e-9) / 1e6:.2f})" if k in row else "–"
+
+        ratio = f"{row['open3d'] / row['raykit']:.2f}x ({row['open3d_cpu'] / max(row['raykit_cpu'], 1e-9):.2f}x)"
+        print(f"| {row['rays']} | {row['query']} | {row['threads']} | {rate('raykit')} | {rate('open3d')} | "
+              f"{ratio} | {rate('embreex')} | {row['agree']:.5f} |")
     print()
     print("uptime:", subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
 
