@@ -2,6 +2,11 @@
 
     python python/bench/bench_vs_open3d.py [MESH] [--rays N] [--reps R] [--threads 1,2]
 
+In the environment scripts/test-python makes (raykit, Open3D):
+
+    scripts/test-python && target/py-venv/bin/pip install embreex
+    target/py-venv/bin/python python/bench/bench_vs_open3d.py
+
 Default mesh: the full Stanford dragon (871,414 triangles) from
 /work/data-cache/package/models/dragon_vrip.ply.gz (or RAYKIT_DRAGON).
 Ray sets: `primary` (a 1024 × 1024 pinhole camera framing the mesh, as
