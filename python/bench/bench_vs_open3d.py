@@ -10,7 +10,7 @@ In the environment scripts/test-python makes (raykit, Open3D):
 Default mesh: the full Stanford dragon (871,414 triangles) from
 /work/data-cache/package/models/dragon_vrip.ply.gz (or RAYKIT_DRAGON).
 Ray sets: `primary` (a 1024 × 1024 pinhole camera framing the mesh, as
-Open3D's create_rays_pinhole makes them) and `incoherent` (from a sphere
+Open3D's create_rays_pinhole makes them, shape (1024, 1024, 6)) and `incoherent` (from a sphere
 around the mesh towards random points of its bounding box). Queries:
 nearest hit (cast_rays) and occlusion (test_occlusions). Thread counts:
 raykit's and Open3D's nthreads per call; embreex's run() traces in the
@@ -63,7 +63,7 @@ def ray_sets(vertices, n, seed=7):
     primary = raykit.RaycastingScene.create_rays_pinhole(
         fov_deg=40, center=centre.tolist(), eye=(centre + np.array([0.3, 0.4, 2.6]) * radius).tolist(),
         up=[0, 1, 0], width_px=side, height_px=side,
-    ).numpy().reshape(-1, 6)
+    ).numpy()
     rng = np.random.default_rng(seed)
     u = rng.normal(size=(n, 3))
     origins = centre + 2 * radius * u / np.linalg.norm(u, axis=1, keepdims=True)
@@ -118,7 +118,8 @@ def main():
     rows = []
     for name, r in rays.items():
         tensor = o3d.core.Tensor(r)
-        o, d = np.ascontiguousarray(r[:, :3]), np.ascontiguousarray(r[:, 3:])
+        flat = r.reshape(-1, 6)
+        o, d = np.ascontiguousarray(flat[:, :3]), np.ascontiguousarray(flat[:, 3:])
         for threads in thread_counts:
             with_embree = embree is not None and threads == 1
             cast = {
@@ -130,8 +131,8 @@ def main():
                 "open3d": lambda: theirs.test_occlusions(tensor, nthreads=threads).numpy(),
             }
             if with_embree:
-                cast["embreex"] = lambda: embree.run(o, d) != -1
-                occlusion["embreex"] = lambda: np.asarray(embree.run(o, d, query="OCCLUDED")) != -1
+                cast["embreex"] = lambda: (embree.run(o, d) != -1).reshape(r.shape[:-1])
+                occlusion["embreex"] = lambda: (np.asarray(embree.run(o, d, query="OCCLUDED")) != -1).reshape(r.shape[:-1])
             for query, engines in (("cast_rays", cast), ("test_occlusions", occlusion)):
                 times, cpu, answers = interleaved(engines, args.reps)
                 hits = {k: (np.isfinite(a) if a.dtype.kind == "f" else a) for k, a in answers.items()}
@@ -146,7 +147,7 @@ def main():
     print("| rays | query | threads | raykit | Open3D | raykit / Open3D | embreex | hit/miss agreement |")
     print("|---|---|---|---|---|---|---|---|")
     for row in rows:
-        m = len(rays[row["rays"]])
+        m = rays[row["rays"]].size // 6
 
         def rate(k):
             return f"{m / row[k] / 1e6:.2f} ({m / max(row[k + '_cpu'], 1e-9) / 1e6:.2f})" if k in row else "–"

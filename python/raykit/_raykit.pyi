@@ -28,7 +28,7 @@ class Scene:
         threads: int = 0,
     ) -> None: ...
     def cast_rays(
-        self, rays: npt.NDArray[np.float32], threads: int = 0
+        self, rays: npt.NDArray[np.float32], threads: int = 0, width: int = 0
     ) -> Tuple[
         npt.NDArray[np.float32],
         npt.NDArray[np.uint32],
@@ -37,7 +37,12 @@ class Scene:
         npt.NDArray[np.float32],
     ]: ...
     def test_occlusions(
-        self, rays: npt.NDArray[np.float32], tnear: float = 0.0, tfar: float = ..., threads: int = 0
+        self,
+        rays: npt.NDArray[np.float32],
+        tnear: float = 0.0,
+        tfar: float = ...,
+        threads: int = 0,
+        width: int = 0,
     ) -> npt.NDArray[np.bool_]: ...
     def all_hits(
         self,

@@ -153,7 +153,7 @@ class RaycastingScene:
         Rays with NaN or infinite coordinates miss.
         """
         flat, lead = _arrays.rows(rays, "rays", 6)
-        t, g, p, uv, n = self._built().cast_rays(flat, _arrays.threads(nthreads))
+        t, g, p, uv, n = self._built().cast_rays(flat, _arrays.threads(nthreads), _image_width(lead))
         return {
             "primitive_uvs": _arrays.result(uv.reshape(lead + (2,))),
             "primitive_ids": _arrays.result(p.reshape(lead)),
@@ -173,7 +173,7 @@ class RaycastingScene:
         tnear, tfar = float(tnear), float(tfar)
         if math.isnan(tnear) or math.isnan(tfar):
             raise ValueError(f"tnear and tfar must be numbers, got {tnear} and {tfar}")
-        hit = self._built().test_occlusions(flat, tnear, tfar, _arrays.threads(nthreads))
+        hit = self._built().test_occlusions(flat, tnear, tfar, _arrays.threads(nthreads), _image_width(lead))
         return _arrays.result(hit.reshape(lead))
 
     def count_intersections(self, rays, nthreads: int = 0):
@@ -235,6 +235,12 @@ class RaycastingScene:
         """Size and quality of the acceleration structure: nodes, leaves,
         bytes, node_bytes, depth, sah_cost, triangle_refs (builds it if needed)."""
         return self._built().stats()
+
+
+def _image_width(lead: tuple) -> int:
+    """Rays shaped ``(..., height, width, 6)`` are images: the engine traces
+    them in square pixel blocks (same answers, more coherent packets)."""
+    return lead[-1] if len(lead) >= 2 else 0
 
 
 def _look_at(center, eye, up) -> np.ndarray:

@@ -6,6 +6,7 @@
 mod arrays;
 mod cull;
 mod errors;
+mod image_order;
 mod mesh_io;
 mod render;
 mod scene;

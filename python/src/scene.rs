@@ -7,6 +7,7 @@
 
 use crate::arrays::{flat, rows};
 use crate::errors::value_error;
+use crate::image_order::ImageOrder;
 use crate::threads::detached;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
@@ -38,19 +39,31 @@ pub struct Scene {
     test: TestKind,
 }
 
-/// `n` rays from rows of `[ox, oy, oz, dx, dy, dz]` over `[tnear, tfar]`.
-fn make_rays(rays: &[f32], tnear: f32, tfar: f32) -> Vec<Ray> {
-    rays.par_chunks_exact(6)
-        .with_min_len(GRAIN)
-        .map(|r| {
-            Ray::segment(
-                Vec3::new(r[0], r[1], r[2]),
-                Vec3::new(r[3], r[4], r[5]),
-                tnear,
-                tfar,
-            )
-        })
-        .collect()
+/// The ray in row `r` of `[ox, oy, oz, dx, dy, dz]` over `[tnear, tfar]`.
+fn ray(r: &[f32], tnear: f32, tfar: f32) -> Ray {
+    Ray::segment(
+        Vec3::new(r[0], r[1], r[2]),
+        Vec3::new(r[3], r[4], r[5]),
+        tnear,
+        tfar,
+    )
+}
+
+/// The rays of the rows of `rays`, in `order` when given.
+fn make_rays(rays: &[f32], tnear: f32, tfar: f32, order: Option<&ImageOrder>) -> Vec<Ray> {
+    match order {
+        Some(o) => o
+            .order
+            .par_iter()
+            .with_min_len(GRAIN)
+            .map(|&i| ray(&rays[6 * i as usize..6 * i as usize + 6], tnear, tfar))
+            .collect(),
+        None => rays
+            .par_chunks_exact(6)
+            .with_min_len(GRAIN)
+            .map(|r| ray(r, tnear, tfar))
+            .collect(),
+    }
 }
 
 impl Scene {
@@ -60,12 +73,23 @@ impl Scene {
         (g as u32, prim - self.offsets[g])
     }
 
-    fn nearest(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
-        let mut hits = vec![None; rays.len()];
-        if let Some(a) = &self.accel {
-            a.intersect_batch(rays, &mut hits);
+    /// Nearest hits of the rows of `rays`, traced in image blocks when
+    /// the rays form rows of `width` (0: any order).
+    fn nearest(&self, rays: &[f32], width: usize) -> Vec<Option<Hit>> {
+        let n = rays.len() / 6;
+        let Some(a) = &self.accel else {
+            return vec![None; n];
+        };
+        let order = ImageOrder::new(n, width);
+        let mut hits = vec![None; n];
+        a.intersect_batch(
+            &make_rays(rays, 0.0, f32::INFINITY, order.as_ref()),
+            &mut hits,
+        );
+        match order {
+            Some(o) => o.restore(&hits),
+            None => hits,
         }
-        hits
     }
 }
 
@@ -142,14 +166,16 @@ impl Scene {
     }
 
     /// Nearest hits of `(n, 6)` float32 rays: `(t_hit, geometry_ids,
-    /// primitive_ids, primitive_uvs, primitive_normals)`.
-    #[pyo3(signature = (rays, threads=0))]
+    /// primitive_ids, primitive_uvs, primitive_normals)`. `width`: the rays
+    /// are the rows of an image this wide (traced in pixel blocks; 0: any).
+    #[pyo3(signature = (rays, threads=0, width=0))]
     #[allow(clippy::type_complexity)]
     fn cast_rays<'py>(
         &self,
         py: Python<'py>,
         rays: PyReadonlyArray2<'py, f32>,
         threads: i64,
+        width: usize,
     ) -> PyResult<(
         Bound<'py, PyArray1<f32>>,
         Bound<'py, PyArray1<u32>>,
@@ -159,7 +185,7 @@ impl Scene {
     )> {
         let (r, n) = rows(&rays, 6, "rays")?;
         let (t, g, p, uv, nrm) = detached(py, threads, || {
-            let hits = self.nearest(&make_rays(r, 0.0, f32::INFINITY));
+            let hits = self.nearest(r, width);
             let mut t = vec![f32::INFINITY; n];
             let mut g = vec![INVALID_ID; n];
             let mut p = vec![INVALID_ID; n];
@@ -194,8 +220,8 @@ impl Scene {
     }
 
     /// Whether each `(n, 6)` float32 ray meets a triangle with `t` in
-    /// `[tnear, tfar]`.
-    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, threads=0))]
+    /// `[tnear, tfar]`; `width` as for `cast_rays`.
+    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, threads=0, width=0))]
     fn test_occlusions<'py>(
         &self,
         py: Python<'py>,
@@ -203,12 +229,17 @@ impl Scene {
         tnear: f32,
         tfar: f32,
         threads: i64,
+        width: usize,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
         let occluded = detached(py, threads, || {
             let mut occluded = vec![false; n];
             if let Some(a) = &self.accel {
-                a.occluded_batch(&make_rays(r, tnear, tfar), &mut occluded);
+                let order = ImageOrder::new(n, width);
+                a.occluded_batch(&make_rays(r, tnear, tfar, order.as_ref()), &mut occluded);
+                if let Some(o) = order {
+                    occluded = o.restore(&occluded);
+                }
             }
             occluded
         })?;

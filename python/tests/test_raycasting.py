@@ -291,3 +291,18 @@ def test_the_gil_is_released_during_a_query(dragon):
     finally:
         sys.setswitchinterval(old)
     assert spins > 10
+
+
+def test_image_rays_traced_in_blocks_give_the_row_order_answers(bunny):
+    v, f, _ = bunny
+    scene = scene_of(v, f)
+    centre = (v.min(0) + v.max(0)) / 2
+    image = raykit.RaycastingScene.create_rays_pinhole(
+        fov_deg=50, center=centre.tolist(), eye=(centre + [0.05, 0.1, 0.3]).tolist(), up=[0, 1, 0], width_px=70, height_px=45
+    )
+    blocks = scene.cast_rays(image)
+    rows = scene.cast_rays(image.reshape(-1, 6))
+    assert np.isfinite(blocks["t_hit"]).mean() > 0.2
+    np.testing.assert_array_equal(blocks["t_hit"].reshape(-1), rows["t_hit"])
+    assert ties(f, blocks["primitive_ids"].reshape(-1)[np.isfinite(rows["t_hit"])], rows["primitive_ids"][np.isfinite(rows["t_hit"])]).all()
+    np.testing.assert_array_equal(scene.test_occlusions(image).reshape(-1), scene.test_occlusions(image.reshape(-1, 6)))
