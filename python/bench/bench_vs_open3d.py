@@ -99,7 +99,7 @@ def main():
     theirs = o3d.t.geometry.RaycastingScene()
     theirs.add_triangles(o3d.core.Tensor(v), o3d.core.Tensor(f))
     start = time.perf_counter()
-    theirs.test_occlusions(o3d.core.Tensor(rays["primary"][:1]))  # Open3D builds at its first query
+    theirs.test_occlusions(o3d.core.Tensor(rays["primary"].reshape(-1, 6)[:1]))  # Open3D builds at its first query
     build_theirs = time.perf_counter() - start
 
     embree = None
@@ -110,7 +110,8 @@ def main():
         start = time.perf_counter()
         embree = rtcore_scene.EmbreeScene()
         TriangleMesh(scene=embree, vertices=v, indices=f.astype(np.int32))
-        embree.run(rays["primary"][:1, :3].copy(), rays["primary"][:1, 3:].copy())
+        first = rays["primary"].reshape(-1, 6)[:1]
+        embree.run(first[:, :3].copy(), first[:, 3:].copy())
         build_embree = time.perf_counter() - start
     print(f"build: raykit bvh8 {build_ours:.2f} s (all cores), Open3D {build_theirs:.2f} s"
           + (f", embreex {build_embree:.2f} s" if embree else ""))
