@@ -356,7 +356,8 @@ fn degenerate_inputs_do_not_panic() {
 fn build_times() {
     let cornell = raykit_scene::builtin("cornell").unwrap();
     let mut cases = vec![("cornell point", cornell.mesh, cornell.lights[0])];
-    let dragon = std::path::Path::new("/work/shared/data/meshes/dragon_vrip_res2.ply.gz");
+    let dragon = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data/meshes/dragon_vrip_res2.ply.gz");
     if dragon.exists() {
         let sun = Light::Directional {
             direction: Vec3::new(-0.4, -1.0, -0.3).normalize(),
@@ -364,7 +365,7 @@ fn build_times() {
         };
         cases.push((
             "dragon directional",
-            raykit_io::load_mesh(dragon).unwrap(),
+            raykit_io::load_mesh(&dragon).unwrap(),
             sun,
         ));
     }

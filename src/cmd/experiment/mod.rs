@@ -66,12 +66,12 @@ pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
     }
 }
 
-/// The shared data folder: `$RAYKIT_SHARED_DATA`, else `../shared/data`
+/// The test data folder: `$RAYKIT_SHARED_DATA`, else the repository's `data/`
 /// next to the source tree.
 pub fn shared_data() -> PathBuf {
     std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"))
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("data"))
 }
 
 /// A file of the shared mesh folder as a `--mesh` argument.

@@ -26,7 +26,7 @@ use std::process::ExitCode;
 #[command(
     after_help = "Scenes: whitted (the built-in Cornell box with a mirror and a glass sphere),\n\
 dragon (the 202k-triangle dragon in gold in the courtyard HDR map, environment box) and engine\n\
-(the 2CylinderEngine glTF assembly, 121k triangles, with two lights), all from ../shared/data.\n\
+(the 2CylinderEngine glTF assembly, 121k triangles, with two lights), all from the repository's data/ folder.\n\
 Writes results.md, results.csv, results.json and the images compared into --out."
 )]
 pub struct WhittedExperimentArgs {

@@ -100,7 +100,7 @@ impl From<IntegratorArg> for IntegratorKind {
 #[command(
     after_help = "Examples:\n  raykit render                                   # builtin:whitted (mirror + glass Cornell box) to render.png\n  \
 raykit render --scene examples/cornell-glass.gltf         # a glTF scene with its own camera and lights\n  \
-raykit render --scene dragon.ply.gz --material glass --env ../shared/data/envmaps/courtyard.exr --env-box\n  \
+raykit render --scene dragon.ply.gz --material glass --env data/envmaps/courtyard.exr --env-box\n  \
 raykit render --shadows maps --pcf 5 --primary raster --integrator wavefront --out frame.exr --aov depth,normal,id\n  \
 raykit render --scene bunny.obj --light dir:-1,-2,-1 --light spot:0,3,2:0,0,0:25:1,0.8,0.6\n\n\
 Without --eye the scene's own camera is used, or one framing the whole mesh.\n\
