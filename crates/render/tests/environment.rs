@@ -482,7 +482,7 @@ fn sky_constant_and_degenerate_inputs() {
     ));
     let described = Environment::env_box(map, Aabb::new(Vec3::ZERO, Vec3::ONE), 2.0).describe();
     assert!(
-        described.contains("paper 001") && described.contains("8x4"),
+        described.contains("Purcell-style stream tracer") && described.contains("8x4"),
         "{described}"
     );
 }

@@ -1,4 +1,4 @@
-//! The rasterized visibility buffer (paper 001's hybrid renderer) against
+//! The rasterized visibility buffer (hybrid rendering: rasterized first hits, traced rays after) against
 //! its independent reference: tracing the same rays through a BVH.
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
@@ -201,7 +201,7 @@ fn time<R>(f: impl FnOnce() -> R) -> (R, f64) {
     (r, start.elapsed().as_secs_f64() * 1e3)
 }
 
-/// Timing of the rasterizer against traced primaries (paper 001 reports
+/// Timing of the rasterizer against traced primaries (the Purcell-style stream tracer reports
 /// 1.6× for one pass); run with `cargo test --release -p raykit-render
 /// --test raster -- --ignored --nocapture`. Prints, asserts nothing about
 /// time.

@@ -1,4 +1,4 @@
-//! Paper 001's shadow maps against their independent reference: shadow
+//! The Purcell-style stream tracer's shadow maps against their independent reference: shadow
 //! rays through a BVH (`Accel::occluded`, as the renderer casts them), and
 //! the analytic shadow of a plate.
 
@@ -347,7 +347,7 @@ fn degenerate_inputs_do_not_panic() {
     }
 }
 
-/// Build times of paper 001's shadow maps (the Cornell box's point light,
+/// Build times of the Purcell-style stream tracer's shadow maps (the Cornell box's point light,
 /// a directional light on the dragon) at the default resolution and at
 /// 2048; run with `cargo test --release -p raykit-render --test shadowmap
 /// -- --ignored --nocapture`. Prints, asserts nothing about time.

@@ -1,9 +1,9 @@
-//! Terrain shadow masks (paper 003): for every grid point, is the light
+//! Terrain shadow masks (Min 2008): for every grid point, is the light
 //! visible from the surface point there? One segment per grid point to the
 //! light, tested against the declared surface ([`crate::heightfield`]).
 //!
 //! Two exact algorithms give identical masks:
-//! - [`ShadowMethod::BruteForce`]: paper 003's method, each segment marched
+//! - [`ShadowMethod::BruteForce`]: Min's (2008) method, each segment marched
 //!   cell by cell;
 //! - [`ShadowMethod::Fast`]: each segment through the min/max quadtree
 //!   ([`crate::pyramid`]), walked from the segment's own cell upwards,
@@ -42,7 +42,7 @@ impl Light {
 /// Which algorithm computes the mask.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowMethod {
-    /// One segment per grid point marched cell by cell (paper 003).
+    /// One segment per grid point marched cell by cell (Min 2008).
     BruteForce,
     /// One segment per grid point through the min/max quadtree.
     Fast,

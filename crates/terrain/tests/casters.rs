@@ -1,5 +1,5 @@
-//! The three terrain casters (per-cell march, per-ray maximum mipmap, paper
-//! 004's per-frame boxes) against each other on every pixel of test views,
+//! The three terrain casters (per-cell march, per-ray maximum mipmap,
+//! per-frame quadtree boxes) against each other on every pixel of test views,
 //! and the march against two independent references: testing every cell of
 //! the grid, and mesh ray casting through raykit's BVH of the same surface.
 

@@ -1,5 +1,5 @@
 //! Shadow masks: the fast method (min/max quadtree with early exits) equals
-//! paper 003's brute force (every segment marched cell by cell, itself
+//! brute force (every segment marched cell by cell, itself
 //! checked against testing every cell and against mesh ray casting in
 //! casters.rs) on synthetic and shared DEMs, for point and sun lights.
 

@@ -1,9 +1,9 @@
-//! `raykit render`: the Whitted ray tracer of papers 000 and 001 — glTF, OBJ
+//! `raykit render`: a Whitted (1980) ray tracer — glTF, OBJ
 //! and other scenes, point/spot/directional lights, shadow rays or shadow
-//! maps, mirrors and glass, HDR environments (optionally paper 001's
+//! maps, mirrors and glass, HDR environments (optionally on an
 //! environment box), traced or rasterized primaries, recursive or wavefront
 //! integration — written to PNG or EXR, with optional AOVs — on the CPU or,
-//! with `--backend gpu`, on the GPU (issue 9).
+//! with `--backend gpu`, on the GPU.
 
 mod gpu;
 pub mod lights_arg;
@@ -32,7 +32,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 pub enum ShadowArg {
     /// Shadow rays: one occlusion query per light and hit.
     Rays,
-    /// Shadow maps rendered from each light, box-filtered (paper 001).
+    /// Shadow maps rendered from each light, box-filtered (Williams 1978).
     Maps,
     /// No shadows.
     Off,
@@ -43,7 +43,7 @@ pub enum ShadowArg {
 pub enum PrimaryArg {
     /// Trace camera rays.
     Traced,
-    /// Rasterize a visibility buffer (paper 001's hybrid renderer).
+    /// Rasterize a visibility buffer (hybrid rendering: rasterized first hits, traced rays after).
     Raster,
 }
 
@@ -52,7 +52,7 @@ pub enum PrimaryArg {
 pub enum IntegratorArg {
     /// Depth-first recursion per camera sample.
     Recursive,
-    /// Paper 001's stream: stages over ray queues.
+    /// Stream organisation after Purcell et al. (2002): stages over ray queues.
     Wavefront,
 }
 
@@ -62,8 +62,8 @@ pub enum BackendArg {
     /// The CPU renderer (every feature), tile-parallel on the worker threads.
     Cpu,
     /// WGSL compute kernels through wgpu (any Vulkan, Metal or DX12 GPU, or
-    /// Mesa's lavapipe): paper 000's single kernel for --integrator
-    /// recursive, paper 001's stream of kernels for --integrator wavefront.
+    /// Mesa's lavapipe): one kernel per ray path for --integrator
+    /// recursive, a stream of kernels (after Purcell et al. 2002) for --integrator wavefront.
     Gpu,
 }
 
@@ -107,8 +107,8 @@ Without --eye the scene's own camera is used, or one framing the whole mesh.\n\
 Without --light the scene's lights are used, or one point light above the mesh.\n\
 --depth counts rays per path: 1 is direct light only, 2 adds one reflection/refraction bounce.\n\n\
 --backend gpu renders the same image on the GPU (wgpu compute; Mesa's lavapipe without a GPU):\n\
---integrator recursive runs paper 000's single kernel (one thread per pixel sample, --depth up to 16),\n\
---integrator wavefront paper 001's stream of kernels over ray queues. --accel picks kd-stack,\n\
+--integrator recursive runs one kernel per ray path (one thread per pixel sample, --depth up to 16),\n\
+--integrator wavefront a stream of kernels (after Purcell et al. 2002) over ray queues. --accel picks kd-stack,\n\
 bvh-threaded (default) or brute, --test plucker or moller. --shadows maps and --primary raster\n\
 are CPU-only and are refused with an error."
 )]

@@ -1,5 +1,5 @@
 //! `raykit terrain shadow`: where a point light or the sun is visible from
-//! the ground (paper 003's terrain shadow map), exact for the declared
+//! the ground (Min's (2008) terrain shadow map), exact for the declared
 //! surface, written as a GeoTIFF with the DEM's georeferencing and a PNG
 //! preview; or hours of direct sun per cell over a day.
 
@@ -19,7 +19,7 @@ use std::process::ExitCode;
 pub enum Method {
     /// Each segment through the min/max quadtree (default).
     Fast,
-    /// Each segment marched cell by cell (paper 003's brute force).
+    /// Each segment marched cell by cell (brute force).
     Brute,
 }
 
