@@ -3,6 +3,20 @@
 use clap::Args;
 use raykit_core::accel::{BuildOptions, BuildQuality, KdOptions, KdSplit};
 
+/// The structure `trace`, `bench` and `render` use on the CPU when
+/// `--accel` is not given: the fastest (BENCHMARKS.md), an 8-wide BVH over
+/// packs of four triangles.
+pub const DEFAULT_ACCEL: &str = "bvh8";
+
+/// The `--bvh-build` name of a build quality.
+pub fn quality_name(q: BuildQuality) -> &'static str {
+    match q {
+        BuildQuality::Sah => "sah",
+        BuildQuality::High => "high",
+        BuildQuality::Fast => "fast",
+    }
+}
+
 /// BVH build options on the command line.
 #[derive(Args, Clone, Debug)]
 pub struct BuildArgs {

@@ -162,9 +162,9 @@ pub struct RenderArgs {
     /// the output, plus PNG previews).
     #[arg(long, value_delimiter = ',')]
     aov: Vec<String>,
-    /// Acceleration structure (`raykit info accels`; default bvh4, or
-    /// bvh-threaded with --backend gpu, which takes kd-stack, bvh-threaded or
-    /// brute).
+    /// Acceleration structure (`raykit info accels`; default bvh8, the
+    /// fastest, or bvh-threaded with --backend gpu, which takes kd-stack,
+    /// bvh-threaded or brute). The summary line names the one used.
     #[arg(long)]
     accel: Option<String>,
     /// Render on the CPU or the GPU (same image; see below).
@@ -209,8 +209,11 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let format = output::Format::of(&args.out)?;
     let backend = args.backend;
     let cpu_accel = match backend {
-        BackendArg::Cpu => args.accel.as_deref().unwrap_or("bvh4"),
-        BackendArg::Gpu => "bvh4",
+        BackendArg::Cpu => args
+            .accel
+            .as_deref()
+            .unwrap_or(crate::build_args::DEFAULT_ACCEL),
+        BackendArg::Gpu => crate::build_args::DEFAULT_ACCEL,
     };
     let (kind, test) = parse_names(cpu_accel, &args.test)?;
     let gpu_kind = match backend {
@@ -302,7 +305,12 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                 shadow_maps: maps.as_ref(),
             };
             let frame = pool.install(|| render_whitted(&scene, &setup.camera, &opts, &progress))?;
-            (frame, build_s, format!("{}, {}", kind.name(), test.name()))
+            let build = crate::build_args::quality_name(args.build.options().quality);
+            (
+                frame,
+                build_s,
+                format!("{} ({build} build), {}", kind.name(), test.name()),
+            )
         }
     };
     bar.finish_and_clear();
