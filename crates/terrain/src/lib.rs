@@ -11,6 +11,7 @@
 //!   start, then a march from there.
 
 pub mod boxes;
+pub mod curvature;
 pub mod dem;
 pub mod fractal;
 pub mod heightfield;
