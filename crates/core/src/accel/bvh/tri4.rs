@@ -222,6 +222,16 @@ impl Tri4Leaves {
         &self.packs
     }
 
+    /// Packs made elsewhere (a saved structure, `super::persist`).
+    pub(crate) fn from_packs(packs: Vec<Tri4>) -> Self {
+        Tri4Leaves { packs }
+    }
+
+    /// The packs, to rewrite their triangles in place (`super::refit`).
+    pub(crate) fn packs_mut(&mut self) -> &mut [Tri4] {
+        &mut self.packs
+    }
+
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         std::mem::size_of_val(&self.packs[..])
