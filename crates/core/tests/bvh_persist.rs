@@ -56,12 +56,18 @@ fn round_trip<T: TriangleTest>(mesh: &TriangleMesh, name: &str) {
     built8.save(&path, mesh).unwrap();
     let loaded8 = Bvh8::<T>::load(&path, mesh).unwrap();
     same_answers(&built8, &loaded8, &brute, &rays);
+    // SAFETY: the file stays as it is while the tree lives.
+    let mapped8 = unsafe { Bvh8::<T>::load_mapped(&path, mesh) }.unwrap();
+    same_answers(&built8, &mapped8, &brute, &rays);
 
     let built4 = Bvh4::<T>::build(mesh, &opts);
     let path = scratch(&format!("{name}-{}.bvh4", T::NAME));
     built4.save(&path, mesh).unwrap();
     let loaded4 = Bvh4::<T>::load(&path, mesh).unwrap();
     same_answers(&built4, &loaded4, &brute, &rays);
+    // SAFETY: as above.
+    let mapped4 = unsafe { Bvh4::<T>::load_mapped(&path, mesh) }.unwrap();
+    same_answers(&built4, &mapped4, &brute, &rays);
 }
 
 #[test]
@@ -96,6 +102,24 @@ fn refit_tree_round_trips() {
     );
     assert_eq!(loaded.sah_costs(), tree.sah_costs());
     assert_eq!(loaded.sah_costs().1, report.built_sah);
+
+    // A mapped tree refits (into its own copy, the file unchanged) as the
+    // tree it was saved from.
+    let path = scratch("bunny-built.bvh8");
+    let mut built = Bvh8::<Moller>::build(&bunny, &BuildOptions::default());
+    built.save(&path, &bunny).unwrap();
+    let before = std::fs::read(&path).unwrap();
+    // SAFETY: the file stays as it is while the tree lives.
+    let mut mapped = unsafe { Bvh8::<Moller>::load_mapped(&path, &bunny) }.unwrap();
+    assert_eq!(mapped.refit(&moved).unwrap(), built.refit(&moved).unwrap());
+    same_answers(
+        &built,
+        &mapped,
+        &BruteForce::<Moller>::new(&moved),
+        &rays(&moved, 10_000, 8),
+    );
+    drop(mapped);
+    assert!(std::fs::read(&path).unwrap() == before);
 }
 
 /// Saving with a mesh the tree was not built over is refused.
@@ -138,14 +162,23 @@ fn saved_sphere() -> (TriangleMesh, Bvh8<Moller>, Vec<u8>, Vec<Ray>) {
     (mesh, tree, bytes, rays)
 }
 
-/// Every byte flipped, one at a time, at every offset of the file: always
-/// refused (a CRC-32 catches every error of up to 32 bits).
+/// Offsets to damage: every byte of the header and the payload's first
+/// record, then every `stride`-th byte and the last 64.
+fn offsets(len: usize, stride: usize) -> Vec<usize> {
+    let mut at: Vec<usize> = (0..192.min(len)).collect();
+    at.extend((192..len).step_by(stride));
+    at.extend(len.saturating_sub(64).max(192)..len);
+    at
+}
+
+/// A byte changed, one at a time, at many offsets over the whole file:
+/// always refused (a CRC-32 catches every error of up to 32 bits).
 #[test]
 fn every_flipped_byte_is_refused() {
     let (mesh, _, bytes, _) = saved_sphere();
     let path = scratch("sphere-flip.bvh8");
     let mut rng = Pcg32::new(3);
-    for at in 0..bytes.len() {
+    for at in offsets(bytes.len(), 5) {
         let mut bad = bytes.clone();
         bad[at] ^= 1 + rng.below(255) as u8;
         std::fs::write(&path, &bad).unwrap();
@@ -184,14 +217,20 @@ fn random_corruption_is_refused_or_harmless() {
     assert!(refused > 2900, "{refused}");
 }
 
-/// Every truncation, and bytes appended, are refused as such.
+/// Truncations at many lengths, and bytes appended, are refused as such.
 #[test]
 fn truncated_and_extended_files_are_refused() {
     let (mesh, _, bytes, _) = saved_sphere();
     let path = scratch("sphere-cut.bvh8");
-    for len in 0..bytes.len() {
+    for len in offsets(bytes.len(), 37) {
         std::fs::write(&path, &bytes[..len]).unwrap();
         let s = expect_err(Bvh8::<Moller>::load(&path, &mesh), "truncated");
+        assert!(s.contains(&format!("offset {len}")), "{s}");
+        // SAFETY: the file is rewritten only after the result is dropped.
+        let s = expect_err(
+            unsafe { Bvh8::<Moller>::load_mapped(&path, &mesh) },
+            "truncated",
+        );
         assert!(s.contains(&format!("offset {len}")), "{s}");
     }
     let mut longer = bytes.clone();
@@ -264,7 +303,7 @@ fn crafted_trees_are_refused_or_traceable() {
     let path = scratch("sphere-crafted.bvh8");
     let nodes = u64::from_le_bytes(bytes[64..72].try_into().unwrap()) as usize;
     let units = u64::from_le_bytes(bytes[72..80].try_into().unwrap()) as usize;
-    let node_start = 96 + 48;
+    let node_start = 96 + 96;
     let unit_start = node_start + nodes * 256;
     let mut rng = Pcg32::new(9);
     let (mut refused, mut loaded) = (0, 0);
@@ -300,7 +339,12 @@ fn crafted_trees_are_refused_or_traceable() {
         let crc = crc32(&bad[..88]);
         bad[88..92].copy_from_slice(&crc.to_le_bytes());
         std::fs::write(&path, &bad).unwrap();
-        match Bvh8::<Moller>::load(&path, &mesh) {
+        let result = match round % 2 {
+            0 => Bvh8::<Moller>::load(&path, &mesh),
+            // SAFETY: the file is rewritten only after the tree is dropped.
+            _ => unsafe { Bvh8::<Moller>::load_mapped(&path, &mesh) },
+        };
+        match result {
             Err(e) => {
                 assert!(e.to_string().contains("offset"), "{e}");
                 refused += 1;

@@ -37,6 +37,7 @@ mod huge_pages;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 pub mod lbvh;
+mod mapped;
 mod node4;
 mod node8;
 mod node_box;

@@ -6,9 +6,12 @@
 //! load is one read per array, a checksum pass and an O(n) check of the
 //! topology; over the other triangle tests the leaves hold triangle
 //! indices and their precomputed triangles are remade from the mesh.
-//! Reading into the arrays costs about what mapping the file would, once
-//! the tree is touched, and keeps the huge-page-aligned layout of a built
-//! tree, so the file is read, not memory-mapped.
+//! [`Bvh8::load`] reads the file into the tree's arrays (huge pages where
+//! the system offers them, as a built tree's); [`Bvh8::load_mapped`] maps
+//! the leaf packs from the file instead, which saves the copy (see
+//! BENCHMARKS.md for both) on the condition that the file is left alone
+//! while the tree lives. Every array starts at a multiple of 64 bytes in
+//! the file, so that it can be used in place.
 //!
 //! Layout, every number little-endian (`u32`, `u64`, `f32`, `f64`):
 //!
@@ -32,8 +35,8 @@
 //! | 80 | 8 | payload bytes |
 //! | 88 | 4 | CRC-32 of bytes 0..88 |
 //! | 92 | 4 | reserved, 0 |
-//! | 96 | 48 | root reference (index, count: `u32`), root box (min, max: 6 `f32`), SAH cost as built (`f64`), SAH cost now (`f64`) |
-//! | 144 | nodes × node bytes | inner nodes: per node the slot boxes as six rows (min x, max x, min y, max y, min z, max z) of one `f32` per slot, then per slot the child reference (index, count: `u32`; `u32::MAX, 0` for an unused slot; count 0 for an inner node, else a leaf of count triangles) |
+//! | 96 | 96 | root reference (index, count: `u32`), root box (min, max: 6 `f32`), SAH cost as built (`f64`), SAH cost now (`f64`), 48 bytes 0 |
+//! | 192 | nodes × node bytes | inner nodes: per node the slot boxes as six rows (min x, max x, min y, max y, min z, max z) of one `f32` per slot, then per slot the child reference (index, count: `u32`; `u32::MAX, 0` for an unused slot; count 0 for an inner node, else a leaf of count triangles) |
 //! | … | units × unit bytes | packs of four triangles (first corners, first edges, second edges as three rows of four `f32` each, the edges' largest components (two rows of four `f32`), the mesh triangle per lane (`u32`, `u32::MAX` unused)), or the mesh triangle of each leaf position (`u32`) |
 //!
 //! The checksums are CRC-32 (IEEE, `crc32fast`), which detects every error
@@ -80,8 +83,10 @@ const BYTE_ORDER: u32 = 0x0102_0304;
 /// Bytes of the header.
 const HEADER: usize = 96;
 
-/// Bytes of the payload's first record (root, root box, SAH costs).
-const META: usize = 48;
+/// Bytes of the payload's first record (root, root box, SAH costs, then
+/// zeros), so that the arrays after it start at byte 192, a multiple of
+/// their 64-byte alignment (for [`Bvh8::load_mapped`]).
+const META: usize = 96;
 
 /// Leaf form code: packs of four Möller triangles.
 const FORM_PACKED: u32 = 1;
@@ -405,7 +410,17 @@ pub(crate) fn save<B: WideBvh>(
 }
 
 /// Load a tree of type `B` over `mesh` from `path` (see the module docs).
-pub(crate) fn load<B: WideBvh>(path: &Path, mesh: &TriangleMesh) -> Result<B, PersistError> {
+///
+/// `mapped`: map the leaf packs from the file instead of reading them.
+///
+/// # Safety
+/// With `mapped`, the file must not be truncated or written while the
+/// tree lives (see [`Bvh8::load_mapped`]).
+pub(crate) unsafe fn load<B: WideBvh>(
+    path: &Path,
+    mesh: &TriangleMesh,
+    mapped: bool,
+) -> Result<B, PersistError> {
     let fault = Fault(path);
     let mut file = File::open(path).map_err(|e| fault.io(e))?;
     let len = file.metadata().map_err(|e| fault.io(e))?.len();
@@ -429,25 +444,63 @@ pub(crate) fn load<B: WideBvh>(path: &Path, mesh: &TriangleMesh) -> Result<B, Pe
     let units = u64_at(&head, 72) as usize;
     let form = u32_at(&head, 32);
 
-    // The payload, read straight into the tree's arrays.
+    // The payload, read straight into the tree's arrays a block at a
+    // time, each block checksummed (and its leaf units checked) while it
+    // is in the cache.
     let mut meta = [0u8; META];
-    let mut nodes: Vec<B::Node> = zeroed(nodes_n);
-    let read = |file: &mut File, buf: &mut [u8]| file.read_exact(buf).map_err(|e| fault.io(e));
-    read(&mut file, &mut meta)?;
-    read(&mut file, bytes_of_mut(&mut nodes))?;
+    file.read_exact(&mut meta).map_err(|e| fault.io(e))?;
     let mut crc = crc32fast::Hasher::new();
     crc.update(&meta);
-    crc.update(bytes_of(&nodes));
-    let (packs, prims) = if form == FORM_PACKED {
+    let mut nodes: Vec<B::Node> = zeroed(nodes_n);
+    read_blocks(&mut file, &mut nodes, &mut crc, |_, _| Ok(()), &fault)?;
+    let triangles = mesh.num_triangles();
+    let units_at = (HEADER + META + nodes_n * std::mem::size_of::<B::Node>()) as u64;
+    let unit_fault = |u: usize, bytes: usize| {
+        fault.at(
+            units_at + (u * bytes) as u64,
+            "leaf units",
+            format!("leaf unit {u} names a triangle beyond the mesh's {triangles}"),
+        )
+    };
+    let pack_check = |first: usize, block: &[Tri4]| match block.iter().position(|p| {
+        p.prim
+            .iter()
+            .any(|&t| t != u32::MAX && t as usize >= triangles)
+    }) {
+        None => Ok(()),
+        Some(k) => Err(unit_fault(first + k, std::mem::size_of::<Tri4>())),
+    };
+    let (packs, prims) = if form == FORM_PACKED && mapped && units > 0 {
+        #[cfg(all(target_os = "linux", target_endian = "little"))]
+        {
+            // SAFETY: the caller keeps the file as it is while the tree
+            // lives; `units_at` is a multiple of 64 (the layout).
+            let map = unsafe { super::mapped::Mapping::<Tri4>::new(&file, units_at, units) }
+                .map_err(|e| fault.io(e))?;
+            let packs = super::mapped::Store::Mapped(map);
+            check_blocks(&packs, &mut crc, pack_check)?;
+            (packs, Vec::new())
+        }
+        #[cfg(not(all(target_os = "linux", target_endian = "little")))]
+        {
+            let mut packs: Vec<Tri4> = zeroed(units);
+            read_blocks(&mut file, &mut packs, &mut crc, pack_check, &fault)?;
+            (packs.into(), Vec::new())
+        }
+    } else if form == FORM_PACKED {
         let mut packs: Vec<Tri4> = zeroed(units);
-        read(&mut file, bytes_of_mut(&mut packs))?;
-        crc.update(bytes_of(&packs));
-        (packs, Vec::new())
+        read_blocks(&mut file, &mut packs, &mut crc, pack_check, &fault)?;
+        (packs.into(), Vec::new())
     } else {
         let mut prims: Vec<u32> = zeroed(units);
-        read(&mut file, bytes_of_mut(&mut prims))?;
-        crc.update(bytes_of(&prims));
-        (Vec::new(), prims)
+        let check =
+            |first: usize, block: &[u32]| match block.iter().position(|&t| t as usize >= triangles)
+            {
+                None => Ok(()),
+                Some(k) => Err(unit_fault(first + k, 4)),
+            };
+        read_blocks(&mut file, &mut prims, &mut crc, check, &fault)?;
+        (Vec::<Tri4>::new().into(), prims)
     };
     let (stored, computed) = (u32_at(&head, 60), crc.finalize());
     if stored != computed {
@@ -461,11 +514,9 @@ pub(crate) fn load<B: WideBvh>(path: &Path, mesh: &TriangleMesh) -> Result<B, Pe
             ),
         ));
     }
-    let (mut nodes, mut packs, mut prims) = (nodes, packs, prims);
-    from_le(&mut nodes);
-    from_le(&mut packs);
-    from_le(&mut prims);
-
+    if meta[48..].iter().any(|&b| b != 0) {
+        return Err(fault.at((HEADER + 48) as u64, "reserved", "not zero"));
+    }
     let f32_at = |at: usize| f32::from_bits(u32_at(&meta, at));
     let root = Child4 {
         index: u32_at(&meta, 0),
@@ -478,10 +529,7 @@ pub(crate) fn load<B: WideBvh>(path: &Path, mesh: &TriangleMesh) -> Result<B, Pe
     let built_sah = f64::from_bits(u64_at(&meta, 32));
     let sah_cost = f64::from_bits(u64_at(&meta, 40));
 
-    let triangles = mesh.num_triangles();
     let shape = check_tree::<B>(&mut nodes, root, form, units, &fault)?;
-    let units_at = (HEADER + META + nodes_n * std::mem::size_of::<B::Node>()) as u64;
-    check_units(form, &packs, &prims, triangles, &fault, units_at)?;
     let leaves = if form == FORM_PACKED {
         Leaves::Packed(Tri4Leaves::from_packs(packs))
     } else {
@@ -828,39 +876,55 @@ fn check_tree<B: WideBvh>(
     Ok(shape)
 }
 
-/// Check that every triangle a leaf unit names is in the mesh.
-fn check_units(
-    form: u32,
-    packs: &[Tri4],
-    prims: &[u32],
-    triangles: usize,
-    fault: &Fault<'_>,
-    units_at: u64,
+/// Bytes read, checksummed and checked at a time (within the L2 cache).
+const BLOCK: usize = 256 << 10;
+
+/// [`read_blocks`] over values already in memory (mapped from the file,
+/// on a little-endian host): blocks checksummed and checked in parallel,
+/// the checksums combined in order.
+#[cfg(all(target_os = "linux", target_endian = "little"))]
+fn check_blocks<W: Words>(
+    v: &[W],
+    crc: &mut crc32fast::Hasher,
+    check: impl Fn(usize, &[W]) -> Result<(), PersistError> + Sync,
 ) -> Result<(), PersistError> {
-    let bad = if form == FORM_PACKED {
-        packs.par_iter().position_first(|p| {
-            p.prim
-                .iter()
-                .any(|&t| t != u32::MAX && t as usize >= triangles)
+    let per_block = (BLOCK / std::mem::size_of::<W>()).max(1);
+    let blocks: Vec<Result<crc32fast::Hasher, PersistError>> = v
+        .par_chunks(per_block)
+        .enumerate()
+        .map(|(k, block)| {
+            let mut h = crc32fast::Hasher::new();
+            h.update(bytes_of(block));
+            check(k * per_block, block).map(|()| h)
         })
-    } else {
-        prims
-            .par_iter()
-            .position_first(|&t| t as usize >= triangles)
-    };
-    match bad {
-        None => Ok(()),
-        Some(u) => Err(fault.at(
-            units_at
-                + (u * if form == FORM_PACKED {
-                    std::mem::size_of::<Tri4>()
-                } else {
-                    4
-                }) as u64,
-            "leaf units",
-            format!("leaf unit {u} names a triangle beyond the mesh's {triangles}"),
-        )),
+        .collect();
+    for b in blocks {
+        crc.combine(&b?);
     }
+    Ok(())
+}
+
+/// Fill `v` from `file` a block at a time: each block is read, added to
+/// `crc` as read (little-endian), put into the host's byte order and
+/// passed to `check` with the index of its first element (a unit's
+/// checks are written against the values, so a failed check is an error
+/// even where the checksum would also have failed).
+fn read_blocks<W: Words>(
+    file: &mut File,
+    v: &mut [W],
+    crc: &mut crc32fast::Hasher,
+    mut check: impl FnMut(usize, &[W]) -> Result<(), PersistError>,
+    fault: &Fault<'_>,
+) -> Result<(), PersistError> {
+    let per_block = (BLOCK / std::mem::size_of::<W>()).max(1);
+    for (k, block) in v.chunks_mut(per_block).enumerate() {
+        file.read_exact(bytes_of_mut(block))
+            .map_err(|e| fault.io(e))?;
+        crc.update(bytes_of(block));
+        from_le(block);
+        check(k * per_block, block)?;
+    }
+    Ok(())
 }
 
 macro_rules! persist_methods {
@@ -884,7 +948,30 @@ macro_rules! persist_methods {
             /// checksum, payload checksum and topology are checked, and
             /// anything wrong is an error naming the offset and field.
             pub fn load(path: impl AsRef<Path>, mesh: &TriangleMesh) -> Result<Self, PersistError> {
-                load(path.as_ref(), mesh)
+                // SAFETY: not mapped.
+                unsafe { load(path.as_ref(), mesh, false) }
+            }
+
+            /// [`Self::load`], with the leaf packs (over
+            /// [`crate::tri::Moller`], most of the file) mapped from the
+            /// file privately instead of read: no copy where the file is in
+            /// the page cache (Linux; elsewhere, and for the other tests,
+            /// the same as [`Self::load`]). The inner nodes are read and
+            /// checked as by [`Self::load`], and a refit writes to private
+            /// copies of the pages, never to the file.
+            ///
+            /// # Safety
+            /// The file must not be truncated or written in place while the
+            /// tree lives: a shrunk file makes the process fault when the
+            /// tree is traced, and values written after the load are used
+            /// unchecked. [`Self::save`] replaces a file by renaming a new
+            /// one over it, which leaves a mapped tree intact.
+            pub unsafe fn load_mapped(
+                path: impl AsRef<Path>,
+                mesh: &TriangleMesh,
+            ) -> Result<Self, PersistError> {
+                // SAFETY: the caller's promise.
+                unsafe { load(path.as_ref(), mesh, true) }
             }
         }
     };

@@ -169,7 +169,7 @@ impl Ray4 {
 /// The packed leaves of a [`super::Bvh4`] over [`Moller`]: Embree-style
 /// `triangle4` packs (Wald et al. 2014), a leaf's packs consecutive.
 pub(crate) struct Tri4Leaves {
-    packs: Vec<Tri4>,
+    packs: super::mapped::Store<Tri4>,
 }
 
 impl Tri4Leaves {
@@ -214,7 +214,9 @@ impl Tri4Leaves {
                 p
             })
             .collect_into_vec(&mut packs);
-        Tri4Leaves { packs }
+        Tri4Leaves {
+            packs: packs.into(),
+        }
     }
 
     /// The packs, for the packet traversal of [`super::packet`].
@@ -223,7 +225,7 @@ impl Tri4Leaves {
     }
 
     /// Packs made elsewhere (a saved structure, `super::persist`).
-    pub(crate) fn from_packs(packs: Vec<Tri4>) -> Self {
+    pub(crate) fn from_packs(packs: super::mapped::Store<Tri4>) -> Self {
         Tri4Leaves { packs }
     }
 

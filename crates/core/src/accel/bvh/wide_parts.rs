@@ -93,20 +93,27 @@ pub(crate) fn words_of_mut<W: Words>(v: &mut [W]) -> &mut [u32] {
 }
 
 /// `n` values of `W`, every bit zero: allocated zeroed, so that a vector
-/// about to be overwritten (read from a file) costs no pass of its own.
+/// about to be overwritten (read from a file) costs no pass of its own,
+/// and backed by huge pages where the system offers them (as the build's
+/// arrays are, `huge_pages`).
 pub(crate) fn zeroed<W: Words>(n: usize) -> Vec<W> {
     if n == 0 || std::mem::size_of::<W>() == 0 {
         return Vec::new();
     }
     let layout = std::alloc::Layout::array::<W>(n).expect("vector too large");
-    // SAFETY: the layout is non-zero-sized; an all-zero `Words` value is
-    // valid; the vector takes the allocation with the same layout.
+    // SAFETY: the layout is non-zero-sized; the vector takes the
+    // allocation with the same layout, empty, is advised before anything
+    // touches it, and then holds `n` all-zero values, which are valid
+    // `Words` values.
     unsafe {
         let p = std::alloc::alloc_zeroed(layout).cast::<W>();
         if p.is_null() {
             std::alloc::handle_alloc_error(layout);
         }
-        Vec::from_raw_parts(p, n, n)
+        let mut v = Vec::from_raw_parts(p, 0, n);
+        super::huge_pages::advise(&mut v);
+        v.set_len(n);
+        v
     }
 }
 
