@@ -27,6 +27,20 @@ impl<T: TriangleTest> LeafTriangles<T> {
         LeafTriangles { tris, prims: order }
     }
 
+    /// Recompute every triangle from `mesh`, whose triangles keep their
+    /// indices and corners' vertex indices but whose positions may have
+    /// moved (a refit); every index must be in range.
+    pub fn recompute(&mut self, mesh: &TriangleMesh) {
+        self.tris
+            .par_iter_mut()
+            .zip(self.prims.par_iter())
+            .with_min_len(1024)
+            .for_each(|(tri, &p)| {
+                let [a, b, c] = mesh.triangle(p as usize);
+                *tri = T::precompute(a, b, c);
+            });
+    }
+
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.tris.len()

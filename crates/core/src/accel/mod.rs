@@ -22,7 +22,10 @@ mod leaf;
 mod registry;
 
 pub use brute::BruteForce;
-pub use bvh::{BuildNode, BuildOptions, BuildQuality, Bvh2, Bvh4, Bvh8, ThreadedBvh};
+pub use bvh::{
+    BuildNode, BuildOptions, BuildQuality, Bvh2, Bvh4, Bvh8, PersistError, RefitError, RefitReport,
+    ThreadedBvh,
+};
 pub use flat::{FlatKdTree, FlatThreadedBvh, FlatTriangles};
 pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
 pub use registry::{build_accel, kd_accel_from_tree, AccelKind};

@@ -19,11 +19,11 @@ use crate::tri::TriangleTest;
 
 /// Traversal stack entries for any tree: each wide node visited pushes at
 /// most three.
-const STACK: usize = 3 * MAX_DEPTH + 1;
+pub(super) const STACK: usize = 3 * MAX_DEPTH + 1;
 
 /// The stack of trees that need no more (most do; a smaller stack is cheaper
 /// to set up per ray).
-const SMALL_STACK: usize = 64;
+pub(super) const SMALL_STACK: usize = 64;
 
 /// 4-wide BVH in the style of Embree's (issue 8, "beat Embree on the CPU";
 /// BVHs as in paper 001), made by collapsing the binned-SAH binary tree of
@@ -45,13 +45,16 @@ const SMALL_STACK: usize = 64;
 /// [`super::tri4`]), with the scalar test's answers bit for bit; the other
 /// tests keep one triangle at a time.
 pub struct Bvh4<T: TriangleTest> {
-    nodes: Vec<Node4>,
-    root_box: NodeBox,
-    root: Child4,
-    leaves: Leaves<T>,
-    stats: AccelStats,
+    pub(super) nodes: Vec<Node4>,
+    pub(super) root_box: NodeBox,
+    pub(super) root: Child4,
+    pub(super) leaves: Leaves<T>,
+    pub(super) stats: AccelStats,
     /// Whether traversal fits in [`SMALL_STACK`] entries.
-    small_stack: bool,
+    pub(super) small_stack: bool,
+    /// The SAH measure of the tree as built or loaded (see
+    /// `refit::stored_sah`), taken at the first refit or save.
+    pub(super) built_sah: Option<f64>,
 }
 
 impl<T: TriangleTest> Bvh4<T> {
@@ -67,6 +70,7 @@ impl<T: TriangleTest> Bvh4<T> {
             leaves: wide.leaves,
             stats: wide.stats,
             small_stack: wide.stack <= SMALL_STACK,
+            built_sah: None,
         }
     }
 

@@ -20,12 +20,12 @@ use crate::tri::TriangleTest;
 
 /// Traversal stack entries for any tree: each 8-wide node visited pushes at
 /// most seven.
-const STACK: usize = 7 * MAX_DEPTH + 1;
+pub(super) const STACK: usize = 7 * MAX_DEPTH + 1;
 
 mod walk;
 
 /// The stack of trees that need no more (most do).
-const SMALL_STACK: usize = 64;
+pub(super) const SMALL_STACK: usize = 64;
 
 /// 8-wide BVH as Embree uses on AVX machines for single rays (issue 8, "beat
 /// Embree on the CPU"; Wald et al. 2014, "Embree: a kernel framework for
@@ -45,15 +45,18 @@ const SMALL_STACK: usize = 64;
 /// [`Moller`] the leaves are packs of four triangles tested with SSE
 /// ([`super::tri4`], Embree's `triangle4`).
 pub struct Bvh8<T: TriangleTest> {
-    nodes: Vec<Node8>,
-    root_box: NodeBox,
-    root: Child4,
-    leaves: Leaves<T>,
-    stats: AccelStats,
+    pub(super) nodes: Vec<Node8>,
+    pub(super) root_box: NodeBox,
+    pub(super) root: Child4,
+    pub(super) leaves: Leaves<T>,
+    pub(super) stats: AccelStats,
     /// Whether traversal fits in [`SMALL_STACK`] entries.
-    small_stack: bool,
+    pub(super) small_stack: bool,
     /// The box kernel, detected at build.
-    path: BoxPath,
+    pub(super) path: BoxPath,
+    /// The SAH measure of the tree as built or loaded (see
+    /// `refit::stored_sah`), taken at the first refit or save.
+    pub(super) built_sah: Option<f64>,
 }
 
 impl<T: TriangleTest> Bvh8<T> {
@@ -69,6 +72,7 @@ impl<T: TriangleTest> Bvh8<T> {
             leaves: wide.leaves,
             stats: wide.stats,
             small_stack: wide.stack <= SMALL_STACK,
+            built_sah: None,
             path: BoxPath::detect(),
         }
     }

@@ -37,6 +37,7 @@ mod huge_pages;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 pub mod lbvh;
+mod mapped;
 mod node4;
 mod node8;
 mod node_box;
@@ -45,7 +46,9 @@ mod packet;
 mod packet_gather;
 #[cfg(target_arch = "x86_64")]
 mod packet_kernel;
+mod persist;
 mod prefetch;
+mod refit;
 mod sah_sweep;
 #[cfg(target_arch = "x86_64")]
 mod sort8;
@@ -58,12 +61,15 @@ mod tri4;
 mod tri4_sse;
 mod wide_build;
 mod wide_leaf;
+mod wide_parts;
 mod wide_tree;
 
 pub use build::{BuildNode, BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;
 pub use bvh4::Bvh4;
 pub use bvh8::Bvh8;
+pub use persist::{PersistError, FORMAT_VERSION, MAGIC};
+pub use refit::{RefitError, RefitReport, DEFAULT_MAX_DEGRADATION};
 pub use threaded::ThreadedBvh;
 
 /// Deepest tree the builders produce; traversal stacks are sized from it.

@@ -169,7 +169,7 @@ impl Ray4 {
 /// The packed leaves of a [`super::Bvh4`] over [`Moller`]: Embree-style
 /// `triangle4` packs (Wald et al. 2014), a leaf's packs consecutive.
 pub(crate) struct Tri4Leaves {
-    packs: Vec<Tri4>,
+    packs: super::mapped::Store<Tri4>,
 }
 
 impl Tri4Leaves {
@@ -214,12 +214,24 @@ impl Tri4Leaves {
                 p
             })
             .collect_into_vec(&mut packs);
-        Tri4Leaves { packs }
+        Tri4Leaves {
+            packs: packs.into(),
+        }
     }
 
     /// The packs, for the packet traversal of [`super::packet`].
     pub(crate) fn packs(&self) -> &[Tri4] {
         &self.packs
+    }
+
+    /// Packs made elsewhere (a saved structure, `super::persist`).
+    pub(crate) fn from_packs(packs: super::mapped::Store<Tri4>) -> Self {
+        Tri4Leaves { packs }
+    }
+
+    /// The packs, to rewrite their triangles in place (`super::refit`).
+    pub(crate) fn packs_mut(&mut self) -> &mut [Tri4] {
+        &mut self.packs
     }
 
     /// Bytes held.

@@ -1,0 +1,304 @@
+//! Refit of a wide BVH ([`super::Bvh4`], [`super::Bvh8`]) to moved vertices:
+//! the topology (nodes, leaves, triangle order) is kept and every box is
+//! recomputed bottom-up in one pass over the tree, O(n), as Embree's refit
+//! of a BVH over deforming geometry (`RTC_BUILD_QUALITY_REFIT`; Wald,
+//! Boulos and Shirley 2007, "Ray tracing deformable scenes using dynamic
+//! bounding volume hierarchies", for the refit and its degradation).
+//!
+//! A refit tree answers every query exactly (its boxes contain its
+//! triangles as a fresh build's do), but its boxes may overlap more than a
+//! fresh build's, so rays visit more nodes. The quality measure is the
+//! surface area heuristic cost of the stored (padded) boxes, relative to
+//! the root box, with traversal and triangle costs 1 ([`stored_sah`]);
+//! [`RefitReport::degradation`] is its ratio to the cost of the tree as
+//! built, and [`Bvh8::refit_or_rebuild`] rebuilds once it passes a limit
+//! ([`DEFAULT_MAX_DEGRADATION`]).
+
+use super::node4::Child4;
+use super::node_box::NodeBox;
+use super::wide_leaf::Leaves;
+use super::wide_parts::{PartsMut, PartsRef, WideBvh, WideNode};
+use super::{BuildOptions, Bvh4, Bvh8};
+use crate::aabb::Aabb;
+use crate::mesh::TriangleMesh;
+use crate::tri::{Moller, TriangleTest};
+use rayon::prelude::*;
+use std::fmt;
+
+/// The SAH degradation past which [`Bvh8::refit_or_rebuild`] rebuilds
+/// when given no other limit: 1.5, the refit tree costing 50% more than
+/// the built one. A refit of the full dragon costs a few percent of a
+/// build (BENCHMARKS.md), so a rebuild pays back within a frame or two of
+/// rays once the tree is 1.5× worse; a tree traced with few rays per
+/// deformation can afford a higher limit (2 is common).
+pub const DEFAULT_MAX_DEGRADATION: f64 = 1.5;
+
+/// What a refit found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefitReport {
+    /// SAH cost ([`stored_sah`]) of the tree as built (or loaded).
+    pub built_sah: f64,
+    /// SAH cost of the refit tree, or of the rebuilt one when `rebuilt`.
+    pub sah: f64,
+    /// SAH cost of the refit tree before any rebuild.
+    pub refit_sah: f64,
+    /// Whether [`Bvh8::refit_or_rebuild`] rebuilt the tree.
+    pub rebuilt: bool,
+}
+
+impl RefitReport {
+    /// How much worse the refit tree is than the tree as built:
+    /// `refit_sah / built_sah` (1 when the mesh moved rigidly).
+    pub fn degradation(&self) -> f64 {
+        self.refit_sah / self.built_sah
+    }
+}
+
+/// Why a mesh cannot refit a tree: it is not the mesh the tree was built
+/// over with moved vertices.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RefitError {
+    /// The mesh has another number of triangles.
+    TriangleCount {
+        /// Triangles in the tree.
+        tree: usize,
+        /// Triangles in the mesh.
+        mesh: usize,
+    },
+    /// A triangle names a vertex the mesh does not have.
+    VertexIndex {
+        /// The triangle.
+        triangle: usize,
+        /// The vertex index it holds.
+        index: u32,
+        /// Vertices in the mesh.
+        vertices: usize,
+    },
+}
+
+impl fmt::Display for RefitError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RefitError::TriangleCount { tree, mesh } => write!(
+                f,
+                "refit: the tree holds {tree} triangles, the mesh {mesh}: not the same mesh"
+            ),
+            RefitError::VertexIndex {
+                triangle,
+                index,
+                vertices,
+            } => write!(
+                f,
+                "refit: triangle {triangle} names vertex {index}, the mesh has {vertices}"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for RefitError {}
+
+/// The SAH cost of a wide tree from its stored (padded) boxes, relative to
+/// the root box: `sum_inner SA(n)/SA(root) + sum_leaf SA(n)/SA(root) *
+/// n_tris`. Used for the tree as built and the refit tree alike.
+pub(crate) fn stored_sah<N: WideNode, T: TriangleTest>(p: &PartsRef<'_, N, T>) -> f64 {
+    let area = |b: Aabb| b.surface_area() as f64;
+    let root = area(Aabb::new(p.root_box.min.into(), p.root_box.max.into()));
+    let mut sum = if p.root.count > 0 {
+        root * p.root.count as f64
+    } else {
+        root
+    };
+    for node in p.nodes {
+        for (slot, c) in node.children().iter().enumerate() {
+            if *c == Child4::EMPTY {
+                continue;
+            }
+            let cost = if c.count > 0 { c.count as f64 } else { 1.0 };
+            sum += area(node.slot_box(slot)) * cost;
+        }
+    }
+    sum / root.max(f64::MIN_POSITIVE)
+}
+
+/// Refit `bvh` to `mesh` (see the module docs).
+pub(crate) fn refit<B: WideBvh>(
+    bvh: &mut B,
+    mesh: &TriangleMesh,
+) -> Result<RefitReport, RefitError> {
+    let tree = bvh.parts().stats.triangle_refs;
+    check_mesh(mesh, tree)?;
+    let built_sah = match bvh.parts().built_sah {
+        Some(s) => s,
+        None => stored_sah(&bvh.parts()),
+    };
+    let p = bvh.parts_mut();
+    *p.built_sah = Some(built_sah);
+    refit_parts(p, mesh);
+    let sah = stored_sah(&bvh.parts());
+    Ok(RefitReport {
+        built_sah,
+        sah,
+        refit_sah: sah,
+        rebuilt: false,
+    })
+}
+
+/// The mesh has the tree's triangle count and every index is in range.
+pub(super) fn check_mesh(mesh: &TriangleMesh, tree: usize) -> Result<(), RefitError> {
+    if mesh.num_triangles() != tree {
+        return Err(RefitError::TriangleCount {
+            tree,
+            mesh: mesh.num_triangles(),
+        });
+    }
+    let vertices = mesh.positions.len();
+    let bad = mesh
+        .indices
+        .par_iter()
+        .with_min_len(4096)
+        .position_first(|t| t.iter().any(|&i| i as usize >= vertices));
+    match bad {
+        None => Ok(()),
+        Some(triangle) => Err(RefitError::VertexIndex {
+            triangle,
+            index: *mesh.indices[triangle]
+                .iter()
+                .find(|&&i| i as usize >= vertices)
+                .expect("a bad index"),
+            vertices,
+        }),
+    }
+}
+
+/// The leaves' triangles recomputed from `mesh` (in parallel), then the
+/// boxes node by node from the last to the first: nodes are in pre-order
+/// (a child after its parent; built trees are, loaded ones are checked), so
+/// every child's box is known when its parent's slots are written.
+fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &TriangleMesh) {
+    let tris = mesh.num_triangles();
+    // Bounds per pack of four (packed leaves) or per triangle (single).
+    let mut unit_bounds: Vec<Aabb> = Vec::new();
+    let per_unit = match p.leaves {
+        Leaves::Packed(packs) => {
+            packs
+                .packs_mut()
+                .par_iter_mut()
+                .with_min_len(1024)
+                .map(|pack| {
+                    let mut b = Aabb::EMPTY;
+                    for lane in 0..4 {
+                        let prim = pack.prim[lane];
+                        if prim as usize >= tris {
+                            continue;
+                        }
+                        let [v0, v1, v2] = mesh.triangle(prim as usize);
+                        pack.set(lane, &Moller::precompute(v0, v1, v2), prim);
+                        b = b.union(Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2)));
+                    }
+                    b
+                })
+                .collect_into_vec(&mut unit_bounds);
+            4
+        }
+        Leaves::Single(leaf_tris) => {
+            leaf_tris.recompute(mesh);
+            leaf_tris
+                .prims(0, leaf_tris.len())
+                .par_iter()
+                .with_min_len(4096)
+                .map(|&prim| mesh.triangle_bounds(prim as usize))
+                .collect_into_vec(&mut unit_bounds);
+            1
+        }
+    };
+    let leaf_bounds = |c: Child4| {
+        let first = c.index as usize;
+        let units = (c.count as usize).div_ceil(per_unit);
+        unit_bounds[first..first + units]
+            .iter()
+            .fold(Aabb::EMPTY, |a, &b| a.union(b))
+    };
+    let area = |b: &Aabb| b.surface_area() as f64;
+    let mut bounds = vec![Aabb::EMPTY; p.nodes.len()];
+    let mut sah = 0.0;
+    for i in (0..p.nodes.len()).rev() {
+        let node = &mut p.nodes[i];
+        let mut nb = Aabb::EMPTY;
+        for slot in 0..N::WIDTH {
+            let c = node.children()[slot];
+            if c == Child4::EMPTY {
+                continue;
+            }
+            let cb = if c.count > 0 {
+                let b = leaf_bounds(c);
+                sah += area(&b) * c.count as f64;
+                b
+            } else {
+                debug_assert!(c.index as usize > i, "nodes in pre-order");
+                bounds[c.index as usize]
+            };
+            node.set_box(slot, &cb.into());
+            nb = nb.union(cb);
+        }
+        sah += area(&nb);
+        bounds[i] = nb;
+    }
+    let root = if p.root.count > 0 {
+        let b = leaf_bounds(p.root);
+        sah += area(&b) * p.root.count as f64;
+        b
+    } else if p.root == Child4::EMPTY {
+        Aabb::EMPTY
+    } else {
+        bounds[p.root.index as usize]
+    };
+    *p.root_box = NodeBox::from(root);
+    p.stats.sah_cost = sah / area(&root).max(f64::MIN_POSITIVE);
+}
+
+macro_rules! refit_methods {
+    ($bvh:ident) => {
+        impl<T: TriangleTest> $bvh<T> {
+            /// Refit the tree to `mesh`: the mesh it was built over (same
+            /// triangles, same vertex indices) with moved vertices. Every
+            /// box is recomputed bottom-up in O(n) and the topology kept
+            /// (Embree's refit); the answers are exact as after a build,
+            /// the speed may degrade ([`RefitReport::degradation`]).
+            pub fn refit(&mut self, mesh: &TriangleMesh) -> Result<RefitReport, RefitError> {
+                refit(self, mesh)
+            }
+
+            /// Refit the tree to `mesh` as [`Self::refit`], and rebuild it
+            /// with `options` when the refit tree's SAH cost is more than
+            /// `max_degradation` times the built tree's (see
+            /// [`DEFAULT_MAX_DEGRADATION`]); the rebuilt tree is the new
+            /// reference for later refits.
+            pub fn refit_or_rebuild(
+                &mut self,
+                mesh: &TriangleMesh,
+                options: &BuildOptions,
+                max_degradation: f64,
+            ) -> Result<RefitReport, RefitError> {
+                let mut report = refit(self, mesh)?;
+                if report.degradation() > max_degradation {
+                    *self = Self::build(mesh, options);
+                    let sah = stored_sah(&self.parts());
+                    self.built_sah = Some(sah);
+                    report.sah = sah;
+                    report.rebuilt = true;
+                }
+                Ok(report)
+            }
+
+            /// The SAH cost ([`stored_sah`]) of the tree as it is now, and of
+            /// the tree as built (or loaded), whose ratio is the refit's
+            /// degradation.
+            pub fn sah_costs(&self) -> (f64, f64) {
+                let now = stored_sah(&self.parts());
+                (now, self.built_sah.unwrap_or(now))
+            }
+        }
+    };
+}
+refit_methods!(Bvh4);
+refit_methods!(Bvh8);
