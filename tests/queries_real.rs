@@ -11,13 +11,14 @@ use raykit_core::rng::Pcg32;
 use raykit_core::{Ray, TriangleMesh, Vec3};
 use std::path::PathBuf;
 
+/// The test data folder: `data/` in the repository, or `$RAYKIT_SHARED_DATA`.
 fn shared_data() -> PathBuf {
     let dir = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
     assert!(
         dir.join("meshes").is_dir(),
-        "shared data folder not found at {} (set RAYKIT_SHARED_DATA): these tests need the real meshes",
+        "test data folder not found at {} (set RAYKIT_SHARED_DATA): these tests need the real meshes",
         dir.display()
     );
     dir
