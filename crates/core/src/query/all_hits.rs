@@ -12,7 +12,7 @@
 //! reached, boxes entered beyond the farthest kept hit are skipped.
 //! [`ray_hits_brute`] is the `f64` reference of the tests.
 
-use super::surface_bvh::{SurfaceBvh, EMPTY, WIDTH};
+use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::accel::{Accel, BATCH_GRAIN};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
@@ -59,8 +59,13 @@ fn slab8(
         for k in 0..WIDTH {
             let t0 = (min[a][k] - o) * inv;
             let t1 = (max[a][k] - o) * inv;
-            lo[k] = lo[k].max(t0.min(t1));
-            hi[k] = hi[k].min(t0.max(t1));
+            // Plain compares (one instruction each, unlike f32::min/max's
+            // NaN rules). A NaN (a ray lying in a slab's plane) may keep or
+            // drop the box, which matters only for triangles the ray grazes
+            // at that plane.
+            let (near, far) = if t0 < t1 { (t0, t1) } else { (t1, t0) };
+            lo[k] = if near > lo[k] { near } else { lo[k] };
+            hi[k] = if far < hi[k] { far } else { hi[k] };
         }
     }
     let mut entry = [f32::NAN; WIDTH];
@@ -106,16 +111,17 @@ impl SurfaceBvh {
     /// Walk the triangles the ray may meet within `reach()`: `visit` gets
     /// each hit and returns false to stop the walk.
     #[inline(always)]
-    fn walk_hits(
+    fn walk_hits<R: FnMut() -> f32, V: FnMut(Hit) -> bool>(
         &self,
         ray: &Ray,
-        reach: &mut dyn FnMut() -> f32,
-        visit: &mut dyn FnMut(Hit) -> bool,
+        mut reach: R,
+        mut visit: V,
     ) {
         if self.nodes.is_empty() || !ray.is_valid() {
             return;
         }
-        let mut stack = [(0u32, 0u32, 0f32); 8 * 128];
+        let (mut small, mut big) = ([(0u32, 0u32, 0f32); SMALL_STACK], Vec::new());
+        let stack = stack_of(&mut small, &mut big, self.stack_need);
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
@@ -185,12 +191,16 @@ impl SurfaceBvh {
             hits: out,
             cap: max_hits,
         });
-        self.walk_hits(ray, &mut || kept.borrow().reach(ray.tfar), &mut |h| {
-            if accept(&h) {
-                kept.borrow_mut().insert(h);
-            }
-            true
-        });
+        self.walk_hits(
+            ray,
+            || kept.borrow().reach(ray.tfar),
+            |h| {
+                if accept(&h) {
+                    kept.borrow_mut().insert(h);
+                }
+                true
+            },
+        );
     }
 
     /// Every hit along `ray`, sorted by `t`, at most `max_hits` (the
@@ -205,10 +215,14 @@ impl SurfaceBvh {
     pub fn count_hits(&self, ray: &Ray) -> u32 {
         let mut n = 0u32;
         let tfar = ray.tfar;
-        self.walk_hits(ray, &mut || tfar, &mut |_| {
-            n += 1;
-            true
-        });
+        self.walk_hits(
+            ray,
+            || tfar,
+            |_| {
+                n += 1;
+                true
+            },
+        );
         n
     }
 
@@ -217,14 +231,18 @@ impl SurfaceBvh {
     pub fn any_hit<F: FnMut(&Hit) -> bool>(&self, ray: &Ray, mut accept: F) -> Option<Hit> {
         let mut found = None;
         let tfar = ray.tfar;
-        self.walk_hits(ray, &mut || tfar, &mut |h| {
-            if accept(&h) {
-                found = Some(h);
-                false
-            } else {
-                true
-            }
-        });
+        self.walk_hits(
+            ray,
+            || tfar,
+            |h| {
+                if accept(&h) {
+                    found = Some(h);
+                    false
+                } else {
+                    true
+                }
+            },
+        );
         found
     }
 

@@ -14,7 +14,7 @@
 //! triangle in `f64` (the reference of the tests).
 
 use super::exact::Triangle64;
-use super::surface_bvh::{SurfaceBvh, EMPTY, WIDTH};
+use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::accel::{Accel, BATCH_GRAIN};
 use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
@@ -148,15 +148,14 @@ fn box_distance2(min: &[[f32; WIDTH]; 3], max: &[[f32; WIDTH]; 3], p: Vec3) -> [
     for a in 0..3 {
         let pa = p[a];
         for k in 0..WIDTH {
-            let d = (min[a][k] - pa).max(pa - max[a][k]).max(0.0);
+            let (below, above) = (min[a][k] - pa, pa - max[a][k]);
+            let d = if below > above { below } else { above };
+            let d = if d > 0.0 { d } else { 0.0 };
             d2[k] += d * d;
         }
     }
     d2
 }
-
-/// Stack entries of the search: each node pushes at most eight.
-const STACK: usize = 8 * 128;
 
 impl SurfaceBvh {
     /// The point of the surface closest to `p` no farther than `max_distance`
@@ -174,7 +173,8 @@ impl SurfaceBvh {
         };
         let limit2 = best2;
         let mut best: Option<usize> = None;
-        let mut stack = [(0u32, 0u32, 0f32); STACK];
+        let (mut small, mut big) = ([(0u32, 0u32, 0f32); SMALL_STACK], Vec::new());
+        let stack = stack_of(&mut small, &mut big, self.stack_need);
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
@@ -209,7 +209,7 @@ impl SurfaceBvh {
                 }
             }
             for &(d, k) in &near[..n] {
-                if sp < STACK {
+                if sp < stack.len() {
                     stack[sp] = (node.child[k], node.count[k], d);
                     sp += 1;
                 }

@@ -54,6 +54,25 @@ impl Default for SurfaceNode {
     }
 }
 
+/// Stack entries kept on the machine stack; deeper trees use the heap.
+pub(crate) const SMALL_STACK: usize = 256;
+
+/// A traversal stack of at least `need` entries, all `T::default()`:
+/// `small` when it is large enough (no allocation), else `big`.
+#[inline(always)]
+pub(crate) fn stack_of<'a, T: Copy + Default>(
+    small: &'a mut [T; SMALL_STACK],
+    big: &'a mut Vec<T>,
+    need: usize,
+) -> &'a mut [T] {
+    if need <= SMALL_STACK {
+        small
+    } else {
+        big.resize(need, T::default());
+        big
+    }
+}
+
 /// An 8-wide BVH over a mesh's triangles for point and multi-hit ray
 /// queries. The root is node 0 (a mesh of one leaf gets a root node with
 /// that leaf as its only child); an empty mesh has no nodes.
@@ -64,6 +83,9 @@ pub struct SurfaceBvh {
     /// Mesh triangle index of each triangle in leaf order.
     pub(crate) prims: Vec<u32>,
     pub(crate) bounds: Aabb,
+    /// Most traversal stack entries a query can need (each inner node
+    /// visited pushes at most eight and pops one).
+    pub(crate) stack_need: usize,
     /// Winding-number moments, made on first use.
     pub(crate) moments: OnceLock<super::winding::Moments>,
 }
@@ -88,6 +110,7 @@ impl SurfaceBvh {
             tris,
             prims: tree.order,
             bounds: tree.root.bounds(),
+            stack_need: 1,
             moments: OnceLock::new(),
         };
         if !bvh.prims.is_empty() {
@@ -96,13 +119,16 @@ impl SurfaceBvh {
                 BuildNode::Leaf { .. } => vec![&tree.root],
                 BuildNode::Inner { .. } => widen(&tree.root),
             };
-            bvh.fill(0, &slots);
+            let depth = bvh.fill(0, &slots);
+            bvh.stack_need = (WIDTH - 1) * depth + WIDTH + 1;
         }
         bvh
     }
 
-    /// Fill node `at` with `slots` as children, making their inner nodes.
-    fn fill(&mut self, at: usize, slots: &[&BuildNode]) {
+    /// Fill node `at` with `slots` as children, making their inner nodes;
+    /// returns the number of inner levels from `at` down (1 for a node of
+    /// leaves).
+    fn fill(&mut self, at: usize, slots: &[&BuildNode]) -> usize {
         let mut node = SurfaceNode::default();
         let mut inner = Vec::new();
         for (k, s) in slots.iter().enumerate() {
@@ -131,9 +157,11 @@ impl SurfaceBvh {
             }
         }
         self.nodes[at] = node;
+        let mut depth = 1;
         for (idx, s) in inner {
-            self.fill(idx, &widen(s));
+            depth = depth.max(1 + self.fill(idx, &widen(s)));
         }
+        depth
     }
 
     /// Number of triangles.

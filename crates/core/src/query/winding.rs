@@ -31,7 +31,7 @@
 //! as `(ρ / r)⁴`; at β = 2 the tests find it below 1% of a unit winding
 //! number, far from the ½ threshold.
 
-use super::surface_bvh::{SurfaceBvh, EMPTY, WIDTH};
+use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::accel::BATCH_GRAIN;
 use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
@@ -228,7 +228,8 @@ impl SurfaceBvh {
         let moments = &self.moments().0;
         let beta2 = beta * beta;
         let mut w = 0.0f32;
-        let mut stack = [0u32; 8 * 128];
+        let (mut small, mut big) = ([0u32; SMALL_STACK], Vec::new());
+        let stack = stack_of(&mut small, &mut big, self.stack_need);
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
