@@ -152,22 +152,30 @@ pub(super) fn check_mesh(mesh: &TriangleMesh, tree: usize) -> Result<(), RefitEr
         });
     }
     let vertices = mesh.positions.len();
-    let bad = mesh
+    // The largest index, a reduction the compiler vectorises; the bad
+    // triangle is looked for only when there is one.
+    let largest = mesh
         .indices
-        .par_iter()
-        .with_min_len(4096)
-        .position_first(|t| t.iter().any(|&i| i as usize >= vertices));
-    match bad {
-        None => Ok(()),
-        Some(triangle) => Err(RefitError::VertexIndex {
-            triangle,
-            index: *mesh.indices[triangle]
-                .iter()
-                .find(|&&i| i as usize >= vertices)
-                .expect("a bad index"),
-            vertices,
-        }),
+        .par_chunks(1 << 14)
+        .map(|c| c.iter().fold(0u32, |m, t| m.max(t[0]).max(t[1]).max(t[2])))
+        .max();
+    if largest.is_none_or(|m| (m as usize) < vertices) {
+        return Ok(());
     }
+    let (triangle, t) = mesh
+        .indices
+        .iter()
+        .enumerate()
+        .find(|(_, t)| t.iter().any(|&i| i as usize >= vertices))
+        .expect("a triangle holds the largest index");
+    Err(RefitError::VertexIndex {
+        triangle,
+        index: *t
+            .iter()
+            .find(|&&i| i as usize >= vertices)
+            .expect("a bad index"),
+        vertices,
+    })
 }
 
 /// The leaves' triangles recomputed from `mesh` (in parallel), then the
