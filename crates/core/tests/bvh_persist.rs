@@ -387,3 +387,35 @@ fn crc32(bytes: &[u8]) -> u32 {
     }
     !crc
 }
+
+/// Through the registry: every structure and test built by kind, saved
+/// through the `Accel` trait and loaded by `load_accel` from the header's
+/// kind answers as built; the structures without a saved form say so.
+#[test]
+fn registry_round_trip_every_kind_and_test() {
+    use raykit_core::accel::{build_accel, load_accel, AccelKind};
+    use raykit_core::tri::TestKind;
+    let mesh = shared_obj("teapot_992.obj");
+    let rays = rays(&mesh, 3000, 21);
+    for kind in AccelKind::ALL {
+        for test in TestKind::ALL {
+            let built = build_accel(kind, test, &mesh, &BuildOptions::default());
+            let path = scratch(&format!("registry-{}-{}.bin", kind.name(), test.name()));
+            let saved = built.save(&path, &mesh);
+            if !matches!(kind, AccelKind::Bvh4 | AccelKind::Bvh8) {
+                assert!(
+                    matches!(saved, Err(PersistError::Unsupported { .. })),
+                    "{kind:?}"
+                );
+                assert!(!path.exists());
+                continue;
+            }
+            saved.unwrap();
+            let (k, t, loaded) = load_accel(&path, &mesh).unwrap();
+            assert_eq!((k, t), (kind, test));
+            for ray in &rays {
+                assert_eq!(bits(loaded.intersect(ray)), bits(built.intersect(ray)));
+            }
+        }
+    }
+}

@@ -68,7 +68,7 @@ pub use build::{BuildNode, BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;
 pub use bvh4::Bvh4;
 pub use bvh8::Bvh8;
-pub use persist::{PersistError, FORMAT_VERSION, MAGIC};
+pub use persist::{saved_kind, PersistError, FORMAT_VERSION, MAGIC};
 pub use refit::{RefitError, RefitReport, DEFAULT_MAX_DEGRADATION};
 pub use threaded::ThreadedBvh;
 

@@ -116,6 +116,11 @@ pub enum PersistError {
         /// What is wrong.
         reason: String,
     },
+    /// The structure has no saved form (only the wide BVHs have).
+    Unsupported {
+        /// The file it was to be saved to or loaded from.
+        path: PathBuf,
+    },
 }
 
 impl fmt::Display for PersistError {
@@ -128,6 +133,11 @@ impl fmt::Display for PersistError {
                 field,
                 reason,
             } => write!(f, "{}: offset {offset} ({field}): {reason}", path.display()),
+            PersistError::Unsupported { path } => write!(
+                f,
+                "{}: this structure has no saved form (bvh4 and bvh8 have)",
+                path.display()
+            ),
         }
     }
 }
@@ -136,7 +146,7 @@ impl std::error::Error for PersistError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             PersistError::Io { source, .. } => Some(source),
-            PersistError::Invalid { .. } => None,
+            PersistError::Invalid { .. } | PersistError::Unsupported { .. } => None,
         }
     }
 }
@@ -581,14 +591,9 @@ fn foreign(fault: &Fault<'_>, magic: &[u8]) -> PersistError {
     )
 }
 
-/// Check the header against the file length, the tree type and the mesh;
-/// returns the payload's length.
-fn check_header<B: WideBvh>(
-    head: &[u8; HEADER],
-    len: u64,
-    mesh: &TriangleMesh,
-    fault: &Fault<'_>,
-) -> Result<usize, PersistError> {
+/// Check the magic bytes, version, byte-order mark, header checksum and
+/// reserved fields.
+fn check_preamble(head: &[u8; HEADER], fault: &Fault<'_>) -> Result<(), PersistError> {
     if head[..8] != MAGIC {
         return Err(foreign(fault, &head[..8]));
     }
@@ -625,6 +630,18 @@ fn check_header<B: WideBvh>(
             return Err(fault.at(at as u64, "reserved", "not zero"));
         }
     }
+    Ok(())
+}
+
+/// Check the header against the file length, the tree type and the mesh;
+/// returns the payload's length.
+fn check_header<B: WideBvh>(
+    head: &[u8; HEADER],
+    len: u64,
+    mesh: &TriangleMesh,
+    fault: &Fault<'_>,
+) -> Result<usize, PersistError> {
+    check_preamble(head, fault)?;
     let kind = u32_at(head, 16);
     if kind != kind_code(B::KIND) {
         return Err(fault.at(
@@ -978,3 +995,39 @@ macro_rules! persist_methods {
 }
 persist_methods!(Bvh4);
 persist_methods!(Bvh8);
+
+/// The structure and triangle test a saved file holds, from its header
+/// (checked as far as the header goes: magic, version, byte order, header
+/// checksum).
+pub fn saved_kind(path: &Path) -> Result<(AccelKind, TestKind), PersistError> {
+    let fault = Fault(path);
+    let mut file = File::open(path).map_err(|e| fault.io(e))?;
+    let mut head = Vec::with_capacity(HEADER);
+    (&mut file)
+        .take(HEADER as u64)
+        .read_to_end(&mut head)
+        .map_err(|e| fault.io(e))?;
+    if head.len() >= 8 && head[..8] != MAGIC {
+        return Err(foreign(&fault, &head[..8]));
+    }
+    if head.len() < HEADER {
+        let len = head.len() as u64;
+        return Err(fault.at(
+            len,
+            "header",
+            format!("truncated: the header is {HEADER} bytes, the file has {len}"),
+        ));
+    }
+    let head: &[u8; HEADER] = head[..].try_into().expect("the header's length");
+    check_preamble(head, &fault)?;
+    let kind = match u32_at(head, 16) {
+        4 => AccelKind::Bvh4,
+        8 => AccelKind::Bvh8,
+        code => return Err(fault.at(16, "structure", kind_name(code))),
+    };
+    let test = u32_at(head, 20);
+    let test = *TestKind::ALL
+        .get(test as usize)
+        .ok_or_else(|| fault.at(20, "triangle test", test_name(test)))?;
+    Ok((kind, test))
+}

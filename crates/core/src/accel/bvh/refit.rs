@@ -74,6 +74,8 @@ pub enum RefitError {
         /// Vertices in the mesh.
         vertices: usize,
     },
+    /// The structure has no refit (only the wide BVHs do).
+    Unsupported,
 }
 
 impl fmt::Display for RefitError {
@@ -90,6 +92,10 @@ impl fmt::Display for RefitError {
             } => write!(
                 f,
                 "refit: triangle {triangle} names vertex {index}, the mesh has {vertices}"
+            ),
+            RefitError::Unsupported => write!(
+                f,
+                "refit: this structure cannot be refit (bvh4 and bvh8 can); build it again"
             ),
         }
     }
