@@ -419,3 +419,52 @@ fn registry_round_trip_every_kind_and_test() {
         }
     }
 }
+
+/// Meshes of no, one and two triangles (an empty tree, a root leaf, a
+/// small tree) save, load and refit.
+#[test]
+fn tiny_meshes_round_trip_and_refit() {
+    use raykit_core::Vec3;
+    let tri = |n: u32| {
+        let mut pos = Vec::new();
+        let mut idx = Vec::new();
+        for i in 0..n {
+            let o = Vec3::new(i as f32, 0.0, 0.0);
+            pos.extend([o, o + Vec3::X * 0.5, o + Vec3::Y]);
+            idx.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        TriangleMesh::new(pos, idx)
+    };
+    for n in [0, 1, 2, 9] {
+        let mesh = tri(n);
+        let mut tree = Bvh8::<Moller>::build(&mesh, &BuildOptions::default());
+        let path = scratch(&format!("tiny-{n}.bvh8"));
+        tree.save(&path, &mesh).unwrap();
+        let loaded = Bvh8::<Moller>::load(&path, &mesh).unwrap();
+        let brute = BruteForce::<Moller>::new(&mesh);
+        let mut moved = mesh.clone();
+        for p in &mut moved.positions {
+            p.z += 0.25 * p.x;
+        }
+        let report = tree.refit(&moved).unwrap();
+        assert!(
+            n == 0 || report.degradation().is_finite(),
+            "{n}: {report:?}"
+        );
+        let brute_moved = BruteForce::<Moller>::new(&moved);
+        let mut rng = Pcg32::new(n as u64);
+        for _ in 0..500 {
+            let o = Vec3::new(rng.range_f32(-1.0, 10.0), rng.range_f32(-1.0, 2.0), 5.0);
+            let ray = Ray::new(o, Vec3::new(0.01, 0.02, -1.0));
+            assert_eq!(
+                bits(loaded.intersect(&ray)),
+                bits(brute.intersect(&ray)),
+                "{n}"
+            );
+            assert!(
+                agree(tree.intersect(&ray), brute_moved.intersect(&ray)),
+                "{n}"
+            );
+        }
+    }
+}

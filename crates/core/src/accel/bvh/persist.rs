@@ -539,7 +539,7 @@ pub(crate) unsafe fn load<B: WideBvh>(
     let built_sah = f64::from_bits(u64_at(&meta, 32));
     let sah_cost = f64::from_bits(u64_at(&meta, 40));
 
-    let shape = check_tree::<B>(&mut nodes, root, form, units, &fault)?;
+    let shape = check_tree::<B>(&mut nodes, root, form, units, triangles, &fault)?;
     let leaves = if form == FORM_PACKED {
         Leaves::Packed(Tri4Leaves::from_packs(packs))
     } else {
@@ -762,6 +762,7 @@ fn check_tree<B: WideBvh>(
     root: Child4,
     form: u32,
     units: usize,
+    triangles: usize,
     fault: &Fault<'_>,
 ) -> Result<Shape, PersistError> {
     let n = nodes.len();
@@ -792,14 +793,23 @@ fn check_tree<B: WideBvh>(
         stack: 0,
     };
     if root.count > 0 {
-        if !leaf_ok(root) || n != 0 {
-            return Err(leaf_fault((HEADER) as u64, root));
+        if !leaf_ok(root) {
+            return Err(leaf_fault(HEADER as u64, root));
+        }
+        if n != 0 {
+            return Err(fault.at(
+                HEADER as u64,
+                "root reference",
+                format!("a root leaf with {n} inner nodes"),
+            ));
         }
         shape.leaves = 1;
         return Ok(shape);
     }
     if root == Child4::EMPTY || n == 0 {
-        if root == Child4::EMPTY && n == 0 && units == 0 {
+        // An empty tree (the builds give a root of count 0 and no nodes),
+        // which traversal skips for a mesh of no triangles, and only then.
+        if n == 0 && units == 0 && triangles == 0 {
             return Ok(shape);
         }
         return Err(fault.at(

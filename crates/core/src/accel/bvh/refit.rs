@@ -27,10 +27,11 @@ use std::fmt;
 
 /// The SAH degradation past which [`Bvh8::refit_or_rebuild`] rebuilds
 /// when given no other limit: 1.5, the refit tree costing 50% more than
-/// the built one. A refit of the full dragon costs a few percent of a
-/// build (BENCHMARKS.md), so a rebuild pays back within a frame or two of
-/// rays once the tree is 1.5× worse; a tree traced with few rays per
-/// deformation can afford a higher limit (2 is common).
+/// the built one. The SAH cost estimates the traversal work per ray, so
+/// past it rays may trace up to 1.5× slower; a rebuild costs about ten
+/// refits on the full dragon (BENCHMARKS.md), which such a slowdown repays
+/// once the rays traced per deformation take about two rebuilds' time. A
+/// caller tracing few rays per deformation can pass 2 (common in practice).
 pub const DEFAULT_MAX_DEGRADATION: f64 = 1.5;
 
 /// What a refit found.
@@ -261,7 +262,7 @@ fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &Trian
         let b = leaf_bounds(p.root);
         sah += area(&b) * p.root.count as f64;
         b
-    } else if p.root == Child4::EMPTY {
+    } else if p.root == Child4::EMPTY || p.nodes.is_empty() {
         Aabb::EMPTY
     } else {
         bounds[p.root.index as usize]
