@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Renders the README gallery into docs/images/gallery/ from the example
-# scenes and the shared data (../shared/data, or $RAYKIT_SHARED_DATA).
+# scenes and the test data (data/, or $RAYKIT_SHARED_DATA).
 # Builds the release binary first. Each line is a command a user can run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-data=${RAYKIT_SHARED_DATA:-../shared/data}
+data=${RAYKIT_SHARED_DATA:-data}
 out=docs/images/gallery
 mkdir -p "$out"
 cargo build --release -q

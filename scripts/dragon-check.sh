@@ -22,5 +22,5 @@ for accel in bvh2 bvh-threaded kd-stack kd-ropes kd-restart kd-backtrack; do
       --accel "$accel" --test "$test" --verify 10000 || status=1
   done
 done
-[ "${SKIP_BENCH:-0}" = 1 ] || $raykit bench --mesh "$dragon" --reps 3
+[ "${SKIP_BENCH:-0}" = 1 ] || $raykit bench --mesh "$dragon" --accel all --test all --reps 3
 exit $status

@@ -3,16 +3,30 @@
 use clap::Args;
 use raykit_core::accel::{BuildOptions, BuildQuality, KdOptions, KdSplit};
 
+/// The structure `trace`, `bench` and `render` use on the CPU when
+/// `--accel` is not given: the fastest (BENCHMARKS.md), an 8-wide BVH over
+/// packs of four triangles.
+pub const DEFAULT_ACCEL: &str = "bvh8";
+
+/// The `--bvh-build` name of a build quality.
+pub fn quality_name(q: BuildQuality) -> &'static str {
+    match q {
+        BuildQuality::Sah => "sah",
+        BuildQuality::High => "high",
+        BuildQuality::Fast => "fast",
+    }
+}
+
 /// BVH build options on the command line.
 #[derive(Args, Clone, Debug)]
 pub struct BuildArgs {
-    /// Most triangles per BVH leaf (1-31; 1 gives paper 001's one-triangle leaves).
+    /// Most triangles per BVH leaf (1-31; 1 gives one-triangle leaves).
     #[arg(long, default_value_t = BuildOptions::default().max_leaf_size as u32, value_parser = clap::value_parser!(u32).range(1..=31))]
     max_leaf: u32,
     /// Most triangles per leaf of the wide BVHs with leaves of four-triangle
     /// packs (bvh4 and bvh8 over moller), in place of --max-leaf (1-31). The
     /// SAH, which counts a leaf's pack tests, picks smaller leaves below it,
-    /// as Embree's builders do. Issue 8, step 3r.
+    /// as Embree's builders do.
     #[arg(long, default_value_t = BuildOptions::default().packed_leaf_size as u32, value_parser = clap::value_parser!(u32).range(1..=31))]
     max_packed_leaf: u32,
     /// SAH bins per axis (2-256).
@@ -26,11 +40,11 @@ pub struct BuildArgs {
     /// largest children, as Embree's builders do: a few percent faster rays,
     /// about 8% slower to build) or `fast` (linear BVH after Karras 2012:
     /// Morton codes, radix sort; several times faster to build, for dynamic
-    /// scenes, a worse tree). Issue 8, steps 3 and 3v.
+    /// scenes, a worse tree).
     #[arg(long, default_value = "sah", value_parser = BuildQuality::parse)]
     bvh_build: BuildQuality,
     /// kd-tree split rule: `sah` (Wald & Havran's O(N log N) SAH with perfect
-    /// splits), `median` (spatial median) or `game:H` (paper 002's score
+    /// splits), `median` (spatial median) or `game:H` (Kim's (2013) score
     /// |front-back|·(20-H) + splits·H, H in 0..=20).
     #[arg(long, default_value = "sah", value_parser = KdSplit::parse)]
     kd_split: KdSplit,
@@ -38,7 +52,7 @@ pub struct BuildArgs {
     #[arg(long, default_value_t = KdOptions::default().intersection_cost)]
     kd_isect_cost: f32,
     /// kd-tree node layout: subtrees of this many levels, each laid out
-    /// breadth-first (paper 000); 0 lays the whole tree out breadth-first.
+    /// breadth-first; 0 lays the whole tree out breadth-first.
     #[arg(long, default_value_t = KdOptions::default().subtree_levels)]
     kd_subtree_levels: u32,
 }

@@ -35,17 +35,17 @@ enum Command {
     Rays(cmd::rays::RaysArgs),
     /// Trace a ray file against a mesh and write hits (or occlusion) to a file.
     Trace(cmd::trace::TraceArgs),
-    /// Measure build time, memory and Mrays/s for every structure × triangle test.
+    /// Measure build time, memory and Mrays/s of bvh8 (the default) or of every structure × triangle test.
     Bench(cmd::bench::BenchArgs),
-    /// Find and remove T-junctions (vertices inside other triangles' edges), paper 002.
+    /// Find and remove T-junctions (vertices inside other triangles' edges).
     Tjunctions(cmd::tjunctions::TJunctionsArgs),
-    /// Remove the hidden interior of a model: triangles or parts no outside viewpoint sees, paper 003.
+    /// Remove the hidden interior of a model: triangles or parts no outside viewpoint sees.
     Cull(cmd::cull::CullArgs),
-    /// DEMs: height-field ray casting (paper 004) and shadow masks (paper 003).
+    /// DEMs: height-field ray casting (per-frame quadtree boxes) and shadow masks (Min 2008).
     Terrain(cmd::terrain::TerrainArgs),
     /// Stream rendered frames to browsers over WebSocket (JPEG) or MJPEG, with interactive cameras.
     Serve(cmd::serve::ServeArgs),
-    /// Reproduce the papers' tables and figures on this machine (CSV, Markdown, SVG).
+    /// Reproduce published tables and figures on this machine (CSV, Markdown, SVG).
     Experiment(cmd::experiment::ExperimentArgs),
     /// Write a scene (built-in or file) as glTF with its materials, camera and lights.
     Export(cmd::export::ExportArgs),

@@ -1,5 +1,5 @@
 //! Every structure × triangle test agrees with brute force on the real meshes
-//! of the shared data folder and on the built-in scenes, for the three
+//! of the test data folder and on the built-in scenes, for the three
 //! standard ray sets (sampled: brute force is O(rays × triangles)).
 
 use raykit_core::accel::kdtree::build_tree;
@@ -12,10 +12,10 @@ use std::path::PathBuf;
 fn shared_data() -> PathBuf {
     let dir = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
     assert!(
         dir.join("meshes").is_dir(),
-        "shared data folder not found at {} (set RAYKIT_SHARED_DATA): these tests need the real meshes",
+        "test data folder not found at {} (set RAYKIT_SHARED_DATA): these tests need the real meshes",
         dir.display()
     );
     dir

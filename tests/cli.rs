@@ -21,11 +21,11 @@ fn stderr(o: &Output) -> String {
 fn teapot() -> PathBuf {
     let dir = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
     let p = dir.join("meshes/teapot_992.obj");
     assert!(
         p.is_file(),
-        "shared data not found at {} (set RAYKIT_SHARED_DATA)",
+        "test data not found at {} (set RAYKIT_SHARED_DATA)",
         p.display()
     );
     p
@@ -108,6 +108,63 @@ fn rays_then_trace_matches_the_library_and_verifies() {
         n_hits > 100,
         "the incoherent set should hit the teapot often"
     );
+}
+
+/// Without --accel, `raykit trace` uses the fastest structure (bvh8, SAH
+/// build), says so in its JSON line, and its hits equal brute force's.
+#[test]
+fn trace_defaults_to_bvh8_and_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh_path = teapot();
+    let rays = dir.path().join("r.bin");
+    let hits = dir.path().join("h.bin");
+    let o = raykit(&[
+        "rays",
+        "--mesh",
+        s(&mesh_path),
+        "--kind",
+        "primary",
+        "--size",
+        "48",
+        "--out",
+        s(&rays),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = raykit(&[
+        "trace",
+        "--mesh",
+        s(&mesh_path),
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&hits),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let stats: serde_json::Value = serde_json::from_str(err.lines().next().unwrap()).unwrap();
+    assert_eq!(stats["accel"], "bvh8", "{err}");
+    assert_eq!(stats["bvh_build"], "sah", "{err}");
+    assert_eq!(stats["test"], "moller", "{err}");
+    let mesh = raykit_io::load_mesh(&mesh_path).unwrap();
+    let brute = build_accel(
+        AccelKind::Brute,
+        TestKind::Moller,
+        &mesh,
+        &BuildOptions::default(),
+    );
+    let ray_list = raykit_io::read_rays(&rays).unwrap();
+    let got = raykit_io::read_hits(&hits).unwrap();
+    assert_eq!(got.len(), ray_list.len());
+    let mut n_hits = 0;
+    for (r, g) in ray_list.iter().zip(&got) {
+        let want = brute.intersect(r);
+        assert_eq!(want.is_some(), g.is_some(), "{r:?}");
+        if let (Some(w), Some(g)) = (want, g) {
+            assert!((w.t - g.t).abs() <= 1e-5 * w.t, "{w:?} vs {g:?}");
+            n_hits += 1;
+        }
+    }
+    assert!(n_hits > 100, "the primary set should hit the teapot");
 }
 
 #[test]

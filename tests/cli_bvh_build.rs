@@ -15,11 +15,11 @@ use cli::{raykit, s, text};
 fn teapot() -> PathBuf {
     let dir = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
     let p = dir.join("meshes/teapot_992.obj");
     assert!(
         p.is_file(),
-        "shared data not found at {} (set RAYKIT_SHARED_DATA)",
+        "test data not found at {} (set RAYKIT_SHARED_DATA)",
         p.display()
     );
     p

@@ -96,11 +96,11 @@ fn unsupported_options_are_refused_by_name() {
 fn gpu_environment_box_png_equals_the_cpu_png() {
     let data = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("data"));
     let map = data.join("envmaps/studio.exr");
     assert!(
         map.is_file(),
-        "{} missing (set RAYKIT_SHARED_DATA): this test needs the shared data",
+        "{} missing (set RAYKIT_SHARED_DATA): this test needs the test data",
         map.display()
     );
     let dir = tempfile::tempdir().unwrap();

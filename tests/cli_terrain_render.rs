@@ -1,4 +1,4 @@
-//! `raykit terrain render` as a user runs it, on the shared Terragen DEM at
+//! `raykit terrain render` as a user runs it, on the Terragen DEM of data/ at
 //! 160×90: the PNG's size, sky above and terrain below in the default view
 //! (told apart by how they react to the light, not by their colours), the
 //! three exact casters giving byte-identical images, the GPU backend giving
@@ -17,11 +17,11 @@ const H: u32 = 90;
 fn ter() -> PathBuf {
     let dir = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
     let p = dir.join("terrain/RealisticTerrain_Large.ter");
     assert!(
         p.is_file(),
-        "shared data not found at {} (set RAYKIT_SHARED_DATA)",
+        "test data not found at {} (set RAYKIT_SHARED_DATA)",
         p.display()
     );
     p

@@ -16,11 +16,11 @@ use std::path::PathBuf;
 fn ter() -> PathBuf {
     let root = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
     let p = root.join("terrain/lidar_dem_400.tif");
     assert!(
         p.is_file(),
-        "{} is missing: the tests need the shared data folder",
+        "{} is missing: the tests need the test data folder",
         p.display()
     );
     p

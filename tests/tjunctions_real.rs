@@ -1,4 +1,4 @@
-//! T-junction elimination (paper 002) on the real meshes of the shared data
+//! T-junction elimination (paper 002) on the real meshes of the test data
 //! folder, as loaded by raykit-io: the naive and fast forms give the same
 //! answer and the same mesh on every mesh the naive form accepts, the result
 //! passes the independent brute-force checker, and the plane-cut real meshes
@@ -17,7 +17,7 @@ use tjunction_support::*;
 fn shared_mesh(file: &str) -> TriangleMesh {
     let dir = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
     let path = dir.join("meshes").join(file);
     assert!(
         path.is_file(),

@@ -62,6 +62,35 @@ class Scene:
     def test(self) -> str: ...
     def stats(self) -> dict[str, Any]: ...
 
+def closest_points(
+    scene: Scene, query_points: npt.NDArray[np.float32], max_distance: float = ..., threads: int = 0
+) -> Tuple[
+    npt.NDArray[np.float32],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.float32],
+    npt.NDArray[np.float32],
+    npt.NDArray[np.float32],
+]: ...
+def distance(scene: Scene, query_points: npt.NDArray[np.float32], threads: int = 0) -> npt.NDArray[np.float32]: ...
+def signed_distance(
+    scene: Scene, query_points: npt.NDArray[np.float32], threads: int = 0
+) -> npt.NDArray[np.float32]: ...
+def occupancy(scene: Scene, query_points: npt.NDArray[np.float32], threads: int = 0) -> npt.NDArray[np.float32]: ...
+def winding_number(
+    scene: Scene, query_points: npt.NDArray[np.float32], beta: float = 2.0, threads: int = 0
+) -> npt.NDArray[np.float32]: ...
+def count_intersections(scene: Scene, rays: npt.NDArray[np.float32], threads: int = 0) -> npt.NDArray[np.int32]: ...
+def list_intersections(
+    scene: Scene, rays: npt.NDArray[np.float32], max_hits: int = ..., threads: int = 0
+) -> Tuple[
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.float32],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.float32],
+]: ...
 def load_mesh(
     path: str | os.PathLike[str],
 ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32], npt.NDArray[np.uint32]]: ...

@@ -26,13 +26,6 @@ from . import _arrays, _raykit
 INVALID_ID = 4294967295
 """``geometry_ids`` and ``primitive_ids`` of a ray that hits nothing (Open3D's value)."""
 
-_NOT_YET = (
-    "RaycastingScene.{name} is not available in this version of raykit: "
-    "it needs the scene model's point and multi-hit queries, which are not "
-    "part of the engine yet. cast_rays and test_occlusions are available."
-)
-
-
 def _mesh_arrays(mesh) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and triangles of an Open3D (tensor or legacy) or trimesh mesh."""
     vertex = getattr(mesh, "vertex", None)
@@ -177,34 +170,112 @@ class RaycastingScene:
         return _arrays.result(hit.reshape(lead))
 
     def count_intersections(self, rays, nthreads: int = 0):
-        """Number of intersections along each ray. Not available in this
-        version of raykit: raises ``NotImplementedError``."""
-        raise NotImplementedError(_NOT_YET.format(name="count_intersections"))
+        """Number of triangles each ray crosses for ``t >= 0``.
 
-    def list_intersections(self, rays, nthreads: int = 0) -> dict:
-        """Every intersection along each ray. Not available in this version
-        of raykit: raises ``NotImplementedError``."""
-        raise NotImplementedError(_NOT_YET.format(name="list_intersections"))
+        ``rays`` as in :meth:`cast_rays`; returns an int32 array of shape
+        ``(...)``. Each triangle counts once per ray (textbook
+        Möller–Trumbore without tolerance, so a crossing near a shared edge
+        is not counted on both neighbours; a ray exactly through an edge may
+        count it on both or neither). Rays with NaN or infinite coordinates
+        count 0.
+        """
+        flat, lead = _arrays.rows(rays, "rays", 6)
+        counts = _raykit.count_intersections(self._built(), flat, _arrays.threads(nthreads))
+        return _arrays.result(counts.reshape(lead))
 
-    def compute_closest_points(self, query_points, nthreads: int = 0) -> dict:
-        """Closest surface point to each query point. Not available in this
-        version of raykit: raises ``NotImplementedError``."""
-        raise NotImplementedError(_NOT_YET.format(name="compute_closest_points"))
+    def list_intersections(self, rays, nthreads: int = 0, *, max_hits: int | None = None) -> dict:
+        """Every intersection along each ray for ``t >= 0``, sorted by ``t``.
+
+        ``rays`` as in :meth:`cast_rays`. Returns a dict in Open3D's layout:
+        ``ray_splits`` ``(num_rays + 1,)`` uint32 (the hits of ray ``i`` are
+        ``ray_splits[i]:ray_splits[i+1]``), ``ray_ids``, ``t_hit``,
+        ``geometry_ids``, ``primitive_ids`` ``(num_intersections,)`` and
+        ``primitive_uvs`` ``(num_intersections, 2)``. Beyond Open3D:
+        ``max_hits`` keeps only the first ``max_hits`` hits of each ray.
+        """
+        flat, _ = _arrays.rows(rays, "rays", 6)
+        cap = np.iinfo(np.uint64).max if max_hits is None else int(max_hits)
+        if cap < 0:
+            raise ValueError(f"max_hits must be >= 0, got {max_hits}")
+        splits, ray_ids, t, g, p, uv = _raykit.list_intersections(
+            self._built(), flat, cap, _arrays.threads(nthreads)
+        )
+        return {
+            "ray_splits": _arrays.result(splits),
+            "ray_ids": _arrays.result(ray_ids),
+            "t_hit": _arrays.result(t),
+            "geometry_ids": _arrays.result(g),
+            "primitive_ids": _arrays.result(p),
+            "primitive_uvs": _arrays.result(uv),
+        }
+
+    def compute_closest_points(self, query_points, nthreads: int = 0, *, max_distance: float = math.inf) -> dict:
+        """Closest surface point to each query point (Ericson's point-triangle
+        test, nearest BVH box first).
+
+        ``query_points``: shape ``(..., 3)``. Returns a dict of ``points``
+        ``(..., 3)`` float32, ``geometry_ids`` and ``primitive_ids`` ``(...)``
+        uint32, ``primitive_uvs`` ``(..., 2)`` float32 (barycentrics: the
+        point is ``(1-u-v)·v0 + u·v1 + v·v2``) and ``primitive_normals``
+        ``(..., 3)`` float32 (the triangle's unit normal). Beyond Open3D:
+        ``max_distance`` limits the search; points with no surface within
+        it, and points with NaN or infinite coordinates, get NaN points and
+        ``INVALID_ID``.
+        """
+        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        pts, g, p, uv, n, _ = _raykit.closest_points(
+            self._built(), flat, float(max_distance), _arrays.threads(nthreads)
+        )
+        return {
+            "points": _arrays.result(pts.reshape(lead + (3,))),
+            "geometry_ids": _arrays.result(g.reshape(lead)),
+            "primitive_ids": _arrays.result(p.reshape(lead)),
+            "primitive_uvs": _arrays.result(uv.reshape(lead + (2,))),
+            "primitive_normals": _arrays.result(n.reshape(lead + (3,))),
+        }
 
     def compute_distance(self, query_points, nthreads: int = 0):
-        """Distance from each query point to the surface. Not available in
-        this version of raykit: raises ``NotImplementedError``."""
-        raise NotImplementedError(_NOT_YET.format(name="compute_distance"))
+        """Distance from each query point to the surface: float32 ``(...)``
+        (NaN for points with NaN or infinite coordinates)."""
+        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        d = _raykit.distance(self._built(), flat, _arrays.threads(nthreads))
+        return _arrays.result(d.reshape(lead))
 
     def compute_signed_distance(self, query_points, nthreads: int = 0, nsamples: int = 1):
-        """Signed distance (negative inside) from each query point. Not
-        available in this version of raykit: raises ``NotImplementedError``."""
-        raise NotImplementedError(_NOT_YET.format(name="compute_signed_distance"))
+        """Signed distance from each query point: float32 ``(...)``, negative
+        inside.
+
+        The sign comes from the generalized winding number (Jacobson et al.
+        2013, with Barill et al.'s 2018 fast approximation), not from one
+        ray's parity as in Open3D: it is right on meshes with holes,
+        duplicated triangles or overlapping parts, where parity flips.
+        ``nsamples`` (Open3D's number of rays) is accepted and must be odd,
+        but is not needed.
+        """
+        _check_nsamples(nsamples)
+        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        d = _raykit.signed_distance(self._built(), flat, _arrays.threads(nthreads))
+        return _arrays.result(d.reshape(lead))
 
     def compute_occupancy(self, query_points, nthreads: int = 0, nsamples: int = 1):
-        """Whether each query point is inside (1) or outside (0). Not
-        available in this version of raykit: raises ``NotImplementedError``."""
-        raise NotImplementedError(_NOT_YET.format(name="compute_occupancy"))
+        """Whether each query point is inside (1.0) or outside (0.0):
+        float32 ``(...)``, by the generalized winding number (at least ½ is
+        inside; see :meth:`compute_signed_distance`). ``nsamples`` is
+        accepted for Open3D compatibility and must be odd."""
+        _check_nsamples(nsamples)
+        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        occ = _raykit.occupancy(self._built(), flat, _arrays.threads(nthreads))
+        return _arrays.result(occ.reshape(lead))
+
+    def compute_winding_number(self, query_points, nthreads: int = 0, *, beta: float = 2.0):
+        """Generalized winding number of each query point (beyond Open3D):
+        float32 ``(...)``, about 1 inside a closed surface, 0 outside, in
+        between near holes. ``beta``: Barill et al.'s accuracy (a cluster of
+        triangles is approximated by a dipole when the point is farther than
+        ``beta`` times its radius; ``inf`` sums every triangle exactly)."""
+        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        w = _raykit.winding_number(self._built(), flat, float(beta), _arrays.threads(nthreads))
+        return _arrays.result(w.reshape(lead))
 
     @staticmethod
     def create_rays_pinhole(*args, **kwargs):
@@ -235,6 +306,12 @@ class RaycastingScene:
         """Size and quality of the acceleration structure: nodes, leaves,
         bytes, node_bytes, depth, sah_cost, triangle_refs (builds it if needed)."""
         return self._built().stats()
+
+
+def _check_nsamples(nsamples) -> None:
+    """Open3D's ``nsamples`` must be a positive odd integer."""
+    if isinstance(nsamples, bool) or not isinstance(nsamples, (int, np.integer)) or nsamples < 1 or nsamples % 2 == 0:
+        raise ValueError(f"nsamples must be a positive odd integer, got {nsamples!r}")
 
 
 def _image_width(lead: tuple) -> int:

@@ -14,9 +14,11 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2}
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::query::SurfaceBvh;
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Rays per rayon task when converting rays and answers.
 const GRAIN: usize = 4096;
@@ -32,9 +34,12 @@ pub struct Scene {
     /// Unit normal of each triangle by its winding (zero for degenerate
     /// ones), made once so a hit costs one load instead of an index and
     /// three vertices.
-    normals: Vec<Vec3>,
+    pub(crate) normals: Vec<Vec3>,
     offsets: Vec<u32>,
     pub(crate) accel: Option<Box<dyn Accel>>,
+    /// The 8-wide BVH of the point and multi-hit queries, built at the
+    /// first such query.
+    pub(crate) surface: OnceLock<SurfaceBvh>,
     kind: AccelKind,
     test: TestKind,
 }
@@ -67,8 +72,13 @@ fn make_rays(rays: &[f32], tnear: f32, tfar: f32, order: Option<&ImageOrder>) ->
 }
 
 impl Scene {
+    /// The BVH of the point and multi-hit queries (built on first use).
+    pub(crate) fn surface(&self) -> &SurfaceBvh {
+        self.surface.get_or_init(|| SurfaceBvh::build(&self.mesh))
+    }
+
     /// Geometry id and the triangle's index within it.
-    fn split(&self, prim: u32) -> (u32, u32) {
+    pub(crate) fn split(&self, prim: u32) -> (u32, u32) {
         let g = self.offsets.partition_point(|&o| o <= prim) - 1;
         (g as u32, prim - self.offsets[g])
     }
@@ -160,6 +170,7 @@ impl Scene {
             normals,
             offsets,
             accel,
+            surface: OnceLock::new(),
             kind,
             test: test_kind,
         })

@@ -1,5 +1,5 @@
-"""Shared fixtures: the real meshes and DEMs of the shared data folder
-(``../shared/data`` beside the checkout, or ``RAYKIT_SHARED_DATA``), and a
+"""Shared fixtures: the real meshes and DEMs of the test data folder
+(``data/`` in the repository, or ``RAYKIT_SHARED_DATA``), and a
 float64 brute-force ray/triangle reference."""
 
 from __future__ import annotations
@@ -14,11 +14,11 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def shared_data() -> Path:
-    root = Path(os.environ.get("RAYKIT_SHARED_DATA", REPO.parent / "shared" / "data"))
+    root = Path(os.environ.get("RAYKIT_SHARED_DATA", REPO / "data"))
     if not (root / "meshes").is_dir():
         raise RuntimeError(
-            f"the shared data folder {root} is missing: put it beside the checkout as "
-            "../shared/data or set RAYKIT_SHARED_DATA"
+            f"the test data folder {root} is missing: it is data/ in the repository "
+            "(RAYKIT_SHARED_DATA overrides it)"
         )
     return root
 

@@ -227,23 +227,6 @@ def test_every_structure_and_test_and_thread_count_agree(bunny):
     assert scene_of(v, f).stats()["nodes"] > 0
 
 
-def test_queries_waiting_for_the_scene_model_say_so(bunny):
-    v, f, _ = bunny
-    s = scene_of(v, f)
-    pts = np.zeros((2, 3), np.float32)
-    rays = rays_at(v, 2, 10)
-    for call in (
-        lambda: s.count_intersections(rays),
-        lambda: s.list_intersections(rays),
-        lambda: s.compute_closest_points(pts),
-        lambda: s.compute_distance(pts),
-        lambda: s.compute_signed_distance(pts, nsamples=3),
-        lambda: s.compute_occupancy(pts),
-    ):
-        with pytest.raises(NotImplementedError, match="not available in this version"):
-            call()
-
-
 def test_pinhole_rays_match_open3d():
     rng = np.random.default_rng(11)
     for _ in range(5):

@@ -91,8 +91,8 @@ def test_plugs_into_a_trimesh(data):
     mesh.ray = raykit.trimesh.RayMeshIntersector(mesh, threads=1)
     o, d = random_rays(mesh, 100, 3)
     assert (mesh.ray.intersects_first(o, d) >= 0).sum() == (reference(o, d) >= 0).sum()
-    with pytest.raises(NotImplementedError, match="not available in this version"):
-        mesh.contains(mesh.vertices[:3])
+    inside = mesh.contains([mesh.centroid, mesh.bounds[1] + 1.0])
+    assert inside.tolist() == [True, False]
     # A changed mesh rebuilds the structure.
     mesh.vertices = mesh.vertices + [0, 0, 1000.0]
     assert not mesh.ray.intersects_any(o, d).any()

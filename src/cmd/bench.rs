@@ -1,5 +1,6 @@
-//! `raykit bench`: build time, memory and Mrays/s of every structure ×
-//! triangle test on the standard ray sets, on one thread and on all threads.
+//! `raykit bench`: build time, memory and Mrays/s of structures ×
+//! triangle tests (the default one, or every one with `--accel all --test
+//! all`) on the standard ray sets, on one thread and on all threads.
 
 use crate::backend::Backend;
 use crate::measure::{median_min_max, pool, timed};
@@ -32,12 +33,14 @@ pub struct BenchArgs {
     /// per cell and mesh.
     #[arg(long, default_value = "builtin:cornell", action = clap::ArgAction::Append)]
     mesh: Vec<String>,
-    /// Structures to measure, comma-separated, or `all`.
-    #[arg(long, default_value = "all")]
-    accel: String,
-    /// Triangle tests to measure, comma-separated, or `all`.
-    #[arg(long, default_value = "all")]
-    test: String,
+    /// Structures to measure, comma-separated, or `all` (default bvh8, the
+    /// fastest; with --backend gpu, every GPU structure).
+    #[arg(long)]
+    accel: Option<String>,
+    /// Triangle tests to measure, comma-separated, or `all` (default moller,
+    /// the fastest with bvh8; with --backend gpu, every test).
+    #[arg(long)]
+    test: Option<String>,
     /// Image side of the ray sets (SIZE² primary and incoherent rays).
     #[arg(long, default_value_t = 1024)]
     size: u32,
@@ -149,16 +152,28 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     if args.backend == Backend::Gpu {
         return crate::cmd::bench_gpu::run(crate::cmd::bench_gpu::GpuBenchSetup {
             mesh: mesh_spec,
-            accel: &args.accel,
-            test: &args.test,
+            accel: args.accel.as_deref().unwrap_or("all"),
+            test: args.test.as_deref().unwrap_or("all"),
             size: args.size,
             reps: args.reps.max(1),
             json: args.json,
             options: args.build.options(),
         });
     }
-    let accels = parse_list(&args.accel, &AccelKind::ALL, AccelKind::name, "--accel")?;
-    let tests = parse_list(&args.test, &TestKind::ALL, TestKind::name, "--test")?;
+    let accels = parse_list(
+        args.accel
+            .as_deref()
+            .unwrap_or(crate::build_args::DEFAULT_ACCEL),
+        &AccelKind::ALL,
+        AccelKind::name,
+        "--accel",
+    )?;
+    let tests = parse_list(
+        args.test.as_deref().unwrap_or("moller"),
+        &TestKind::ALL,
+        TestKind::name,
+        "--test",
+    )?;
     let reps = args.reps.max(1);
     let one = pool(1)?;
     let all = pool(args.threads)?;
@@ -173,7 +188,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         args.size
     );
     let sets = all.install(|| {
-        let helper = build_accel(AccelKind::Bvh2, TestKind::Moller, &mesh, &opts);
+        let helper = build_accel(AccelKind::Bvh8, TestKind::Moller, &mesh, &opts);
         raysets::standard_sets(&mesh, helper.as_ref(), args.size, 1)
     });
     let brute_sample = (2e8 / mesh.num_triangles().max(1) as f64).clamp(64.0, 1e9) as usize;
@@ -443,13 +458,13 @@ fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
             }
         };
         let kinds = parse_list(
-            &one(&args.accel, "bvh8"),
+            &one(args.accel.as_deref().unwrap_or("all"), "bvh8"),
             &AccelKind::ALL,
             AccelKind::name,
             "--accel",
         )?;
         let tests = parse_list(
-            &one(&args.test, "moller"),
+            &one(args.test.as_deref().unwrap_or("all"), "moller"),
             &TestKind::ALL,
             TestKind::name,
             "--test",

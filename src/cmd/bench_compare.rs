@@ -4,7 +4,7 @@
 //! agree (hit/miss and distance; different triangles at the same distance,
 //! and rays grazing a shared edge that one engine catches and the other
 //! slips through, are ties). With several meshes or structures a summary
-//! gives, per cell and mesh, our best ratio: issue 8's "done when" table.
+//! gives, per cell and mesh, our best ratio.
 
 use crate::embree::{EmbreeDevice, EmbreeScene, Quality};
 use crate::measure::{median_min_max, pool, timed};
@@ -140,7 +140,7 @@ type Run<'a> = Box<dyn FnMut() + 'a>;
 /// 4b). In turn, a burst falls on both engines' samples alike. The warm-up
 /// round is for the trace cells: without it the first cells after the
 /// builds showed spreads of 75–90% in some runs where every later cell
-/// showed under 10% (step 4a); the medians are then the steady state, as a
+/// showed under 10%; the medians are then the steady state, as a
 /// renderer tracing frame after frame sees it.
 fn time_in_turn(reps: usize, warm_up: bool, runs: &mut [Run]) -> Vec<(f64, f64)> {
     if warm_up {

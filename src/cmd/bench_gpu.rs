@@ -1,5 +1,5 @@
 //! `raykit bench --backend gpu`: build, upload, memory and Mrays/s of the
-//! GPU kernels (paper 000's stack kd-tree, paper 001's threaded BVH) × the
+//! GPU kernels (the kd-tree with a per-ray stack, the threaded BVH (Smits 1998)) × the
 //! Plücker and Möller tests, every answer checked against the CPU twin.
 
 use crate::backend::{gpu_accel, open_gpu};

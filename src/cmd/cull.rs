@@ -1,4 +1,4 @@
-//! `raykit cull`: visibility culling of a model (paper 003) — removes the
+//! `raykit cull`: visibility culling of a model (Min 2008) — removes the
 //! triangles (or parts) that no viewpoint outside the model can see.
 
 use crate::measure::timed;
@@ -31,7 +31,7 @@ pub enum ByArg {
 /// Arguments of `raykit cull`.
 #[derive(Args)]
 #[command(
-    after_help = "Paper 003's global visibility culling: a grid of RESOLUTION points along the model's\n\
+    after_help = "Global visibility culling (Min 2008): a grid of RESOLUTION points along the model's\n\
 longest axis is laid around it, the directed distance field (distance to the nearest surface along\n\
 +-x, +-y, +-z from every grid point, by axis rays through a BVH) is computed, and a front propagated\n\
 from the grid's outer boundary marks the points reachable from outside. Triangles the outside points'\n\
@@ -45,7 +45,7 @@ conservative mode keeps what the evidence does not clearly hide: triangles withi
 a visible surface, triangles in grid cells with an outside corner, and candidates next to kept\n\
 triangles that random rays (or escape directions shared by their neighbours) show to escape the\n\
 model; --confirm also tests every remaining candidate by rays (slow on models with many hidden\n\
-triangles). --paper applies the paper's rule alone (removes more, may remove\n\
+triangles). --paper applies Min's rule alone (removes more, may remove\n\
 visible triangles near small openings).\n\n\
 Examples:\n  raykit cull engine.glb engine_outside.glb\n  \
 raykit cull assembly.obj shell.obj --resolution 256 --by part --report cull.json\n  \
@@ -76,7 +76,7 @@ pub struct CullArgs {
     /// Remove hidden triangles, or whole parts with no visible triangle.
     #[arg(long, value_enum, default_value = "triangle")]
     by: ByArg,
-    /// Paper 003's rule alone, without the conservative additions (may
+    /// Min's (2008) rule alone, without the conservative additions (may
     /// remove visible triangles seen through openings finer than the grid).
     #[arg(long, conflicts_with = "confirm")]
     paper: bool,

@@ -1,4 +1,4 @@
-//! `raykit tjunctions`: T-junction elimination (paper 002) on a mesh file.
+//! `raykit tjunctions`: T-junction elimination (Kim 2013) on a mesh file.
 
 use crate::measure::{pool, timed};
 use anyhow::{bail, Context, Result};
@@ -15,7 +15,7 @@ use std::time::Duration;
 pub enum MethodArg {
     /// Uniform grid over the points; near-linear, parallel.
     Fast,
-    /// Paper 002's O(n²) reference: every edge against every point (refuses
+    /// The O(n²) reference: every edge against every point (refuses
     /// meshes with more than 2e9 triangle × point pairs).
     Naive,
 }
@@ -31,7 +31,7 @@ edge and the triangle re-triangulated (no new vertices; parts and materials kept
 give the same output mesh.\n\n\
 Examples:\n  raykit tjunctions level.obj level_fixed.obj\n  \
 raykit tjunctions cut.ply fixed.ply --method naive --json\n  \
-raykit tjunctions bunny.obj fixed.ply --kd-cut 8 --cut-out cut.ply   (cut by paper 002's kd-tree first)\n\n\
+raykit tjunctions bunny.obj fixed.ply --kd-cut 8 --cut-out cut.ply   (cut by Kim's (2013) kd-tree first)\n\n\
 Prints a summary (or, with --json, a JSON report on stdout: the library's report fields\n\
 t_junctions, inserted, degenerate_dropped, triangles_in, triangles_out, rounds, remaining_*,\n\
 find_s, retriangulate_s, plus input, output, options, threads, load_s, save_s)."
@@ -42,7 +42,7 @@ pub struct TJunctionsArgs {
     /// Output mesh, format from its extension (obj, ply, stl, off, gltf, glb; .gz
     /// compresses); never the input file.
     output: PathBuf,
-    /// Finder: fast (grid, parallel) or naive (paper 002's O(n²) reference).
+    /// Finder: fast (grid, parallel) or naive (the O(n²) reference).
     #[arg(long, value_enum, default_value = "fast")]
     method: MethodArg,
     /// Allowed distance from an edge's line, relative to the edge length.
@@ -63,7 +63,7 @@ pub struct TJunctionsArgs {
     /// Print the report as JSON on stdout instead of the summary.
     #[arg(long)]
     json: bool,
-    /// First cut the mesh with paper 002's game kd-tree of weight H (0..=20):
+    /// First cut the mesh with Kim's (2013) game kd-tree of weight H (0..=20):
     /// straddling triangles are cut at the split planes, leaving the
     /// T-junctions that are then removed.
     #[arg(long, value_name = "H", value_parser = clap::value_parser!(u8).range(0..=20))]

@@ -17,7 +17,7 @@ use std::process::ExitCode;
 /// Arguments of `raykit trace`.
 #[derive(Args)]
 #[command(after_help = "Prints one JSON line of statistics on stderr:\n\
-{\"accel\", \"test\", \"load_ms\", \"build_ms\", \"trace_ms\", \"rays\", \"mrays\", \"threads\"}\n\
+{\"accel\", \"bvh_build\", \"test\", \"load_ms\", \"build_ms\", \"trace_ms\", \"rays\", \"mrays\", \"threads\"}\n\
 (trace_ms excludes loading and building). Hit file: per ray f32 t, u32 prim (8 bytes; a miss is\n\
 t = +inf, prim = 4294967295). Occlusion file: one byte per ray (1 = occluded).")]
 pub struct TraceArgs {
@@ -30,8 +30,9 @@ pub struct TraceArgs {
     /// Output hit file (or occlusion file with --occlusion).
     #[arg(long)]
     out: PathBuf,
-    /// Acceleration structure (`raykit info accels`; default bvh2, or
-    /// kd-stack with --backend gpu, which also takes bvh-threaded and brute).
+    /// Acceleration structure (`raykit info accels`; default bvh8, the
+    /// fastest, or kd-stack with --backend gpu, which also takes
+    /// bvh-threaded and brute). The JSON line names the one used.
     #[arg(long)]
     accel: Option<String>,
     /// Ray/triangle test (`raykit info tests`).
@@ -79,7 +80,12 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
     if args.backend == Backend::Gpu {
         return run_gpu(args);
     }
-    let (kind, test) = parse_names(args.accel.as_deref().unwrap_or("bvh2"), &args.test)?;
+    let (kind, test) = parse_names(
+        args.accel
+            .as_deref()
+            .unwrap_or(crate::build_args::DEFAULT_ACCEL),
+        &args.test,
+    )?;
     crate::paths::ensure_not_input(&args.out, &[&args.rays, std::path::Path::new(&args.mesh)])?;
     let pool = pool(args.threads)?;
     let threads = pool.current_num_threads();
@@ -110,6 +116,7 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
         "{}",
         json!({
             "accel": kind.name(),
+            "bvh_build": crate::build_args::quality_name(opts.quality),
             "test": test.name(),
             "load_ms": load_s * 1e3,
             "build_ms": build_s * 1e3,
@@ -244,6 +251,7 @@ fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
             "backend": "gpu",
             "adapter": ctx.describe(),
             "accel": kind.name(),
+            "bvh_build": crate::build_args::quality_name(opts.quality),
             "test": test.name(),
             "load_ms": load_s * 1e3,
             "build_ms": scene.build_seconds * 1e3,

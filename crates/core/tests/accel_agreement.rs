@@ -267,8 +267,8 @@ fn stats_describe_the_tree() {
     }
 }
 
-/// The BVH layouts over trees from every builder (issue 8, step 3: the
-/// binned SAH, with wide nodes filled (step 3v) or not, and the fast linear
+/// The BVH layouts over trees from every builder (the
+/// binned SAH, with wide nodes filled or not, and the fast linear
 /// BVH) agree with brute force.
 #[test]
 fn bvhs_of_every_build_quality_agree_with_brute_force() {
@@ -310,7 +310,7 @@ fn bvhs_of_every_build_quality_agree_with_brute_force() {
 /// batches (packets and interleaved walks), as brute force says: such a
 /// ray's slab arithmetic gives NaNs, which the box tests' `min`/`max` drop,
 /// and the wide BVHs once entered their unused slots' inverted boxes with
-/// them (a crash; issue 8, step 4e).
+/// them (a crash).
 #[test]
 fn rays_that_are_not_finite_hit_nothing_on_every_structure() {
     let mesh = random_soup(3000, 17);

@@ -1,4 +1,4 @@
-//! The BVH builders (issue 8, step 3: binned SAH after Wald 2007 / Embree,
+//! The BVH builders (binned SAH after Wald 2007 / Embree,
 //! linear BVH after Karras 2012) give valid trees: every triangle in exactly
 //! one leaf, every leaf's box the exact bounds of its triangles (recomputed
 //! from the mesh), every inner box the union of its children's; and the same

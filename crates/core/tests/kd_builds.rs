@@ -1,4 +1,4 @@
-//! The kd-tree builds checked against independent references: paper 002's
+//! The kd-tree builds checked against independent references: Kim's (2013)
 //! score recomputed by brute force for the root plane, the spatial median,
 //! and the cut mesh of the game build against the original surface.
 
@@ -32,7 +32,7 @@ fn closed_mesh(level: u32) -> TriangleMesh {
     support::sphere(level)
 }
 
-/// Paper 002's score of the plane `x[axis] = pos`, from the triangles'
+/// Kim's (2013) score of the plane `x[axis] = pos`, from the triangles'
 /// corners: `None` when the plane leaves no whole triangle on a side.
 fn brute_score(mesh: &TriangleMesh, axis: usize, pos: f32, h: i64) -> Option<i64> {
     let (mut front, mut back, mut split) = (0i64, 0i64, 0i64);
@@ -219,7 +219,7 @@ fn open_edges(mesh: &TriangleMesh) -> usize {
     edges.values().filter(|&&c| c != 2).count()
 }
 
-/// Paper 002's pipeline end to end: the game build cuts a closed mesh,
+/// Kim's (2013) pipeline end to end: the game build cuts a closed mesh,
 /// leaving T-junctions (and so open edges); elimination removes every one
 /// and the surface is closed again. Naive and fast forms agree.
 #[test]

@@ -1,4 +1,4 @@
-//! T-junction elimination (paper 002) checked against an independent
+//! T-junction elimination (Kim 2013) checked against an independent
 //! brute-force f64 checker on meshes cut by axis planes the way a
 //! game-heuristic kd-tree build cuts polygons: the naive and fast finders
 //! agree with each other and with the checker, and after elimination no point

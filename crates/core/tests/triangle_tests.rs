@@ -1,4 +1,4 @@
-//! The three ray/triangle tests (Möller–Trumbore, paper 000's Plücker test,
+//! The three ray/triangle tests (Möller–Trumbore, the stack kd-tree GPU tracer's Plücker test,
 //! Wald's projection test), as shipped and in their textbook form without
 //! the conservative tolerance (`intersect_strict`, measured only), against
 //! the `f64` reference in `raykit_core::tri::reference`:

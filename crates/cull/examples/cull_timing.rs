@@ -1,4 +1,4 @@
-//! Times paper 003's culling on a box of icospheres (1,280,192 triangles at
+//! Times Min's (2008) culling on a box of icospheres (1,280,192 triangles at
 //! the defaults): `cargo run --release -p raykit-cull --example cull_timing
 //! -- [RESOLUTION] [SPHERES_PER_AXIS] [SUBDIVISIONS]`.
 

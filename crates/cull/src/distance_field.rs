@@ -1,8 +1,8 @@
-//! The directed distance field (paper 003, step 1): per grid point, the
+//! The directed distance field (Min 2008, first stage): per grid point, the
 //! distance to the nearest surface along each of ±x, ±y, ±z and the id of the
 //! triangle found there.
 //!
-//! Paper 003 renders the model slab by slab and reads the depth buffer (the
+//! Min (2008) renders the model slab by slab and reads the depth buffer (the
 //! distance) and a colour buffer (the triangle id). We cast one axis-aligned
 //! ray per grid line through the accel and peel it: after each hit the ray
 //! goes on just past it, so a line's sorted hit list holds every surface
@@ -22,7 +22,7 @@ use rayon::prelude::*;
 /// reached from outside (more triangles kept, never fewer).
 pub const MAX_HITS_PER_LINE: usize = 1 << 16;
 
-/// One of the six axis directions of paper 003's directed distances.
+/// One of the six axis directions of Min's (2008) directed distances.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Direction {
     /// 0, 1, 2 for x, y, z.
@@ -61,7 +61,7 @@ impl Direction {
     ];
 }
 
-/// The nearest surface along one direction from one grid point (paper 003:
+/// The nearest surface along one direction from one grid point (Min (2008):
 /// the depth and colour buffer values at that point).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DirectedHit {
@@ -89,7 +89,7 @@ impl LineHits {
     }
 }
 
-/// Paper 003's directed distance field on a [`Grid`], stored as the sorted
+/// Min's (2008) directed distance field on a [`Grid`], stored as the sorted
 /// hit lists of the grid lines (see the module documentation).
 #[derive(Clone, Debug)]
 pub struct DirectedDistanceField {
@@ -99,7 +99,7 @@ pub struct DirectedDistanceField {
 }
 
 /// All surface crossings along one line, nearest first: cast, then cast again
-/// from just past the hit (depth peeling, as paper 003's slab renders).
+/// from just past the hit (depth peeling, as Min's (2008) slab renders).
 fn peel_line(accel: &dyn Accel, origin: Vec3, axis: usize, length: f32) -> Vec<(f32, u32)> {
     let dir = Vec3::AXES[axis];
     let mut hits = Vec::new();
@@ -119,7 +119,7 @@ fn peel_line(accel: &dyn Accel, origin: Vec3, axis: usize, length: f32) -> Vec<(
 
 impl DirectedDistanceField {
     /// Cast the grid lines of `grid` against `accel` (built over the model),
-    /// in parallel over lines (paper 003, step 1).
+    /// in parallel over lines (Min 2008, first stage).
     pub fn compute(accel: &dyn Accel, grid: &Grid) -> DirectedDistanceField {
         let lines = [0, 1, 2].map(|axis| {
             let n = grid.dims[axis];
@@ -156,7 +156,7 @@ impl DirectedDistanceField {
         self.lines[axis].line(line)
     }
 
-    /// Paper 003's directed distance of point `p` in direction `dir`: the
+    /// Min's (2008) directed distance of point `p` in direction `dir`: the
     /// nearest surface at distance ≥ 0 (a surface through the point is at 0),
     /// or `None` when the ray leaves the grid without meeting one.
     pub fn directed(&self, p: [usize; 3], dir: Direction) -> Option<DirectedHit> {
@@ -180,7 +180,7 @@ impl DirectedDistanceField {
     /// One byte per grid point: bit `a` set when the step from the point to
     /// its neighbour along `+a` is free — no surface on the closed segment
     /// between them, i.e. the point's `+a` directed distance exceeds the
-    /// spacing (paper 003's propagation rule). A line cut off at
+    /// spacing (Min's (2008) propagation rule). A line cut off at
     /// [`MAX_HITS_PER_LINE`] is free beyond its last recorded hit.
     pub fn free_steps(&self) -> Vec<u8> {
         let g = &self.grid;

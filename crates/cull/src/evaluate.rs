@@ -1,4 +1,4 @@
-//! The ground-truth evaluator of issue 6 (point 4): which triangles of a
+//! The ground-truth evaluator: which triangles of a
 //! model are truly visible from outside, by ray casting alone (no grid), and
 //! how a culling result compares with it.
 //!
@@ -53,7 +53,7 @@ pub struct EvalOptions {
     /// box diagonal: an escape needs a beam this wide (see
     /// [`crate::visible::beam_escapes`]), so cracks between independently
     /// tessellated faces do not make hidden triangles visible. 0 (the
-    /// default, issue 6's definition): any single ray.
+    /// default definition): any single ray.
     pub min_opening: f32,
 }
 

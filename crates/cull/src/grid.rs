@@ -1,4 +1,4 @@
-//! The regular grid of sample points around the model (paper 003, step 1).
+//! The regular grid of sample points around the model (Min 2008, first stage).
 
 use raykit_core::{Aabb, Vec3};
 
@@ -6,10 +6,10 @@ use raykit_core::{Aabb, Vec3};
 /// box, beyond the one-cell margin. CAD models have many axis-aligned faces
 /// at round coordinates; an irrational-looking offset keeps grid planes from
 /// coinciding with them (an axis ray lying in a face's plane would slip
-/// through it, paper 003's depth buffer has the same blind spot).
+/// through it, Min's (2008) depth buffer has the same blind spot).
 pub const GRID_OFFSET: f32 = 0.381_966;
 
-/// A regular grid of points around a model's bounding box (paper 003, §
+/// A regular grid of points around a model's bounding box (Min (2008), §
 /// "directed distance field": the grid on which distances are stored).
 ///
 /// Point `[i, j, k]` lies at `origin + spacing · (i, j, k)`. The grid keeps a
@@ -35,7 +35,7 @@ impl Grid {
     pub const MAX_RESOLUTION: usize = 1024;
 
     /// The grid with `resolution` points along the longest axis of `bounds`
-    /// (paper 003's grid size N), clamped to
+    /// (Min's (2008) grid size N), clamped to
     /// `[MIN_RESOLUTION, MAX_RESOLUTION]`. An empty or non-finite box gives a
     /// grid around the origin; a flat box a grid a few points thick.
     pub fn around(bounds: &Aabb, resolution: usize) -> Grid {

@@ -1,8 +1,8 @@
-//! raykit visibility culling of CAD models, after paper 003 (global
+//! raykit visibility culling of CAD models, after Min (2008) (global
 //! visibility culling): remove the triangles that no viewpoint outside the
 //! model can see.
 //!
-//! The steps of paper 003, one module each:
+//! The steps of Min (2008), one module each:
 //! 1. [`grid`] a regular grid around the model, and [`distance_field`] the
 //!    directed distance field on it — per point, the distance to the nearest
 //!    surface along ±x, ±y, ±z and the triangle found there (here by casting
@@ -63,13 +63,13 @@ use raykit_core::{MeshError, TriangleMesh};
 use serde::Serialize;
 use std::time::Instant;
 
-/// Settings of [`cull`] (paper 003's grid size and our conservative mode).
+/// Settings of [`cull`] (Min's (2008) grid size and our conservative mode).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CullOptions {
-    /// Grid points along the model's longest axis (paper 003 used 64–256).
+    /// Grid points along the model's longest axis (Min (2008) used 64–256).
     pub resolution: usize,
     /// Conservative mode (the default): keep what the evidence does not
-    /// clearly hide. Off: paper 003's rule alone.
+    /// clearly hide. Off: Min's (2008) rule alone.
     pub conservative: bool,
     /// Conservative mode: triangles within this many spacings behind the
     /// first surface on an outside point's ray are kept.
@@ -102,7 +102,7 @@ impl Default for CullOptions {
 }
 
 impl CullOptions {
-    /// Paper 003's method alone at `resolution`, with no conservative
+    /// Min's (2008) method alone at `resolution`, with no conservative
     /// additions.
     pub fn paper(resolution: usize) -> Self {
         CullOptions {
@@ -124,7 +124,7 @@ impl CullOptions {
     }
 }
 
-/// Figures of one run: paper 003's Table 5-1 columns and more.
+/// Figures of one run: Min's (2008) table columns and more.
 #[derive(Clone, Debug, Default, Serialize, PartialEq)]
 pub struct CullStats {
     /// Grid points per axis.
@@ -139,9 +139,9 @@ pub struct CullStats {
     pub field_hits: usize,
     /// Seconds to build the BVH.
     pub accel_seconds: f64,
-    /// Seconds to compute the directed distance field (paper 003's first time).
+    /// Seconds to compute the directed distance field (Min's (2008) first time).
     pub distance_field_seconds: f64,
-    /// Seconds of front propagation, free-step bits included (paper 003's second time).
+    /// Seconds of front propagation, free-step bits included (Min's (2008) second time).
     pub propagation_seconds: f64,
     /// Seconds to mark visible triangles, conservative additions included.
     pub visible_seconds: f64,
@@ -178,7 +178,7 @@ pub struct CullResult {
     pub stats: CullStats,
 }
 
-/// Classify every triangle of `mesh` as kept or removed (paper 003's global
+/// Classify every triangle of `mesh` as kept or removed (Min's (2008) global
 /// visibility culling). An empty mesh gives an empty result; a mesh failing
 /// [`TriangleMesh::validate`] otherwise gives its error.
 pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, MeshError> {

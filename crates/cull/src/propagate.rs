@@ -1,8 +1,8 @@
-//! Front propagation from the grid's outer boundary (paper 003, step 2).
+//! Front propagation from the grid's outer boundary (Min 2008, second stage).
 
 use crate::grid::Grid;
 
-/// Paper 003's fast-marching tags.
+/// Min's (2008) fast-marching tags.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
 pub enum Tag {
@@ -32,7 +32,7 @@ impl Classification {
     }
 }
 
-/// Classify every grid point as outside or inside (paper 003, step 2).
+/// Classify every grid point as outside or inside (Min 2008, second stage).
 ///
 /// The front starts at the grid's boundary points (outside by construction)
 /// and moves inwards: a neighbour `q` of a `Known` point `p` becomes `Trial`

@@ -1,6 +1,6 @@
 //! Escape directions shared between neighbouring triangles: the
-//! ground-truth evaluator's search through narrow openings (issue 6,
-//! point 4; our addition to paper 003's setting).
+//! ground-truth evaluator's search through narrow openings (our
+//! addition to Min's (2008) setting).
 //!
 //! A triangle seen only through a slit (the clearance round a bolt, a seam
 //! between two parts) escapes along a small cone of directions that random

@@ -1,7 +1,7 @@
-//! Synthetic assemblies with known visibility (issue 6's test models):
+//! Synthetic assemblies with known visibility (test models):
 //! boxes (closed, or with openings), icospheres, boxes full of parts, nested
 //! shells. Each appended piece becomes one part, as a CAD assembly's nodes.
-//! Used by the tests and the timings of paper 003's method.
+//! Used by the tests and the timings of Min's (2008) method.
 
 use raykit_core::{Aabb, TriangleMesh, Vec3};
 

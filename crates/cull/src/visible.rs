@@ -1,4 +1,4 @@
-//! The visible set (paper 003, step 3) and the conservative additions that
+//! The visible set (Min 2008, third stage) and the conservative additions that
 //! keep triangles the grid cannot clearly hide.
 
 use crate::distance_field::DirectedDistanceField;
@@ -10,15 +10,15 @@ use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// Triangles met by the directed rays of outside grid points (paper 003,
-/// step 3: "the triangle id found there is visible").
+/// Triangles met by the directed rays of outside grid points (Min (2008),
+/// third stage: "the triangle id found there is visible").
 ///
 /// `depth_cells` is the conservative dilation: along each such ray, the
 /// triangles hit within `depth_cells` grid spacings beyond the first surface
 /// are marked visible too. It keeps surfaces that lie closer behind a visible
 /// one than the grid can resolve — thin gaps, slots and small openings next
 /// to the first surface, where the true outside reaches between the grid
-/// points. 0 gives paper 003's rule exactly.
+/// points. 0 gives Min's (2008) rule exactly.
 pub fn visible_from_outside(
     field: &DirectedDistanceField,
     class: &Classification,

@@ -1,4 +1,4 @@
-//! The ground-truth evaluator (issue 6, point 4) on synthetic assemblies
+//! The ground-truth evaluator on synthetic assemblies
 //! whose visibility is known from their geometry, and `compare` on
 //! hand-made kept masks.
 

@@ -1,4 +1,4 @@
-//! Paper 003's steps 1 and 2 on their own: the directed distance field
+//! Min's (2008) first two stages on their own: the directed distance field
 //! against brute-force f64 line casting over every triangle, and front
 //! propagation against an independent flood fill over those brute-force
 //! free steps, and against the analytic inside of a closed box.

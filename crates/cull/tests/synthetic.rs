@@ -1,4 +1,4 @@
-//! Paper 003's culling on synthetic assemblies with known answers, each
+//! Min's (2008) culling on synthetic assemblies with known answers, each
 //! checked against the ray-traced reference of `common`.
 
 mod common;
@@ -80,7 +80,7 @@ fn parts_seen_through_a_hole_are_kept() {
         |p: u32| (0..mesh.num_triangles()).any(|t| mesh.part_of(t) == p && reference[t]);
     assert!(seen_part(0) && seen_part(1));
     assert!(!seen_part(4));
-    // The hole spans 11 cells at resolution 48: even paper 003's rule alone
+    // The hole spans 11 cells at resolution 48: even Min's (2008) rule alone
     // keeps every triangle the reference sees.
     for options in [CullOptions::paper(48), CullOptions::conservative(48)] {
         let r = cull(&mesh, &options).unwrap();
@@ -157,7 +157,7 @@ fn open_surfaces_lose_nothing_visible() {
     let single = TriangleMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]);
     for mesh in [soup, open_box, single] {
         let reference = reference_visible(&mesh, 8, 128, &[]);
-        // Paper 003's rule alone misses small triangles no axis ray meets.
+        // Min's (2008) rule alone misses small triangles no axis ray meets.
         for options in [CullOptions::conservative(32), CullOptions::conservative(6)] {
             let r = cull(&mesh, &options).unwrap();
             assert_eq!(

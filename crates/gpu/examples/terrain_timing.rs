@@ -1,6 +1,6 @@
 //! GPU against CPU terrain ray casting on one view: the maximum-mipmap
-//! kernel's Mrays/s (Tevs et al. 2008, paper 004's method C) and paper
-//! 004's boxes kernel (kernel time, submission to completion) beside the
+//! kernel's Mrays/s (Tevs et al. 2008) and the
+//! quadtree-box caster's boxes kernel (kernel time, submission to completion) beside the
 //! CPU's maxmip and boxes casters (all cores, rays made and cast).
 //!
 //! `cargo run --release -p raykit-gpu --example terrain_timing -- DEM [WIDTH HEIGHT REPS]`

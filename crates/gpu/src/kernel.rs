@@ -14,11 +14,11 @@ pub mod wgsl {
     pub const SCENE: &str = include_str!("shaders/scene.wgsl");
     /// Möller–Trumbore.
     pub const TRI_MOLLER: &str = include_str!("shaders/tri_moller.wgsl");
-    /// Plücker (paper 000).
+    /// Plücker (the stack kd-tree GPU tracer).
     pub const TRI_PLUCKER: &str = include_str!("shaders/tri_plucker.wgsl");
-    /// Paper 000's kd-tree with a per-thread stack.
+    /// The stack kd-tree GPU tracer's kd-tree with a per-thread stack.
     pub const KD_STACK: &str = include_str!("shaders/kd_stack.wgsl");
-    /// Paper 001's threaded BVH.
+    /// The Purcell-style stream tracer's threaded BVH.
     pub const BVH_THREADED: &str = include_str!("shaders/bvh_threaded.wgsl");
     /// Brute force.
     pub const BRUTE: &str = include_str!("shaders/brute.wgsl");
@@ -26,7 +26,7 @@ pub mod wgsl {
     pub const TRACE: &str = include_str!("shaders/trace.wgsl");
     /// Terrain bindings and the per-cell test of the declared surface.
     pub const TERRAIN_CELL: &str = include_str!("shaders/terrain_cell.wgsl");
-    /// Paper 004's per-frame boxes: nearest box entry, then a march.
+    /// per-frame quadtree boxes: nearest box entry, then a march.
     pub const TERRAIN_BOXES: &str = include_str!("shaders/terrain_boxes.wgsl");
     /// Per-ray maximum-mipmap terrain casting (Tevs et al. 2008).
     pub const TERRAIN_MAXMIP: &str = include_str!("shaders/terrain_maxmip.wgsl");
@@ -40,9 +40,9 @@ pub mod wgsl {
     pub const ENVIRONMENT: &str = include_str!("shaders/render/environment.wgsl");
     /// The Whitted shading kernel (Tracer::scatter).
     pub const SCATTER: &str = include_str!("shaders/render/scatter.wgsl");
-    /// Paper 000's single render kernel.
+    /// The stack kd-tree GPU tracer's single render kernel.
     pub const MEGAKERNEL: &str = include_str!("shaders/render/megakernel.wgsl");
-    /// Paper 001's stream kernels.
+    /// The Purcell-style stream tracer's stream kernels.
     pub const STREAM: &str = include_str!("shaders/render/stream.wgsl");
 }
 

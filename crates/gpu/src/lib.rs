@@ -1,20 +1,20 @@
-//! raykit's GPU backend on wgpu (issue 9): WGSL compute kernels that trace
+//! raykit's GPU backend on wgpu: WGSL compute kernels that trace
 //! the same structures, with the same triangle records and arithmetic, as
 //! the CPU engine, so that both give the same answers.
 //!
 //! - [`GpuContext`]: adapter and device (any Vulkan, Metal or DX12 GPU; in
 //!   CI Mesa's lavapipe).
-//! - [`GpuScene`]: a structure uploaded: paper 000's kd-tree with 8-byte
+//! - [`GpuScene`]: a structure uploaded: the stack kd-tree GPU tracer's kd-tree with 8-byte
 //!   nodes traversed with a fixed-size per-thread stack
-//!   (`shaders/kd_stack.wgsl`), paper 001's threaded BVH with escape indices
+//!   (`shaders/kd_stack.wgsl`), the threaded BVH (Smits 1998) with escape indices
 //!   (`shaders/bvh_threaded.wgsl`), or brute force; triangles precomputed for
-//!   paper 000's Plücker test or Möller–Trumbore (paper 001).
+//!   the stack kd-tree GPU tracer's Plücker test or Möller–Trumbore (1997).
 //! - [`GpuTracer`]: batch nearest-hit and occlusion queries.
 //! - [`GpuTerrain`]: height-field ray casting by per-ray maximum-mipmap
-//!   traversal (Tevs et al. 2008, paper 004's method C) on the declared
+//!   traversal (Tevs et al. 2008) on the declared
 //!   two-triangles-per-cell surface of `raykit-terrain`.
-//! - [`render_whitted_gpu`]: the Whitted renderer, as paper 000's single
-//!   kernel or paper 001's stream of kernels over ray queues.
+//! - [`render_whitted_gpu`]: the Whitted renderer, as the stack kd-tree GPU tracer's single
+//!   kernel or a stream of kernels (after Purcell et al. 2002) over ray queues.
 //!
 //! Every kernel is WGSL assembled from small pieces (`shaders/`): the
 //! common records, the scene bindings, one triangle test, one structure, one

@@ -1,5 +1,5 @@
-//! A triangle mesh's acceleration structure uploaded to the GPU: paper
-//! 000's kd-tree or paper 001's threaded BVH (or brute force), with the
+//! A triangle mesh's acceleration structure uploaded to the GPU: the
+//! stack kd-tree, the threaded BVH (Smits 1998) or brute force, with the
 //! triangles precomputed for the Plücker or Möller test.
 
 use crate::buffers::{storage, uniform};
@@ -14,9 +14,9 @@ use std::time::Instant;
 /// The structures the GPU kernels traverse.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum GpuAccelKind {
-    /// Paper 000: kd-tree with 8-byte nodes and a fixed-size per-thread stack.
+    /// Stack kd-tree: kd-tree with 8-byte nodes and a fixed-size per-thread stack.
     KdStack,
-    /// Paper 001: BVH in pre-order with escape indices, no stack.
+    /// Threaded BVH (Smits 1998): BVH in pre-order with escape indices, no stack.
     BvhThreaded,
     /// Every ray against every triangle (the reference).
     Brute,

@@ -1,4 +1,4 @@
-//! The GPU Whitted renderer (paper 000's single kernel and paper 001's
+//! The GPU Whitted renderer (one kernel per ray path and the Purcell-style stream tracer's
 //! stream) gives the CPU renderer's image on the built-in scenes, and its
 //! two organisations give the same image.
 //!
@@ -259,7 +259,7 @@ fn shirley6_matches_cpu() {
     );
 }
 
-/// Spot, directional and point lights together, and paper 000's kd-tree
+/// Spot, directional and point lights together, and the stack kd-tree GPU tracer's kd-tree
 /// kernel with its Plücker test instead of the threaded BVH with Möller.
 #[test]
 fn every_light_kind_on_the_plucker_kd_tree_matches_cpu() {
@@ -285,7 +285,7 @@ fn every_light_kind_on_the_plucker_kd_tree_matches_cpu() {
             0.5 * b.diagonal(),
         )),
     ];
-    // Paper 000's combination: the kd-tree with the Plücker test.
+    // The stack kd-tree GPU tracer's combination: the kd-tree with the Plücker test.
     check_with(
         "whitted, three light kinds",
         &scene,
@@ -296,8 +296,8 @@ fn every_light_kind_on_the_plucker_kd_tree_matches_cpu() {
     );
 }
 
-/// A smooth equirectangular map, looked up by direction and through paper
-/// 001's environment box, rotated and scaled.
+/// A smooth equirectangular map, looked up by direction and through the
+/// environment box, rotated and scaled.
 fn test_map() -> EquirectMap {
     let (w, h) = (64, 32);
     let texels = (0..w * h)

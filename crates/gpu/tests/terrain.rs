@@ -1,6 +1,6 @@
 //! The GPU terrain casters (per-ray maximum-mipmap traversal, Tevs et al.
-//! 2008, paper 004's method C; paper 004's per-frame boxes; in f32) against
-//! the CPU's f64 casters of the same kind on every pixel of test views of the shared DEMs and a fractal
+//! 2008; per-frame quadtree boxes; in f32) against
+//! the CPU's f64 casters of the same kind on every pixel of test views of the test DEMs and a fractal
 //! one: same hit or miss and same hit cell, distances within 1e-4
 //! relative. Pixels may differ only where f32 rounding decides: each
 //! difference must be explained and they must be under 0.1% of the pixels.

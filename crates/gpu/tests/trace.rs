@@ -1,5 +1,5 @@
 //! The GPU kernels give the CPU's answers: every structure × test on the
-//! built-in scenes and the shared meshes, the standard primary, shadow and
+//! built-in scenes and the test meshes, the standard primary, shadow and
 //! incoherent ray sets, nearest hits and occlusion.
 
 mod support;

@@ -1,4 +1,4 @@
-//! Every loader on the real files of the shared data folder, each checked
+//! Every loader on the real files of the test data folder, each checked
 //! against an independent reference: a few-line parser written here with
 //! `str::split_whitespace` for the text formats, and the `gltf` crate's own
 //! accessor reader plus a node walk for the GLB. Counts are the ones the data

@@ -1,6 +1,6 @@
 //! Arbitrary output variables of a frame: what the camera's first hit was,
 //! per pixel — distance, surface normal and triangle id — for compositing,
-//! debugging and checking the rasterized visibility buffer of paper 001.
+//! debugging and checking the rasterized visibility buffer of the Purcell-style stream tracer.
 
 use crate::surface::Surface;
 use raykit_core::glam::Vec3;

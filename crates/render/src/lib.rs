@@ -1,5 +1,5 @@
 //! raykit renderer: one primary ray per sample through a pinhole camera,
-//! Blinn-Phong shading (Phong's model as used in paper 000, with Blinn's half
+//! Blinn-Phong shading (Phong's model as used in the stack kd-tree GPU tracer, with Blinn's half
 //! vector) of barycentrically interpolated vertex normals, point lights with
 //! `1/d²` falloff, hard shadows by shadow rays, a sky gradient behind,
 //! rendered tile by tile in parallel and encoded as 8-bit sRGB.

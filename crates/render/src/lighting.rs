@@ -1,5 +1,5 @@
-//! Direct lighting: Phong's model with Blinn's half vector, as paper 000
-//! shades its hits and paper 001's lighting kernel does.
+//! Direct lighting: Phong's model with Blinn's half vector, as the stack kd-tree GPU tracer
+//! shades its hits and the Purcell-style stream tracer's lighting kernel does.
 //!
 //! For a surface with diffuse colour `kd` (texture applied), specular colour
 //! `ks`, exponent `s`, shading normal `n` and unit direction to the viewer `v`:

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 /// than a strip of one row, whose rays part ways in the tree sooner (Wald
 /// et al. 2001). 1024² primary rays through `bvh8` in one batch got 1.16×
 /// (1M-triangle terrain), 1.27× (full dragon) and 1.31× (500k scatter)
-/// faster on one thread (issue 8, BENCHMARKS.md step 3y).
+/// faster on one thread (BENCHMARKS.md).
 const BLOCK_SIDE: u32 = 4;
 
 /// The pixels of a `width` × `height` image in the order they are traced:

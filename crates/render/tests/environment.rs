@@ -95,12 +95,12 @@ fn directions(rng: &mut Pcg32, n: usize) -> Vec<Vec3> {
 
 // ----------------------------------------------------------- the shared maps
 
-/// The eight shared maps: `$RAYKIT_SHARED_DATA/envmaps`, or the shared data
+/// The eight test maps: `$RAYKIT_SHARED_DATA/envmaps`, or the test data
 /// folder next to the project. Missing maps fail the tests.
 fn shared_maps() -> Vec<PathBuf> {
     let root = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data"));
     let dir = root.join("envmaps");
     let mut maps: Vec<PathBuf> = std::fs::read_dir(&dir)
         .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
@@ -482,7 +482,7 @@ fn sky_constant_and_degenerate_inputs() {
     ));
     let described = Environment::env_box(map, Aabb::new(Vec3::ZERO, Vec3::ONE), 2.0).describe();
     assert!(
-        described.contains("paper 001") && described.contains("8x4"),
+        described.contains("Purcell-style stream tracer") && described.contains("8x4"),
         "{described}"
     );
 }

@@ -1,4 +1,4 @@
-//! The rasterized visibility buffer (paper 001's hybrid renderer) against
+//! The rasterized visibility buffer (hybrid rendering: rasterized first hits, traced rays after) against
 //! its independent reference: tracing the same rays through a BVH.
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
@@ -95,13 +95,7 @@ fn both_samplings(name: &str, mesh: &TriangleMesh, camera: &Camera, (w, h): (u32
 }
 
 fn bunny() -> TriangleMesh {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes/bunny_3674.obj");
-    let path = if path.exists() {
-        path
-    } else {
-        Path::new("/work/shared/data/meshes/bunny_3674.obj").to_path_buf()
-    };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/meshes/bunny_3674.obj");
     raykit_io::load_mesh(&path).expect("bunny mesh")
 }
 
@@ -207,14 +201,15 @@ fn time<R>(f: impl FnOnce() -> R) -> (R, f64) {
     (r, start.elapsed().as_secs_f64() * 1e3)
 }
 
-/// Timing of the rasterizer against traced primaries (paper 001 reports
+/// Timing of the rasterizer against traced primaries (the Purcell-style stream tracer reports
 /// 1.6× for one pass); run with `cargo test --release -p raykit-render
 /// --test raster -- --ignored --nocapture`. Prints, asserts nothing about
 /// time.
 #[test]
 #[ignore]
 fn speed_against_traced_primaries() {
-    let dragon = Path::new("/work/shared/data/meshes/dragon_vrip_res2.ply.gz");
+    let dragon =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/meshes/dragon_vrip_res2.ply.gz");
     let mut scenes = vec![(
         "cornell".to_string(),
         raykit_scene::builtin("cornell").unwrap().mesh,
@@ -223,7 +218,7 @@ fn speed_against_traced_primaries() {
     if dragon.exists() {
         scenes.push((
             "dragon_res2".into(),
-            raykit_io::load_mesh(dragon).unwrap(),
+            raykit_io::load_mesh(&dragon).unwrap(),
             None,
         ));
     }

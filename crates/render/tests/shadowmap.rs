@@ -1,4 +1,4 @@
-//! Paper 001's shadow maps against their independent reference: shadow
+//! The Purcell-style stream tracer's shadow maps against their independent reference: shadow
 //! rays through a BVH (`Accel::occluded`, as the renderer casts them), and
 //! the analytic shadow of a plate.
 
@@ -347,7 +347,7 @@ fn degenerate_inputs_do_not_panic() {
     }
 }
 
-/// Build times of paper 001's shadow maps (the Cornell box's point light,
+/// Build times of the Purcell-style stream tracer's shadow maps (the Cornell box's point light,
 /// a directional light on the dragon) at the default resolution and at
 /// 2048; run with `cargo test --release -p raykit-render --test shadowmap
 /// -- --ignored --nocapture`. Prints, asserts nothing about time.
@@ -356,7 +356,8 @@ fn degenerate_inputs_do_not_panic() {
 fn build_times() {
     let cornell = raykit_scene::builtin("cornell").unwrap();
     let mut cases = vec![("cornell point", cornell.mesh, cornell.lights[0])];
-    let dragon = std::path::Path::new("/work/shared/data/meshes/dragon_vrip_res2.ply.gz");
+    let dragon = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data/meshes/dragon_vrip_res2.ply.gz");
     if dragon.exists() {
         let sun = Light::Directional {
             direction: Vec3::new(-0.4, -1.0, -0.3).normalize(),
@@ -364,7 +365,7 @@ fn build_times() {
         };
         cases.push((
             "dragon directional",
-            raykit_io::load_mesh(dragon).unwrap(),
+            raykit_io::load_mesh(&dragon).unwrap(),
             sun,
         ));
     }

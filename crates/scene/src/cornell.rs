@@ -26,8 +26,8 @@ pub fn cornell(seed: u64) -> Scene {
     build(seed, false)
 }
 
-/// The Cornell box of [`cornell`] with Whitted's materials (papers 000 and
-/// 001 render such scenes): the tall box a silver mirror and the sphere
+/// The Cornell box of [`cornell`] with Whitted's materials (Whitted
+/// 1980 renders such scenes): the tall box a silver mirror and the sphere
 /// clear glass (index of refraction 1.5), for reflections and refractions.
 pub fn whitted(seed: u64) -> Scene {
     let mut scene = build(seed, true);

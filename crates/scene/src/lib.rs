@@ -3,7 +3,7 @@
 //!
 //! - [`cornell()`]: a Cornell box with two boxes and a sphere, and
 //!   [`whitted()`], the same box with a mirror and a glass sphere;
-//! - [`shirley6()`]: after Peter Shirley's test scene 6, used in paper 000;
+//! - [`shirley6()`]: after Peter Shirley's test scene 6, used in the stack kd-tree GPU tracer;
 //! - [`terrain()`]: an fBm noise height field of configurable size;
 //! - [`scatter()`]: many stretched, rotated icospheres in a box.
 //!

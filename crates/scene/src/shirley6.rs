@@ -1,5 +1,5 @@
 //! A small scene in the spirit of Peter Shirley's test scene 6, the 804-triangle
-//! scene of the intersection benchmarks in paper 000: a checkered ground, two
+//! scene of the intersection benchmarks in the stack kd-tree GPU tracer: a checkered ground, two
 //! smooth spheres and three boxes under one point light.
 
 use crate::builder::{material, MeshBuilder};

@@ -38,7 +38,7 @@ pub const BUILTINS: &[BuiltinInfo] = &[
     },
     BuiltinInfo {
         name: "shirley6",
-        description: "after Shirley's test scene 6 of paper 000: checkered ground, spheres and boxes (804 triangles)",
+        description: "after Shirley's test scene 6 of the stack kd-tree GPU tracer: checkered ground, spheres and boxes (804 triangles)",
         keys: &["seed"],
     },
     BuiltinInfo {

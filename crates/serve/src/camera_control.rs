@@ -1,5 +1,5 @@
 //! Camera motions driven by client input: orbit, pan, zoom, fly and the
-//! device-orientation mode that stands in for paper 001's tracked handheld.
+//! device-orientation mode that stands in for the Purcell-style stream tracer's tracked handheld.
 
 use raykit_core::glam::{Mat3, Quat, Vec3};
 use raykit_core::Camera;

@@ -1,4 +1,4 @@
-//! raykit remote rendering server: the arrangement of paper 001 (render on
+//! raykit remote rendering server: the arrangement of the Purcell-style stream tracer (render on
 //! a PC, stream the frames to a tracked handheld) for today's clients.
 //!
 //! [`start`] binds an axum server that renders the loaded scene with

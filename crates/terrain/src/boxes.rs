@@ -1,4 +1,4 @@
-//! Paper 004's per-frame box subdivision: traverse the quadtree of the
+//! the quadtree-box caster's per-frame box subdivision: traverse the quadtree of the
 //! maximum mipmap once per frame, refining a node while its projected
 //! footprint covers at least 4 τ² pixels and dropping nodes wholly outside
 //! the view frustum; each surviving node becomes a box from its lowest to
@@ -127,7 +127,7 @@ pub fn select_boxes(
 
 /// For every pixel, the nearest entry of its ray into any box (`t`, or
 /// infinity when it meets none) and the number of boxes tested: the CPU
-/// stand-in for paper 004's rasterization of the boxes with a depth test.
+/// stand-in for the quadtree-box caster's rasterization of the boxes with a depth test.
 pub fn pixel_starts(
     field: &HeightField,
     cam: &TerrainCamera,

@@ -1,16 +1,17 @@
 //! raykit terrain: digital elevation models and exact height-field ray
-//! casting (papers 003 and 004).
+//! casting (Min 2008; per-frame quadtree boxes).
 //!
 //! The surface every caster intersects is declared in [`heightfield`]: two
 //! triangles per grid cell, split along the cell's top-left to bottom-right
 //! diagonal. Three casters give the same first hit on it:
 //! - [`march::march`]: a 2D DDA over the cells, the reference;
 //! - [`maxmip::trace`]: per-ray maximum-mipmap traversal (Tevs et al. 2008);
-//! - [`boxes`]: paper 004's method, one quadtree traversal per frame with
+//! - [`boxes`]: the quadtree-box caster's method, one quadtree traversal per frame with
 //!   view-distance LOD and frustum culling, boxes giving each pixel's ray its
 //!   start, then a march from there.
 
 pub mod boxes;
+pub mod curvature;
 pub mod dem;
 pub mod fractal;
 pub mod heightfield;

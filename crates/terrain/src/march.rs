@@ -1,5 +1,5 @@
 //! The reference caster: a 2D DDA over the cells the ray crosses (Amanatides
-//! and Woo's traversal), testing each cell's two triangles, as paper 004's
+//! and Woo's traversal), testing each cell's two triangles, as the quadtree-box caster's
 //! unaccelerated "per-texel exact intersection" baseline.
 
 use crate::heightfield::{GridRay, HeightField, Steps, TerrainHit};

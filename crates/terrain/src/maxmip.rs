@@ -1,5 +1,5 @@
-//! Per-ray maximum-mipmap traversal (Tevs, Ihrke and Seidel 2008; paper
-//! 004's "per-ray top-down" method C): walk the quadtree from the root,
+//! Per-ray maximum-mipmap traversal (Tevs, Ihrke and Seidel 2008; the
+//! "per-ray top-down" method): walk the quadtree from the root,
 //! skip a node when the ray stays above its maximum over the node's
 //! footprint, visit the children in the order the ray crosses them, and
 //! test cells at level 0. Exact for the declared surface: a skipped node

@@ -1,4 +1,4 @@
-//! The maximum mipmap of Tevs et al. (2008), as paper 004 uses it: a
+//! The maximum mipmap of Tevs et al. (2008), as the quadtree-box caster uses it: a
 //! quadtree stored as an image pyramid whose level 0 holds each cell's
 //! highest corner and each higher texel the maximum of its (up to) four
 //! children. A minimum pyramid is kept beside it, so a node's box spans

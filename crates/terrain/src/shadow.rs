@@ -1,9 +1,9 @@
-//! Terrain shadow masks (paper 003): for every grid point, is the light
+//! Terrain shadow masks (Min 2008): for every grid point, is the light
 //! visible from the surface point there? One segment per grid point to the
 //! light, tested against the declared surface ([`crate::heightfield`]).
 //!
 //! Two exact algorithms give identical masks:
-//! - [`ShadowMethod::BruteForce`]: paper 003's method, each segment marched
+//! - [`ShadowMethod::BruteForce`]: Min's (2008) method, each segment marched
 //!   cell by cell;
 //! - [`ShadowMethod::Fast`]: each segment through the min/max quadtree
 //!   ([`crate::pyramid`]), walked from the segment's own cell upwards,
@@ -42,7 +42,7 @@ impl Light {
 /// Which algorithm computes the mask.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowMethod {
-    /// One segment per grid point marched cell by cell (paper 003).
+    /// One segment per grid point marched cell by cell (Min 2008).
     BruteForce,
     /// One segment per grid point through the min/max quadtree.
     Fast,
@@ -56,11 +56,16 @@ const END_EPS: f64 = 1e-9;
 /// fast method concludes it crosses the surface, metres.
 const BELOW_EPS: f64 = 1e-7;
 
-/// The segment from grid point (`col`, `row`) towards `light`, in grid
-/// units with `t` in `[0, tmax]`, and whether its far end is on or above
-/// the surface (which the fast method's early exit needs).
-fn segment(field: &HeightField, light: &Light, col: usize, row: usize) -> (GridRay, f64) {
-    let p = [col as f64, row as f64, field.at(col, row) as f64];
+/// The segment from `lift` metres above grid point (`col`, `row`) towards
+/// `light`, in grid units with `t` in `[0, tmax]`.
+fn segment(
+    field: &HeightField,
+    light: &Light,
+    col: usize,
+    row: usize,
+    lift: f64,
+) -> (GridRay, f64) {
+    let p = [col as f64, row as f64, field.at(col, row) as f64 + lift];
     match *light {
         Light::Point(w) => {
             let l = [w[0] / field.sx, -w[1] / field.sy, w[2]];
@@ -132,7 +137,24 @@ pub fn occluded_with_hint(
     hint: &mut Option<Blocker>,
     steps: &mut Steps,
 ) -> bool {
-    let (ray, tmax) = segment(field, light, col, row);
+    occluded_from(field, pyramid, light, col, row, 0.0, method, hint, steps)
+}
+
+/// [`occluded_with_hint`] for the point `lift` >= 0 metres above the grid
+/// point (a target above the ground).
+#[allow(clippy::too_many_arguments)]
+fn occluded_from(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    light: &Light,
+    col: usize,
+    row: usize,
+    lift: f64,
+    method: ShadowMethod,
+    hint: &mut Option<Blocker>,
+    steps: &mut Steps,
+) -> bool {
+    let (ray, tmax) = segment(field, light, col, row, lift);
     match method {
         ShadowMethod::BruteForce => march(field, &ray, END_EPS, tmax, steps).is_some(),
         ShadowMethod::Fast => {
@@ -156,8 +178,9 @@ pub fn occluded_with_hint(
             let end_above = end[2] >= field.height_at(end[0], end[1]);
             // The segment sinks into the ground at its grid point and ends
             // strictly above the surface: it must come back up through it.
+            // (A lifted start is above the ground and cannot sink into it.)
             let end_clear = end[2] > field.height_at(end[0], end[1]) + BELOW_EPS;
-            if end_clear && dips_below(field, &ray, col, row) {
+            if lift == 0.0 && end_clear && dips_below(field, &ray, col, row) {
                 steps.cells += 1;
                 return true;
             }
@@ -389,13 +412,33 @@ pub fn shadow_mask_with_progress(
     method: ShadowMethod,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Vec<u8> {
+    shadow_mask_for_targets(field, pyramid, light, method, 0.0, progress)
+}
+
+/// [`shadow_mask_with_progress`] for targets `target_height` >= 0 metres
+/// above the ground at every grid point (gdal_viewshed's `-tz`): 1 where
+/// the segment from the target to the light meets no part of the surface.
+/// A negative or non-finite height counts as 0.
+pub fn shadow_mask_for_targets(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    light: &Light,
+    method: ShadowMethod,
+    target_height: f64,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Vec<u8> {
+    let lift = if target_height.is_finite() {
+        target_height.max(0.0)
+    } else {
+        0.0
+    };
     let w = field.width;
     let mut mask = vec![0u8; w * field.height];
     mask.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
         let mut steps = Steps::default();
         for (col, m) in line.iter_mut().enumerate() {
-            *m = u8::from(!occluded(
-                field, pyramid, light, col, row, method, &mut steps,
+            *m = u8::from(!occluded_from(
+                field, pyramid, light, col, row, lift, method, &mut None, &mut steps,
             ));
         }
         progress(w);

@@ -130,7 +130,7 @@ pub enum Caster {
     March,
     /// Per-ray maximum-mipmap traversal.
     MaxMipmap,
-    /// Paper 004: per-frame quadtree boxes with LOD parameter τ (pixels).
+    /// Per-frame quadtree boxes with LOD parameter τ (pixels).
     Boxes {
         /// Side of the pixel square a node's footprint is compared with
         /// (refine while the footprint is at least 4 τ² pixels).
@@ -144,7 +144,7 @@ pub struct CastImage {
     pub hits: Vec<Option<TerrainHit>>,
     /// Per pixel work.
     pub steps: Vec<Steps>,
-    /// Boxes the frame used (paper 004 only).
+    /// Boxes the frame used (the quadtree-box caster only).
     pub boxes: usize,
 }
 

@@ -1,5 +1,5 @@
-//! The three terrain casters (per-cell march, per-ray maximum mipmap, paper
-//! 004's per-frame boxes) against each other on every pixel of test views,
+//! The three terrain casters (per-cell march, per-ray maximum mipmap,
+//! per-frame quadtree boxes) against each other on every pixel of test views,
 //! and the march against two independent references: testing every cell of
 //! the grid, and mesh ray casting through raykit's BVH of the same surface.
 
@@ -232,9 +232,7 @@ fn the_three_casters_agree_on_views_of_the_shared_dems() {
     use raykit_terrain::io::{load_dem, LoadOptions};
     let root = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
-        });
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data"));
     for name in [
         "RealisticTerrain_Large.ter",
         "lidar_dem_400.tif",
@@ -243,7 +241,7 @@ fn the_three_casters_agree_on_views_of_the_shared_dems() {
         let path = root.join("terrain").join(name);
         assert!(
             path.is_file(),
-            "{} is missing: the tests need the shared data folder (set RAYKIT_SHARED_DATA)",
+            "{} is missing: the tests need the test data folder (set RAYKIT_SHARED_DATA)",
             path.display()
         );
         let dem = load_dem(&path, &LoadOptions::default()).unwrap();

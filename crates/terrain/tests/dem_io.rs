@@ -12,8 +12,8 @@ use raykit_terrain::io::{
 };
 use raykit_terrain::{Dem, GeoRef};
 
-/// The shared data folder: `$RAYKIT_SHARED_DATA`, or
-/// `<workspace>/../shared/data`. Missing data fails the test.
+/// The test data folder: `$RAYKIT_SHARED_DATA`, or
+/// `<workspace>/data`. Missing data fails the test.
 fn shared_data() -> PathBuf {
     if let Some(p) = std::env::var_os("RAYKIT_SHARED_DATA") {
         let p = PathBuf::from(p);
@@ -24,10 +24,10 @@ fn shared_data() -> PathBuf {
         );
         return p;
     }
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data");
     assert!(
         p.is_dir(),
-        "shared test data not found: looked in {} (CARGO_MANIFEST_DIR/../../../shared/data); \
+        "shared test data not found: looked in {} (CARGO_MANIFEST_DIR/../../data); \
          set RAYKIT_SHARED_DATA to its location",
         p.display()
     );

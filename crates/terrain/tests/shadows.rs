@@ -1,5 +1,5 @@
 //! Shadow masks: the fast method (min/max quadtree with early exits) equals
-//! paper 003's brute force (every segment marched cell by cell, itself
+//! brute force (every segment marched cell by cell, itself
 //! checked against testing every cell and against mesh ray casting in
 //! casters.rs) on synthetic and shared DEMs, for point and sun lights.
 
@@ -12,11 +12,11 @@ use std::path::{Path, PathBuf};
 fn shared_terrain(name: &str) -> PathBuf {
     let root = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data"));
     let p = root.join("terrain").join(name);
     assert!(
         p.is_file(),
-        "{} is missing: the tests need the shared data folder (set RAYKIT_SHARED_DATA)",
+        "{} is missing: the tests need the test data folder (set RAYKIT_SHARED_DATA)",
         p.display()
     );
     p

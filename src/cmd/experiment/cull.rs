@@ -1,6 +1,6 @@
-//! `raykit experiment cull`: paper 003's Table 5-1 measured on this machine
+//! `raykit experiment cull`: Min's (2008) culling measured on this machine
 //! (grid resolution, parts and triangles hidden, removal rate, distance-field
-//! and propagation times), for the paper's rule and our conservative mode,
+//! and propagation times), for Min's rule and our conservative mode,
 //! with false and missed removals against the ray-traced ground truth.
 
 use super::{shared_mesh, write_csv, write_text};
@@ -34,7 +34,7 @@ Debian's assimp-testmodels (run scripts/fetch-assimp-testmodels.sh first, else t
 reported as skipped), synthetic assemblies with known answers (a box of 64 spheres, nested\n\
 shells, a box of 1,000 spheres with 1,280,192 triangles) and the engine instanced 3 x 3\n\
 (1,093,464 triangles, no ground truth: too slow to evaluate).\n\
-Each model is culled at every resolution by paper 003's rule and by the conservative\n\
+Each model is culled at every resolution by Min's (2008) rule and by the conservative\n\
 default; times are medians of --reps runs. The ground truth is `raykit cull --evaluate`'s\n\
 (rays from the surface and renders from 10,000+ viewpoints, doubled until stable) or the\n\
 known answer. Writes results.csv, results.md and SVG plots into --out; exit status 1 when\n\
@@ -428,7 +428,7 @@ fn plots(rows: &[Row], out: &Path) -> Result<()> {
     for mode in ["paper", "conservative"] {
         write_svg(
             &LineChart {
-                title: format!("Triangles removed, {mode} mode (paper 003, Table 5-1)"),
+                title: format!("Triangles removed, {mode} mode (Min 2008)"),
                 x_label: "grid resolution",
                 y_label: "% of triangles removed",
                 series: series(mode, &|r| r.removed_triangles_pct),

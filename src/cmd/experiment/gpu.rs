@@ -1,4 +1,4 @@
-//! `raykit experiment gpu`: paper 000's Table 2 on the GPU backend — Mrays/s
+//! `raykit experiment gpu`: Mrays/s
 //! of each kernel (stack kd-tree, threaded BVH) × triangle test (Plücker,
 //! Möller) on primary, shadow and incoherent rays, with the node memory of
 //! each layout (Table 1) and the CPU's speed on the same structure beside it.
@@ -23,8 +23,8 @@ use std::process::ExitCode;
 /// Arguments of `raykit experiment gpu`.
 #[derive(Args)]
 #[command(
-    after_help = "Default meshes: built-in shirley6 (paper 000's Shirley 6), the shared bunny\n\
-and dragon (res2, 202k triangles, the size of paper 000's Fairy Forest), and the full\n\
+    after_help = "Default meshes: built-in shirley6 (Shirley's six-object test scene), the shared bunny\n\
+and dragon (res2, 202k triangles, the size of the Fairy Forest scene), and the full\n\
 871k dragon (the size of its Happy Buddha) when scripts/dragon-check.sh has fetched it.\n\
 Every GPU answer is checked against the CPU structure of the same name. On Mesa's\n\
 lavapipe (no GPU) the kernels run on the CPU cores: the figures then compare\n\
@@ -255,7 +255,7 @@ pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
 
 fn markdown(rows: &[Row], args: &GpuExperimentArgs, adapter: &str, threads: usize) -> String {
     let mut s = format!(
-        "# GPU kernels (paper 000's Table 2 on the GPU backend)\n\n`raykit experiment gpu --size {} --reps {}` on {adapter}; CPU figures on {threads} threads.\n\n",
+        "# GPU kernels\n\n`raykit experiment gpu --size {} --reps {}` on {adapter}; CPU figures on {threads} threads.\n\n",
         args.size, args.reps
     );
     s += "Mrays/s, median of the runs: GPU kernel time from submission to completion (uploads and read-back excluded); CPU the same structure and test through the batch API. Shadow = occlusion (any hit).\n\n";
@@ -268,7 +268,7 @@ fn markdown(rows: &[Row], args: &GpuExperimentArgs, adapter: &str, threads: usiz
             r.checked, r.disagreements, r.edge_grazes, r.ties
         );
     }
-    s += "\n## Ratios on the GPU (paper 000 claims stack ≈ 2× stackless and Plücker +10–20%)\n\n| mesh | set | kd-stack ÷ bvh-threaded (plucker) | kd-stack ÷ bvh-threaded (moller) | plucker ÷ moller (kd-stack) | plucker ÷ moller (bvh-threaded) |\n|---|---|---:|---:|---:|---:|\n";
+    s += "\n## Ratios on the GPU (the stack kd-tree against the stackless BVH, Plücker against Möller–Trumbore)\n\n| mesh | set | kd-stack ÷ bvh-threaded (plucker) | kd-stack ÷ bvh-threaded (moller) | plucker ÷ moller (kd-stack) | plucker ÷ moller (bvh-threaded) |\n|---|---|---:|---:|---:|---:|\n";
     let mut meshes: Vec<&str> = Vec::new();
     for r in rows {
         if !meshes.contains(&r.mesh.as_str()) {

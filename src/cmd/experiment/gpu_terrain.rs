@@ -1,6 +1,6 @@
-//! The terrain part of `raykit experiment gpu`: paper 004's casters on the
+//! The terrain part of `raykit experiment gpu`: the terrain casters on the
 //! GPU backend — per-ray maximum-mipmap traversal (Tevs et al. 2008) and the
-//! per-frame boxes (τ = 16, paper 004's best) — beside the same casters on
+//! per-frame boxes (τ = 16, the best) — beside the same casters on
 //! the CPU, on one low oblique view per DEM.
 
 use crate::measure::median_min_max;
@@ -98,7 +98,7 @@ pub fn measure_dem(
 
 /// The Markdown section for the rows.
 pub fn markdown(rows: &[TerrainRow], threads: usize) -> String {
-    let mut s = format!("\n## Terrain ray casting (paper 004) on the GPU backend\n\nMrays/s, median: GPU kernel time (rays made and boxes selected on the host are not included); CPU on {threads} threads, rays made and cast. One low oblique view across the whole DEM.\n\n| DEM | grid | view | GPU max mipmap | GPU boxes τ=16 | CPU max mipmap | CPU boxes τ=16 | noise |\n|---|---|---|---:|---:|---:|---:|---:|\n");
+    let mut s = format!("\n## Terrain ray casting (per-frame quadtree boxes) on the GPU backend\n\nMrays/s, median: GPU kernel time (rays made and boxes selected on the host are not included); CPU on {threads} threads, rays made and cast. One low oblique view across the whole DEM.\n\n| DEM | grid | view | GPU max mipmap | GPU boxes τ=16 | CPU max mipmap | CPU boxes τ=16 | noise |\n|---|---|---|---:|---:|---:|---:|---:|\n");
     for r in rows {
         s += &format!(
             "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0}% |\n",

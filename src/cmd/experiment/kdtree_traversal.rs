@@ -1,8 +1,7 @@
-//! `raykit experiment kdtree-traversal`: the analogue of paper 000's Tables
-//! 1 and 2 on this machine (node memory of ropes vs stack layouts; speed of
+//! `raykit experiment kdtree-traversal`: on this machine, node memory of ropes vs stack layouts; speed of
 //! {stack, ropes, restart, backtrack} × {projection, Plücker, Möller} on
-//! primary rays with Phong shading and on shadow rays), with the BVH2 and the
-//! threaded BVH of paper 001 in the same table.
+//! primary rays with Phong shading and on shadow rays, with the BVH2 and the
+//! threaded BVH (Smits 1998) in the same table.
 
 use super::{cached_dragon, shared_mesh, write_csv, write_text};
 use crate::build_args::BuildArgs;
@@ -41,7 +40,7 @@ pub struct KdTraversalArgs {
     /// Repetitions of every measurement (the median is reported).
     #[arg(long, default_value_t = 3)]
     reps: usize,
-    /// Threads (paper 000 compares single-kernel GPU variants; 1 thread
+    /// Threads (single-kernel GPU variants are compared; 1 thread
     /// gives the steadiest CPU figures).
     #[arg(long, default_value_t = 1)]
     threads: usize,
@@ -52,7 +51,7 @@ pub struct KdTraversalArgs {
     build: BuildArgs,
 }
 
-/// Memory of one layout on one mesh (paper 000's Table 1).
+/// Node memory of one layout on one mesh.
 #[derive(Serialize, Clone)]
 struct MemoryRow {
     mesh: String,
@@ -67,7 +66,7 @@ struct MemoryRow {
     depth: u32,
 }
 
-/// Speed of one structure × test on one mesh (paper 000's Table 2).
+/// Mrays/s of one structure × test on one mesh.
 #[derive(Serialize, Clone)]
 struct SpeedRow {
     mesh: String,
@@ -277,7 +276,7 @@ fn markdown(
         args.threads,
         meshes.len()
     );
-    s += "## Node memory (paper 000, Table 1)\n\nStructure bytes without the precomputed triangles (kd-trees: 8-byte nodes + per-traversal extras; the index list is counted with the triangles).\n\n";
+    s += "## Node memory\n\nStructure bytes without the precomputed triangles (kd-trees: 8-byte nodes + per-traversal extras; the index list is counted with the triangles).\n\n";
     s += "| mesh | triangles | accel | node KB | bytes/triangle | nodes | leaves | refs | depth |\n|---|---:|---|---:|---:|---:|---:|---:|---:|\n";
     for r in memory {
         s += &format!(
@@ -293,7 +292,7 @@ fn markdown(
             r.depth
         );
     }
-    s += "\n## Mrays/s (paper 000, Table 2): primary rays with Phong shading / shadow rays\n\n";
+    s += "\n## Mrays/s: primary rays with Phong shading / shadow rays\n\n";
     let mut names: Vec<&str> = Vec::new();
     for r in speed {
         if !names.contains(&r.mesh.as_str()) {

@@ -1,4 +1,4 @@
-//! `raykit experiment`: the papers' tables and figures, measured on this
+//! `raykit experiment`: published tables and figures, measured on this
 //! machine, written as Markdown, CSV, JSON and SVG plots.
 
 pub mod cull;
@@ -25,29 +25,29 @@ pub struct ExperimentArgs {
 
 #[derive(Subcommand)]
 enum Which {
-    /// Papers 000 and 001: memory and Mrays/s of the four kd-tree
+    /// Memory and Mrays/s of the four kd-tree
     /// traversals × three triangle tests, next to the BVHs.
     KdtreeTraversal(kdtree_traversal::KdTraversalArgs),
-    /// Paper 002: the split-plane weight H = 0..20 against split polygons,
+    /// Kim's (2013) split-plane weight H = 0..20 against split polygons,
     /// depth, build time, T-junction elimination time and query speed.
     SplitHeuristic(split_heuristic::SplitHeuristicArgs),
-    /// Paper 003: Table 5-1 — triangles and parts hidden, removal rate and
+    /// Min's (2008) culling: triangles and parts hidden, removal rate and
     /// times per grid resolution, with false and missed removals against the
     /// ray-traced ground truth.
     Cull(cull::CullExperimentArgs),
-    /// Paper 001's remote rendering, today: `raykit serve` on loopback — one
+    /// Remote rendering: `raykit serve` on loopback — one
     /// client's fps and latency while moving and refinement when still, then
     /// N clients for T seconds with frames, errors, latency and memory.
     Serve(serve::ServeExperimentArgs),
-    /// Papers 004 and 003 on DEMs: the box method against per-cell and
+    /// DEMs: the box method against per-cell and
     /// max-mipmap ray casting for τ = 4..4096, shadow-mask times brute force
     /// against fast, and gdal_viewshed on the same DEM and light.
     Terrain(terrain::TerrainExperimentArgs),
-    /// Paper 001's Table 2: frame times of traced against rasterized
+    /// Frame times of traced against rasterized
     /// primaries × shadow rays against shadow maps × recursive against
     /// wavefront, at 1 and 2 passes, with the image differences.
     Whitted(whitted::WhittedExperimentArgs),
-    /// Paper 000's Table 2 on the GPU backend: Mrays/s of the stack kd-tree
+    /// Mrays/s of the stack kd-tree
     /// and threaded BVH kernels × Plücker and Möller, node memory, the CPU
     /// beside them, every answer checked.
     Gpu(gpu::GpuExperimentArgs),
@@ -66,12 +66,12 @@ pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
     }
 }
 
-/// The shared data folder: `$RAYKIT_SHARED_DATA`, else `../shared/data`
+/// The test data folder: `$RAYKIT_SHARED_DATA`, else the repository's `data/`
 /// next to the source tree.
 pub fn shared_data() -> PathBuf {
     std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"))
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("data"))
 }
 
 /// A file of the shared mesh folder as a `--mesh` argument.

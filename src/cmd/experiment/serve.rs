@@ -1,6 +1,6 @@
 //! `raykit experiment serve`: the streaming server under load on loopback —
 //! one client's frame rate while the camera moves and how soon the view
-//! refines when it stops (paper 001's remote-rendering arrangement, judged
+//! refines when it stops (a remote-rendering arrangement, judged
 //! by its interactivity), then N clients at once for T seconds: frames,
 //! errors, input-to-frame latency percentiles and the server's memory.
 

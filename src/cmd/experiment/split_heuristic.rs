@@ -1,4 +1,4 @@
-//! `raykit experiment split-heuristic`: paper 002's sweep of the split-plane
+//! `raykit experiment split-heuristic`: Kim's (2013) sweep of the split-plane
 //! weight H = 0..20 (its Figures 5 to 8) with the SAH tree as a reference.
 
 use super::{shared_mesh, write_csv, write_text};
@@ -23,7 +23,7 @@ use std::process::ExitCode;
 /// Arguments of `raykit experiment split-heuristic`.
 #[derive(Args)]
 #[command(
-    after_help = "Default mesh: the shared bunny (3,674 triangles; paper 002's level had 15,382\n\
+    after_help = "Default mesh: the shared bunny (3,674 triangles; Kim's (2013) game level had 15,382\n\
 polygons). A scene of many objects, e.g. --mesh builtin:scatter:triangles=15000, gives\n\
 the frustum queries objects to cull. Large CAD models explode under the game heuristic\n\
 (the engine: 121k -> 864k triangles at H = 8), so expect minutes per H there.\n\
@@ -61,7 +61,7 @@ pub struct SplitHeuristicArgs {
 struct Row {
     split: String,
     h: Option<u8>,
-    /// Pieces cut by split planes over the build (paper 002's split polygons).
+    /// Pieces cut by split planes over the build (split polygons).
     split_polygons: usize,
     /// Original triangles in more than one piece (SAH: referenced by more
     /// than one leaf).
@@ -295,7 +295,7 @@ fn fmt_opt<T: std::fmt::Display>(v: Option<T>) -> String {
 
 fn markdown(rows: &[Row], name: &str, tris: usize, args: &SplitHeuristicArgs) -> String {
     let mut s = format!(
-        "# Split-heuristic experiment (paper 002)\n\n`raykit experiment split-heuristic --size {} --frustums {} --reps {} --threads {} --game-leaf {}` on {name} ({tris} triangles).\n\n",
+        "# Split-heuristic experiment (Kim 2013)\n\n`raykit experiment split-heuristic --size {} --frustums {} --reps {} --threads {} --game-leaf {}` on {name} ({tris} triangles).\n\n",
         args.size, args.frustums, args.reps, args.threads, args.game_leaf
     );
     s += "| split | split polygons | split triangles | depth | leaves | build ms | T-junctions | fast ms | naive ms | naive = fast | Mrays/s | frustum queries/s |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|\n";

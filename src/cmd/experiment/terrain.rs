@@ -1,7 +1,7 @@
-//! `raykit experiment terrain`: (a) paper 004's Table 1 — speed of the
+//! `raykit experiment terrain`: (a) speed of the
 //! per-frame box method against the per-cell march and per-ray maximum
 //! mipmap for τ = 4..4096 at 1600×900 on a 4096² DEM, with heat maps of the
-//! steps per ray; (b) paper 003's terrain shadow-map times for growing DEMs,
+//! steps per ray; (b) Min's (2008) terrain shadow-map times for growing DEMs,
 //! brute force against the fast method; (c) gdal_viewshed on the same DEM
 //! and light, in the same run: time ratio and the cells where the masks
 //! differ.
@@ -18,7 +18,7 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
-/// Paper 004's Table 1: τ, speed ratio A:B (box vs per-cell), A:C (box vs
+/// Speed of the box method: τ, speed ratio A:B (box vs per-cell), A:C (box vs
 /// per-ray max mipmap), Radeon HD5870, 1600×900, Puget Sound 4096².
 const PAPER_TABLE1: [(f64, f64, f64); 11] = [
     (4.0, 8.0, 0.89),
@@ -111,7 +111,7 @@ struct GdalRow {
     note: String,
 }
 
-/// A camera flying over the DEM from the south-west, like paper 004's views.
+/// A camera flying over the DEM from the south-west, like a flight over terrain.
 fn flight_camera(field: &HeightField, width: u32, height: u32) -> TerrainCamera {
     let (wx, wy) = (
         (field.width - 1) as f64 * field.sx,
@@ -243,7 +243,7 @@ fn part_a(args: &TerrainExperimentArgs, dem: &Dem) -> Result<Vec<CastRow>> {
         }
         let paper = PAPER_TABLE1.iter().find(|p| p.0 == tau);
         rows.push(CastRow {
-            method: "A: boxes (paper 004)".into(),
+            method: "A: boxes (per-frame quadtree boxes)".into(),
             tau: Some(tau),
             ms,
             noise,
@@ -442,7 +442,7 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
     write_csv(&args.out, "gdal.csv", std::slice::from_ref(&c))?;
     let mut md = format!(
         "# Terrain experiment ({} threads)\n\n`{command}`\n\n\
-         ## (a) Paper 004, Table 1: fractal:{} DEM, {}x{}, median of {} runs\n\n\
+         ## (a) Per-frame quadtree boxes against per-cell and maximum-mipmap casting: fractal:{} DEM, {}x{}, median of {} runs\n\n\
          | method | τ | ms | noise | boxes | cells/ray | nodes or boxes/ray | A:B (ours) | A:B (paper) | A:C (ours) | A:C (paper) | pixels ≠ march |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         rayon::current_num_threads(), args.size, args.width, args.height, args.reps
@@ -465,7 +465,7 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
         );
     }
     md += "\nHeat maps (steps per ray, same scale): heat-march.png, heat-maxmip.png, heat-boxes-tau16.png.\n\n\
-           ## (b) Paper 003: terrain shadow map, brute force against fast\n\n\
+           ## (b) Terrain shadow map (Min 2008), brute force against fast\n\n\
            | DEM | light | brute force s | fast s | speed-up | cells ≠ | lit % |\n|---:|---|---:|---:|---:|---:|---:|\n";
     for r in &b {
         md += &format!(
@@ -500,7 +500,7 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
     write_svg(
         &LineChart {
             title: format!(
-                "Paper 004 Table 1 on this CPU: box method speed-up, {}x{}",
+                "Per-frame quadtree boxes on this CPU: speed-up, {}x{}",
                 args.width, args.height
             ),
             x_label: "log2 τ",

@@ -1,7 +1,6 @@
-//! `raykit experiment whitted`: paper 001's Table 2 on this machine — time
-//! per frame for {traced, rasterized primaries} × {shadow rays, shadow maps}
+//! `raykit experiment whitted`: time per frame for {traced, rasterized primaries} × {shadow rays, shadow maps}
 //! × {recursive, wavefront} × passes 1 and 2, with the speed-ups next to the
-//! paper's 1.6× (1 pass) and 1.2× (2 passes), and the image differences
+//! 1.6× (1 pass) and 1.2× (2 passes) that GPU hybrid renderers reported, and the image differences
 //! between the variants.
 
 use super::{shared_data, shared_mesh, write_csv, write_text};
@@ -26,17 +25,17 @@ use std::process::ExitCode;
 #[command(
     after_help = "Scenes: whitted (the built-in Cornell box with a mirror and a glass sphere),\n\
 dragon (the 202k-triangle dragon in gold in the courtyard HDR map, environment box) and engine\n\
-(the 2CylinderEngine glTF assembly, 121k triangles, with two lights), all from ../shared/data.\n\
+(the 2CylinderEngine glTF assembly, 121k triangles, with two lights), all from the repository's data/ folder.\n\
 Writes results.md, results.csv, results.json and the images compared into --out."
 )]
 pub struct WhittedExperimentArgs {
     /// Scenes to run: whitted, dragon, engine.
     #[arg(long, value_delimiter = ',', default_value = "whitted,dragon,engine")]
     scenes: Vec<String>,
-    /// Image width (paper 001: 512).
+    /// Image width.
     #[arg(long, default_value_t = 512)]
     width: u32,
-    /// Image height (paper 001: 512).
+    /// Image height.
     #[arg(long, default_value_t = 512)]
     height: u32,
     /// Repetitions per configuration (medians are reported).
@@ -331,7 +330,7 @@ pub fn run(args: WhittedExperimentArgs) -> Result<ExitCode> {
         )?,
     )?;
     let mut md = format!(
-        "# Whitted experiment: paper 001's Table 2 on this CPU ({} threads)\n\n`{command}`\n\n\
+        "# Whitted experiment: traced against rasterized primaries on this CPU ({} threads)\n\n`{command}`\n\n\
          {}×{} pixels, 1 sample per pixel, median of {} frames. Passes: 1 = camera ray + shadow tests, \
          2 = plus one reflection/refraction ray. Shadow-map frames exclude the map build (listed below).\n\n\
          | scene | triangles | passes | shadows | primaries | integrator | ms | noise | raster ms | Mrays |\n\
@@ -357,7 +356,7 @@ pub fn run(args: WhittedExperimentArgs) -> Result<ExitCode> {
         );
     }
     md += "\n## Speed-ups (median over the other settings)\n\n\
-           | scene | passes | rasterized over traced primaries | paper 001 | shadow maps over shadow rays | wavefront over recursive |\n\
+           | scene | passes | rasterized over traced primaries | reported on the GPU | shadow maps over shadow rays | wavefront over recursive |\n\
            |---|---:|---:|---:|---:|---:|\n";
     for s in &summaries {
         for (passes, paper) in [(1, 1.6), (2, 1.2)] {

@@ -1,6 +1,6 @@
 //! `raykit render --backend gpu`: the same frame from raykit-gpu's WGSL
-//! kernels — paper 000's single kernel for `--integrator recursive`, paper
-//! 001's stream of kernels for `--integrator wavefront` — written through
+//! kernels — one kernel per ray path for `--integrator recursive`, a
+//! stream of kernels (after Purcell et al. 2002) for `--integrator wavefront` — written through
 //! the same image path as the CPU renderer.
 
 use super::setup::RenderSetup;

@@ -1,9 +1,9 @@
-//! `raykit render`: the Whitted ray tracer of papers 000 and 001 — glTF, OBJ
+//! `raykit render`: a Whitted (1980) ray tracer — glTF, OBJ
 //! and other scenes, point/spot/directional lights, shadow rays or shadow
-//! maps, mirrors and glass, HDR environments (optionally paper 001's
+//! maps, mirrors and glass, HDR environments (optionally on an
 //! environment box), traced or rasterized primaries, recursive or wavefront
 //! integration — written to PNG or EXR, with optional AOVs — on the CPU or,
-//! with `--backend gpu`, on the GPU (issue 9).
+//! with `--backend gpu`, on the GPU.
 
 mod gpu;
 pub mod lights_arg;
@@ -32,7 +32,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 pub enum ShadowArg {
     /// Shadow rays: one occlusion query per light and hit.
     Rays,
-    /// Shadow maps rendered from each light, box-filtered (paper 001).
+    /// Shadow maps rendered from each light, box-filtered (Williams 1978).
     Maps,
     /// No shadows.
     Off,
@@ -43,7 +43,7 @@ pub enum ShadowArg {
 pub enum PrimaryArg {
     /// Trace camera rays.
     Traced,
-    /// Rasterize a visibility buffer (paper 001's hybrid renderer).
+    /// Rasterize a visibility buffer (hybrid rendering: rasterized first hits, traced rays after).
     Raster,
 }
 
@@ -52,7 +52,7 @@ pub enum PrimaryArg {
 pub enum IntegratorArg {
     /// Depth-first recursion per camera sample.
     Recursive,
-    /// Paper 001's stream: stages over ray queues.
+    /// Stream organisation after Purcell et al. (2002): stages over ray queues.
     Wavefront,
 }
 
@@ -62,8 +62,8 @@ pub enum BackendArg {
     /// The CPU renderer (every feature), tile-parallel on the worker threads.
     Cpu,
     /// WGSL compute kernels through wgpu (any Vulkan, Metal or DX12 GPU, or
-    /// Mesa's lavapipe): paper 000's single kernel for --integrator
-    /// recursive, paper 001's stream of kernels for --integrator wavefront.
+    /// Mesa's lavapipe): one kernel per ray path for --integrator
+    /// recursive, a stream of kernels (after Purcell et al. 2002) for --integrator wavefront.
     Gpu,
 }
 
@@ -100,15 +100,15 @@ impl From<IntegratorArg> for IntegratorKind {
 #[command(
     after_help = "Examples:\n  raykit render                                   # builtin:whitted (mirror + glass Cornell box) to render.png\n  \
 raykit render --scene examples/cornell-glass.gltf         # a glTF scene with its own camera and lights\n  \
-raykit render --scene dragon.ply.gz --material glass --env ../shared/data/envmaps/courtyard.exr --env-box\n  \
+raykit render --scene dragon.ply.gz --material glass --env data/envmaps/courtyard.exr --env-box\n  \
 raykit render --shadows maps --pcf 5 --primary raster --integrator wavefront --out frame.exr --aov depth,normal,id\n  \
 raykit render --scene bunny.obj --light dir:-1,-2,-1 --light spot:0,3,2:0,0,0:25:1,0.8,0.6\n\n\
 Without --eye the scene's own camera is used, or one framing the whole mesh.\n\
 Without --light the scene's lights are used, or one point light above the mesh.\n\
 --depth counts rays per path: 1 is direct light only, 2 adds one reflection/refraction bounce.\n\n\
 --backend gpu renders the same image on the GPU (wgpu compute; Mesa's lavapipe without a GPU):\n\
---integrator recursive runs paper 000's single kernel (one thread per pixel sample, --depth up to 16),\n\
---integrator wavefront paper 001's stream of kernels over ray queues. --accel picks kd-stack,\n\
+--integrator recursive runs one kernel per ray path (one thread per pixel sample, --depth up to 16),\n\
+--integrator wavefront a stream of kernels (after Purcell et al. 2002) over ray queues. --accel picks kd-stack,\n\
 bvh-threaded (default) or brute, --test plucker or moller. --shadows maps and --primary raster\n\
 are CPU-only and are refused with an error."
 )]
@@ -162,9 +162,9 @@ pub struct RenderArgs {
     /// the output, plus PNG previews).
     #[arg(long, value_delimiter = ',')]
     aov: Vec<String>,
-    /// Acceleration structure (`raykit info accels`; default bvh4, or
-    /// bvh-threaded with --backend gpu, which takes kd-stack, bvh-threaded or
-    /// brute).
+    /// Acceleration structure (`raykit info accels`; default bvh8, the
+    /// fastest, or bvh-threaded with --backend gpu, which takes kd-stack,
+    /// bvh-threaded or brute). The summary line names the one used.
     #[arg(long)]
     accel: Option<String>,
     /// Render on the CPU or the GPU (same image; see below).
@@ -209,8 +209,11 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let format = output::Format::of(&args.out)?;
     let backend = args.backend;
     let cpu_accel = match backend {
-        BackendArg::Cpu => args.accel.as_deref().unwrap_or("bvh4"),
-        BackendArg::Gpu => "bvh4",
+        BackendArg::Cpu => args
+            .accel
+            .as_deref()
+            .unwrap_or(crate::build_args::DEFAULT_ACCEL),
+        BackendArg::Gpu => crate::build_args::DEFAULT_ACCEL,
     };
     let (kind, test) = parse_names(cpu_accel, &args.test)?;
     let gpu_kind = match backend {
@@ -302,7 +305,12 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                 shadow_maps: maps.as_ref(),
             };
             let frame = pool.install(|| render_whitted(&scene, &setup.camera, &opts, &progress))?;
-            (frame, build_s, format!("{}, {}", kind.name(), test.name()))
+            let build = crate::build_args::quality_name(args.build.options().quality);
+            (
+                frame,
+                build_s,
+                format!("{} ({build} build), {}", kind.name(), test.name()),
+            )
         }
     };
     bar.finish_and_clear();

@@ -37,7 +37,7 @@ pub struct SceneArgs {
     /// `R,G,B` (uniform), or an equirectangular HDR map (`.exr`, `.hdr`).
     #[arg(long, default_value = "sky")]
     pub env: String,
-    /// Paper 001's environment box: look the map up where a ray leaves a box
+    /// The environment box: look the map up where a ray leaves a box
     /// around the scene (reflections get parallax) instead of by direction.
     #[arg(long)]
     pub env_box: bool,

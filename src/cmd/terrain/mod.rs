@@ -1,6 +1,7 @@
-//! `raykit terrain`: DEMs — rendering by height-field ray casting (paper
-//! 004) and shadow masks (paper 003).
+//! `raykit terrain`: DEMs — rendering by height-field ray casting (per-frame
+//! quadtree boxes, maximum mipmap) and shadow masks (Min 2008).
 
+mod creation_options;
 pub mod dem_arg;
 pub mod render;
 pub mod shadow;
@@ -21,8 +22,8 @@ enum Which {
     /// Shadow mask of a point light or the sun (GeoTIFF with the DEM's
     /// georeferencing, plus a PNG preview), or hours of sun over a day.
     Shadow(shadow::ShadowArgs),
-    /// Render a DEM to a PNG by exact height-field ray casting (paper 004's
-    /// boxes, maximum mipmap or per-cell march) with Phong shading and shadows.
+    /// Render a DEM to a PNG by exact height-field ray casting (per-frame
+    /// quadtree boxes, maximum mipmap or per-cell march) with Phong shading and shadows.
     Render(render::TerrainRenderArgs),
 }
 

@@ -1,6 +1,6 @@
 //! `raykit terrain render`: a DEM rendered by exact height-field ray casting
-//! (paper 004's boxes, the maximum mipmap or the per-cell march), Phong
-//! shading on the declared surface times paper 003's shadow mask, written
+//! (per-frame quadtree boxes, the maximum mipmap or the per-cell march), Phong
+//! shading on the declared surface times the shadow mask, written
 //! to a PNG; optionally a steps-per-ray heat map and fly-throughs.
 
 #[path = "render_shade.rs"]
@@ -38,7 +38,7 @@ pub enum CasterArg {
     March,
     /// Per-ray maximum-mipmap quadtree traversal (Tevs et al. 2008).
     Maxmip,
-    /// Paper 004: per-frame quadtree boxes with LOD τ, then a march from each pixel's box entry.
+    /// Per-frame quadtree boxes with LOD τ, then a march from each pixel's box entry.
     Boxes,
 }
 
@@ -76,7 +76,7 @@ raykit terrain render fractal:513 --path 500,500,2300:4000,2500,2100:4500,4500,2
 raykit terrain render N57E011.hgt --backend gpu --heatmap steps.png\n\n\
 GPU backend (--backend gpu): the heights and the maximum mipmap are uploaded once and a WGSL \
 kernel casts one ray per pixel in f32 on the same declared surface: --caster maxmip (the \
-default there) walks the maximum mipmap per ray (Tevs et al. 2008) as the CPU does; --caster boxes takes paper 004's \
+default there) walks the maximum mipmap per ray (Tevs et al. 2008) as the CPU does; --caster boxes takes the \
 boxes from the CPU's per-frame quadtree traversal, finds each pixel's nearest box entry and \
 marches from there. Hit cells, distances and step counts come back and the host shades them \
 with the same code, so the image equals the CPU's but at the rare pixels where f32 rounding \
@@ -410,7 +410,7 @@ fn write_png(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<()> {
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// The caster: `--caster`, or the backend's faster one (paper 004's boxes
+/// The caster: `--caster`, or the backend's faster one (per-frame quadtree boxes
 /// on the CPU, the per-ray maximum mipmap on the GPU).
 fn resolve_caster(args: &TerrainRenderArgs) -> CasterArg {
     args.caster.unwrap_or(match args.backend {

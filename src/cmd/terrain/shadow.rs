@@ -1,14 +1,20 @@
 //! `raykit terrain shadow`: where a point light or the sun is visible from
-//! the ground (paper 003's terrain shadow map), exact for the declared
+//! the ground (Min's (2008) terrain shadow map), exact for the declared
 //! surface, written as a GeoTIFF with the DEM's georeferencing and a PNG
-//! preview; or hours of direct sun per cell over a day.
+//! preview; or hours of direct sun per cell over a day. The options follow
+//! gdal_viewshed where the meaning is the same (values of visible,
+//! invisible, out-of-range and no-data cells, target height, maximum
+//! distance, curvature coefficient, creation options).
 
+use super::creation_options;
 use super::dem_arg::{self, numbers};
 use crate::measure::timed;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use raykit_terrain::shadow::{shadow_mask_with_progress, Light, ShadowMethod};
+use raykit_terrain::curvature::curvature_corrected;
+use raykit_terrain::io::GeoTiffLayout;
+use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
 use raykit_terrain::sun::{day_of_year, sun_position};
 use raykit_terrain::{Dem, HeightField, MaxMipmap};
 use std::path::{Path, PathBuf};
@@ -19,7 +25,7 @@ use std::process::ExitCode;
 pub enum Method {
     /// Each segment through the min/max quadtree (default).
     Fast,
-    /// Each segment marched cell by cell (paper 003's brute force).
+    /// Each segment marched cell by cell (brute force).
     Brute,
 }
 
@@ -29,7 +35,16 @@ pub enum Method {
 The surface is the DEM's grid points joined as two triangles per cell. A grid point is lit when the\n\
 segment from the surface there to the light meets no other part of the surface. Map coordinates\n\
 are in the DEM's own units (metres for projected rasters, degrees for SRTM .hgt).\n\n\
+Output values (gdal_viewshed's -vv, -iv, -ov, -a_nodata): --visible-value (default 1),\n\
+--invisible-value (0), --out-of-range-value (0) for cells beyond --max-distance, --nodata-value\n\
+(255) where the DEM has no data. The GeoTIFF is DEFLATE-compressed in strips unless --co says\n\
+otherwise (--co COMPRESS=DEFLATE|LZW|PACKBITS|NONE, --co TILED=YES, --co BLOCKXSIZE=N).\n\
+Unlike gdal_viewshed, the output always covers the whole DEM, and the curvature coefficient is 0\n\
+(a flat earth, exact for the declared surface) unless given; gdal_viewshed's default is 0.85714.\n\
+The long options have gdal-like aliases: --vv, --iv, --ov, --tz, --md, --cc.\n\n\
 Examples:\n  raykit terrain shadow dem.tif --light 429452,5150685,10 --out mask.tif\n  \
+raykit terrain shadow dem.tif --light 429452,5150685,10 --vv 255 --tz 2 --md 5000 --cc 0.85714 \\\n      \
+--co TILED=YES --out viewshed.tif\n  \
 raykit terrain shadow N57E011.hgt --sun 135,20 --out sun.tif --preview sun.png\n  \
 raykit terrain shadow dem.tif --sun-path 2026-06-21,45.5,-93.2 --out hours.tif\n  \
 raykit terrain shadow fractal:2048 --light 10000,-10000,50 --compare --out m.tif")]
@@ -57,7 +72,49 @@ pub struct ShadowArgs {
     /// Run both algorithms, report their times and the cells on which they differ.
     #[arg(long)]
     compare: bool,
-    /// Output GeoTIFF (mask: 1 lit, 0 shadow, 255 no-data; sun path: hours).
+    /// Height above the ground of the target at every grid point, metres
+    /// (gdal_viewshed's -tz): a cell is lit when the light sees that point.
+    #[arg(
+        long,
+        visible_alias = "tz",
+        default_value_t = 0.0,
+        value_name = "METRES"
+    )]
+    target_height: f64,
+    /// With --light: cells farther than this from the light, horizontally in
+    /// metres, get --out-of-range-value (gdal_viewshed's -md).
+    #[arg(long, visible_alias = "md", value_name = "METRES")]
+    max_distance: Option<f64>,
+    /// With --light: lower every height by COEFF · d² / earth diameter, d the
+    /// horizontal distance from the light (curvature and refraction,
+    /// gdal_viewshed's -cc; 1 is curvature alone, 0.85714 gdal's default).
+    #[arg(
+        long,
+        visible_alias = "cc",
+        default_value_t = 0.0,
+        value_name = "COEFF"
+    )]
+    curvature_coefficient: f64,
+    /// Mask value of lit cells (gdal_viewshed's -vv).
+    #[arg(long, visible_alias = "vv", default_value_t = 1, value_name = "0-255")]
+    visible_value: u8,
+    /// Mask value of cells in shadow (gdal_viewshed's -iv).
+    #[arg(long, visible_alias = "iv", default_value_t = 0, value_name = "0-255")]
+    invisible_value: u8,
+    /// Mask value of cells beyond --max-distance (gdal_viewshed's -ov).
+    #[arg(long, visible_alias = "ov", default_value_t = 0, value_name = "0-255")]
+    out_of_range_value: u8,
+    /// Mask value, declared as the GeoTIFF's nodata, where the DEM has no data
+    /// (gdal_viewshed's -a_nodata).
+    #[arg(long, default_value_t = 255, value_name = "0-255")]
+    nodata_value: u8,
+    /// GeoTIFF creation option KEY=VALUE, repeatable (gdal's -co):
+    /// COMPRESS=DEFLATE|LZW|PACKBITS|NONE (default DEFLATE), TILED=YES|NO,
+    /// BLOCKXSIZE=N, BLOCKYSIZE=N (tile size, default 256).
+    #[arg(long = "co", value_name = "KEY=VALUE", action = clap::ArgAction::Append)]
+    creation_options: Vec<String>,
+    /// Output GeoTIFF (mask: --visible-value, --invisible-value, ...; sun
+    /// path: float32 hours).
     #[arg(long)]
     out: PathBuf,
     /// PNG preview (default: OUT with .png).
@@ -82,6 +139,7 @@ fn compute(
     pyramid: &MaxMipmap,
     light: &Light,
     method: ShadowMethod,
+    target_height: f64,
     label: &str,
 ) -> (Vec<u8>, f64) {
     let bar = ProgressBar::new((field.width * field.height) as u64).with_style(
@@ -89,8 +147,11 @@ fn compute(
             .expect("valid template"),
     );
     bar.set_message(label.to_string());
-    let (mask, s) =
-        timed(|| shadow_mask_with_progress(field, pyramid, light, method, &|n| bar.inc(n as u64)));
+    let (mask, s) = timed(|| {
+        shadow_mask_for_targets(field, pyramid, light, method, target_height, &|n| {
+            bar.inc(n as u64)
+        })
+    });
     bar.finish_and_clear();
     (mask, s)
 }
@@ -108,6 +169,33 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     if args.light_elevation && args.light.is_none() {
         bail!("--light-elevation applies to --light only");
     }
+    if args.light.is_none() && (args.max_distance.is_some() || args.curvature_coefficient != 0.0) {
+        bail!("--max-distance and --curvature-coefficient apply to --light only");
+    }
+    if !(args.target_height.is_finite() && args.target_height >= 0.0) {
+        bail!(
+            "--target-height {}: expected a height >= 0 metres",
+            args.target_height
+        );
+    }
+    if let Some(md) = args.max_distance {
+        if !(md.is_finite() && md > 0.0) {
+            bail!("--max-distance {md}: expected a distance > 0 metres");
+        }
+    }
+    if !args.curvature_coefficient.is_finite() {
+        bail!("--curvature-coefficient must be a finite number");
+    }
+    let nv = args.nodata_value;
+    if nv == args.visible_value || nv == args.invisible_value {
+        bail!(
+            "--nodata-value {nv} equals --visible-value or --invisible-value: GDAL would read those cells as no data"
+        );
+    }
+    if args.max_distance.is_some() && nv == args.out_of_range_value {
+        bail!("--nodata-value {nv} equals --out-of-range-value: GDAL would read those cells as no data");
+    }
+    let layout = creation_options::layout(&args.creation_options)?;
     let preview = args
         .preview
         .clone()
@@ -117,7 +205,21 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     crate::paths::ensure_not_input(&preview, &[input])?;
     let (dem, load_s) = timed(|| dem_arg::load(&args.dem));
     let dem = dem?;
-    let field = HeightField::new(&dem).map_err(|e| anyhow::anyhow!("{}: {e}", args.dem))?;
+    // The light's grid position, for the curvature and the distances.
+    let light_grid = match &args.light {
+        Some(s) => {
+            let [x, y, _] = numbers::<3>("--light", s)?;
+            Some(dem.map_to_grid(x, y))
+        }
+        None => None,
+    };
+    let field_dem = match light_grid {
+        Some((c, r)) if args.curvature_coefficient != 0.0 => {
+            curvature_corrected(&dem, c, r, args.curvature_coefficient)
+        }
+        _ => dem.clone(),
+    };
+    let field = HeightField::new(&field_dem).map_err(|e| anyhow::anyhow!("{}: {e}", args.dem))?;
     let (pyramid, pyr_s) = timed(|| MaxMipmap::new(&field));
     let method = match args.method {
         Method::Fast => ShadowMethod::Fast,
@@ -137,7 +239,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
 
     if let Some(spec) = &args.sun_path {
         return sun_path(
-            &args, spec, &dem, &field, &pyramid, method, &nodata, &preview,
+            &args, spec, &dem, &field, &pyramid, method, &nodata, &preview, &layout,
         );
     }
     let light = if let Some(s) = &args.light {
@@ -162,7 +264,8 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
             elevation_deg: el,
         }
     };
-    let (mut mask, secs) = compute(&field, &pyramid, &light, method, "shadow mask");
+    let tz = args.target_height;
+    let (mask, secs) = compute(&field, &pyramid, &light, method, tz, "shadow mask");
     if args.compare {
         let other = match method {
             ShadowMethod::Fast => ShadowMethod::BruteForce,
@@ -173,6 +276,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
             &pyramid,
             &light,
             other,
+            tz,
             "shadow mask (second method)",
         );
         let differ = mask.iter().zip(&m2).filter(|(a, b)| a != b).count();
@@ -192,32 +296,60 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
             eprintln!("raykit: the two exact methods disagree: please report this");
         }
     }
-    for (m, &nd) in mask.iter_mut().zip(&nodata) {
-        if nd {
-            *m = 255;
+    // Each cell's class: lit, shadow, out of range or no data.
+    let (sx, sy) = (field.sx, field.sy);
+    let out_of_range = |i: usize| match (args.max_distance, light_grid) {
+        (Some(md), Some((lc, lr))) => {
+            let (c, r) = ((i % dem.width) as f64, (i / dem.width) as f64);
+            ((c - lc) * sx).hypot((r - lr) * sy) > md
         }
-    }
-    let lit = mask.iter().filter(|&&m| m == 1).count();
-    raykit_terrain::io::write_geotiff_u8(
+        _ => false,
+    };
+    let class: Vec<Cell> = (0..mask.len())
+        .map(|i| {
+            if nodata[i] {
+                Cell::NoData
+            } else if out_of_range(i) {
+                Cell::OutOfRange
+            } else if mask[i] == 1 {
+                Cell::Lit
+            } else {
+                Cell::Shadow
+            }
+        })
+        .collect();
+    let lit = class.iter().filter(|&&c| c == Cell::Lit).count();
+    let values: Vec<u8> = class
+        .iter()
+        .map(|c| match c {
+            Cell::Lit => args.visible_value,
+            Cell::Shadow => args.invisible_value,
+            Cell::OutOfRange => args.out_of_range_value,
+            Cell::NoData => nv,
+        })
+        .collect();
+    raykit_terrain::io::write_geotiff_u8_with(
         &args.out,
         dem.width,
         dem.height,
-        &mask,
+        &values,
         &dem.georef,
-        Some(255.0),
+        Some(nv as f64),
+        &layout,
     )?;
-    let rgb: Vec<u8> = mask
+    let rgb: Vec<u8> = class
         .iter()
-        .flat_map(|&m| match m {
-            1 => [235, 225, 190],
-            0 => [40, 45, 70],
-            _ => [255, 0, 255],
+        .flat_map(|c| match c {
+            Cell::Lit => [235, 225, 190],
+            Cell::Shadow => [40, 45, 70],
+            Cell::OutOfRange => [120, 120, 120],
+            Cell::NoData => [255, 0, 255],
         })
         .collect();
     raykit_io::write_png(&preview, dem.width as u32, dem.height as u32, &rgb)
         .with_context(|| format!("writing {}", preview.display()))?;
     eprintln!(
-        "{:?}: {:.1}% of the grid points lit, {:.3} s ({}) -> {} and {}",
+        "{:?}: {:.1}% of the grid points lit, {:.3} s ({}) -> {} ({}) and {}",
         light,
         100.0 * lit as f64 / mask.len() as f64,
         secs,
@@ -226,9 +358,27 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
             ShadowMethod::BruteForce => "brute force",
         },
         args.out.display(),
+        describe(&layout),
         preview.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// What a grid point of the mask is.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Cell {
+    Lit,
+    Shadow,
+    OutOfRange,
+    NoData,
+}
+
+/// The GeoTIFF layout in words, e.g. "DEFLATE, tiles 256x256".
+fn describe(layout: &GeoTiffLayout) -> String {
+    match layout.tile {
+        Some((w, h)) => format!("{}, tiles {w}x{h}", layout.compression.name()),
+        None => format!("{}, strips", layout.compression.name()),
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -241,6 +391,7 @@ fn sun_path(
     method: ShadowMethod,
     nodata: &[bool],
     preview: &Path,
+    layout: &GeoTiffLayout,
 ) -> Result<ExitCode> {
     let parts: Vec<&str> = spec.split(',').collect();
     let [date, lat, lon] = parts[..] else {
@@ -280,7 +431,14 @@ fn sun_path(
                 azimuth_deg: az,
                 elevation_deg: el,
             };
-            let mask = raykit_terrain::shadow::shadow_mask(field, pyramid, &light, method);
+            let mask = shadow_mask_for_targets(
+                field,
+                pyramid,
+                &light,
+                method,
+                args.target_height,
+                &|_| {},
+            );
             for (h, &m) in hours.iter_mut().zip(&mask) {
                 *h += m as f32 * step_h as f32;
             }
@@ -293,13 +451,14 @@ fn sun_path(
             *h = f32::NAN;
         }
     }
-    raykit_terrain::io::write_geotiff_f32(
+    raykit_terrain::io::write_geotiff_f32_with(
         &args.out,
         dem.width,
         dem.height,
         &hours,
         &dem.georef,
         Some(-9999.0),
+        layout,
     )?;
     let max = hours
         .iter()

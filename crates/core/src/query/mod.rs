@@ -13,18 +13,34 @@
 //! - [`walk`]: the tree queries through [`Accel::visit_regions`], with
 //!   [`QueryStats`], and the brute-force references.
 //!
-//! Every query returns sorted unique ids; a tree query returns exactly what
+//! - [`surface_bvh`]: [`SurfaceBvh`], the 8-wide BVH of the point and
+//!   multi-hit ray queries below.
+//! - [`closest`]: closest point on the surface and unsigned distance
+//!   (Ericson 2005), nearest box first.
+//! - [`winding`]: generalized winding number (Jacobson et al. 2013) with
+//!   Barill et al.'s 2018 far-field approximation: occupancy and signed
+//!   distance that are right on open and self-intersecting meshes.
+//! - [`all_hits`]: all hits along a ray sorted by `t` (with a cap), their
+//!   count, and any-hit with a filter callback.
+//!
+//! Every region query returns sorted unique ids; a tree query returns exactly what
 //! its brute-force reference returns, which the tests check on every
 //! [`crate::accel::AccelKind`].
 
+pub mod all_hits;
+pub mod closest;
 pub mod exact;
 pub mod frustum;
 pub mod shapes;
+pub mod surface_bvh;
 pub mod walk;
+pub mod winding;
 
+pub use closest::ClosestPoint;
 pub use exact::Triangle64;
 pub use frustum::{Frustum, Plane};
 pub use shapes::{QueryShape, Sphere};
+pub use surface_bvh::SurfaceBvh;
 pub use walk::{
     parts_overlapping, parts_overlapping_brute, triangles_overlapping, triangles_overlapping_brute,
     QueryResult, QueryStats,

@@ -7,15 +7,15 @@ use raykit_core::rng::Pcg32;
 use raykit_core::{Aabb, Hit, Ray, TriangleMesh, Vec3};
 use std::path::PathBuf;
 
-/// The shared data folder: `$RAYKIT_SHARED_DATA`, or `shared/data` beside
-/// the checkout (as the other crates' tests find it).
+/// The test data folder: `data/` in the repository, or
+/// `$RAYKIT_SHARED_DATA` (as the other crates' tests find it).
 pub fn shared_data() -> PathBuf {
     let root = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data"));
     assert!(
         root.is_dir(),
-        "{} is missing: the tests need the shared data folder (set RAYKIT_SHARED_DATA)",
+        "{} is missing: the tests need the test data folder (set RAYKIT_SHARED_DATA)",
         root.display()
     );
     root

@@ -1,4 +1,4 @@
-//! Test support for T-junction elimination (paper 002), written independently
+//! Test support for T-junction elimination (Kim 2013), written independently
 //! of `raykit_core::tjunction`: meshes, a plane cutter that makes real
 //! T-junctions the way a kd-tree build that cuts polygons does, and a
 //! brute-force f64 checker. Also used by the root package's real-mesh tests.

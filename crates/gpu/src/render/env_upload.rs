@@ -1,12 +1,12 @@
 //! The environment as the WGSL reads it (`shaders/render/environment.wgsl`):
-//! the sky, a constant, an equirectangular map by direction, or paper 001's
+//! the sky, a constant, an equirectangular map by direction, or the Purcell-style stream tracer's
 //! environment box.
 
 use raykit_core::glam::Vec3;
 use raykit_render::env::{Environment, EquirectMap};
 
 /// The environment as the shaders read it: kind (0 sky, 1 constant, 2 map
-/// by direction, 3 paper 001's environment box), colour, map and box.
+/// by direction, 3 The environment box), colour, map and box.
 #[derive(Default)]
 pub struct EnvUpload {
     /// 0 sky, 1 constant, 2 map by direction, 3 environment box.

@@ -1,4 +1,4 @@
-//! Paper 000's single kernel: one thread per pixel sample follows its whole
+//! The stack kd-tree GPU tracer's single kernel: one thread per pixel sample follows its whole
 //! path — camera ray, shadow rays, reflection and refraction rays — with a
 //! fixed-size per-thread stack (`shaders/render/megakernel.wgsl`).
 

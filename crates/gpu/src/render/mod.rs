@@ -2,15 +2,15 @@
 //! renderer's image (crates/render/src/whitted) from WGSL kernels, in the
 //! two organisations of the papers:
 //!
-//! - paper 000's single kernel ([`megakernel`]): one thread per pixel
+//! - one kernel per ray path ([`megakernel`]): one thread per pixel
 //!   sample traces the camera ray, the shadow rays and the reflection and
 //!   refraction rays with a small per-thread stack;
-//! - paper 001's stream ([`stream`]): ray generation, intersection,
+//! - the Purcell-style stream tracer's stream ([`stream`]): ray generation, intersection,
 //!   environment and shading kernels chained through ray queues.
 //!
 //! Both run the same WGSL shading (`shaders/render/`: surface, lights,
 //! base-colour textures, Blinn-Phong, Fresnel, refraction, the sky, equirectangular maps and
-//! paper 001's environment box) as the CPU's
+//! The environment box) as the CPU's
 //! `Tracer::scatter`, with camera samples placed by the CPU's
 //! `sample_position`, and hand back linear radiance that the caller encodes
 //! as the CPU renderer does.
@@ -36,7 +36,7 @@ use raykit_render::Image;
 use std::time::Instant;
 use upload::{FrameSettings, ShadeBuffers};
 
-/// The longest path (`--depth`) paper 000's single kernel follows: the size
+/// The longest path (`--depth`) one kernel per ray path follows: the size
 /// of its per-thread stack of pending rays.
 pub const MAX_GPU_DEPTH: u32 = 16;
 
@@ -72,7 +72,7 @@ struct RunReport {
     first_hits: Vec<u32>,
 }
 
-/// A frame rendered on the GPU by paper 000's single kernel or paper 001's
+/// A frame rendered on the GPU by one kernel per ray path or the Purcell-style stream tracer's
 /// stream.
 pub struct GpuFrame {
     /// The image, first hits (for AOVs) and ray counts; `stats.seconds`
@@ -82,9 +82,9 @@ pub struct GpuFrame {
     pub compile_seconds: f64,
 }
 
-/// Refuse options the GPU renderer (papers 000 and 001 on wgpu) does not
-/// implement, naming them (never a silently different image): paper 001's
-/// shadow maps and rasterized primaries, and paths longer than paper 000's
+/// Refuse options the GPU renderer (Whitted (1980), on the GPU after Purcell et al. (2002) on wgpu) does not
+/// implement, naming them (never a silently different image): the Purcell-style stream tracer's
+/// shadow maps and rasterized primaries, and paths longer than the stack kd-tree GPU tracer's
 /// single kernel's ray stack.
 pub fn check_options(opts: &WhittedOptions) -> GpuResult<()> {
     if opts.shadows == ShadowMode::Maps {
@@ -154,8 +154,8 @@ fn positions(opts: &WhittedOptions, sample: u32) -> Vec<u32> {
 }
 
 /// Render `scene` (uploaded as `gpu`) through `camera` with the
-/// organisation `opts.integrator` picks: recursive → paper 000's single
-/// kernel, wavefront → paper 001's stream. `progress(samples, rays)` is
+/// organisation `opts.integrator` picks: recursive → the stack kd-tree GPU tracer's single
+/// kernel, wavefront → the Purcell-style stream tracer's stream. `progress(samples, rays)` is
 /// called after each camera sample of every pixel. The frame holds the
 /// average linear radiance times the exposure, encoded as the CPU's, and
 /// the first camera sample's hits, as the CPU's frame does.

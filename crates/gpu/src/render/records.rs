@@ -1,4 +1,4 @@
-//! The shading records the WGSL reads (papers 000 and 001 shade from
+//! The shading records the WGSL reads (Whitted (1980), on the GPU after Purcell et al. (2002) shade from
 //! per-triangle and per-material tables): triangles, materials, lights and
 //! the texture atlas.
 

@@ -1,4 +1,4 @@
-//! Paper 001's stream organisation on the GPU: per camera sample, `raygen`
+//! The Purcell-style stream tracer's stream organisation on the GPU: per camera sample, `raygen`
 //! fills a ray queue; per bounce, `intersect`, `miss` (environment) and
 //! `shade` run over the queue, and shading appends the next bounce's rays
 //! to a second queue through an atomic counter (`shaders/render/stream.wgsl`).

@@ -1,4 +1,4 @@
-//! The shading data of the GPU Whitted renderer (papers 000 and 001): the
+//! The shading data of the GPU Whitted renderer (Whitted (1980), on the GPU after Purcell et al. (2002)): the
 //! per-triangle corners, vertex normals and material index, the material
 //! and light tables and the frame's parameters, uploaded as bind group 1 of
 //! both organisations (`shaders/render/shade_data.wgsl`), with the ray
@@ -47,7 +47,7 @@ pub struct ShadeParams {
     _pad2: u32,
 }
 
-/// What the shading of papers 000 and 001 reads about the scene,
+/// What the shading of Whitted (1980), on the GPU after Purcell et al. (2002) reads about the scene,
 /// independent of the camera: geometry with materials, lights, environment.
 pub struct ShadeScene<'a> {
     /// Geometry with materials.

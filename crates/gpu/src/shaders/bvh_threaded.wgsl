@@ -1,4 +1,4 @@
-// Paper 001's stackless BVH (crates/core/src/accel/bvh/threaded.rs): nodes
+// The Purcell-style stream tracer's stackless BVH (crates/core/src/accel/bvh/threaded.rs): nodes
 // in pre-order, eight words each (padded box, escape index, leaf range with
 // the count in the top 5 bits); one loop, hit -> next node, miss or leaf ->
 // escape.

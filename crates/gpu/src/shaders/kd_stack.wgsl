@@ -1,4 +1,4 @@
-// Paper 000's kd-tree traversal with a fixed-size per-thread stack in
+// The stack kd-tree GPU tracer's kd-tree traversal with a fixed-size per-thread stack in
 // private memory (crates/core/src/accel/kdtree/stack.rs): 8-byte nodes (leaf
 // bit, 2 axis bits, 28-bit first-child offset; split or leaf count), near
 // child first, far child pushed with its segment, stop at the first leaf

@@ -1,4 +1,4 @@
-// Paper 004's per-frame boxes on the GPU: the boxes come from the CPU's one
+// per-frame quadtree boxes on the GPU: the boxes come from the CPU's one
 // quadtree traversal per frame (raykit-terrain's boxes.rs select_boxes:
 // view-distance LOD and frustum culling), listed per image row; each thread
 // takes one pixel, finds the nearest entry of its ray into the boxes

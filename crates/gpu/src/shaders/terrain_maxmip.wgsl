@@ -1,5 +1,5 @@
 // Per-ray maximum-mipmap traversal of a height field (Tevs, Ihrke and
-// Seidel 2008; paper 004's "per-ray top-down" method C), one thread per
+// Seidel 2008; per-ray top-down), one thread per
 // pixel, the same walk as raykit-terrain's maxmip.rs: from the root, skip a
 // node when the ray stays above its maximum over the node's stretch of the
 // ray, visit the children in the order the ray crosses them, and test the

@@ -1,4 +1,4 @@
-// Möller–Trumbore (paper 001) with the conservative tolerance of
+// Möller–Trumbore (1997) with the conservative tolerance of
 // crates/core/src/tri/moller.rs, on its 11-word record:
 // v0, e1, e2, max|e1_i|, max|e2_i|.
 

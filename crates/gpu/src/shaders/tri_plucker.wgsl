@@ -1,4 +1,4 @@
-// Paper 000's Plücker test (section 5.1) with the conservative side
+// The stack kd-tree GPU tracer's Plücker test (section 5.1) with the conservative side
 // tolerance of crates/core/src/tri/plucker.rs, on its 28-word record:
 // (e_i, M_i) for the three edges, n, a, scale_v, scale_u, tol_m, cap.
 // The sign test is branch-free; shadow rays skip the barycentrics.

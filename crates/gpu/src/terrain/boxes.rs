@@ -1,4 +1,4 @@
-//! Paper 004's per-frame boxes for the GPU: the CPU's one quadtree
+//! per-frame quadtree boxes for the GPU: the CPU's one quadtree
 //! traversal per frame (`raykit_terrain::boxes::select_boxes`) flattened
 //! into box records and per-row lists for `shaders/terrain_boxes.wgsl`.
 

@@ -23,10 +23,9 @@ const OUT_WORDS: usize = 4;
 /// rounding, like their CPU counterparts).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum GpuCaster {
-    /// Per-ray maximum-mipmap traversal (Tevs et al. 2008; paper 004's
-    /// method C).
+    /// Per-ray maximum-mipmap traversal (Tevs et al. 2008).
     MaxMipmap,
-    /// Paper 004's per-frame boxes with LOD parameter τ (pixels): the CPU
+    /// per-frame quadtree boxes with LOD parameter τ (pixels): the CPU
     /// selects the boxes, the GPU finds each pixel's nearest box entry and
     /// marches from there.
     Boxes {
@@ -54,7 +53,7 @@ pub struct GpuView {
     out: wgpu::Buffer,
     params: wgpu::Buffer,
     groups: (u32, u32),
-    /// Paper 004's boxes, row lists and chunk parameters (boxes caster).
+    /// per-frame quadtree boxes, row lists and chunk parameters (boxes caster).
     boxes: Option<[wgpu::Buffer; 3]>,
     /// Boxes the frame uses (0 for the maximum mipmap).
     pub box_count: usize,
@@ -62,7 +61,7 @@ pub struct GpuView {
 
 impl GpuTerrain {
     /// Upload the rays of pixels `first .. first + count` of `camera`
-    /// (`count` is cut to [`CHUNK`] and to the image) and, for paper 004's boxes, the frame's
+    /// (`count` is cut to [`CHUNK`] and to the image) and, for per-frame quadtree boxes, the frame's
     /// boxes (selected on the CPU from `pyramid`).
     #[allow(clippy::too_many_arguments)]
     pub fn upload_view(

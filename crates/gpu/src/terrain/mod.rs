@@ -1,5 +1,5 @@
-//! GPU terrain ray casting (issue 9): the height field and its maximum
-//! mipmap (Tevs et al. 2008, as paper 004 uses it) in storage buffers, and
+//! GPU terrain ray casting: the height field and its maximum
+//! mipmap (Tevs et al. 2008, as the quadtree-box caster uses it) in storage buffers, and
 //! a WGSL kernel casting one ray per pixel by per-ray top-down traversal,
 //! the same walk as `raykit_terrain::maxmip` on the same declared surface
 //! (two triangles per cell, split along the (col, row)–(col+1, row+1)
@@ -9,7 +9,7 @@
 //! - [`GpuTerrain::cast`]: a [`CastImage`](raykit_terrain::view::CastImage)
 //!   like the CPU's `cast_image`, so the host shades it the same way;
 //! - [`time_terrain_casts`]: Mrays/s of the kernel for benchmarks;
-//! - paper 004's per-frame boxes ([`GpuCaster::Boxes`],
+//! - per-frame quadtree boxes ([`GpuCaster::Boxes`],
 //!   `shaders/terrain_boxes.wgsl`): the CPU's boxes uploaded, each pixel's
 //!   nearest box entry found on the GPU, a march from there.
 
@@ -64,7 +64,7 @@ struct TerrainParams {
 }
 
 /// A height field and its maximum mipmap uploaded, with the per-ray
-/// maximum-mipmap kernel compiled (Tevs et al. 2008; paper 004's method C).
+/// maximum-mipmap kernel compiled (Tevs et al. 2008).
 pub struct GpuTerrain {
     heights: wgpu::Buffer,
     maxes: wgpu::Buffer,

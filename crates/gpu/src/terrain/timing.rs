@@ -1,6 +1,6 @@
 //! Throughput of the GPU terrain caster, for `raykit experiment gpu` and
-//! benchmarks: per-ray maximum-mipmap traversal (Tevs et al. 2008, paper
-//! 004's method C) timed from submission to completion of the kernel.
+//! benchmarks: per-ray maximum-mipmap traversal (Tevs et al.
+//! 2008) timed from submission to completion of the kernel.
 
 use super::{GpuCaster, GpuTerrain};
 use crate::context::GpuContext;
@@ -46,7 +46,7 @@ pub fn time_terrain_casts(
     time_caster(ctx, field, pyramid, camera, GpuCaster::MaxMipmap, reps)
 }
 
-/// [`time_terrain_casts`] for paper 004's per-frame boxes with LOD `tau`:
+/// [`time_terrain_casts`] for per-frame quadtree boxes with LOD `tau`:
 /// the kernel time covers each pixel's nearest box entry and its march; the
 /// CPU's box selection is in `ray_seconds`.
 pub fn time_terrain_boxes(

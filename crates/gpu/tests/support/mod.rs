@@ -1,5 +1,5 @@
 //! What the GPU tests share: the device (failing loudly without one), the
-//! shared data folder, and the ray-by-ray comparison with the CPU.
+//! test data folder, and the ray-by-ray comparison with the CPU.
 #![allow(dead_code)]
 
 use raykit_core::{Hit, Ray};
@@ -25,14 +25,14 @@ pub fn gpu() -> &'static GpuContext {
     })
 }
 
-/// The shared data folder (`../shared/data` or `$RAYKIT_SHARED_DATA`).
+/// The test data folder (`data/` in the repository, or `$RAYKIT_SHARED_DATA`).
 pub fn shared_data() -> PathBuf {
     let dir = std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data"));
     assert!(
         dir.is_dir(),
-        "shared data folder not found at {} (set RAYKIT_SHARED_DATA): these tests need the real meshes",
+        "test data folder not found at {} (set RAYKIT_SHARED_DATA): these tests need the real meshes",
         dir.display()
     );
     dir

@@ -5,7 +5,7 @@ use raykit_core::{TriangleMesh, Vec3};
 use raykit_io::{LoadError, Location};
 use std::path::{Path, PathBuf};
 
-/// The shared data folder: `$RAYKIT_SHARED_DATA`, or `<workspace>/../shared/data`.
+/// The test data folder: `$RAYKIT_SHARED_DATA`, or `<workspace>/data`.
 /// Panics (failing the test) with the places it looked when it is missing.
 pub fn shared_data() -> PathBuf {
     if let Some(p) = std::env::var_os("RAYKIT_SHARED_DATA") {
@@ -17,20 +17,20 @@ pub fn shared_data() -> PathBuf {
         );
         return p;
     }
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data");
     assert!(
         p.is_dir(),
-        "shared test data not found: looked in {} (CARGO_MANIFEST_DIR/../../../shared/data); \
+        "shared test data not found: looked in {} (CARGO_MANIFEST_DIR/../../data); \
          set RAYKIT_SHARED_DATA to its location",
         p.display()
     );
     p
 }
 
-/// A file under the shared data folder, which must exist.
+/// A file under the test data folder, which must exist.
 pub fn shared(rel: &str) -> PathBuf {
     let p = shared_data().join(rel);
-    assert!(p.is_file(), "shared data file missing: {}", p.display());
+    assert!(p.is_file(), "test data file missing: {}", p.display());
     p
 }
 

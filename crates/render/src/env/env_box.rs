@@ -1,4 +1,4 @@
-//! The environment box of paper 001 (GPU ray tracing after Purcell): the map
+//! The environment box of the Purcell-style stream tracer (Purcell et al. 2002): the map
 //! is painted on the inside of an axis-aligned box around the scene, and a
 //! ray leaving the scene is looked up in the direction from the box centre to
 //! the point where it leaves the box. Unlike a direction-only lookup, two
@@ -18,7 +18,7 @@ pub const DEFAULT_BOX_SCALE: f32 = 2.0;
 /// flat scene (a ground plane alone) still gets a box with a volume.
 const MIN_RELATIVE_EXTENT: f32 = 0.01;
 
-/// The environment box around `scene` (paper 001), grounded: the scene
+/// The environment box around `scene` (Purcell-style stream tracer), grounded: the scene
 /// bounds scaled about their centre by `scale` horizontally and upwards, with
 /// the floor kept at the scene's lowest point, so the lower half of the map
 /// is painted on the ground the scene stands on rather than below it.

@@ -6,8 +6,8 @@
 //! * [`Environment::Map`]: classic environment mapping, an
 //!   [`EquirectMap`] looked up by direction only: fast, but without
 //!   parallax, as if the surroundings were infinitely far away.
-//! * [`Environment::Box`]: the environment box of paper 001 (GPU ray tracing
-//!   after Purcell): the map is painted on the inside of an axis-aligned box
+//! * [`Environment::Box`]: the environment box of the Purcell-style stream tracer (Purcell et al.
+//!   2002): the map is painted on the inside of an axis-aligned box
 //!   larger than the scene; a ray is intersected with the box and the map is
 //!   looked up in the direction from the box centre to the ray's exit point,
 //!   which removes the parallax errors of direction-only lookup.
@@ -64,7 +64,7 @@ pub enum Environment {
         /// The map.
         map: Arc<EquirectMap>,
     },
-    /// Paper 001's environment box: `map` painted on the inside of `bounds`,
+    /// The environment box: `map` painted on the inside of `bounds`,
     /// looked up from the box centre towards each ray's exit point. Rays that
     /// start outside the box and miss it fall back to direction lookup.
     Box {
@@ -81,7 +81,7 @@ impl Environment {
         Environment::Map { map: map.into() }
     }
 
-    /// Paper 001's environment box around `scene_bounds`: the bounds scaled
+    /// The environment box around `scene_bounds`: the bounds scaled
     /// about their centre by `scale` ([`DEFAULT_BOX_SCALE`] is a sensible
     /// choice), except the floor, which stays at the scene's lowest point so
     /// that the ground of the map lies under the scene rather than below it
@@ -139,7 +139,7 @@ impl Environment {
                 format!("environment map {} by direction", describe_map(map))
             }
             Environment::Box { map, bounds } => format!(
-                "environment box (paper 001) from ({}, {}, {}) to ({}, {}, {}) with map {}",
+                "environment box (Purcell-style stream tracer) from ({}, {}, {}) to ({}, {}, {}) with map {}",
                 bounds.min.x,
                 bounds.min.y,
                 bounds.min.z,

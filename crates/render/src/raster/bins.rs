@@ -1,5 +1,5 @@
 //! Binning: set-up triangles grouped by the horizontal bands of rows they
-//! overlap (paper 001's rasterizer works band by band in parallel).
+//! overlap (the Purcell-style stream tracer's rasterizer works band by band in parallel).
 
 use rayon::prelude::*;
 

@@ -1,4 +1,4 @@
-//! CPU rasterization of primary visibility, after paper 001's hybrid
+//! CPU rasterization of primary visibility, after the Purcell-style stream tracer's hybrid
 //! renderer: the first hit of every pixel is found by rasterizing the mesh
 //! with a projection matched to the ray camera, and rays are traced only
 //! from there on.

@@ -1,6 +1,6 @@
 //! The image positions of the pixels' own sample rays, computed once per
-//! image so that coverage is tested where each ray really passes (paper
-//! 001's rasterizer samples one position per pixel; ours may be jittered).
+//! image so that coverage is tested where each ray really passes (a
+//! hardware rasterizer samples one position per pixel; ours may be jittered).
 
 use super::screen::{Screen, U};
 use raykit_core::Ray;

@@ -1,5 +1,5 @@
 //! Image coordinates of sample rays and of triangle corners, in the frame
-//! of a [`RasterView`], for paper 001's rasterizer to test coverage where
+//! of a [`RasterView`], for the Purcell-style stream tracer's rasterizer to test coverage where
 //! each pixel's ray actually passes rather than over a whole pixel.
 
 use super::view::RasterView;

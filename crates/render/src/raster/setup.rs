@@ -15,7 +15,7 @@ pub(crate) const EXPANSION: f64 = 4.0 * MAX_EDGE_TOLERANCE as f64;
 /// difference between the view's directions and the sample rays.
 const SLACK: f64 = 1e-5;
 
-/// Edge functions and screen box of one triangle (paper 001: rasterization
+/// Edge functions and screen box of one triangle (the Purcell-style stream tracer: rasterization
 /// setup). A pixel `(x, y)` is a candidate when `a[i]·(x+½) + b[i]·(y+½) +
 /// c[i] >= 0` for all three edges, or, when `either` is set (triangle seen
 /// edge-on, orientation unknown), when `-a[i]·(x+½) - b[i]·(y+½) + cm[i] >= 0`

@@ -1,4 +1,4 @@
-//! Tight triangle setup in `f32` (paper 001's rasterization setup): edge
+//! Tight triangle setup in `f32` (the Purcell-style stream tracer's rasterization setup): edge
 //! functions of the projected triangle, widened only by a bound on rounding
 //! error, tested at each pixel's own sample position.
 //!

@@ -4,7 +4,7 @@
 use raykit_core::glam::DVec3;
 use raykit_core::{Camera, Ray, Vec3};
 
-/// How image positions map to rays (paper 001's hybrid renderer: the raster
+/// How image positions map to rays (the Purcell-style stream tracer's hybrid renderer: the raster
 /// projection must equal the ray camera's). Image positions `(x, y)` are in
 /// pixels, `(0, 0)` the top-left corner, pixel centres at half-integers.
 ///
@@ -42,7 +42,7 @@ pub enum RasterView {
 impl RasterView {
     /// The view of `camera` for a `width` × `height` image: exactly the
     /// mapping of [`Camera::rays`] (`PrimaryRays::ray`), so the rasterizer
-    /// of paper 001's hybrid renderer sees what the ray caster sees.
+    /// of the Purcell-style stream tracer's hybrid renderer sees what the ray caster sees.
     pub fn camera(camera: &Camera, width: u32, height: u32) -> RasterView {
         let (right, up, forward) = camera.basis();
         let h = (camera.vfov_deg.to_radians() * 0.5).tan();

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 /// Rows per band: the unit of parallel work.
 const BAND_HEIGHT: u32 = 8;
 
-/// Paper 001's rasterized primary visibility: the nearest hit of the camera
+/// The Purcell-style stream tracer's rasterized primary visibility: the nearest hit of the camera
 /// ray of every pixel of a `width` × `height` image (row-major), through the
 /// pixel centres, as [`visibility`] computes it.
 pub fn primary_visibility(
@@ -28,7 +28,7 @@ pub fn primary_visibility(
     visibility(mesh, test, camera, width, height, &|x, y| rays.pixel(x, y))
 }
 
-/// Visibility buffer by rasterization (paper 001's hybrid renderer: the first
+/// Visibility buffer by rasterization (the Purcell-style stream tracer's hybrid renderer: the first
 /// hit per pixel is rasterized with the ray camera's projection, rays are
 /// traced only from there on).
 ///
@@ -65,7 +65,7 @@ pub fn visibility(
 }
 
 /// [`visibility`] for any [`RasterView`] (perspective or orthographic), as
-/// paper 001's shadow maps render depth from a light: `sample(x, y)` must be
+/// the Purcell-style stream tracer's shadow maps render depth from a light: `sample(x, y)` must be
 /// a ray of `view` through pixel (`x`, `y`).
 pub fn rasterize(
     mesh: &TriangleMesh,

@@ -1,4 +1,4 @@
-//! Shadow maps, after paper 001's hybrid renderer: instead of a shadow
+//! Shadow maps, after the Purcell-style stream tracer's hybrid renderer: instead of a shadow
 //! feeler ray per light and surface point, the depth of the scene seen from
 //! each light is rendered once by the CPU rasterizer ([`crate::raster`]),
 //! and a point is lit where it is no farther from the light than the stored
@@ -39,7 +39,7 @@ enum LightMaps {
     Cube(Vec<DepthMap>),
 }
 
-/// Paper 001's shadow maps for a list of lights: build once with
+/// The Purcell-style stream tracer's shadow maps for a list of lights: build once with
 /// [`ShadowMaps::build`], then query [`ShadowMaps::visibility`] instead of
 /// casting shadow rays.
 pub struct ShadowMaps {
@@ -49,8 +49,8 @@ pub struct ShadowMaps {
 }
 
 impl ShadowMaps {
-    /// Render the depth maps of every light of `lights` for `mesh` (paper
-    /// 001): all maps in parallel, each rasterized in parallel bands.
+    /// Render the depth maps of every light of `lights` for `mesh`
+    /// (Williams 1978): all maps in parallel, each rasterized in parallel bands.
     pub fn build(mesh: &TriangleMesh, lights: &[Light], opts: &ShadowMapOptions) -> ShadowMaps {
         let (res, pcf) = opts.clamped();
         let border = views::border(pcf);
@@ -126,7 +126,7 @@ impl ShadowMaps {
         }
     }
 
-    /// Fraction in `[0, 1]` of the filter taps (paper 001's box filter,
+    /// Fraction in `[0, 1]` of the filter taps (the Purcell-style stream tracer's box filter,
     /// `pcf × pcf`) that see `point` lit by light `light_index`: 1 lit, 0 in
     /// shadow, between only near shadow boundaries. `geometric_normal` is the
     /// surface's normal at `point` (either orientation, any length; zero
@@ -180,7 +180,7 @@ impl ShadowMaps {
         self.lights.is_empty()
     }
 
-    /// Bytes held by the depth maps (paper 001's memory cost of shadow maps).
+    /// Bytes held by the depth maps (the Purcell-style stream tracer's memory cost of shadow maps).
     pub fn memory_bytes(&self) -> usize {
         self.lights
             .iter()

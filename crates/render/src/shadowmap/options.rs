@@ -2,7 +2,7 @@
 
 use raykit_core::TriangleMesh;
 
-/// Settings of paper 001's shadow maps (depth rendered from each light,
+/// Settings of the Purcell-style stream tracer's shadow maps (depth rendered from each light,
 /// compared against with a box-filtered percentage-closer lookup).
 ///
 /// Defaults ([`Default`]) are for a scene of unit size; use
@@ -19,7 +19,7 @@ pub struct ShadowMapOptions {
     /// `8..=16384`.
     pub resolution: u32,
     /// Width of the box filter in texels: `pcf × pcf` taps (percentage-closer
-    /// filtering against aliasing, paper 001). Default 3; 1 (or 0) is a
+    /// filtering against aliasing, the Purcell-style stream tracer). Default 3; 1 (or 0) is a
     /// single tap, no filtering. Clamped to `1..=15`.
     pub pcf: u32,
     /// Constant depth bias, world units. Default `1e-4` (for a unit-size

@@ -1,5 +1,5 @@
 //! Rendering a frame with either integrator, with traced or rasterized
-//! primaries (paper 001's hybrid renderer).
+//! primaries (hybrid rendering: rasterized first hits, traced rays after).
 
 use super::options::{IntegratorKind, PrimaryMode, ShadowMode, WhittedOptions};
 use super::samples::sample_position;
@@ -47,7 +47,7 @@ pub struct FrameStats {
     pub raster_seconds: f64,
     /// Seconds for the whole frame (rasterization included).
     pub seconds: f64,
-    /// Paths that ended in the environment (paper 001's state −2).
+    /// Paths that ended in the environment (the Purcell-style stream tracer's state −2).
     pub environment_hits: u64,
 }
 
@@ -187,7 +187,7 @@ pub fn render_whitted(
 /// The nearest hit of every pixel's camera ray (from `ray_of`), row-major,
 /// through [`raykit_core::Accel::intersect_batch`] in 4 × 4 pixel blocks
 /// ([`crate::primary::trace_primaries`]), so that a wide BVH over Möller
-/// traces them as coherent packets (issue 8, item 4; Wald et al. 2001),
+/// traces them as coherent packets (Wald et al. 2001),
 /// with the single-ray answers.
 fn traced_primaries(
     tracer: &Tracer,

@@ -1,8 +1,8 @@
-//! The Whitted ray tracer of papers 000 and 001: Blinn-Phong direct light
+//! The Whitted ray tracer of Whitted (1980), on the GPU after Purcell et al. (2002): Blinn-Phong direct light
 //! from point, spot and directional lights with hard shadows (shadow rays or
 //! shadow maps), perfect mirror reflection, dielectric refraction with
 //! Fresnel and total internal reflection, HDR environments, and two ray
-//! organisations — depth-first recursion and paper 001's wavefront stream —
+//! organisations — depth-first recursion and the Purcell-style stream tracer's wavefront stream —
 //! fed by traced or rasterized primary visibility.
 
 mod frame;

@@ -1,5 +1,5 @@
 //! Perfect specular optics for the Whitted integrator: mirror reflection,
-//! Snell refraction and the Fresnel equations (papers 000 and 001 trace
+//! Snell refraction and the Fresnel equations (Whitted (1980), on the GPU after Purcell et al. (2002) trace
 //! reflection and refraction rays this way).
 
 use raykit_core::glam::Vec3;

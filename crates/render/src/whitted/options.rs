@@ -10,7 +10,7 @@ pub enum ShadowMode {
     Off,
     /// Shadow rays: an occlusion query with early exit per light and hit.
     Rays,
-    /// Shadow maps rasterized from each light, filtered (paper 001).
+    /// Shadow maps rasterized from each light, filtered (Purcell-style stream tracer).
     Maps,
 }
 
@@ -19,8 +19,8 @@ pub enum ShadowMode {
 pub enum PrimaryMode {
     /// Trace the camera rays through the acceleration structure.
     Traced,
-    /// Rasterize a visibility buffer with the camera's projection (paper
-    /// 001's hybrid renderer); rays are traced only from the first hit on.
+    /// Rasterize a visibility buffer with the camera's projection (hybrid
+    /// rendering); rays are traced only from the first hit on.
     Rasterized,
 }
 
@@ -29,7 +29,7 @@ pub enum PrimaryMode {
 pub enum IntegratorKind {
     /// Depth-first recursion per camera sample, tile-parallel.
     Recursive,
-    /// Paper 001's stream organisation: each stage a batch over a ray queue.
+    /// The Purcell-style stream tracer's stream organisation: each stage a batch over a ray queue.
     Wavefront,
 }
 
@@ -46,7 +46,7 @@ pub struct WhittedOptions {
     /// Seed of the jitter.
     pub seed: u64,
     /// Longest path in rays, counting the camera ray: 1 gives direct
-    /// lighting only, 2 adds one reflection/refraction bounce (paper 001's
+    /// lighting only, 2 adds one reflection/refraction bounce (the Purcell-style stream tracer's
     /// "passes"), and so on.
     pub max_depth: u32,
     /// Ambient radiance (linear RGB), multiplied by the diffuse colour.

@@ -1,4 +1,4 @@
-//! Paper 001's stream organisation of the Whitted integrator: instead of
+//! The Purcell-style stream tracer's stream organisation of the Whitted integrator: instead of
 //! following each path depth-first, every stage runs as one batch over a
 //! queue of rays:
 //!
@@ -25,7 +25,7 @@ use rayon::prelude::*;
 /// Rays per parallel batch of the intersect stage.
 const BATCH: usize = 4096;
 
-/// The state of a queued ray after a stage, numbered as in paper 001.
+/// The state of a queued ray after a stage, numbered as in the Purcell-style stream tracer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RayState {
     /// Waiting for intersection.

@@ -1,16 +1,21 @@
-//! GeoTIFF output: one band of `u8` or `f32` samples in strips,
-//! uncompressed, georeferenced with ModelPixelScale + ModelTiepoint
-//! (PixelIsArea) and the raw geokey tags, written atomically.
+//! GeoTIFF output: one band of `u8` or `f32` samples in strips or tiles,
+//! uncompressed or compressed ([`GeoTiffLayout`]), georeferenced with
+//! ModelPixelScale + ModelTiepoint (PixelIsArea) and the raw geokey tags,
+//! written atomically.
 
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
 
 use tiff::encoder::colortype::{ColorType, Gray32Float, Gray8};
-use tiff::encoder::{TiffEncoder, TiffKind, TiffKindBig, TiffKindStandard, TiffValue};
+use tiff::encoder::{
+    DirectoryEncoder, TiffEncoder, TiffKind, TiffKindBig, TiffKindStandard, TiffValue,
+};
 use tiff::tags::Tag;
 
 use super::geokeys::{set_geo_key_short, validate_geo_keys, KEY_RASTER_TYPE};
+use super::geotiff_blocks::{write_strips, write_tiles, TileSample};
+use super::geotiff_layout::{GeoTiffLayout, TiffCompression};
 use super::geotiff_read::{
     TAG_GDAL_NODATA, TAG_GEO_ASCII_PARAMS, TAG_GEO_DOUBLE_PARAMS, TAG_GEO_KEY_DIRECTORY,
     TAG_MODEL_PIXEL_SCALE, TAG_MODEL_TIEPOINT,
@@ -24,8 +29,8 @@ use crate::dem::{Dem, GeoRef};
 const BIG_TIFF_BYTES: u64 = (1 << 32) - (1 << 26);
 
 /// Writes `width` × `height` bytes (rows from the top) as a single-band
-/// 8-bit GeoTIFF; see [`write_geotiff_f32`] for the georeferencing. A
-/// `nodata` must be a whole number in 0..=255.
+/// 8-bit GeoTIFF in uncompressed strips; see [`write_geotiff_f32`] for the
+/// georeferencing. A `nodata` must be a whole number in 0..=255.
 pub fn write_geotiff_u8(
     path: impl AsRef<Path>,
     width: usize,
@@ -33,6 +38,28 @@ pub fn write_geotiff_u8(
     data: &[u8],
     georef: &GeoRef,
     nodata: Option<f64>,
+) -> Result<(), DemError> {
+    write_geotiff_u8_with(
+        path,
+        width,
+        height,
+        data,
+        georef,
+        nodata,
+        &GeoTiffLayout::default(),
+    )
+}
+
+/// [`write_geotiff_u8`] with the strips or tiles and the compression of
+/// `layout`; the padding of edge tiles is `nodata` (else 0).
+pub fn write_geotiff_u8_with(
+    path: impl AsRef<Path>,
+    width: usize,
+    height: usize,
+    data: &[u8],
+    georef: &GeoRef,
+    nodata: Option<f64>,
+    layout: &GeoTiffLayout,
 ) -> Result<(), DemError> {
     let path = path.as_ref();
     if let Some(nd) = nodata {
@@ -44,7 +71,18 @@ pub fn write_geotiff_u8(
             ));
         }
     }
-    write::<Gray8>(path, width, height, data, georef, nodata, |s| s)
+    let pad = nodata.map_or(0, |nd| nd as u8);
+    write::<Gray8>(
+        path,
+        width,
+        height,
+        data,
+        georef,
+        nodata,
+        layout,
+        pad,
+        |s| s,
+    )
 }
 
 /// Writes `width` × `height` heights (rows from the top) as a single-band
@@ -59,7 +97,8 @@ pub fn write_geotiff_u8(
 /// type projected or geographic, PixelIsArea). GeoDoubleParams and
 /// GeoAsciiParams are written when non-empty, GDAL_NODATA when `nodata` is
 /// given, and then NaN samples are written as the nodata value. Files over
-/// about 4 GiB are BigTIFF.
+/// about 4 GiB are BigTIFF. Samples are written in uncompressed strips
+/// ([`write_geotiff_f32_with`] takes a layout).
 pub fn write_geotiff_f32(
     path: impl AsRef<Path>,
     width: usize,
@@ -67,6 +106,28 @@ pub fn write_geotiff_f32(
     data: &[f32],
     georef: &GeoRef,
     nodata: Option<f64>,
+) -> Result<(), DemError> {
+    write_geotiff_f32_with(
+        path,
+        width,
+        height,
+        data,
+        georef,
+        nodata,
+        &GeoTiffLayout::default(),
+    )
+}
+
+/// [`write_geotiff_f32`] with the strips or tiles and the compression of
+/// `layout`; the padding of edge tiles is the nodata value (else NaN).
+pub fn write_geotiff_f32_with(
+    path: impl AsRef<Path>,
+    width: usize,
+    height: usize,
+    data: &[f32],
+    georef: &GeoRef,
+    nodata: Option<f64>,
+    layout: &GeoTiffLayout,
 ) -> Result<(), DemError> {
     let path = path.as_ref();
     let fill = match nodata {
@@ -84,14 +145,26 @@ pub fn write_geotiff_f32(
         _ => None,
     };
     match fill {
-        Some(f) => write::<Gray32Float>(path, width, height, data, georef, nodata, |s| {
-            if s.is_nan() {
-                f
-            } else {
-                s
-            }
-        }),
-        None => write::<Gray32Float>(path, width, height, data, georef, nodata, |s| s),
+        Some(f) => {
+            write::<Gray32Float>(path, width, height, data, georef, nodata, layout, f, |s| {
+                if s.is_nan() {
+                    f
+                } else {
+                    s
+                }
+            })
+        }
+        None => write::<Gray32Float>(
+            path,
+            width,
+            height,
+            data,
+            georef,
+            nodata,
+            layout,
+            f32::NAN,
+            |s| s,
+        ),
     }
 }
 
@@ -108,6 +181,7 @@ pub fn write_dem_geotiff(path: impl AsRef<Path>, dem: &Dem) -> Result<(), DemErr
     )
 }
 
+#[allow(clippy::too_many_arguments)]
 fn write<C>(
     path: &Path,
     width: usize,
@@ -115,14 +189,19 @@ fn write<C>(
     data: &[C::Inner],
     georef: &GeoRef,
     nodata: Option<f64>,
+    layout: &GeoTiffLayout,
+    pad: C::Inner,
     fix: impl Fn(C::Inner) -> C::Inner,
 ) -> Result<(), DemError>
 where
     C: ColorType,
-    C::Inner: Copy,
+    C::Inner: TileSample,
     [C::Inner]: TiffValue,
 {
     check_dimensions(path, "arguments", width, height)?;
+    layout
+        .check()
+        .map_err(|m| DemError::new(path, "tile size", m))?;
     if data.len() != width * height {
         return Err(DemError::new(
             path,
@@ -172,13 +251,20 @@ where
         nodata: nodata.map(nodata_text),
     };
     let bytes = data.len() as u64 * std::mem::size_of::<C::Inner>() as u64;
+    let image = Image {
+        width,
+        height,
+        data,
+        layout,
+        pad,
+    };
     raykit_io::write_atomic_file(
         path,
         |w| {
             if bytes > BIG_TIFF_BYTES {
-                encode::<C, TiffKindBig>(path, w, width, height, data, &tags, &fix)
+                encode::<C, TiffKindBig>(path, w, &image, &tags, &fix)
             } else {
-                encode::<C, TiffKindStandard>(path, w, width, height, data, &tags, &fix)
+                encode::<C, TiffKindStandard>(path, w, &image, &tags, &fix)
             }
         },
         |e| DemError::new(path, "write", e.to_string()),
@@ -195,18 +281,26 @@ struct Tags<'a> {
     nodata: Option<String>,
 }
 
+/// The samples to write and how.
+struct Image<'a, T> {
+    width: usize,
+    height: usize,
+    data: &'a [T],
+    layout: &'a GeoTiffLayout,
+    /// The sample that pads the edge tiles.
+    pad: T,
+}
+
 fn encode<C, K>(
     path: &Path,
     w: &mut BufWriter<File>,
-    width: usize,
-    height: usize,
-    data: &[C::Inner],
+    image: &Image<C::Inner>,
     tags: &Tags,
     fix: &impl Fn(C::Inner) -> C::Inner,
 ) -> Result<(), DemError>
 where
     C: ColorType,
-    C::Inner: Copy,
+    C::Inner: TileSample,
     [C::Inner]: TiffValue,
     K: TiffKind,
 {
@@ -214,31 +308,33 @@ where
         let at = at.to_string();
         move |e: tiff::TiffError| DemError::new(path, at.clone(), format!("cannot write: {e}"))
     };
+    let (width, height, data) = (image.width, image.height, image.data);
+    let compression = image.layout.compression;
     let mut enc = TiffEncoder::<_, K>::new_generic(w).map_err(err("header"))?;
+    if image.layout.tile.is_some() || compression != TiffCompression::None {
+        let mut d = enc.image_directory().map_err(err("image directory"))?;
+        match image.layout.tile {
+            Some(tile) => write_tiles::<_, K, C>(
+                &mut d,
+                width,
+                height,
+                data,
+                tile,
+                compression,
+                image.pad,
+                fix,
+            )
+            .map_err(err("tiles"))?,
+            None => write_strips::<_, K, C>(&mut d, width, height, data, compression, fix)
+                .map_err(err("strips"))?,
+        }
+        write_geo_tags(path, &mut d, tags)?;
+        return d.finish().map_err(err("image directory"));
+    }
     let mut img = enc
         .new_image::<C>(width as u32, height as u32)
         .map_err(err("image directory"))?;
-    let tag = |t: u16| Tag::from_u16_exhaustive(t);
-    let at = |t: u16| format!("tag {t}");
-    let d = img.encoder();
-    d.write_tag(tag(TAG_MODEL_PIXEL_SCALE), &tags.scale[..])
-        .map_err(err(&at(TAG_MODEL_PIXEL_SCALE)))?;
-    d.write_tag(tag(TAG_MODEL_TIEPOINT), &tags.tie[..])
-        .map_err(err(&at(TAG_MODEL_TIEPOINT)))?;
-    d.write_tag(tag(TAG_GEO_KEY_DIRECTORY), &tags.keys[..])
-        .map_err(err(&at(TAG_GEO_KEY_DIRECTORY)))?;
-    if !tags.doubles.is_empty() {
-        d.write_tag(tag(TAG_GEO_DOUBLE_PARAMS), tags.doubles)
-            .map_err(err(&at(TAG_GEO_DOUBLE_PARAMS)))?;
-    }
-    if !tags.ascii.is_empty() {
-        d.write_tag(tag(TAG_GEO_ASCII_PARAMS), tags.ascii)
-            .map_err(err(&at(TAG_GEO_ASCII_PARAMS)))?;
-    }
-    if let Some(nd) = &tags.nodata {
-        d.write_tag(tag(TAG_GDAL_NODATA), nd.as_str())
-            .map_err(err(&at(TAG_GDAL_NODATA)))?;
-    }
+    write_geo_tags(path, img.encoder(), tags)?;
     let mut start = 0;
     let mut strip = Vec::new();
     while img.next_strip_sample_count() > 0 {
@@ -249,5 +345,41 @@ where
         start += n;
     }
     img.finish().map_err(err("image directory"))?;
+    Ok(())
+}
+
+/// The georeferencing and nodata tags.
+fn write_geo_tags<W, K>(
+    path: &Path,
+    d: &mut DirectoryEncoder<'_, W, K>,
+    tags: &Tags,
+) -> Result<(), DemError>
+where
+    W: std::io::Write + std::io::Seek,
+    K: TiffKind,
+{
+    let err = |at: String| {
+        move |e: tiff::TiffError| DemError::new(path, at.clone(), format!("cannot write: {e}"))
+    };
+    let tag = |t: u16| Tag::from_u16_exhaustive(t);
+    let at = |t: u16| format!("tag {t}");
+    d.write_tag(tag(TAG_MODEL_PIXEL_SCALE), &tags.scale[..])
+        .map_err(err(at(TAG_MODEL_PIXEL_SCALE)))?;
+    d.write_tag(tag(TAG_MODEL_TIEPOINT), &tags.tie[..])
+        .map_err(err(at(TAG_MODEL_TIEPOINT)))?;
+    d.write_tag(tag(TAG_GEO_KEY_DIRECTORY), &tags.keys[..])
+        .map_err(err(at(TAG_GEO_KEY_DIRECTORY)))?;
+    if !tags.doubles.is_empty() {
+        d.write_tag(tag(TAG_GEO_DOUBLE_PARAMS), tags.doubles)
+            .map_err(err(at(TAG_GEO_DOUBLE_PARAMS)))?;
+    }
+    if !tags.ascii.is_empty() {
+        d.write_tag(tag(TAG_GEO_ASCII_PARAMS), tags.ascii)
+            .map_err(err(at(TAG_GEO_ASCII_PARAMS)))?;
+    }
+    if let Some(nd) = &tags.nodata {
+        d.write_tag(tag(TAG_GDAL_NODATA), nd.as_str())
+            .map_err(err(at(TAG_GDAL_NODATA)))?;
+    }
     Ok(())
 }

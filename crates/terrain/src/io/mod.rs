@@ -5,6 +5,8 @@
 
 mod error;
 mod geokeys;
+mod geotiff_blocks;
+mod geotiff_layout;
 mod geotiff_read;
 mod geotiff_write;
 mod hgt;
@@ -18,11 +20,16 @@ mod terragen;
 
 pub use error::DemError;
 pub use geokeys::{geo_key_short, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
+pub use geotiff_blocks::TileSample;
+pub use geotiff_layout::{GeoTiffLayout, TiffCompression};
 pub use geotiff_read::{
     read_geotiff, TAG_GDAL_NODATA, TAG_GEO_ASCII_PARAMS, TAG_GEO_DOUBLE_PARAMS,
     TAG_GEO_KEY_DIRECTORY, TAG_MODEL_PIXEL_SCALE, TAG_MODEL_TIEPOINT, TAG_MODEL_TRANSFORMATION,
 };
-pub use geotiff_write::{write_dem_geotiff, write_geotiff_f32, write_geotiff_u8};
+pub use geotiff_write::{
+    write_dem_geotiff, write_geotiff_f32, write_geotiff_f32_with, write_geotiff_u8,
+    write_geotiff_u8_with,
+};
 pub use hgt::{parse_hgt_name, read_hgt, HGT_VOID};
 pub use limits::{check_dimensions, MAX_SAMPLES, MAX_SIDE};
 pub use load::{load_dem, LoadOptions, RawSpec, SUPPORTED_EXTENSIONS};

@@ -1,6 +1,6 @@
 // What rays leaving the scene see (crates/render/src/env, crates/render/src/sky.rs):
 // env_kind 0 the sky gradient, 1 a constant radiance, 2 an equirectangular
-// map looked up by direction, 3 paper 001's environment box (the map looked
+// map looked up by direction, 3 The environment box (the map looked
 // up from the box centre towards the ray's exit point).
 
 const SKY_ZENITH: vec3f = vec3f(0.22, 0.40, 0.80);

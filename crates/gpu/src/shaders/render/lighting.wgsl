@@ -1,6 +1,6 @@
 // Point, spot and directional lights (raykit_core::Light::toward) and
 // Blinn-Phong direct lighting with shadow rays (crates/render/src/lighting.rs),
-// as paper 000 shades its hits and paper 001's lighting kernel does.
+// as the stack kd-tree GPU tracer shades its hits and the Purcell-style stream tracer's lighting kernel does.
 // Light record (16 words): kind (0 point, 1 spot, 2 directional),
 // position, direction, intensity or irradiance, cos_inner, cos_outer,
 // max(cos_inner - cos_outer, 1e-6).

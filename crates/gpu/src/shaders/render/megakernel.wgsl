@@ -1,4 +1,4 @@
-// Paper 000's single kernel: one thread per pixel sample traces the camera
+// The stack kd-tree GPU tracer's single kernel: one thread per pixel sample traces the camera
 // ray, shades each hit (shadow rays to every light) and follows the
 // reflection and refraction rays iteratively with a small per-thread stack
 // of pending rays and their path weights, up to max_depth rays per path.

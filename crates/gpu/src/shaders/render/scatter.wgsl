@@ -1,5 +1,5 @@
 // The one Whitted shading kernel (crates/render/src/whitted/tracer.rs,
-// Tracer::scatter), shared by paper 000's single kernel and paper 001's
+// Tracer::scatter), shared by one kernel per ray path and the Purcell-style stream tracer's
 // shading stage: a hit's local radiance (emission + (1-t)(1-r) direct) and
 // up to two secondary rays with their weights (reflection: (1-t) r
 // Schlick(ks) + t F; refraction: t (1-F) kd).

@@ -1,5 +1,5 @@
-// The Whitted renderer's shading data (group 1), shared by paper 000's
-// single kernel and paper 001's stream kernels: per-triangle corners,
+// The Whitted renderer's shading data (group 1), shared by the stack kd-tree GPU tracer's
+// single kernel and the Purcell-style stream tracer's stream kernels: per-triangle corners,
 // vertex normals and material, the material and light tables, the frame's
 // parameters, the ray counters and the radiance accumulator.
 // See crates/gpu/src/render/upload.rs for the layouts.

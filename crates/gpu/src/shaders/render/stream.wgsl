@@ -1,4 +1,4 @@
-// Paper 001's stream organisation: kernels chained through ray queues.
+// The Purcell-style stream tracer's stream organisation: kernels chained through ray queues.
 // raygen writes the camera rays into the queue; per bounce, intersect finds
 // each queued ray's nearest hit, environment finishes the missed rays
 // (state -1 -> -2) and shade adds each hit's local radiance and appends its

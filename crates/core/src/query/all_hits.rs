@@ -1,0 +1,330 @@
+//! Multi-hit ray queries: every hit along a ray sorted by `t` (up to a
+//! cap, which makes it the first `k` hits), the number of hits, and an
+//! any-hit query that asks a filter callback about each hit found (for
+//! example to skip back faces).
+//!
+//! Each triangle is crossed at most once: the tree ([`SurfaceBvh`] or any
+//! [`Accel`]'s regions) is walked with a slab test against the boxes, and
+//! the triangles are tested with textbook Möller–Trumbore (1997) without
+//! the tolerance band of the nearest-hit tests, so that two neighbours do
+//! not both report one crossing near their shared edge (a ray through the
+//! shared edge itself may be counted by both or by neither). When the cap is
+//! reached, boxes entered beyond the farthest kept hit are skipped.
+//! [`ray_hits_brute`] is the `f64` reference of the tests.
+
+use super::surface_bvh::{SurfaceBvh, EMPTY, WIDTH};
+use crate::accel::{Accel, BATCH_GRAIN};
+use crate::hit::Hit;
+use crate::mesh::TriangleMesh;
+use crate::ray::Ray;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+/// Möller–Trumbore without tolerance: `(t, u, v)` when the ray meets the
+/// triangle at `t` in `[tnear, tfar]` with `u, v >= 0` and `u + v <= 1`.
+#[inline(always)]
+fn moller(ray: &Ray, tri: &[Vec3; 3], tfar: f32) -> Option<(f32, f32, f32)> {
+    let e1 = tri[1] - tri[0];
+    let e2 = tri[2] - tri[0];
+    let p = ray.dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = ray.origin - tri[0];
+    let u = s.dot(p) * inv;
+    let q = s.cross(e1);
+    let v = ray.dir.dot(q) * inv;
+    let t = e2.dot(q) * inv;
+    let ok = u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= ray.tnear && t <= tfar;
+    ok.then_some((t, u, v))
+}
+
+/// Slab test of a ray against the eight boxes of a node: the entry
+/// distances, NaN for boxes missed or unused (so that every comparison
+/// with a reach rejects them).
+#[inline(always)]
+fn slab8(
+    min: &[[f32; WIDTH]; 3],
+    max: &[[f32; WIDTH]; 3],
+    child: &[u32; WIDTH],
+    ray: &Ray,
+    tfar: f32,
+) -> [f32; WIDTH] {
+    let mut lo = [ray.tnear; WIDTH];
+    let mut hi = [tfar; WIDTH];
+    for a in 0..3 {
+        let (o, inv) = (ray.origin[a], ray.inv_dir[a]);
+        for k in 0..WIDTH {
+            let t0 = (min[a][k] - o) * inv;
+            let t1 = (max[a][k] - o) * inv;
+            lo[k] = lo[k].max(t0.min(t1));
+            hi[k] = hi[k].min(t0.max(t1));
+        }
+    }
+    let mut entry = [f32::NAN; WIDTH];
+    for k in 0..WIDTH {
+        // Widened by a few ulps so rounding never drops a box the
+        // triangle test would hit.
+        if lo[k] <= hi[k] * (1.0 + 4.0 * f32::EPSILON) && child[k] != EMPTY {
+            entry[k] = lo[k];
+        }
+    }
+    entry
+}
+
+/// The hits kept by a query: all, sorted by `t`, up to a cap.
+struct Kept<'a> {
+    hits: &'a mut Vec<Hit>,
+    cap: usize,
+}
+
+impl Kept<'_> {
+    /// The farthest `t` still worth looking at.
+    fn reach(&self, tfar: f32) -> f32 {
+        if self.hits.len() >= self.cap {
+            self.hits.last().map_or(tfar, |h| h.t)
+        } else {
+            tfar
+        }
+    }
+
+    fn insert(&mut self, h: Hit) {
+        let at = self
+            .hits
+            .partition_point(|x| (x.t, x.prim) <= (h.t, h.prim));
+        if at >= self.cap {
+            return;
+        }
+        self.hits.insert(at, h);
+        self.hits.truncate(self.cap);
+    }
+}
+
+impl SurfaceBvh {
+    /// Walk the triangles the ray may meet within `reach()`: `visit` gets
+    /// each hit and returns false to stop the walk.
+    #[inline(always)]
+    fn walk_hits(
+        &self,
+        ray: &Ray,
+        reach: &mut dyn FnMut() -> f32,
+        visit: &mut dyn FnMut(Hit) -> bool,
+    ) {
+        if self.nodes.is_empty() || !ray.is_valid() {
+            return;
+        }
+        let mut stack = [(0u32, 0u32, 0f32); 8 * 128];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (child, count, entry) = stack[sp];
+            let tfar = reach();
+            if entry > tfar {
+                continue;
+            }
+            if count > 0 {
+                for t in child as usize..(child + count) as usize {
+                    if let Some((th, u, v)) = moller(ray, &self.tris[t], reach()) {
+                        let hit = Hit {
+                            t: th,
+                            u,
+                            v,
+                            prim: self.prims[t],
+                        };
+                        if !visit(hit) {
+                            return;
+                        }
+                    }
+                }
+                continue;
+            }
+            let node = &self.nodes[child as usize];
+            let entry = slab8(&node.min, &node.max, &node.child, ray, tfar);
+            // Far children pushed first, so the nearest is walked first.
+            let mut order = [(0f32, 0usize); WIDTH];
+            let mut n = 0;
+            for (k, &e) in entry.iter().enumerate() {
+                if e <= tfar {
+                    let mut i = n;
+                    while i > 0 && order[i - 1].0 < e {
+                        order[i] = order[i - 1];
+                        i -= 1;
+                    }
+                    order[i] = (e, k);
+                    n += 1;
+                }
+            }
+            for &(e, k) in &order[..n] {
+                if sp < stack.len() {
+                    stack[sp] = (node.child[k], node.count[k], e);
+                    sp += 1;
+                }
+            }
+        }
+    }
+
+    /// The hits along `ray` with `t` in `[ray.tnear, ray.tfar]` that
+    /// `accept` keeps, sorted by `t` (then triangle), at most `max_hits` of
+    /// them (the nearest): every hit with `usize::MAX`, the first `k` with
+    /// `k`. Written to `out` (cleared first). A ray that is not valid
+    /// (NaN, infinite origin, zero direction) has no hits.
+    pub fn ray_hits_filtered<F: FnMut(&Hit) -> bool>(
+        &self,
+        ray: &Ray,
+        max_hits: usize,
+        mut accept: F,
+        out: &mut Vec<Hit>,
+    ) {
+        out.clear();
+        if max_hits == 0 {
+            return;
+        }
+        let kept = std::cell::RefCell::new(Kept {
+            hits: out,
+            cap: max_hits,
+        });
+        self.walk_hits(ray, &mut || kept.borrow().reach(ray.tfar), &mut |h| {
+            if accept(&h) {
+                kept.borrow_mut().insert(h);
+            }
+            true
+        });
+    }
+
+    /// Every hit along `ray`, sorted by `t`, at most `max_hits` (the
+    /// nearest); see [`SurfaceBvh::ray_hits_filtered`].
+    pub fn ray_hits(&self, ray: &Ray, max_hits: usize) -> Vec<Hit> {
+        let mut out = Vec::new();
+        self.ray_hits_filtered(ray, max_hits, |_| true, &mut out);
+        out
+    }
+
+    /// Number of triangles `ray` crosses with `t` in `[ray.tnear, ray.tfar]`.
+    pub fn count_hits(&self, ray: &Ray) -> u32 {
+        let mut n = 0u32;
+        let tfar = ray.tfar;
+        self.walk_hits(ray, &mut || tfar, &mut |_| {
+            n += 1;
+            true
+        });
+        n
+    }
+
+    /// Any hit that `accept` takes (the first found, not the nearest), for
+    /// example `|h| !back_face(h)`; stops at the first accepted hit.
+    pub fn any_hit<F: FnMut(&Hit) -> bool>(&self, ray: &Ray, mut accept: F) -> Option<Hit> {
+        let mut found = None;
+        let tfar = ray.tfar;
+        self.walk_hits(ray, &mut || tfar, &mut |h| {
+            if accept(&h) {
+                found = Some(h);
+                false
+            } else {
+                true
+            }
+        });
+        found
+    }
+
+    /// [`SurfaceBvh::count_hits`] for many rays, in parallel.
+    pub fn count_hits_batch(&self, rays: &[Ray], out: &mut [u32]) {
+        assert_eq!(rays.len(), out.len(), "one result per ray");
+        rays.par_iter()
+            .zip(out.par_iter_mut())
+            .with_min_len(BATCH_GRAIN)
+            .for_each(|(r, o)| *o = self.count_hits(r));
+    }
+
+    /// [`SurfaceBvh::ray_hits`] for many rays, in parallel: one sorted list
+    /// per ray.
+    pub fn ray_hits_batch(&self, rays: &[Ray], max_hits: usize) -> Vec<Vec<Hit>> {
+        rays.par_iter()
+            .with_min_len(BATCH_GRAIN)
+            .map(|r| self.ray_hits(r, max_hits))
+            .collect()
+    }
+}
+
+/// Every hit along `ray` through any structure's regions
+/// ([`Accel::visit_regions`], `accel` built over `mesh`), sorted by `t`
+/// (then triangle), at most `max_hits`; a triangle stored in several leaves
+/// is reported once.
+pub fn ray_hits_in(accel: &dyn Accel, mesh: &TriangleMesh, ray: &Ray, max_hits: usize) -> Vec<Hit> {
+    let mut hits: Vec<Hit> = Vec::new();
+    if !ray.is_valid() || max_hits == 0 {
+        return hits;
+    }
+    let n = mesh.num_triangles();
+    accel.visit_regions(
+        &mut |region| {
+            region
+                .clip(ray, ray.tnear, ray.tfar * (1.0 + 4.0 * f32::EPSILON))
+                .is_some()
+        },
+        &mut |prims| {
+            for &t in prims {
+                if (t as usize) < n {
+                    if let Some((th, u, v)) = moller(ray, &mesh.triangle(t as usize), ray.tfar) {
+                        hits.push(Hit {
+                            t: th,
+                            u,
+                            v,
+                            prim: t,
+                        });
+                    }
+                }
+            }
+        },
+    );
+    hits.sort_by(|a, b| (a.t, a.prim).partial_cmp(&(b.t, b.prim)).unwrap());
+    let mut seen = std::collections::HashSet::new();
+    hits.retain(|h| seen.insert(h.prim));
+    hits.truncate(max_hits);
+    hits
+}
+
+/// A crossing found by [`ray_hits_brute`]: `t`, the triangle, and how far
+/// inside the triangle it is (the smallest barycentric coordinate; near 0
+/// the crossing is at an edge, where `f32` tests may disagree).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crossing64 {
+    /// Distance along the ray.
+    pub t: f64,
+    /// Triangle index.
+    pub prim: u32,
+    /// Smallest barycentric coordinate of the crossing.
+    pub margin: f64,
+}
+
+/// Reference: every triangle against `ray` in `f64` (Möller–Trumbore on
+/// the `f64` corners), the crossings with `t` in `[tnear, tfar]` sorted by
+/// `t`.
+pub fn ray_hits_brute(mesh: &TriangleMesh, ray: &Ray) -> Vec<Crossing64> {
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let mut out = Vec::new();
+    for t in 0..mesh.num_triangles() {
+        let [a, b, c]: [DVec3; 3] = mesh.triangle(t).map(|v| v.as_dvec3());
+        let (e1, e2) = (b - a, c - a);
+        let p = d.cross(e2);
+        let det = e1.dot(p);
+        if det == 0.0 {
+            continue;
+        }
+        let s = o - a;
+        let u = s.dot(p) / det;
+        let q = s.cross(e1);
+        let v = d.dot(q) / det;
+        let th = e2.dot(q) / det;
+        if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && th >= ray.tnear as f64 && th <= ray.tfar as f64 {
+            out.push(Crossing64 {
+                t: th,
+                prim: t as u32,
+                margin: u.min(v).min(1.0 - u - v),
+            });
+        }
+    }
+    out.sort_by(|a, b| a.t.total_cmp(&b.t));
+    out
+}

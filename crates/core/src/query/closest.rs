@@ -1,0 +1,326 @@
+//! Closest point on a triangle mesh's surface and unsigned distance.
+//!
+//! The point of a triangle closest to a query point is Ericson's ("Real-Time
+//! Collision Detection", 2005, 5.1.5): the Voronoi region of the point among
+//! the triangle's corners, edges and face from six dot products, then the
+//! projection onto that feature. The tree is searched nearest box first
+//! ([`SurfaceBvh::closest_point`]): the eight children of a node are ordered
+//! by their boxes' distance to the point and pushed far to near, and a box
+//! no nearer than the best triangle so far (or than the search radius) is
+//! never opened. The search runs in `f32` relative to the query point; the
+//! winning triangle is then solved again in `f64` for the reported point,
+//! barycentrics and distance. [`closest_point_in`] runs the same search
+//! through any [`Accel`]'s regions, and [`closest_point_brute`] tests every
+//! triangle in `f64` (the reference of the tests).
+
+use super::exact::Triangle64;
+use super::surface_bvh::{SurfaceBvh, EMPTY, WIDTH};
+use crate::accel::{Accel, BATCH_GRAIN};
+use crate::mesh::TriangleMesh;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+/// The point of a surface closest to a query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClosestPoint {
+    /// The point on the surface.
+    pub point: Vec3,
+    /// Its distance to the query point.
+    pub distance: f32,
+    /// The triangle (index in the mesh) holding it.
+    pub prim: u32,
+    /// Barycentric weight of the triangle's second corner.
+    pub u: f32,
+    /// Barycentric weight of the triangle's third corner (the point is
+    /// `(1-u-v)·v0 + u·v1 + v·v2`).
+    pub v: f32,
+}
+
+/// Ericson's closest point on triangle `(a, b, c)` to the origin, written
+/// once for `f32` and `f64`: returns `(u, v)` with the point `a + u·(b-a) +
+/// v·(c-a)`. A degenerate triangle (no positive area within rounding) takes
+/// the closest point of its three edges.
+macro_rules! closest_uv {
+    ($name:ident, $v:ty, $f:ty) => {
+        #[inline(always)]
+        pub(crate) fn $name(a: $v, b: $v, c: $v) -> ($f, $f) {
+            let (ab, ac) = (b - a, c - a);
+            let ap = -a;
+            let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+            if d1 <= 0.0 && d2 <= 0.0 {
+                return (0.0, 0.0);
+            }
+            let bp = -b;
+            let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+            if d3 >= 0.0 && d4 <= d3 {
+                return (1.0, 0.0);
+            }
+            let vc = d1 * d4 - d3 * d2;
+            if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+                return (d1 / (d1 - d3), 0.0);
+            }
+            let cp = -c;
+            let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+            if d6 >= 0.0 && d5 <= d6 {
+                return (0.0, 1.0);
+            }
+            let vb = d5 * d2 - d1 * d6;
+            if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+                return (0.0, d2 / (d2 - d6));
+            }
+            let va = d3 * d6 - d5 * d4;
+            if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+                let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+                return (1.0 - w, w);
+            }
+            let denom = va + vb + vc;
+            if denom.is_nan() || denom <= 0.0 {
+                // Degenerate: the best of the three edges.
+                let seg = |s: $v, e: $v| -> $f {
+                    let d = e - s;
+                    let l = d.length_squared();
+                    if l > 0.0 {
+                        (-s.dot(d) / l).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    }
+                };
+                let (s_ab, s_ac, s_bc) = (seg(a, b), seg(a, c), seg(b, c));
+                let cands = [(s_ab, 0.0), (0.0, s_ac), (1.0 - s_bc, s_bc)];
+                let mut best = cands[0];
+                let mut best_d = <$f>::INFINITY;
+                for (u, v) in cands {
+                    let d = (a + ab * u + ac * v).length_squared();
+                    if d < best_d {
+                        best_d = d;
+                        best = (u, v);
+                    }
+                }
+                return best;
+            }
+            let u = (vb / denom).clamp(0.0, 1.0);
+            let v = (vc / denom).clamp(0.0, 1.0 - u);
+            (u, v)
+        }
+    };
+}
+
+closest_uv!(closest_uv32, Vec3, f32);
+closest_uv!(closest_uv64, DVec3, f64);
+
+/// Squared distance from `p` to triangle `tri`, with the barycentrics of
+/// the closest point, in `f32` relative to `p`.
+#[inline(always)]
+pub(crate) fn triangle_distance2(p: Vec3, tri: &[Vec3; 3]) -> (f32, f32, f32) {
+    let (a, b, c) = (tri[0] - p, tri[1] - p, tri[2] - p);
+    let (u, v) = closest_uv32(a, b, c);
+    let q = a + (b - a) * u + (c - a) * v;
+    (q.length_squared(), u, v)
+}
+
+/// The closest point of triangle `tri` to `p` in `f64`: `(point, u, v)`.
+pub fn closest_on_triangle64(p: DVec3, tri: &Triangle64) -> (DVec3, f64, f64) {
+    let (a, b, c) = (tri[0] - p, tri[1] - p, tri[2] - p);
+    let (u, v) = closest_uv64(a, b, c);
+    let q = a + (b - a) * u + (c - a) * v;
+    (q + p, u, v)
+}
+
+/// The answer for triangle `prim` with corners `tri`, solved in `f64`.
+fn answer(p: Vec3, tri: &[Vec3; 3], prim: u32) -> ClosestPoint {
+    let p64 = p.as_dvec3();
+    let t64 = tri.map(|c| c.as_dvec3());
+    let (q, u, v) = closest_on_triangle64(p64, &t64);
+    ClosestPoint {
+        point: q.as_vec3(),
+        distance: q.distance(p64) as f32,
+        prim,
+        u: u as f32,
+        v: v as f32,
+    }
+}
+
+/// Squared distances from `p` to the eight boxes of a node (`+inf` for
+/// unused slots, NaN for a NaN point).
+#[inline(always)]
+fn box_distance2(min: &[[f32; WIDTH]; 3], max: &[[f32; WIDTH]; 3], p: Vec3) -> [f32; WIDTH] {
+    let mut d2 = [0.0f32; WIDTH];
+    for a in 0..3 {
+        let pa = p[a];
+        for k in 0..WIDTH {
+            let d = (min[a][k] - pa).max(pa - max[a][k]).max(0.0);
+            d2[k] += d * d;
+        }
+    }
+    d2
+}
+
+/// Stack entries of the search: each node pushes at most eight.
+const STACK: usize = 8 * 128;
+
+impl SurfaceBvh {
+    /// The point of the surface closest to `p` no farther than `max_distance`
+    /// (`f32::INFINITY` for no limit), or `None` when there is none or `p`
+    /// is not finite. Ties between triangles at the same distance (a shared
+    /// edge or corner) go to either.
+    pub fn closest_point(&self, p: Vec3, max_distance: f32) -> Option<ClosestPoint> {
+        if !p.is_finite() || self.nodes.is_empty() || max_distance.is_nan() || max_distance < 0.0 {
+            return None;
+        }
+        let mut best2 = if max_distance.is_finite() {
+            max_distance * max_distance
+        } else {
+            f32::INFINITY
+        };
+        let limit2 = best2;
+        let mut best: Option<usize> = None;
+        let mut stack = [(0u32, 0u32, 0f32); STACK];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (child, count, d2) = stack[sp];
+            if d2 > best2 {
+                continue;
+            }
+            if count > 0 {
+                for t in child as usize..(child + count) as usize {
+                    let (dt, _, _) = triangle_distance2(p, &self.tris[t]);
+                    if dt < best2 || (best.is_none() && dt <= limit2) {
+                        best2 = dt;
+                        best = Some(t);
+                    }
+                }
+                continue;
+            }
+            let node = &self.nodes[child as usize];
+            let d2 = box_distance2(&node.min, &node.max, p);
+            // The children within reach, sorted far to near.
+            let mut near = [(0f32, 0usize); WIDTH];
+            let mut n = 0;
+            for (k, &d) in d2.iter().enumerate() {
+                if d <= best2 && node.child[k] != EMPTY {
+                    let mut i = n;
+                    while i > 0 && near[i - 1].0 < d {
+                        near[i] = near[i - 1];
+                        i -= 1;
+                    }
+                    near[i] = (d, k);
+                    n += 1;
+                }
+            }
+            for &(d, k) in &near[..n] {
+                if sp < STACK {
+                    stack[sp] = (node.child[k], node.count[k], d);
+                    sp += 1;
+                }
+            }
+        }
+        best.map(|t| answer(p, &self.tris[t], self.prims[t]))
+    }
+
+    /// Unsigned distance from `p` to the surface: `+inf` for an empty mesh,
+    /// NaN for a point that is not finite.
+    pub fn distance(&self, p: Vec3) -> f32 {
+        if !p.is_finite() {
+            return f32::NAN;
+        }
+        self.closest_point(p, f32::INFINITY)
+            .map_or(f32::INFINITY, |c| c.distance)
+    }
+
+    /// [`SurfaceBvh::closest_point`] for many points, in parallel over the
+    /// rayon pool.
+    pub fn closest_points(
+        &self,
+        points: &[Vec3],
+        max_distance: f32,
+        out: &mut [Option<ClosestPoint>],
+    ) {
+        assert_eq!(points.len(), out.len(), "one result per point");
+        points
+            .par_iter()
+            .zip(out.par_iter_mut())
+            .with_min_len(BATCH_GRAIN)
+            .for_each(|(p, o)| *o = self.closest_point(*p, max_distance));
+    }
+
+    /// [`SurfaceBvh::distance`] for many points, in parallel over the rayon
+    /// pool.
+    pub fn distances(&self, points: &[Vec3], out: &mut [f32]) {
+        assert_eq!(points.len(), out.len(), "one result per point");
+        points
+            .par_iter()
+            .zip(out.par_iter_mut())
+            .with_min_len(BATCH_GRAIN)
+            .for_each(|(p, o)| *o = self.distance(*p));
+    }
+}
+
+/// The closest point through any structure's regions
+/// ([`Accel::visit_regions`], `accel` built over `mesh`): a region farther
+/// than the best triangle so far is pruned; triangles are solved in `f64`.
+/// Same contract as [`SurfaceBvh::closest_point`].
+pub fn closest_point_in(
+    accel: &dyn Accel,
+    mesh: &TriangleMesh,
+    p: Vec3,
+    max_distance: f32,
+) -> Option<ClosestPoint> {
+    if !p.is_finite() || max_distance.is_nan() || max_distance < 0.0 {
+        return None;
+    }
+    let p64 = p.as_dvec3();
+    let mut best2 = (max_distance as f64).powi(2);
+    let mut best: Option<(u32, DVec3, f64, f64)> = None;
+    let n = mesh.num_triangles();
+    let best_cell = std::cell::Cell::new(best2);
+    accel.visit_regions(
+        &mut |region| {
+            let (lo, hi) = (region.min.as_dvec3(), region.max.as_dvec3());
+            let q = p64.clamp(lo, hi);
+            // Slack for the regions' f32 rounding.
+            q.distance_squared(p64) <= best_cell.get() * (1.0 + 1e-6) + 1e-30
+        },
+        &mut |prims| {
+            for &t in prims {
+                if (t as usize) >= n {
+                    continue;
+                }
+                let tri = mesh.triangle(t as usize).map(|c| c.as_dvec3());
+                let (q, u, v) = closest_on_triangle64(p64, &tri);
+                let d2 = q.distance_squared(p64);
+                let better = match best {
+                    Some((bt, ..)) => d2 < best2 || (d2 == best2 && t < bt),
+                    None => d2 <= best2,
+                };
+                if better {
+                    best2 = d2;
+                    best_cell.set(d2);
+                    best = Some((t, q, u, v));
+                }
+            }
+        },
+    );
+    best.map(|(prim, q, u, v)| ClosestPoint {
+        point: q.as_vec3(),
+        distance: q.distance(p64) as f32,
+        prim,
+        u: u as f32,
+        v: v as f32,
+    })
+}
+
+/// Reference: every triangle of `mesh` in `f64`; the nearest (lowest index
+/// on ties) as `(distance, prim, point)`, `None` for an empty mesh.
+pub fn closest_point_brute(mesh: &TriangleMesh, p: DVec3) -> Option<(f64, u32, DVec3)> {
+    let mut best: Option<(f64, u32, DVec3)> = None;
+    for t in 0..mesh.num_triangles() {
+        let tri = mesh.triangle(t).map(|c| c.as_dvec3());
+        let (q, _, _) = closest_on_triangle64(p, &tri);
+        let d = q.distance(p);
+        if best.is_none_or(|b| d < b.0) {
+            best = Some((d, t as u32, q));
+        }
+    }
+    best
+}

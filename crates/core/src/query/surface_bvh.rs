@@ -1,0 +1,233 @@
+//! [`SurfaceBvh`]: the 8-wide BVH behind the point queries (closest point,
+//! distance, winding number) and the multi-hit ray queries.
+//!
+//! It is made by the same binned-SAH build as [`crate::accel::Bvh8`]
+//! ([`crate::accel::bvh::build`]), collapsed into nodes of up to eight
+//! children the same way (the largest-area inner child's children pulled
+//! up first), with the children's boxes in structure-of-arrays layout so
+//! that one query point or ray is tested against all eight at once (the
+//! loops over the eight lanes compile to SIMD). Unlike the ray-casting
+//! tree's leaves (packs of precomputed Möller data), its leaves keep the
+//! triangles' corners, which the closest-point and solid-angle kernels
+//! need, and every child slot keeps the range of triangles below it, from
+//! which the winding-number moments are made ([`super::winding`]).
+
+use crate::aabb::Aabb;
+use crate::accel::bvh::{build, BuildNode, BuildOptions};
+use crate::mesh::TriangleMesh;
+use glam::Vec3;
+use std::sync::OnceLock;
+
+/// Children per node.
+pub const WIDTH: usize = 8;
+
+/// A child reference with no child.
+pub(crate) const EMPTY: u32 = u32::MAX;
+
+/// An inner node: the boxes of up to eight children (structure of arrays;
+/// an unused slot has the empty box, `min = +inf`, `max = -inf`), and per
+/// child either an inner node (`count == 0`, `child` its index), a leaf
+/// (`count > 0`, `child` its first triangle in leaf order) or nothing
+/// (`child == EMPTY`).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct SurfaceNode {
+    pub(crate) min: [[f32; WIDTH]; 3],
+    pub(crate) max: [[f32; WIDTH]; 3],
+    pub(crate) child: [u32; WIDTH],
+    pub(crate) count: [u32; WIDTH],
+    /// Triangles below each child, as a range of the leaf order.
+    pub(crate) first: [u32; WIDTH],
+    pub(crate) total: [u32; WIDTH],
+}
+
+impl Default for SurfaceNode {
+    fn default() -> Self {
+        SurfaceNode {
+            min: [[f32::INFINITY; WIDTH]; 3],
+            max: [[f32::NEG_INFINITY; WIDTH]; 3],
+            child: [EMPTY; WIDTH],
+            count: [0; WIDTH],
+            first: [0; WIDTH],
+            total: [0; WIDTH],
+        }
+    }
+}
+
+/// An 8-wide BVH over a mesh's triangles for point and multi-hit ray
+/// queries. The root is node 0 (a mesh of one leaf gets a root node with
+/// that leaf as its only child); an empty mesh has no nodes.
+pub struct SurfaceBvh {
+    pub(crate) nodes: Vec<SurfaceNode>,
+    /// Corners of the triangles in leaf order.
+    pub(crate) tris: Vec<[Vec3; 3]>,
+    /// Mesh triangle index of each triangle in leaf order.
+    pub(crate) prims: Vec<u32>,
+    pub(crate) bounds: Aabb,
+    /// Winding-number moments, made on first use.
+    pub(crate) moments: OnceLock<super::winding::Moments>,
+}
+
+impl SurfaceBvh {
+    /// Build over all triangles of `mesh` with the default build options.
+    pub fn build(mesh: &TriangleMesh) -> Self {
+        Self::build_with(mesh, &BuildOptions::default())
+    }
+
+    /// Build over all triangles of `mesh` (the binned SAH or linear BVH that
+    /// `options.quality` names, leaves of up to `options.max_leaf_size`).
+    pub fn build_with(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        let tree = build::build(mesh, options);
+        let tris: Vec<[Vec3; 3]> = tree
+            .order
+            .iter()
+            .map(|&t| mesh.triangle(t as usize))
+            .collect();
+        let mut bvh = SurfaceBvh {
+            nodes: Vec::new(),
+            tris,
+            prims: tree.order,
+            bounds: tree.root.bounds(),
+            moments: OnceLock::new(),
+        };
+        if !bvh.prims.is_empty() {
+            bvh.nodes.push(SurfaceNode::default());
+            let slots = match &tree.root {
+                BuildNode::Leaf { .. } => vec![&tree.root],
+                BuildNode::Inner { .. } => widen(&tree.root),
+            };
+            bvh.fill(0, &slots);
+        }
+        bvh
+    }
+
+    /// Fill node `at` with `slots` as children, making their inner nodes.
+    fn fill(&mut self, at: usize, slots: &[&BuildNode]) {
+        let mut node = SurfaceNode::default();
+        let mut inner = Vec::new();
+        for (k, s) in slots.iter().enumerate() {
+            let b = s.bounds();
+            for a in 0..3 {
+                node.min[a][k] = b.min[a];
+                node.max[a][k] = b.max[a];
+            }
+            let (first, total) = s.triangle_range();
+            node.first[k] = first;
+            node.total[k] = total;
+            match s {
+                BuildNode::Leaf { first, count, .. } => {
+                    node.child[k] = *first;
+                    node.count[k] = (*count).max(1);
+                    if *count == 0 {
+                        node.child[k] = EMPTY;
+                        node.count[k] = 0;
+                    }
+                }
+                BuildNode::Inner { .. } => {
+                    node.child[k] = self.nodes.len() as u32;
+                    self.nodes.push(SurfaceNode::default());
+                    inner.push((self.nodes.len() - 1, *s));
+                }
+            }
+        }
+        self.nodes[at] = node;
+        for (idx, s) in inner {
+            self.fill(idx, &widen(s));
+        }
+    }
+
+    /// Number of triangles.
+    pub fn num_triangles(&self) -> usize {
+        self.prims.len()
+    }
+
+    /// Bounds of all triangles.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Number of inner nodes.
+    pub fn num_nodes(&self) -> usize {
+        self.nodes.len()
+    }
+}
+
+/// The up to eight nodes that replace the inner node `node`: its two
+/// children, then repeatedly the inner one of largest surface area replaced
+/// by its own two children, as the wide collapse of the ray-casting BVHs.
+fn widen(node: &BuildNode) -> Vec<&BuildNode> {
+    let BuildNode::Inner { children, .. } = node else {
+        return vec![node];
+    };
+    let mut slots: Vec<&BuildNode> = vec![&children[0], &children[1]];
+    while slots.len() < WIDTH {
+        let pick = slots
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| matches!(s, BuildNode::Inner { .. }))
+            .max_by(|a, b| {
+                a.1.bounds()
+                    .surface_area()
+                    .total_cmp(&b.1.bounds().surface_area())
+            })
+            .map(|(i, _)| i);
+        let Some(i) = pick else { break };
+        let BuildNode::Inner { children, .. } = slots[i] else {
+            break;
+        };
+        slots[i] = &children[0];
+        slots.push(&children[1]);
+    }
+    slots
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Pcg32;
+
+    #[test]
+    fn every_triangle_sits_in_exactly_one_leaf_inside_its_boxes() {
+        let mut rng = Pcg32::new(3);
+        let mut pos = Vec::new();
+        let mut idx = Vec::new();
+        for i in 0..3000u32 {
+            let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
+            for _ in 0..3 {
+                pos.push(c + rng.unit_vector() * 0.01);
+            }
+            idx.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let mesh = TriangleMesh::new(pos, idx);
+        let bvh = SurfaceBvh::build(&mesh);
+        let mut seen = vec![0u32; mesh.num_triangles()];
+        let mut stack = vec![0usize];
+        while let Some(n) = stack.pop() {
+            let node = &bvh.nodes[n];
+            for k in 0..WIDTH {
+                if node.child[k] == EMPTY {
+                    continue;
+                }
+                let lo = Vec3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
+                let hi = Vec3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
+                let r = node.first[k] as usize..(node.first[k] + node.total[k]) as usize;
+                for t in r.clone() {
+                    for v in bvh.tris[t] {
+                        assert!(v.cmpge(lo).all() && v.cmple(hi).all());
+                    }
+                }
+                if node.count[k] > 0 {
+                    assert_eq!(node.child[k] as usize, r.start);
+                    assert_eq!(node.count[k] as usize, r.len());
+                    for t in r {
+                        seen[bvh.prims[t] as usize] += 1;
+                        assert_eq!(bvh.tris[t], mesh.triangle(bvh.prims[t] as usize));
+                    }
+                } else {
+                    stack.push(node.child[k] as usize);
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s == 1));
+    }
+}

@@ -1,0 +1,345 @@
+//! Generalized winding number (Jacobson, Kavan and Sorkine-Hornung 2013,
+//! "Robust inside-outside segmentation using generalized winding numbers")
+//! with the hierarchical far-field approximation of Barill, Dickson,
+//! Schmidt, Levin and Jacobson 2018 ("Fast winding numbers for soups and
+//! clouds").
+//!
+//! The winding number of a point `q` is the signed solid angle the surface
+//! subtends at `q`, over `4π`: each triangle contributes its solid angle
+//! (Van Oosterom and Strackee 1983: `tan(Ω/2) = a·(b×c) / (|a||b||c| +
+//! (a·b)|c| + (b·c)|a| + (c·a)|b|)` with `a, b, c` its corners relative to
+//! `q`), positive when `q` sees the triangle's back (inside a mesh whose
+//! triangles are counter-clockwise seen from outside). It is 1 inside and 0
+//! outside a closed surface, and degrades gracefully where the surface is
+//! open, duplicated or self-intersecting: it is a harmonic function that
+//! jumps by one across each sheet, so a hole shifts it smoothly, a
+//! duplicated triangle adds a local ±1 only right at that triangle, and
+//! thresholding at ½ still separates inside from outside.
+//!
+//! Far from a cluster of triangles, the cluster's solid angle is expanded
+//! about its area-weighted centroid `p̃` (Barill et al.'s Taylor series of
+//! the kernel `f(y) = (y - q) / |y - q|³`, whose flux through a surface is
+//! its solid angle): with `x = p̃ - q`, `r = |x|` and each triangle's area
+//! vector `A_t = ½(b-a)×(c-a)`,
+//! `Ω ≈ Σ_i N_i f_i(p̃) + Σ_ij T_ij ∂_j f_i(p̃) + ½ Σ_ijk C_ijk ∂_j ∂_k f_i(p̃)`
+//! with the moments `N = Σ A_t`, `T_ij = Σ A_t,i ∫(y - p̃)_j dA / a_t` and
+//! `C_ijk = Σ A_t,i ∫(y - p̃)_j (y - p̃)_k dA / a_t`, integrated exactly over
+//! each flat triangle (the terms up to Barill et al.'s "order 2"). A child
+//! of a [`SurfaceBvh`] node whose triangles all lie within `ρ` of `p̃` is
+//! taken in this form when `r > β·ρ` (β = 2 by default, as in the paper);
+//! otherwise it is opened, and leaves are summed exactly. The error falls
+//! as `(ρ / r)⁴`; at β = 2 the tests find it below 1% of a unit winding
+//! number, far from the ½ threshold.
+
+use super::surface_bvh::{SurfaceBvh, EMPTY, WIDTH};
+use crate::accel::BATCH_GRAIN;
+use crate::mesh::TriangleMesh;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+/// Barill et al.'s default accuracy: a child is approximated when the
+/// query point is farther than twice its radius from its centre.
+pub const DEFAULT_BETA: f32 = 2.0;
+
+/// The far-field data of each node's eight children (structure of arrays,
+/// parallel to the nodes): area-weighted centroid, radius about it, and the
+/// summed area vector.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct SlotMoments {
+    center: [[f32; WIDTH]; 3],
+    radius: [f32; WIDTH],
+    normal: [[f32; WIDTH]; 3],
+    /// `T[i][j]`.
+    tensor: [[[f32; WIDTH]; 3]; 3],
+    /// `C[i][jk]` for `jk` in `xx, yy, zz, xy, xz, yz`.
+    hessian: [[[f32; WIDTH]; 6]; 3],
+}
+
+/// The moments of every node of a [`SurfaceBvh`].
+pub(crate) struct Moments(Vec<SlotMoments>);
+
+/// Solid angle of triangle `(a, b, c)` seen from the origin (Van Oosterom
+/// and Strackee 1983), in `f32`.
+#[inline(always)]
+fn solid_angle32(a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    let (la, lb, lc) = (a.length(), b.length(), c.length());
+    let num = a.dot(b.cross(c));
+    let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    2.0 * num.atan2(den)
+}
+
+/// Solid angle of triangle `(a, b, c)` seen from `q`, in `f64`.
+pub fn solid_angle64(q: DVec3, tri: &[DVec3; 3]) -> f64 {
+    let (a, b, c) = (tri[0] - q, tri[1] - q, tri[2] - q);
+    let (la, lb, lc) = (a.length(), b.length(), c.length());
+    let num = a.dot(b.cross(c));
+    let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    2.0 * num.atan2(den)
+}
+
+/// The pairs `(j, k)` of the symmetric second moments, in storage order.
+const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+impl Moments {
+    /// The moments of every child of every node, in `f64` from the
+    /// triangles below it (each triangle is summed once per level above
+    /// it), stored in `f32`.
+    #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
+    fn build(bvh: &SurfaceBvh) -> Moments {
+        let nodes = bvh
+            .nodes
+            .par_iter()
+            .map(|node| {
+                let mut m = SlotMoments {
+                    center: [[0.0; WIDTH]; 3],
+                    radius: [f32::INFINITY; WIDTH],
+                    normal: [[0.0; WIDTH]; 3],
+                    tensor: [[[0.0; WIDTH]; 3]; 3],
+                    hessian: [[[0.0; WIDTH]; 6]; 3],
+                };
+                for k in 0..WIDTH {
+                    if node.child[k] == EMPTY {
+                        continue;
+                    }
+                    let (lo, hi) = (
+                        node.first[k] as usize,
+                        (node.first[k] + node.total[k]) as usize,
+                    );
+                    let tris = &bvh.tris[lo..hi];
+                    let (mut nsum, mut csum, mut asum) = (DVec3::ZERO, DVec3::ZERO, 0.0f64);
+                    for t in tris {
+                        let [a, b, c] = t.map(|v| v.as_dvec3());
+                        let av = 0.5 * (b - a).cross(c - a);
+                        nsum += av;
+                        csum += av.length() * (a + b + c) / 3.0;
+                        asum += av.length();
+                    }
+                    let center = if asum > 0.0 {
+                        csum / asum
+                    } else {
+                        tris.iter().flatten().map(|v| v.as_dvec3()).sum::<DVec3>()
+                            / (3 * tris.len()) as f64
+                    };
+                    let mut r2 = 0.0f64;
+                    let mut tensor = [[0.0f64; 3]; 3];
+                    let mut hessian = [[0.0f64; 6]; 3];
+                    for t in tris {
+                        let [a, b, c] = t.map(|v| v.as_dvec3() - center);
+                        r2 = r2
+                            .max(a.length_squared())
+                            .max(b.length_squared())
+                            .max(c.length_squared());
+                        let av = 0.5 * (b - a).cross(c - a);
+                        let g = (a + b + c) / 3.0;
+                        // ∫ y dA / area = g; ∫ y yᵀ dA / area = (Σ v vᵀ + 9 g gᵀ) / 12.
+                        for i in 0..3 {
+                            for j in 0..3 {
+                                tensor[i][j] += av[i] * g[j];
+                            }
+                            for (jk, &(j, kk)) in PAIRS.iter().enumerate() {
+                                let second = (a[j] * a[kk]
+                                    + b[j] * b[kk]
+                                    + c[j] * c[kk]
+                                    + 9.0 * g[j] * g[kk])
+                                    / 12.0;
+                                hessian[i][jk] += av[i] * second;
+                            }
+                        }
+                    }
+                    for i in 0..3 {
+                        m.center[i][k] = center[i] as f32;
+                        m.normal[i][k] = nsum[i] as f32;
+                        for j in 0..3 {
+                            m.tensor[i][j][k] = tensor[i][j] as f32;
+                        }
+                        for jk in 0..6 {
+                            m.hessian[i][jk][k] = hessian[i][jk] as f32;
+                        }
+                    }
+                    // Rounded up so the f32 centre stays within the radius.
+                    m.radius[k] = (r2.sqrt() * (1.0 + 1e-6)) as f32;
+                }
+                m
+            })
+            .collect();
+        Moments(nodes)
+    }
+}
+
+/// The far-field solid angle of child `k` seen from `q`: the expansion of
+/// the module documentation with `x = p̃ - q`, `d2 = |x|²`.
+#[inline(always)]
+fn far_field(m: &SlotMoments, k: usize, x: [f32; 3], d2: f32) -> f32 {
+    let inv2 = 1.0 / d2;
+    let inv3 = inv2 * inv2.sqrt();
+    let dot = x[0] * m.normal[0][k] + x[1] * m.normal[1][k] + x[2] * m.normal[2][k];
+    let t = &m.tensor;
+    let trace = t[0][0][k] + t[1][1][k] + t[2][2][k];
+    let mut xtx = 0.0;
+    for (i, row) in t.iter().enumerate() {
+        xtx += x[i] * (row[0][k] * x[0] + row[1][k] * x[1] + row[2][k] * x[2]);
+    }
+    // Second order: ½ Σ C_ijk ∂j∂k f_i, with
+    // ∂j∂k f_i = -3(δij x_k + δik x_j + δjk x_i) / r⁵ + 15 x_i x_j x_k / r⁷.
+    let h = &m.hessian;
+    let (mut diag, mut tr_x, mut cubic) = (0.0, 0.0, 0.0);
+    for i in 0..3 {
+        let [xx, yy, zz, xy, xz, yz] = [
+            h[i][0][k], h[i][1][k], h[i][2][k], h[i][3][k], h[i][4][k], h[i][5][k],
+        ];
+        // Row i of C_i (Σ_j C_iij x_j needs C_i[i][j]).
+        let row = match i {
+            0 => [xx, xy, xz],
+            1 => [xy, yy, yz],
+            _ => [xz, yz, zz],
+        };
+        diag += row[0] * x[0] + row[1] * x[1] + row[2] * x[2];
+        tr_x += x[i] * (xx + yy + zz);
+        let quad = xx * x[0] * x[0]
+            + yy * x[1] * x[1]
+            + zz * x[2] * x[2]
+            + 2.0 * (xy * x[0] * x[1] + xz * x[0] * x[2] + yz * x[1] * x[2]);
+        cubic += x[i] * quad;
+    }
+    let inv5 = inv3 * inv2;
+    let second = 0.5 * (-3.0 * inv5 * (2.0 * diag + tr_x) + 15.0 * inv5 * inv2 * cubic);
+    (dot + trace) * inv3 - 3.0 * xtx * inv5 + second
+}
+
+impl SurfaceBvh {
+    fn moments(&self) -> &Moments {
+        self.moments.get_or_init(|| Moments::build(self))
+    }
+
+    /// The generalized winding number of `q` with Barill et al.'s far-field
+    /// approximation at accuracy `beta` (a child is approximated when `q` is
+    /// farther than `beta` times its radius from its centre; `beta = inf`
+    /// gives the exact sum). NaN for a point that is not finite; 0 for an
+    /// empty mesh.
+    #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
+    pub fn winding_number_with(&self, q: Vec3, beta: f32) -> f32 {
+        if !q.is_finite() {
+            return f32::NAN;
+        }
+        if self.nodes.is_empty() {
+            return 0.0;
+        }
+        let moments = &self.moments().0;
+        let beta2 = beta * beta;
+        let mut w = 0.0f32;
+        let mut stack = [0u32; 8 * 128];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let ni = stack[sp] as usize;
+            let (node, m) = (&self.nodes[ni], &moments[ni]);
+            // Far field of all eight lanes at once; lanes that are near or
+            // unused contribute zero.
+            let mut far = [false; WIDTH];
+            let mut sum = 0.0f32;
+            for k in 0..WIDTH {
+                let d = [
+                    m.center[0][k] - q.x,
+                    m.center[1][k] - q.y,
+                    m.center[2][k] - q.z,
+                ];
+                let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                let r2 = m.radius[k] * m.radius[k] * beta2;
+                let is_far = d2 > r2;
+                far[k] = is_far;
+                let term = far_field(m, k, d, d2);
+                sum += if is_far { term } else { 0.0 };
+            }
+            w += sum;
+            for k in 0..WIDTH {
+                if far[k] || node.child[k] == EMPTY {
+                    continue;
+                }
+                if node.count[k] > 0 {
+                    let first = node.child[k] as usize;
+                    for t in &self.tris[first..first + node.count[k] as usize] {
+                        w += solid_angle32(t[0] - q, t[1] - q, t[2] - q);
+                    }
+                } else if sp < stack.len() {
+                    stack[sp] = node.child[k];
+                    sp += 1;
+                }
+            }
+        }
+        w / (4.0 * std::f32::consts::PI)
+    }
+
+    /// [`SurfaceBvh::winding_number_with`] at [`DEFAULT_BETA`].
+    pub fn winding_number(&self, q: Vec3) -> f32 {
+        self.winding_number_with(q, DEFAULT_BETA)
+    }
+
+    /// Occupancy: true when `q` is inside the surface, i.e. its generalized
+    /// winding number is at least ½. Unlike the parity of one ray's
+    /// crossings, this is right on open meshes (a ray leaving through a hole
+    /// crosses the surface an even number of times from inside), duplicated
+    /// and overlapping triangles (one crossing counted twice flips the
+    /// parity) and self-intersecting meshes; the tests show such cases.
+    /// False for a point that is not finite.
+    pub fn is_inside(&self, q: Vec3) -> bool {
+        self.winding_number(q) >= 0.5
+    }
+
+    /// Signed distance: the unsigned distance, negative inside (by
+    /// [`SurfaceBvh::is_inside`], the winding number), as Open3D's
+    /// `compute_signed_distance`. NaN for a point that is not finite.
+    pub fn signed_distance(&self, q: Vec3) -> f32 {
+        let d = self.distance(q);
+        if d.is_nan() {
+            return d;
+        }
+        if self.is_inside(q) {
+            -d
+        } else {
+            d
+        }
+    }
+
+    /// [`SurfaceBvh::winding_number`] for many points, in parallel.
+    pub fn winding_numbers(&self, points: &[Vec3], out: &mut [f32]) {
+        assert_eq!(points.len(), out.len(), "one result per point");
+        self.moments();
+        points
+            .par_iter()
+            .zip(out.par_iter_mut())
+            .with_min_len(BATCH_GRAIN)
+            .for_each(|(p, o)| *o = self.winding_number(*p));
+    }
+
+    /// [`SurfaceBvh::is_inside`] for many points, in parallel.
+    pub fn inside_batch(&self, points: &[Vec3], out: &mut [bool]) {
+        assert_eq!(points.len(), out.len(), "one result per point");
+        self.moments();
+        points
+            .par_iter()
+            .zip(out.par_iter_mut())
+            .with_min_len(BATCH_GRAIN)
+            .for_each(|(p, o)| *o = self.is_inside(*p));
+    }
+
+    /// [`SurfaceBvh::signed_distance`] for many points, in parallel.
+    pub fn signed_distances(&self, points: &[Vec3], out: &mut [f32]) {
+        assert_eq!(points.len(), out.len(), "one result per point");
+        self.moments();
+        points
+            .par_iter()
+            .zip(out.par_iter_mut())
+            .with_min_len(BATCH_GRAIN)
+            .for_each(|(p, o)| *o = self.signed_distance(*p));
+    }
+}
+
+/// Reference: the exact winding number of `q` in `f64`, summing every
+/// triangle's solid angle.
+pub fn winding_number_brute(mesh: &TriangleMesh, q: DVec3) -> f64 {
+    (0..mesh.num_triangles())
+        .map(|t| solid_angle64(q, &mesh.triangle(t).map(|c| c.as_dvec3())))
+        .sum::<f64>()
+        / (4.0 * std::f64::consts::PI)
+}

@@ -1,0 +1,185 @@
+//! Multi-hit ray queries (all hits sorted, first k, counts, any-hit with a
+//! filter) against an `f64` brute force, on the 8-wide [`SurfaceBvh`] and
+//! through every structure's regions.
+
+mod query_support;
+
+use query_support::{random_soup, sphere, transformed, without};
+use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::query::all_hits::{ray_hits_brute, ray_hits_in, Crossing64};
+use raykit_core::query::SurfaceBvh;
+use raykit_core::rng::Pcg32;
+use raykit_core::tri::TestKind;
+use raykit_core::{Hit, Ray, TriangleMesh, Vec3};
+
+/// Random rays through the mesh's box, some with finite `tfar`; kept when
+/// no `f64` crossing lies within `1e-4` (barycentric) of an edge, where an
+/// `f32` test may count a crossing on both neighbours or neither.
+fn clear_rays(mesh: &TriangleMesh, n: usize, seed: u64) -> Vec<(Ray, Vec<Crossing64>)> {
+    let mut rng = Pcg32::new(seed);
+    let b = mesh.bounds();
+    let pad = b.extent();
+    let mut out = Vec::new();
+    while out.len() < n {
+        let o = rng.in_box(b.min - pad, b.max + pad);
+        let target = rng.in_box(b.min, b.max);
+        let dir = target - o;
+        let ray = if out.len() % 3 == 0 {
+            Ray::segment(o, dir, 0.0, rng.range_f32(0.2, 1.5))
+        } else {
+            Ray::new(o, dir)
+        };
+        let want = ray_hits_brute(mesh, &ray);
+        if want.iter().all(|c| c.margin > 1e-4) {
+            out.push((ray, want));
+        }
+    }
+    out
+}
+
+fn same(got: &[Hit], want: &[Crossing64], what: &str) {
+    assert_eq!(
+        got.len(),
+        want.len(),
+        "{what}: {} hits vs {}",
+        got.len(),
+        want.len()
+    );
+    let mut gp: Vec<u32> = got.iter().map(|h| h.prim).collect();
+    let mut wp: Vec<u32> = want.iter().map(|c| c.prim).collect();
+    gp.sort_unstable();
+    wp.sort_unstable();
+    assert_eq!(gp, wp, "{what}: different triangles");
+    for (g, w) in got.iter().zip(want) {
+        assert!(
+            (g.t as f64 - w.t).abs() <= 1e-4 * (1.0 + w.t.abs()),
+            "{what}: t {} vs {}",
+            g.t,
+            w.t
+        );
+    }
+    assert!(
+        got.windows(2).all(|p| p[0].t <= p[1].t),
+        "{what}: not sorted"
+    );
+}
+
+#[test]
+fn all_hits_counts_and_first_k_match_brute_force() {
+    let meshes = [
+        random_soup(3000, 21),
+        sphere(4),
+        without(&sphere(4), |c| c.x > 0.5),
+        {
+            let mut m = sphere(3);
+            m.append(&transformed(&sphere(3), 0.5, Vec3::new(0.6, 0.1, 0.0)));
+            m
+        },
+    ];
+    for (mi, mesh) in meshes.iter().enumerate() {
+        let bvh = SurfaceBvh::build(mesh);
+        let rays = clear_rays(mesh, 400, 30 + mi as u64);
+        let plain: Vec<Ray> = rays.iter().map(|r| r.0).collect();
+        let mut counts = vec![0; plain.len()];
+        bvh.count_hits_batch(&plain, &mut counts);
+        let lists = bvh.ray_hits_batch(&plain, usize::MAX);
+        let mut any = 0;
+        for (i, (ray, want)) in rays.iter().enumerate() {
+            let got = bvh.ray_hits(ray, usize::MAX);
+            same(&got, want, &format!("mesh {mi} ray {i}"));
+            assert_eq!(lists[i], got);
+            assert_eq!(counts[i] as usize, want.len());
+            assert_eq!(bvh.count_hits(ray) as usize, want.len());
+            for k in [1, 3] {
+                let first = bvh.ray_hits(ray, k);
+                same(
+                    &first,
+                    &want[..k.min(want.len())],
+                    &format!("mesh {mi} ray {i} first {k}"),
+                );
+            }
+            any += usize::from(!want.is_empty());
+        }
+        assert!(any > 50, "mesh {mi}: too few rays hit ({any})");
+    }
+}
+
+#[test]
+fn any_hit_filter_skips_back_faces() {
+    let mesh = random_soup(2000, 40);
+    let bvh = SurfaceBvh::build(&mesh);
+    let normal = |prim: u32| {
+        let [a, b, c] = mesh.triangle(prim as usize);
+        (b - a).cross(c - a)
+    };
+    for (ray, want) in clear_rays(&mesh, 500, 41) {
+        let front: Vec<u32> = want
+            .iter()
+            .filter(|c| normal(c.prim).dot(ray.dir) < 0.0)
+            .map(|c| c.prim)
+            .collect();
+        let got = bvh.any_hit(&ray, |h| normal(h.prim).dot(ray.dir) < 0.0);
+        match got {
+            None => assert!(front.is_empty(), "missed a front face"),
+            Some(h) => assert!(
+                front.contains(&h.prim),
+                "accepted a hit the filter rejects or none"
+            ),
+        }
+        let mut out = Vec::new();
+        bvh.ray_hits_filtered(
+            &ray,
+            usize::MAX,
+            |h| normal(h.prim).dot(ray.dir) < 0.0,
+            &mut out,
+        );
+        let mut prims: Vec<u32> = out.iter().map(|h| h.prim).collect();
+        prims.sort_unstable();
+        let mut f = front.clone();
+        f.sort_unstable();
+        assert_eq!(prims, f);
+    }
+}
+
+#[test]
+fn every_structure_lists_the_same_hits() {
+    let mesh = random_soup(1500, 50);
+    let rays = clear_rays(&mesh, 200, 51);
+    for kind in AccelKind::ALL {
+        let accel = build_accel(kind, TestKind::Moller, &mesh, &BuildOptions::default());
+        for (ray, want) in &rays {
+            same(
+                &ray_hits_in(accel.as_ref(), &mesh, ray, usize::MAX),
+                want,
+                kind.name(),
+            );
+            let two = ray_hits_in(accel.as_ref(), &mesh, ray, 2);
+            same(&two, &want[..2.min(want.len())], kind.name());
+        }
+    }
+}
+
+#[test]
+fn invalid_rays_hit_nothing() {
+    let mesh = random_soup(300, 60);
+    let bvh = SurfaceBvh::build(&mesh);
+    let accel = build_accel(
+        AccelKind::Bvh8,
+        TestKind::Moller,
+        &mesh,
+        &BuildOptions::default(),
+    );
+    for ray in [
+        Ray::new(Vec3::new(f32::NAN, 0.5, 0.5), Vec3::X),
+        Ray::new(Vec3::splat(0.5), Vec3::new(f32::NAN, 0.0, 1.0)),
+        Ray::new(Vec3::new(f32::INFINITY, 0.5, 0.5), -Vec3::X),
+        Ray::new(Vec3::splat(0.5), Vec3::ZERO),
+    ] {
+        assert!(bvh.ray_hits(&ray, usize::MAX).is_empty());
+        assert_eq!(bvh.count_hits(&ray), 0);
+        assert_eq!(bvh.any_hit(&ray, |_| true), None);
+        assert!(ray_hits_in(accel.as_ref(), &mesh, &ray, usize::MAX).is_empty());
+    }
+    let empty = SurfaceBvh::build(&TriangleMesh::default());
+    assert_eq!(empty.count_hits(&Ray::new(Vec3::ZERO, Vec3::X)), 0);
+}

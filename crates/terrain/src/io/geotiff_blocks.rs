@@ -1,0 +1,172 @@
+//! A compressed or tiled TIFF image, written by hand (the `tiff` crate's
+//! encoder writes strips only, and GDAL 3.6 cannot decode its DEFLATE
+//! strips): the samples cut into blocks, each compressed on its own, then
+//! the directory's image tags. Tiles (TIFF 6.0, section 15) have the
+//! layout's size, row-major from the top-left, those of the last row and
+//! column padded with a fill sample; strips are runs of whole rows, about
+//! 64 KiB each, the last one shorter.
+
+use std::io::{Seek, Write};
+
+use tiff::encoder::colortype::ColorType;
+use tiff::encoder::compression::{CompressionAlgorithm, Deflate, Lzw, Packbits};
+use tiff::encoder::{DirectoryEncoder, TiffKind, TiffValue};
+use tiff::tags::Tag;
+use tiff::TiffResult;
+
+use super::geotiff_layout::TiffCompression;
+
+/// A sample type the tiled writer can lay out as bytes (in the machine's
+/// byte order, which the `tiff` crate's header declares).
+pub trait TileSample: Copy {
+    /// Append the sample's bytes to `out`.
+    fn put(self, out: &mut Vec<u8>);
+}
+
+impl TileSample for u8 {
+    fn put(self, out: &mut Vec<u8>) {
+        out.push(self);
+    }
+}
+
+impl TileSample for f32 {
+    fn put(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_ne_bytes());
+    }
+}
+
+/// `bytes` compressed by `compression` (the input itself for none).
+fn compress(compression: TiffCompression, bytes: &[u8]) -> std::io::Result<Vec<u8>> {
+    let mut out = Vec::with_capacity(bytes.len() / 2);
+    match compression {
+        TiffCompression::None => out.extend_from_slice(bytes),
+        TiffCompression::Deflate => {
+            Deflate::default().write_to(&mut out, bytes)?;
+        }
+        TiffCompression::Lzw => {
+            Lzw.write_to(&mut out, bytes)?;
+        }
+        TiffCompression::Packbits => {
+            Packbits.write_to(&mut out, bytes)?;
+        }
+    }
+    Ok(out)
+}
+
+/// The tags that describe one band of samples of type `C`.
+fn write_sample_tags<W, K, C>(
+    d: &mut DirectoryEncoder<'_, W, K>,
+    width: usize,
+    height: usize,
+    compression: TiffCompression,
+) -> TiffResult<()>
+where
+    W: Write + Seek,
+    K: TiffKind,
+    C: ColorType,
+{
+    d.write_tag(Tag::ImageWidth, u32::try_from(width)?)?;
+    d.write_tag(Tag::ImageLength, u32::try_from(height)?)?;
+    d.write_tag(Tag::BitsPerSample, C::BITS_PER_SAMPLE)?;
+    d.write_tag(Tag::Compression, compression.tag_value())?;
+    d.write_tag(Tag::PhotometricInterpretation, C::TIFF_VALUE.to_u16())?;
+    d.write_tag(Tag::SamplesPerPixel, 1u16)?;
+    d.write_tag(Tag::PlanarConfiguration, 1u16)?;
+    let formats: Vec<u16> = C::SAMPLE_FORMAT.iter().map(|f| f.to_u16()).collect();
+    d.write_tag(Tag::SampleFormat, &formats[..])?;
+    Ok(())
+}
+
+/// Write the strips of `data` (`width` × `height`, rows from the top, each
+/// sample through `fix`) and the image tags into directory `d`; the caller
+/// adds its own tags and finishes the directory.
+pub fn write_strips<W, K, C>(
+    d: &mut DirectoryEncoder<'_, W, K>,
+    width: usize,
+    height: usize,
+    data: &[C::Inner],
+    compression: TiffCompression,
+    fix: &impl Fn(C::Inner) -> C::Inner,
+) -> TiffResult<()>
+where
+    W: Write + Seek,
+    K: TiffKind,
+    C: ColorType,
+    C::Inner: TileSample,
+    [C::Inner]: TiffValue,
+{
+    let row_bytes = width * std::mem::size_of::<C::Inner>();
+    let rows = (65536 / row_bytes.max(1)).clamp(1, height);
+    let mut offsets = Vec::with_capacity(height.div_ceil(rows));
+    let mut counts = Vec::with_capacity(offsets.capacity());
+    let mut raw = Vec::with_capacity(rows * row_bytes);
+    for first in (0..height).step_by(rows) {
+        raw.clear();
+        let end = (first + rows).min(height);
+        for &s in &data[first * width..end * width] {
+            fix(s).put(&mut raw);
+        }
+        let packed = compress(compression, &raw)?;
+        offsets.push(K::convert_offset(d.write_data(&packed[..])?)?);
+        counts.push(K::convert_offset(packed.len() as u64)?);
+    }
+    write_sample_tags::<W, K, C>(d, width, height, compression)?;
+    d.write_tag(Tag::RowsPerStrip, u32::try_from(rows)?)?;
+    d.write_tag(Tag::StripOffsets, K::convert_slice(&offsets))?;
+    d.write_tag(Tag::StripByteCounts, K::convert_slice(&counts))?;
+    Ok(())
+}
+
+/// Write the tiles of `data` (`width` × `height`, rows from the top, each
+/// sample through `fix`) and the image tags into directory `d`; the caller
+/// adds its own tags and finishes the directory.
+#[allow(clippy::too_many_arguments)]
+pub fn write_tiles<W, K, C>(
+    d: &mut DirectoryEncoder<'_, W, K>,
+    width: usize,
+    height: usize,
+    data: &[C::Inner],
+    tile: (u32, u32),
+    compression: TiffCompression,
+    pad: C::Inner,
+    fix: &impl Fn(C::Inner) -> C::Inner,
+) -> TiffResult<()>
+where
+    W: Write + Seek,
+    K: TiffKind,
+    C: ColorType,
+    C::Inner: TileSample,
+    [C::Inner]: TiffValue,
+{
+    let (tw, th) = (tile.0 as usize, tile.1 as usize);
+    let (across, down) = (width.div_ceil(tw), height.div_ceil(th));
+    let mut offsets = Vec::with_capacity(across * down);
+    let mut counts = Vec::with_capacity(across * down);
+    let mut raw = Vec::new();
+    for ty in 0..down {
+        for tx in 0..across {
+            raw.clear();
+            for r in 0..th {
+                let row = ty * th + r;
+                for c in 0..tw {
+                    let col = tx * tw + c;
+                    let s = if row < height && col < width {
+                        fix(data[row * width + col])
+                    } else {
+                        pad
+                    };
+                    s.put(&mut raw);
+                }
+            }
+            let packed = compress(compression, &raw)?;
+            offsets.push(K::convert_offset(d.write_data(&packed[..])?)?);
+            counts.push(K::convert_offset(packed.len() as u64)?);
+        }
+    }
+    write_sample_tags::<W, K, C>(d, width, height, compression)?;
+    d.write_tag(Tag::TileWidth, tile.0)?;
+    d.write_tag(Tag::TileLength, tile.1)?;
+    d.write_tag(Tag::TileOffsets, K::convert_slice(&offsets))?;
+    d.write_tag(Tag::TileByteCounts, K::convert_slice(&counts))?;
+    Ok(())
+}
