@@ -387,3 +387,84 @@ fn crc32(bytes: &[u8]) -> u32 {
     }
     !crc
 }
+
+/// Through the registry: every structure and test built by kind, saved
+/// through the `Accel` trait and loaded by `load_accel` from the header's
+/// kind answers as built; the structures without a saved form say so.
+#[test]
+fn registry_round_trip_every_kind_and_test() {
+    use raykit_core::accel::{build_accel, load_accel, AccelKind};
+    use raykit_core::tri::TestKind;
+    let mesh = shared_obj("teapot_992.obj");
+    let rays = rays(&mesh, 3000, 21);
+    for kind in AccelKind::ALL {
+        for test in TestKind::ALL {
+            let built = build_accel(kind, test, &mesh, &BuildOptions::default());
+            let path = scratch(&format!("registry-{}-{}.bin", kind.name(), test.name()));
+            let saved = built.save(&path, &mesh);
+            if !matches!(kind, AccelKind::Bvh4 | AccelKind::Bvh8) {
+                assert!(
+                    matches!(saved, Err(PersistError::Unsupported { .. })),
+                    "{kind:?}"
+                );
+                assert!(!path.exists());
+                continue;
+            }
+            saved.unwrap();
+            let (k, t, loaded) = load_accel(&path, &mesh).unwrap();
+            assert_eq!((k, t), (kind, test));
+            for ray in &rays {
+                assert_eq!(bits(loaded.intersect(ray)), bits(built.intersect(ray)));
+            }
+        }
+    }
+}
+
+/// Meshes of no, one and two triangles (an empty tree, a root leaf, a
+/// small tree) save, load and refit.
+#[test]
+fn tiny_meshes_round_trip_and_refit() {
+    use raykit_core::Vec3;
+    let tri = |n: u32| {
+        let mut pos = Vec::new();
+        let mut idx = Vec::new();
+        for i in 0..n {
+            let o = Vec3::new(i as f32, 0.0, 0.0);
+            pos.extend([o, o + Vec3::X * 0.5, o + Vec3::Y]);
+            idx.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        TriangleMesh::new(pos, idx)
+    };
+    for n in [0, 1, 2, 9] {
+        let mesh = tri(n);
+        let mut tree = Bvh8::<Moller>::build(&mesh, &BuildOptions::default());
+        let path = scratch(&format!("tiny-{n}.bvh8"));
+        tree.save(&path, &mesh).unwrap();
+        let loaded = Bvh8::<Moller>::load(&path, &mesh).unwrap();
+        let brute = BruteForce::<Moller>::new(&mesh);
+        let mut moved = mesh.clone();
+        for p in &mut moved.positions {
+            p.z += 0.25 * p.x;
+        }
+        let report = tree.refit(&moved).unwrap();
+        assert!(
+            n == 0 || report.degradation().is_finite(),
+            "{n}: {report:?}"
+        );
+        let brute_moved = BruteForce::<Moller>::new(&moved);
+        let mut rng = Pcg32::new(n as u64);
+        for _ in 0..500 {
+            let o = Vec3::new(rng.range_f32(-1.0, 10.0), rng.range_f32(-1.0, 2.0), 5.0);
+            let ray = Ray::new(o, Vec3::new(0.01, 0.02, -1.0));
+            assert_eq!(
+                bits(loaded.intersect(&ray)),
+                bits(brute.intersect(&ray)),
+                "{n}"
+            );
+            assert!(
+                agree(tree.intersect(&ray), brute_moved.intersect(&ray)),
+                "{n}"
+            );
+        }
+    }
+}

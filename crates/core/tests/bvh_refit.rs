@@ -200,3 +200,37 @@ fn refit_refuses_another_mesh() {
         assert!(agree(tree.intersect(&ray), brute.intersect(&ray)));
     }
 }
+
+/// Through the `Accel` trait: the wide BVHs built by kind refit (and then
+/// answer as brute force on the moved mesh); the others say they cannot.
+#[test]
+fn registry_refit_every_kind() {
+    use raykit_core::accel::{build_accel, AccelKind};
+    use raykit_core::tri::TestKind;
+    let s = sphere();
+    let moved = deformed(&s, 0.9, 0.08);
+    let brute = BruteForce::<Moller>::new(&moved);
+    let rays = rays(&moved, 2000, 13);
+    for kind in AccelKind::ALL {
+        let mut accel = build_accel(kind, TestKind::Moller, &s, &BuildOptions::default());
+        match accel.refit(&moved) {
+            Ok(report) => {
+                assert!(
+                    matches!(kind, AccelKind::Bvh4 | AccelKind::Bvh8),
+                    "{kind:?}"
+                );
+                assert!(report.degradation().is_finite());
+                for ray in &rays {
+                    assert!(
+                        agree(accel.intersect(ray), brute.intersect(ray)),
+                        "{kind:?}"
+                    );
+                }
+            }
+            Err(e) => {
+                assert_eq!(e, RefitError::Unsupported, "{kind:?}");
+                assert!(!matches!(kind, AccelKind::Bvh4 | AccelKind::Bvh8));
+            }
+        }
+    }
+}

@@ -12,22 +12,66 @@ use raykit_core::tri::Moller;
 use raykit_core::{Ray, TriangleMesh, Vec3};
 use std::time::Instant;
 
-/// Seconds of `f`, the median of `rounds` runs, and the spread (min, max).
-fn time<R>(rounds: usize, mut f: impl FnMut() -> R) -> (f64, f64, f64, R) {
-    let mut secs = Vec::new();
+/// Seconds of CPU time of the whole process (every thread).
+fn cpu_seconds() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: a valid clock id and a timespec to write.
+    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+}
+
+/// Timings of `rounds` runs: wall-clock median and minimum, and the
+/// median CPU time of the process (every thread; on a loaded machine the
+/// fairer figure for one thread), in seconds.
+struct Timing {
+    median: f64,
+    min: f64,
+    cpu: f64,
+}
+
+impl std::fmt::Display for Timing {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:7.2} ms (min {:.2}, cpu {:.2})",
+            self.median * 1e3,
+            self.min * 1e3,
+            self.cpu * 1e3
+        )
+    }
+}
+
+/// Run `f` `rounds` times; its timing and last result.
+fn time<R>(rounds: usize, mut f: impl FnMut() -> R) -> (Timing, R) {
+    let (mut wall, mut cpu) = (Vec::new(), Vec::new());
     let mut last = None;
     for _ in 0..rounds {
-        let t0 = Instant::now();
+        let (t0, c0) = (Instant::now(), cpu_seconds());
         let r = f();
-        secs.push(t0.elapsed().as_secs_f64());
+        wall.push(t0.elapsed().as_secs_f64());
+        cpu.push(cpu_seconds() - c0);
         last = Some(r);
     }
-    secs.sort_by(f64::total_cmp);
-    (
-        secs[secs.len() / 2],
-        secs[0],
-        secs[secs.len() - 1],
-        last.unwrap(),
+    wall.sort_by(f64::total_cmp);
+    cpu.sort_by(f64::total_cmp);
+    let t = Timing {
+        median: wall[wall.len() / 2],
+        min: wall[0],
+        cpu: cpu[cpu.len() / 2],
+    };
+    (t, last.unwrap())
+}
+
+/// `a / b` by wall-clock median, minimum and CPU time.
+fn ratios(what: &str, a: &Timing, b: &Timing) -> String {
+    format!(
+        "{what} {:.1}x (min {:.1}x, cpu {:.1}x)",
+        a.median / b.median,
+        a.min / b.min,
+        a.cpu / b.cpu
     )
 }
 
@@ -63,8 +107,8 @@ fn rays(mesh: &TriangleMesh, n: usize) -> Vec<Ray> {
 
 fn trace_rate(tree: &dyn Accel, rays: &[Ray]) -> f64 {
     let mut hits = vec![None; rays.len()];
-    let (s, _, _, _) = time(3, || tree.intersect_batch(rays, &mut hits));
-    rays.len() as f64 / s
+    let (t, _) = time(3, || tree.intersect_batch(rays, &mut hits));
+    rays.len() as f64 / t.median
 }
 
 fn main() {
@@ -74,47 +118,24 @@ fn main() {
     let mesh = raykit_io::load(path).expect("mesh").mesh;
     let threads = std::env::var("RAYON_NUM_THREADS").unwrap_or_else(|_| "all".into());
     println!(
-        "{}: {} triangles, {threads} threads, median of {rounds} (min-max)",
+        "{}: {} triangles, {threads} threads, {rounds} rounds: wall median (min, cpu time median)",
         path.display(),
         mesh.num_triangles()
     );
     let opts = BuildOptions::default();
-    let (build, b0, b1, tree) = time(rounds, || Bvh8::<Moller>::build(&mesh, &opts));
-    println!(
-        "build   {:8.2} ms ({:.2}-{:.2})",
-        build * 1e3,
-        b0 * 1e3,
-        b1 * 1e3
-    );
+    let (build, tree) = time(rounds, || Bvh8::<Moller>::build(&mesh, &opts));
+    println!("build   {build}, {} nodes", tree.stats().nodes);
     let file = std::env::temp_dir().join(format!("persist_refit_{}.bvh8", std::process::id()));
-    let (save, s0, s1, _) = time(rounds, || tree.save(&file, &mesh).expect("save"));
+    let (save, _) = time(rounds, || tree.save(&file, &mesh).expect("save"));
     let bytes = std::fs::metadata(&file).map(|m| m.len()).unwrap_or(0);
-    println!(
-        "save    {:8.2} ms ({:.2}-{:.2}), {:.1} MB",
-        save * 1e3,
-        s0 * 1e3,
-        s1 * 1e3,
-        bytes as f64 / 1e6
-    );
-    let (load, l0, l1, loaded) = time(rounds, || Bvh8::<Moller>::load(&file, &mesh).expect("load"));
-    println!(
-        "load    {:8.2} ms ({:.2}-{:.2}): build/load {:.1}x",
-        load * 1e3,
-        l0 * 1e3,
-        l1 * 1e3,
-        build / load
-    );
+    println!("save    {save}, {:.1} MB", bytes as f64 / 1e6);
+    let (load, loaded) = time(rounds, || Bvh8::<Moller>::load(&file, &mesh).expect("load"));
+    println!("load    {load}: {}", ratios("build/load", &build, &load));
     // SAFETY: the file is left alone until the mapped tree is dropped.
-    let (mload, m0, m1, mapped) = time(rounds, || unsafe {
+    let (mload, mapped) = time(rounds, || unsafe {
         Bvh8::<Moller>::load_mapped(&file, &mesh).expect("load")
     });
-    println!(
-        "mapped  {:8.2} ms ({:.2}-{:.2}): build/load {:.1}x",
-        mload * 1e3,
-        m0 * 1e3,
-        m1 * 1e3,
-        build / mload
-    );
+    println!("mapped  {mload}: {}", ratios("build/load", &build, &mload));
     let check = rays(&mesh, 500_000);
     let (mut a, mut b, mut c) = (
         vec![None; check.len()],
@@ -138,21 +159,15 @@ fn main() {
     let mut refit_tree = Bvh8::<Moller>::build(&mesh, &opts);
     for (frame, phase) in [0.5f32, 1.5, 3.0].into_iter().enumerate() {
         let moved = deformed(&mesh, phase, 0.04);
-        let (refit, r0, r1, report) = time(rounds, || refit_tree.refit(&moved).expect("refit"));
-        let (rebuild, q0, q1, rebuilt) = time(rounds, || Bvh8::<Moller>::build(&moved, &opts));
+        let (refit, report) = time(rounds, || refit_tree.refit(&moved).expect("refit"));
+        let (rebuild, rebuilt) = time(rounds, || Bvh8::<Moller>::build(&moved, &opts));
         let rays = rays(&moved, 500_000);
         let (rate_refit, rate_rebuilt) =
             (trace_rate(&refit_tree, &rays), trace_rate(&rebuilt, &rays));
         println!(
-            "frame {frame}: refit {:.2} ms ({:.2}-{:.2}), rebuild {:.2} ms ({:.2}-{:.2}): \
-             rebuild/refit {:.1}x; SAH degradation {:.3}; trace refit/rebuilt tree {:.3}x",
-            refit * 1e3,
-            r0 * 1e3,
-            r1 * 1e3,
-            rebuild * 1e3,
-            q0 * 1e3,
-            q1 * 1e3,
-            rebuild / refit,
+            "frame {frame}: refit {refit}, rebuild {rebuild}: {}; SAH degradation {:.3}; \
+             trace refit/rebuilt tree {:.3}x",
+            ratios("rebuild/refit", &rebuild, &refit),
             report.degradation(),
             rate_refit / rate_rebuilt
         );

@@ -10,6 +10,7 @@
 
 use crate::aabb::Aabb;
 use crate::hit::Hit;
+use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -28,7 +29,7 @@ pub use bvh::{
 };
 pub use flat::{FlatKdTree, FlatThreadedBvh, FlatTriangles};
 pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
-pub use registry::{build_accel, kd_accel_from_tree, AccelKind};
+pub use registry::{build_accel, kd_accel_from_tree, load_accel, AccelKind};
 
 /// Rays per rayon task in the batch queries: large enough to amortise task
 /// overhead, small enough to balance two cores on uneven work.
@@ -85,6 +86,29 @@ pub trait Accel: Send + Sync {
     /// parent's region contains its children's. The frustum, box and sphere
     /// queries of [`crate::query`] (paper 002's game queries) are built on it.
     fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32]));
+
+    /// Save the built structure to `path`, `mesh` being the mesh it was
+    /// built over or last refit to, in the versioned, checksummed format
+    /// of `bvh/persist.rs`, loaded again by [`load_accel`] or the
+    /// structure's own `load`. The wide BVHs ([`Bvh4`], [`Bvh8`]) have a
+    /// saved form; the other structures refuse with
+    /// [`PersistError::Unsupported`].
+    fn save(&self, path: &std::path::Path, mesh: &TriangleMesh) -> Result<(), PersistError> {
+        let _ = (path, mesh);
+        Err(PersistError::Unsupported {
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Refit the structure to `mesh`, the mesh it was built over with
+    /// moved vertices: boxes recomputed bottom-up in O(n), topology kept
+    /// (see `bvh/refit.rs`). The wide BVHs ([`Bvh4`], [`Bvh8`]) refit; the
+    /// other structures refuse with [`RefitError::Unsupported`] (build
+    /// them again).
+    fn refit(&mut self, mesh: &TriangleMesh) -> Result<RefitReport, RefitError> {
+        let _ = mesh;
+        Err(RefitError::Unsupported)
+    }
 
     /// Nearest hits for many rays, in parallel over the rayon pool.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {

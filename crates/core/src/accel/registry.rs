@@ -4,7 +4,7 @@
 use super::kdtree::{KdBuildNode, KdTree};
 use super::{
     Accel, BruteForce, BuildOptions, Bvh2, Bvh4, Bvh8, KdBacktrack, KdRestart, KdRopes, KdStack,
-    ThreadedBvh,
+    PersistError, ThreadedBvh,
 };
 use crate::aabb::Aabb;
 use crate::mesh::TriangleMesh;
@@ -123,6 +123,23 @@ pub fn build_accel(
         AccelKind::KdRopes => Box::new(KdRopes::<T>::build(mesh, &options.kd)),
         AccelKind::KdRestart => Box::new(KdRestart::<T>::build(mesh, &options.kd)),
         AccelKind::KdBacktrack => Box::new(KdBacktrack::<T>::build(mesh, &options.kd)),
+    })
+}
+
+/// Load a structure saved with [`Accel::save`] over `mesh`, of the
+/// structure and triangle test its header names (see
+/// [`super::bvh::saved_kind`]), checked as the structure's own `load` does.
+pub fn load_accel(
+    path: &std::path::Path,
+    mesh: &TriangleMesh,
+) -> Result<(AccelKind, TestKind, Box<dyn Accel>), PersistError> {
+    let (kind, test) = super::bvh::saved_kind(path)?;
+    with_test!(test, T => {
+        let accel = match kind {
+            AccelKind::Bvh4 => Box::new(Bvh4::<T>::load(path, mesh)?) as Box<dyn Accel>,
+            _ => Box::new(Bvh8::<T>::load(path, mesh)?),
+        };
+        Ok((kind, test, accel))
     })
 }
 

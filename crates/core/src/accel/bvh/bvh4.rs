@@ -259,6 +259,23 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
         self.stats.clone()
     }
 
+    /// [`Bvh4::save`].
+    fn save(
+        &self,
+        path: &std::path::Path,
+        mesh: &TriangleMesh,
+    ) -> Result<(), crate::accel::PersistError> {
+        Bvh4::save(self, path, mesh)
+    }
+
+    /// [`Bvh4::refit`].
+    fn refit(
+        &mut self,
+        mesh: &TriangleMesh,
+    ) -> Result<crate::accel::RefitReport, crate::accel::RefitError> {
+        Bvh4::refit(self, mesh)
+    }
+
     /// Coherent packets over Möller, sixteen rays with AVX-512, else eight
     /// (issue 8, item 4; see `bvh/packet.rs`), single rays otherwise.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {

@@ -345,6 +345,23 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
         self.stats.clone()
     }
 
+    /// [`Bvh8::save`].
+    fn save(
+        &self,
+        path: &std::path::Path,
+        mesh: &TriangleMesh,
+    ) -> Result<(), crate::accel::PersistError> {
+        Bvh8::save(self, path, mesh)
+    }
+
+    /// [`Bvh8::refit`].
+    fn refit(
+        &mut self,
+        mesh: &TriangleMesh,
+    ) -> Result<crate::accel::RefitReport, crate::accel::RefitError> {
+        Bvh8::refit(self, mesh)
+    }
+
     /// Coherent packets over Möller, sixteen rays with AVX-512, else eight
     /// (issue 8, item 4; Wald et al. 2001, with Benthin et al. 2012's hand-over to single rays; see
     /// `bvh/packet.rs`), single rays otherwise.

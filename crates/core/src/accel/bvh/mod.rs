@@ -20,6 +20,13 @@
 //!   same ordered traversal and leaves as [`Bvh4`], and the same packet path.
 //! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
 //!   indices, traversed without a stack.
+//! - `refit`: [`Bvh4`] and [`Bvh8`] refit to moved vertices in O(n),
+//!   topology kept, with an SAH degradation measure and a rebuild past a
+//!   limit (Embree's refit).
+//! - `persist`: [`Bvh4`] and [`Bvh8`] saved to and loaded from a versioned,
+//!   checksummed binary file without a build (read, or the leaf packs
+//!   memory-mapped with `load_mapped`); `mapped` holds the mapped array and
+//!   `wide_parts` the view of both widths that refit and persist share.
 
 mod bin_pass;
 mod binning;
@@ -68,7 +75,7 @@ pub use build::{BuildNode, BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;
 pub use bvh4::Bvh4;
 pub use bvh8::Bvh8;
-pub use persist::{PersistError, FORMAT_VERSION, MAGIC};
+pub use persist::{saved_kind, PersistError, FORMAT_VERSION, MAGIC};
 pub use refit::{RefitError, RefitReport, DEFAULT_MAX_DEGRADATION};
 pub use threaded::ThreadedBvh;
 

@@ -116,6 +116,11 @@ pub enum PersistError {
         /// What is wrong.
         reason: String,
     },
+    /// The structure has no saved form (only the wide BVHs have).
+    Unsupported {
+        /// The file it was to be saved to or loaded from.
+        path: PathBuf,
+    },
 }
 
 impl fmt::Display for PersistError {
@@ -128,6 +133,11 @@ impl fmt::Display for PersistError {
                 field,
                 reason,
             } => write!(f, "{}: offset {offset} ({field}): {reason}", path.display()),
+            PersistError::Unsupported { path } => write!(
+                f,
+                "{}: this structure has no saved form (bvh4 and bvh8 have)",
+                path.display()
+            ),
         }
     }
 }
@@ -136,7 +146,7 @@ impl std::error::Error for PersistError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             PersistError::Io { source, .. } => Some(source),
-            PersistError::Invalid { .. } => None,
+            PersistError::Invalid { .. } | PersistError::Unsupported { .. } => None,
         }
     }
 }
@@ -529,7 +539,7 @@ pub(crate) unsafe fn load<B: WideBvh>(
     let built_sah = f64::from_bits(u64_at(&meta, 32));
     let sah_cost = f64::from_bits(u64_at(&meta, 40));
 
-    let shape = check_tree::<B>(&mut nodes, root, form, units, &fault)?;
+    let shape = check_tree::<B>(&mut nodes, root, form, units, triangles, &fault)?;
     let leaves = if form == FORM_PACKED {
         Leaves::Packed(Tri4Leaves::from_packs(packs))
     } else {
@@ -581,14 +591,9 @@ fn foreign(fault: &Fault<'_>, magic: &[u8]) -> PersistError {
     )
 }
 
-/// Check the header against the file length, the tree type and the mesh;
-/// returns the payload's length.
-fn check_header<B: WideBvh>(
-    head: &[u8; HEADER],
-    len: u64,
-    mesh: &TriangleMesh,
-    fault: &Fault<'_>,
-) -> Result<usize, PersistError> {
+/// Check the magic bytes, version, byte-order mark, header checksum and
+/// reserved fields.
+fn check_preamble(head: &[u8; HEADER], fault: &Fault<'_>) -> Result<(), PersistError> {
     if head[..8] != MAGIC {
         return Err(foreign(fault, &head[..8]));
     }
@@ -625,6 +630,18 @@ fn check_header<B: WideBvh>(
             return Err(fault.at(at as u64, "reserved", "not zero"));
         }
     }
+    Ok(())
+}
+
+/// Check the header against the file length, the tree type and the mesh;
+/// returns the payload's length.
+fn check_header<B: WideBvh>(
+    head: &[u8; HEADER],
+    len: u64,
+    mesh: &TriangleMesh,
+    fault: &Fault<'_>,
+) -> Result<usize, PersistError> {
+    check_preamble(head, fault)?;
     let kind = u32_at(head, 16);
     if kind != kind_code(B::KIND) {
         return Err(fault.at(
@@ -745,6 +762,7 @@ fn check_tree<B: WideBvh>(
     root: Child4,
     form: u32,
     units: usize,
+    triangles: usize,
     fault: &Fault<'_>,
 ) -> Result<Shape, PersistError> {
     let n = nodes.len();
@@ -775,14 +793,23 @@ fn check_tree<B: WideBvh>(
         stack: 0,
     };
     if root.count > 0 {
-        if !leaf_ok(root) || n != 0 {
-            return Err(leaf_fault((HEADER) as u64, root));
+        if !leaf_ok(root) {
+            return Err(leaf_fault(HEADER as u64, root));
+        }
+        if n != 0 {
+            return Err(fault.at(
+                HEADER as u64,
+                "root reference",
+                format!("a root leaf with {n} inner nodes"),
+            ));
         }
         shape.leaves = 1;
         return Ok(shape);
     }
     if root == Child4::EMPTY || n == 0 {
-        if root == Child4::EMPTY && n == 0 && units == 0 {
+        // An empty tree (the builds give a root of count 0 and no nodes),
+        // which traversal skips for a mesh of no triangles, and only then.
+        if n == 0 && units == 0 && triangles == 0 {
             return Ok(shape);
         }
         return Err(fault.at(
@@ -978,3 +1005,39 @@ macro_rules! persist_methods {
 }
 persist_methods!(Bvh4);
 persist_methods!(Bvh8);
+
+/// The structure and triangle test a saved file holds, from its header
+/// (checked as far as the header goes: magic, version, byte order, header
+/// checksum).
+pub fn saved_kind(path: &Path) -> Result<(AccelKind, TestKind), PersistError> {
+    let fault = Fault(path);
+    let mut file = File::open(path).map_err(|e| fault.io(e))?;
+    let mut head = Vec::with_capacity(HEADER);
+    (&mut file)
+        .take(HEADER as u64)
+        .read_to_end(&mut head)
+        .map_err(|e| fault.io(e))?;
+    if head.len() >= 8 && head[..8] != MAGIC {
+        return Err(foreign(&fault, &head[..8]));
+    }
+    if head.len() < HEADER {
+        let len = head.len() as u64;
+        return Err(fault.at(
+            len,
+            "header",
+            format!("truncated: the header is {HEADER} bytes, the file has {len}"),
+        ));
+    }
+    let head: &[u8; HEADER] = head[..].try_into().expect("the header's length");
+    check_preamble(head, &fault)?;
+    let kind = match u32_at(head, 16) {
+        4 => AccelKind::Bvh4,
+        8 => AccelKind::Bvh8,
+        code => return Err(fault.at(16, "structure", kind_name(code))),
+    };
+    let test = u32_at(head, 20);
+    let test = *TestKind::ALL
+        .get(test as usize)
+        .ok_or_else(|| fault.at(20, "triangle test", test_name(test)))?;
+    Ok((kind, test))
+}

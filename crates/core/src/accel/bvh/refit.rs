@@ -27,10 +27,11 @@ use std::fmt;
 
 /// The SAH degradation past which [`Bvh8::refit_or_rebuild`] rebuilds
 /// when given no other limit: 1.5, the refit tree costing 50% more than
-/// the built one. A refit of the full dragon costs a few percent of a
-/// build (BENCHMARKS.md), so a rebuild pays back within a frame or two of
-/// rays once the tree is 1.5× worse; a tree traced with few rays per
-/// deformation can afford a higher limit (2 is common).
+/// the built one. The SAH cost estimates the traversal work per ray, so
+/// past it rays may trace up to 1.5× slower; a rebuild costs about ten
+/// refits on the full dragon (BENCHMARKS.md), which such a slowdown repays
+/// once the rays traced per deformation take about two rebuilds' time. A
+/// caller tracing few rays per deformation can pass 2 (common in practice).
 pub const DEFAULT_MAX_DEGRADATION: f64 = 1.5;
 
 /// What a refit found.
@@ -74,6 +75,8 @@ pub enum RefitError {
         /// Vertices in the mesh.
         vertices: usize,
     },
+    /// The structure has no refit (only the wide BVHs do).
+    Unsupported,
 }
 
 impl fmt::Display for RefitError {
@@ -90,6 +93,10 @@ impl fmt::Display for RefitError {
             } => write!(
                 f,
                 "refit: triangle {triangle} names vertex {index}, the mesh has {vertices}"
+            ),
+            RefitError::Unsupported => write!(
+                f,
+                "refit: this structure cannot be refit (bvh4 and bvh8 can); build it again"
             ),
         }
     }
@@ -152,22 +159,30 @@ pub(super) fn check_mesh(mesh: &TriangleMesh, tree: usize) -> Result<(), RefitEr
         });
     }
     let vertices = mesh.positions.len();
-    let bad = mesh
+    // The largest index, a reduction the compiler vectorises; the bad
+    // triangle is looked for only when there is one.
+    let largest = mesh
         .indices
-        .par_iter()
-        .with_min_len(4096)
-        .position_first(|t| t.iter().any(|&i| i as usize >= vertices));
-    match bad {
-        None => Ok(()),
-        Some(triangle) => Err(RefitError::VertexIndex {
-            triangle,
-            index: *mesh.indices[triangle]
-                .iter()
-                .find(|&&i| i as usize >= vertices)
-                .expect("a bad index"),
-            vertices,
-        }),
+        .par_chunks(1 << 14)
+        .map(|c| c.iter().fold(0u32, |m, t| m.max(t[0]).max(t[1]).max(t[2])))
+        .max();
+    if largest.is_none_or(|m| (m as usize) < vertices) {
+        return Ok(());
     }
+    let (triangle, t) = mesh
+        .indices
+        .iter()
+        .enumerate()
+        .find(|(_, t)| t.iter().any(|&i| i as usize >= vertices))
+        .expect("a triangle holds the largest index");
+    Err(RefitError::VertexIndex {
+        triangle,
+        index: *t
+            .iter()
+            .find(|&&i| i as usize >= vertices)
+            .expect("a bad index"),
+        vertices,
+    })
 }
 
 /// The leaves' triangles recomputed from `mesh` (in parallel), then the
@@ -247,7 +262,7 @@ fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &Trian
         let b = leaf_bounds(p.root);
         sah += area(&b) * p.root.count as f64;
         b
-    } else if p.root == Child4::EMPTY {
+    } else if p.root == Child4::EMPTY || p.nodes.is_empty() {
         Aabb::EMPTY
     } else {
         bounds[p.root.index as usize]
