@@ -12,6 +12,7 @@
 //! reached, boxes entered beyond the farthest kept hit are skipped.
 //! [`ray_hits_brute`] is the `f64` reference of the tests.
 
+use super::batch::answer_each;
 use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::accel::{Accel, BATCH_GRAIN};
 use crate::hit::Hit;
@@ -248,11 +249,7 @@ impl SurfaceBvh {
 
     /// [`SurfaceBvh::count_hits`] for many rays, in parallel.
     pub fn count_hits_batch(&self, rays: &[Ray], out: &mut [u32]) {
-        assert_eq!(rays.len(), out.len(), "one result per ray");
-        rays.par_iter()
-            .zip(out.par_iter_mut())
-            .with_min_len(BATCH_GRAIN)
-            .for_each(|(r, o)| *o = self.count_hits(r));
+        answer_each(rays, out, |r| self.count_hits(r));
     }
 
     /// [`SurfaceBvh::ray_hits`] for many rays, in parallel: one sorted list

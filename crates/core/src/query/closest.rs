@@ -13,12 +13,12 @@
 //! through any [`Accel`]'s regions, and [`closest_point_brute`] tests every
 //! triangle in `f64` (the reference of the tests).
 
+use super::batch::answer_each;
 use super::exact::Triangle64;
 use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
-use crate::accel::{Accel, BATCH_GRAIN};
+use crate::accel::Accel;
 use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
 /// The point of a surface closest to a query point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -236,23 +236,13 @@ impl SurfaceBvh {
         max_distance: f32,
         out: &mut [Option<ClosestPoint>],
     ) {
-        assert_eq!(points.len(), out.len(), "one result per point");
-        points
-            .par_iter()
-            .zip(out.par_iter_mut())
-            .with_min_len(BATCH_GRAIN)
-            .for_each(|(p, o)| *o = self.closest_point(*p, max_distance));
+        answer_each(points, out, |p| self.closest_point(*p, max_distance));
     }
 
     /// [`SurfaceBvh::distance`] for many points, in parallel over the rayon
     /// pool.
     pub fn distances(&self, points: &[Vec3], out: &mut [f32]) {
-        assert_eq!(points.len(), out.len(), "one result per point");
-        points
-            .par_iter()
-            .zip(out.par_iter_mut())
-            .with_min_len(BATCH_GRAIN)
-            .for_each(|(p, o)| *o = self.distance(*p));
+        answer_each(points, out, |p| self.distance(*p));
     }
 }
 

@@ -28,6 +28,7 @@
 //! [`crate::accel::AccelKind`].
 
 pub mod all_hits;
+mod batch;
 pub mod closest;
 pub mod exact;
 pub mod frustum;

@@ -31,8 +31,8 @@
 //! as `(ρ / r)⁴`; at β = 2 the tests find it below 1% of a unit winding
 //! number, far from the ½ threshold.
 
+use super::batch::answer_each;
 use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
-use crate::accel::BATCH_GRAIN;
 use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -304,35 +304,20 @@ impl SurfaceBvh {
 
     /// [`SurfaceBvh::winding_number`] for many points, in parallel.
     pub fn winding_numbers(&self, points: &[Vec3], out: &mut [f32]) {
-        assert_eq!(points.len(), out.len(), "one result per point");
         self.moments();
-        points
-            .par_iter()
-            .zip(out.par_iter_mut())
-            .with_min_len(BATCH_GRAIN)
-            .for_each(|(p, o)| *o = self.winding_number(*p));
+        answer_each(points, out, |p| self.winding_number(*p));
     }
 
     /// [`SurfaceBvh::is_inside`] for many points, in parallel.
     pub fn inside_batch(&self, points: &[Vec3], out: &mut [bool]) {
-        assert_eq!(points.len(), out.len(), "one result per point");
         self.moments();
-        points
-            .par_iter()
-            .zip(out.par_iter_mut())
-            .with_min_len(BATCH_GRAIN)
-            .for_each(|(p, o)| *o = self.is_inside(*p));
+        answer_each(points, out, |p| self.is_inside(*p));
     }
 
     /// [`SurfaceBvh::signed_distance`] for many points, in parallel.
     pub fn signed_distances(&self, points: &[Vec3], out: &mut [f32]) {
-        assert_eq!(points.len(), out.len(), "one result per point");
         self.moments();
-        points
-            .par_iter()
-            .zip(out.par_iter_mut())
-            .with_min_len(BATCH_GRAIN)
-            .for_each(|(p, o)| *o = self.signed_distance(*p));
+        answer_each(points, out, |p| self.signed_distance(*p));
     }
 }
 
