@@ -1,10 +1,11 @@
 //! raykit core: rays, axis-aligned boxes, indexed triangle meshes, the three
 //! ray/triangle tests and the acceleration structures that are generic over them.
 //!
-//! The layout follows the papers summarised in `PAPERS.md`: the triangle tests
-//! of paper 000 (Plücker coordinates, Wald's projection) and paper 001
-//! (Möller–Trumbore), the binned-SAH BVH and the threaded (escape-index) BVH
-//! of paper 001.
+//! The triangle tests are Möller–Trumbore (1997), the Plücker test (Jones 2000)
+//! and Wald's projection (Wald 2004); the structures include the binned-SAH BVH
+//! (Wald 2007), the threaded (escape-index) BVH (Smits 1998) and kd-trees
+//! traversed with a per-ray stack, ropes (Popov et al. 2007) or restart and
+//! backtrack (Foley & Sugerman 2005).
 
 pub mod aabb;
 pub mod accel;

@@ -1,5 +1,5 @@
 //! Punctual lights: point, spot and directional, as in glTF's
-//! `KHR_lights_punctual` and the Phong lighting of papers 000 and 001.
+//! `KHR_lights_punctual`, with Phong (1975) lighting.
 
 use glam::Vec3;
 

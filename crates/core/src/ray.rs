@@ -10,8 +10,8 @@ use glam::Vec3;
 /// The direction need not be unit length: `t` is measured in units of `dir`.
 ///
 /// The layout is C's, fields in this order (44 bytes), so that the packet
-/// path can move eight rays into its lanes with vector loads (issue 8,
-/// `accel/bvh/packet_gather.rs`).
+/// path can move eight rays into its lanes with vector loads
+/// (`accel/bvh/packet_gather.rs`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub struct Ray {
@@ -54,8 +54,7 @@ impl Ray {
     /// origin or direction is not finite. A NaN `tfar` fails every box and
     /// triangle test, so such a ray hits nothing; without it, a NaN from
     /// its slab arithmetic is dropped by the `min`/`max` that drop `0·∞`,
-    /// and it entered the inverted boxes of the wide BVHs' unused slots
-    /// (issue 8, step 4e).
+    /// and it entered the inverted boxes of the wide BVHs' unused slots.
     #[inline(always)]
     pub(crate) fn traversal_tfar(&self) -> f32 {
         if self.origin.is_finite() && self.dir.is_finite() {

@@ -1,4 +1,4 @@
-//! Paper 002's game queries (frustum culling, box and ball overlap) through
+//! Kim's (2013) game queries (frustum culling, box and ball overlap) through
 //! every acceleration structure give exactly the brute-force answers: the
 //! same triangles and the same parts, on random soups, grids whose vertices
 //! sit on the query boxes' faces, and meshes of several parts.

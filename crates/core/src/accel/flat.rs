@@ -1,5 +1,5 @@
 //! Structures as flat arrays of 32-bit words, for devices that trace them
-//! with kernels of their own (the GPU backend of issue 9, `crates/gpu`).
+//! with kernels of their own (the GPU backend, `crates/gpu`).
 //!
 //! The arrays are exactly what the CPU traverses — the same nodes, the same
 //! triangle order, the same precomputed triangle records — so a device that
@@ -21,7 +21,7 @@ pub struct FlatTriangles {
     pub prims: Vec<u32>,
 }
 
-/// Paper 000's kd-tree as flat arrays: the 8-byte nodes (two words each:
+/// The kd-tree as flat arrays: the 8-byte nodes (two words each:
 /// leaf bit, 2 axis bits and 28-bit first-child offset; split bits or leaf
 /// count), the triangle-index list, the root cell and the triangles.
 #[derive(Clone, Debug)]
@@ -40,7 +40,7 @@ pub struct FlatKdTree {
     pub tris: FlatTriangles,
 }
 
-/// Paper 001's threaded BVH as flat arrays: eight words per node in
+/// The threaded BVH (Smits 1998) as flat arrays: eight words per node in
 /// pre-order (padded box min and max as `f32` bits, escape index, leaf
 /// range with the count in the top 5 bits and the first triangle below,
 /// count 0 for inner nodes) and the triangles.

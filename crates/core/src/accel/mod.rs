@@ -4,8 +4,8 @@
 //! - [`BruteForce`]: every ray against every triangle, the reference.
 //! - [`Bvh2`]: binary BVH, binned-SAH build, stack traversal nearest child first.
 //! - [`Bvh4`]: 4-wide BVH collapsed from the binary build, SSE box tests of
-//!   four children at once (issue 8).
-//! - [`ThreadedBvh`]: paper 001's BVH in pre-order with escape indices,
+//!   four children at once.
+//! - [`ThreadedBvh`]: BVH in pre-order with escape indices (Smits 1998),
 //!   traversed without a stack.
 
 use crate::aabb::Aabb;
@@ -84,7 +84,7 @@ pub trait Accel: Send + Sync {
     /// cells (kd-trees) may pass the cells instead: it suffices that the
     /// regions of the leaves storing a triangle together cover it, and that a
     /// parent's region contains its children's. The frustum, box and sphere
-    /// queries of [`crate::query`] (paper 002's game queries) are built on it.
+    /// queries of [`crate::query`] (the game queries of Kim 2013) are built on it.
     fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32]));
 
     /// Save the built structure to `path`, `mesh` being the mesh it was

@@ -87,10 +87,10 @@ impl AccelKind {
                 "8-wide BVH collapsed from the binary build, AVX box tests (SSE/scalar fallback), ordered stack traversal"
             }
             AccelKind::ThreadedBvh => {
-                "paper 001: BVH nodes in pre-order with escape indices, stackless traversal"
+                "BVH nodes in pre-order with escape indices, stackless traversal (Smits 1998)"
             }
             AccelKind::KdStack => {
-                "paper 000: kd-tree (--kd-split), 8-byte nodes, per-ray stack traversal"
+                "kd-tree (--kd-split), 8-byte nodes, per-ray stack traversal"
             }
             AccelKind::KdRopes => {
                 "kd-tree with ropes and leaf boxes, stackless (Popov et al. 2007)"

@@ -1,4 +1,4 @@
-//! Exact triangle tests in f64 for the game queries of paper 002: does a
+//! Exact triangle tests in f64 for the game queries of Kim 2013: does a
 //! triangle share at least one point with a convex polytope (a frustum), an
 //! axis-aligned box, or a ball? Touching the boundary counts as overlapping.
 //!

@@ -1,4 +1,4 @@
-//! Planes and view frustums in f64, for paper 002's frustum culling.
+//! Planes and view frustums in f64, for frustum culling as in Kim 2013.
 
 use crate::camera::Camera;
 use glam::DVec3;
@@ -37,7 +37,7 @@ impl Plane {
 
 /// A view frustum: the convex region inside six planes (near, far, left,
 /// right, bottom, top), the volume a game tests its objects against to cull
-/// those that cannot be seen (paper 002's frustum culling on kd-trees).
+/// those that cannot be seen (frustum culling on kd-trees, Kim 2013).
 ///
 /// Any six planes are accepted ([`Frustum::from_planes`]); the queries only
 /// use the intersection of their insides, so the region may also be

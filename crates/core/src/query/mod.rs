@@ -1,7 +1,8 @@
 //! Spatial queries for games on every acceleration structure: which
 //! triangles or objects lie at least partly inside a view frustum, a box or a
-//! ball. Paper 002 ("Split-plane heuristic for kd-trees in 3D games") builds
-//! its kd-trees for exactly these: frustum culling and collision detection.
+//! ball. Kim (2013, "Tree build heuristics for spatial partitioning trees of
+//! 3D games") builds its kd-trees for exactly these: frustum culling and
+//! collision detection.
 //!
 //! - [`frustum`]: [`Plane`] and [`Frustum`] (from a [`crate::Camera`] or six
 //!   planes).
@@ -51,37 +52,37 @@ use crate::aabb::Aabb;
 use crate::accel::Accel;
 use crate::mesh::TriangleMesh;
 
-/// Frustum culling (paper 002): the triangles of `mesh` at least partly
+/// Frustum culling (Kim 2013): the triangles of `mesh` at least partly
 /// inside `frustum`, sorted, through `accel` built over `mesh`.
 pub fn triangles_in_frustum(accel: &dyn Accel, mesh: &TriangleMesh, frustum: &Frustum) -> Vec<u32> {
     triangles_overlapping(accel, mesh, frustum).ids
 }
 
-/// Box overlap query (paper 002's collision queries): the triangles of
+/// Box overlap query (the collision queries of Kim 2013): the triangles of
 /// `mesh` sharing a point with the closed box `query`, sorted.
 pub fn triangles_in_box(accel: &dyn Accel, mesh: &TriangleMesh, query: &Aabb) -> Vec<u32> {
     triangles_overlapping(accel, mesh, query).ids
 }
 
-/// Ball overlap query (paper 002's collision queries): the triangles of
+/// Ball overlap query (the collision queries of Kim 2013): the triangles of
 /// `mesh` within `sphere.radius` of its centre, sorted.
 pub fn triangles_in_sphere(accel: &dyn Accel, mesh: &TriangleMesh, sphere: &Sphere) -> Vec<u32> {
     triangles_overlapping(accel, mesh, sphere).ids
 }
 
-/// Object-level frustum culling (paper 002): the parts of `mesh` with a
+/// Object-level frustum culling (Kim 2013): the parts of `mesh` with a
 /// triangle at least partly inside `frustum`, sorted.
 pub fn parts_in_frustum(accel: &dyn Accel, mesh: &TriangleMesh, frustum: &Frustum) -> Vec<u32> {
     parts_overlapping(accel, mesh, frustum).ids
 }
 
-/// Object-level box query (paper 002): the parts of `mesh` with a triangle
+/// Object-level box query (Kim 2013): the parts of `mesh` with a triangle
 /// sharing a point with the box `query`, sorted.
 pub fn parts_in_box(accel: &dyn Accel, mesh: &TriangleMesh, query: &Aabb) -> Vec<u32> {
     parts_overlapping(accel, mesh, query).ids
 }
 
-/// Object-level ball query (paper 002): the parts of `mesh` with a triangle
+/// Object-level ball query (Kim 2013): the parts of `mesh` with a triangle
 /// within `sphere.radius` of its centre, sorted.
 pub fn parts_in_sphere(accel: &dyn Accel, mesh: &TriangleMesh, sphere: &Sphere) -> Vec<u32> {
     parts_overlapping(accel, mesh, sphere).ids

@@ -1,4 +1,4 @@
-//! The query shapes of paper 002's game queries (frustum, box, ball) behind
+//! The query shapes of Kim's (2013) game queries (frustum, box, ball) behind
 //! one trait: a conservative test against a tree region, an exact one
 //! against a triangle.
 
@@ -26,7 +26,7 @@ pub trait QueryShape {
     fn overlaps_triangle(&self, tri: &Triangle64) -> bool;
 }
 
-/// A ball (solid sphere) for proximity and collision queries (paper 002).
+/// A ball (solid sphere) for proximity and collision queries (Kim 2013).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
     /// Centre.

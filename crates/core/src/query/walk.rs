@@ -8,7 +8,7 @@ use crate::accel::Accel;
 use crate::mesh::TriangleMesh;
 use serde::Serialize;
 
-/// Work done by one tree query, for timing experiments such as paper 002's
+/// Work done by one tree query, for timing experiments such as Kim's (2013)
 /// frustum queries per split heuristic.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct QueryStats {
@@ -100,7 +100,7 @@ fn walk<S: QueryShape + ?Sized>(
 }
 
 /// The triangles of `mesh` sharing at least one point with `shape`, found
-/// through `accel` (which must have been built over `mesh`): paper 002's
+/// through `accel` (which must have been built over `mesh`): Kim's (2013)
 /// tree queries for frustum culling and collision, in the general form.
 pub fn triangles_overlapping<S: QueryShape + ?Sized>(
     accel: &dyn Accel,
@@ -118,7 +118,7 @@ pub fn triangles_overlapping<S: QueryShape + ?Sized>(
 }
 
 /// The parts (objects, [`TriangleMesh::part_of`]) having at least one
-/// triangle that shares a point with `shape`: paper 002's "which objects
+/// triangle that shares a point with `shape`: Kim's (2013) "which objects
 /// lie at least partly inside the view frustum". Once a part is found, its
 /// other triangles are not tested.
 pub fn parts_overlapping<S: QueryShape + ?Sized>(

@@ -1,4 +1,4 @@
-//! The one predicate of paper 002's T-junction search, "the vertex lies on
+//! The one predicate of Kim's (2013) T-junction search, "the vertex lies on
 //! the edge: distance to the edge line ≈ 0 and within the segment", in f64,
 //! shared by the naive and the fast finders (so they agree exactly) and by the
 //! classification of degenerate triangles.

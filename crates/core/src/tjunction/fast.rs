@@ -1,4 +1,4 @@
-//! The fast T-junction finder: the naive search of paper 002 with a uniform
+//! The fast T-junction finder: the naive search of Kim 2013 with a uniform
 //! grid (spatial hashing) over the points, so each edge is tested only
 //! against the points near it.
 //!

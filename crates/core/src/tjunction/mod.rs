@@ -1,10 +1,10 @@
-//! T-junction elimination (paper 002, "Split-plane heuristic for kd-trees in
-//! 3D games", section on T-junctions).
+//! T-junction elimination (Kim 2013, "Tree build heuristics for spatial
+//! partitioning trees of 3D games", section on T-junctions).
 //!
 //! Cutting polygons along split planes (as the game-heuristic kd-tree build
 //! does) leaves vertices lying on the edges of neighbouring polygons that were
 //! not cut: **T-junctions**. They cause cracks and lighting seams, because the
-//! two sides of the edge are no longer made of the same segments. Paper 002
+//! two sides of the edge are no longer made of the same segments. Kim (2013)
 //! removes them by finding, for every polygon edge, every other vertex lying on
 //! it, inserting a copy of that vertex into the edge and re-tessellating the
 //! polygon. Its naive form tests every edge against every vertex, O(n²).
@@ -65,7 +65,7 @@
 //!
 //! Two finders give identical answers (same [`EdgeVertex`] list in the
 //! canonical order, because both use the same predicate on the same points):
-//! [`find_naive`] (paper 002's reference, every edge against every point,
+//! [`find_naive`] (Kim's (2013) reference, every edge against every point,
 //! refusing inputs over [`NAIVE_MAX_PAIRS`]) and [`find_fast`] (a uniform
 //! grid over the points; each edge visits only the cells along it).
 
@@ -82,7 +82,7 @@ mod retriangulate;
 
 pub use naive::NAIVE_MAX_PAIRS;
 
-/// Tolerances of the T-junction test (paper 002: "distance to the edge line
+/// Tolerances of the T-junction test (Kim 2013: "distance to the edge line
 /// ≈ 0 and within the segment").
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct TJunctionOptions {
@@ -111,7 +111,7 @@ impl Default for TJunctionOptions {
 }
 
 /// A T-junction: `vertex` lies inside edge `edge` of triangle `tri`
-/// (paper 002). Lists are in the canonical order `(tri, edge, t, vertex)`.
+/// (Kim 2013). Lists are in the canonical order `(tri, edge, t, vertex)`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct EdgeVertex {
     /// Triangle index in the mesh.
@@ -124,7 +124,7 @@ pub struct EdgeVertex {
     pub t: f64,
 }
 
-/// Which finder [`eliminate`] uses (paper 002's naive O(n²) one or ours).
+/// Which finder [`eliminate`] uses (Kim's (2013) naive O(n²) one or ours).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
@@ -145,7 +145,7 @@ impl Method {
     }
 }
 
-/// Why T-junction elimination refused its input (paper 002's naive finder is
+/// Why T-junction elimination refused its input (Kim's (2013) naive finder is
 /// O(n²), so it has a size limit).
 #[derive(Clone, Debug, PartialEq)]
 pub enum TJunctionError {
@@ -181,7 +181,7 @@ impl fmt::Display for TJunctionError {
 
 impl std::error::Error for TJunctionError {}
 
-/// What [`eliminate`] did: paper 002's measured quantities (T-junctions,
+/// What [`eliminate`] did: the quantities Kim (2013) measures (T-junctions,
 /// triangles, elimination time) and what the rounds did.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TJunctionReport {
@@ -271,7 +271,7 @@ fn find_prepared(
     }
 }
 
-/// Paper 002's naive T-junction finder: every edge of every non-degenerate
+/// Kim's (2013) naive T-junction finder: every edge of every non-degenerate
 /// triangle against every point, O(triangles × points). The reference for
 /// [`find_fast`]; refuses meshes where triangles × points exceeds
 /// [`NAIVE_MAX_PAIRS`]. Result in the canonical order `(tri, edge, t, vertex)`.
@@ -283,7 +283,7 @@ pub fn find_naive(
     naive::find(mesh, &prepare(mesh, opts))
 }
 
-/// The fast T-junction finder: the same answers as [`find_naive`] (paper 002's
+/// The fast T-junction finder: the same answers as [`find_naive`] (Kim's (2013)
 /// definition, same predicate, same canonical order) from a uniform grid over
 /// the points, each edge testing only the points in the cells it passes
 /// through; near-linear in the mesh size and parallel over triangles (rayon).
@@ -295,7 +295,7 @@ pub fn find_fast(
     Ok(fast::find(mesh, &prepare(mesh, opts)))
 }
 
-/// Paper 002's T-junction elimination: find the T-junctions with `method`,
+/// Kim's (2013) T-junction elimination: find the T-junctions with `method`,
 /// insert each point into its edge and re-triangulate (see the module docs),
 /// repeating until a find pass finds nothing or `max_rounds` is reached.
 /// Returns the new mesh (same vertex arrays, materials and parts; new

@@ -1,4 +1,4 @@
-//! Paper 002's naive T-junction search: "for each polygon edge, find every
+//! Kim's (2013) naive T-junction search: "for each polygon edge, find every
 //! other vertex lying on it" by testing every edge against every point,
 //! O(triangles × points). It is the reference the fast finder is checked
 //! against, so it is kept as plain as the definition (parallel over
@@ -9,7 +9,7 @@ use super::{EdgeVertex, Prepared, TJunctionError};
 use crate::mesh::TriangleMesh;
 use rayon::prelude::*;
 
-/// Largest number of (kept triangle × distinct point) pairs paper 002's
+/// Largest number of (kept triangle × distinct point) pairs the
 /// naive finder accepts: 2·10⁹, i.e. 6·10⁹ edge tests, about 12 s on one
 /// core (1.2·10⁹ pairs took 7 s in release on the development machine).
 /// Beyond it, [`find_naive`](super::find_naive) returns

@@ -1,5 +1,5 @@
 //! Welding by exact position: the distinct points a T-junction search tests
-//! against the edges (paper 002 tests "every other vertex"; vertices at one
+//! against the edges (Kim 2013 tests "every other vertex"; vertices at one
 //! position are one vertex for this purpose).
 
 use crate::mesh::TriangleMesh;

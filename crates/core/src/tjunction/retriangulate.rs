@@ -1,4 +1,4 @@
-//! Paper 002's re-tessellation step: insert the T-junction points into the
+//! Kim's (2013) re-tessellation step: insert the T-junction points into the
 //! edges of each triangle and triangulate the convex polygon they form.
 //!
 //! The polygon has three straight chains (one per original edge) and no

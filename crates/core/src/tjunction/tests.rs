@@ -1,5 +1,5 @@
 //! Unit tests of the public T-junction API on hand-made meshes with known
-//! answers (paper 002's definition).
+//! answers (Kim's (2013) definition).
 
 use super::*;
 use glam::Vec3;

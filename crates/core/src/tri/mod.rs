@@ -4,9 +4,9 @@
 //!
 //! | test | per triangle | per ray | shipped: slips on closed meshes | paper's/textbook form |
 //! |---|---|---|---|---|
-//! | [`Moller`]: Möller–Trumbore 1997, paper 001 | 44 bytes | 4 bytes | 0 | 2.8% of edge rays, 9.4% of corner rays |
-//! | [`Plucker`]: Plücker sign test, paper 000 | 112 bytes | 32 bytes | 0 up to 10^2 sizes from the origin; 6 of ~90,000 at 10^3-10^4 | 0 inside shared edges, 0.25% of corner rays |
-//! | [`Projection`]: Wald 2004, the comparison of paper 000 | 48 bytes | 0 | 0 up to 10^3 sizes from the origin; 3 of ~90,000 at 10^4 | 6.9% of edge rays, 6.2% of corner rays |
+//! | [`Moller`]: Möller–Trumbore 1997 | 44 bytes | 4 bytes | 0 | 2.8% of edge rays, 9.4% of corner rays |
+//! | [`Plucker`]: Plücker sign test, Jones 2000 | 112 bytes | 32 bytes | 0 up to 10^2 sizes from the origin; 6 of ~90,000 at 10^3-10^4 | 0 inside shared edges, 0.25% of corner rays |
+//! | [`Projection`]: Wald 2004 | 48 bytes | 0 | 0 up to 10^3 sizes from the origin; 3 of ~90,000 at 10^4 | 6.9% of edge rays, 6.2% of corner rays |
 //!
 //! (Rays aimed exactly at shared-edge points and shared corners of closed
 //! meshes placed 0 to 10^4 mesh sizes from the origin, see
@@ -134,8 +134,8 @@ impl TestKind {
     /// One-line description for `raykit info tests`.
     pub fn description(self) -> &'static str {
         match self {
-            TestKind::Moller => "Möller–Trumbore 1997 (paper 001): edge vectors, determinant and barycentrics per ray",
-            TestKind::Plucker => "Plücker coordinates (paper 000): sign test on precomputed edge lines, then distance; watertight on shared edges",
+            TestKind::Moller => "Möller–Trumbore 1997: edge vectors, determinant and barycentrics per ray",
+            TestKind::Plucker => "Plücker coordinates (Jones 2000): sign test on precomputed edge lines, then distance; watertight on shared edges",
             TestKind::Projection => "Wald's projection test (2004): precomputed projection onto the dominant axis plane",
         }
     }

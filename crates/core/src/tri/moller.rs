@@ -1,6 +1,6 @@
 //! Möller–Trumbore ray/triangle test (T. Möller, B. Trumbore, "Fast, minimum
-//! storage ray/triangle intersection", 1997), the test of paper 001, made
-//! watertight by a conservative tolerance.
+//! storage ray/triangle intersection", 1997), made watertight by a conservative
+//! tolerance.
 //!
 //! # Data
 //!
@@ -104,7 +104,7 @@ const K_BARY: f32 = 64.0;
 /// the packet path that forms eight of them at once (`accel/bvh/packet.rs`).
 pub(crate) const PREPARE_FACTOR: f32 = K_BARY * U;
 
-/// Möller–Trumbore (Möller & Trumbore 1997, paper 001) with a conservative
+/// Möller–Trumbore (Möller & Trumbore 1997) with a conservative
 /// tolerance: per triangle the first corner, the two edge vectors and their
 /// max norms (11 floats, 44 bytes); per ray the tolerance scale
 /// `64u · max|d_i|`.

@@ -1,8 +1,8 @@
-//! Plücker-coordinate ray/triangle test of paper 000 (section 5.1, eqs.
-//! (1)-(15)): a sign test of the ray against the three precomputed edge lines
-//! first, distance and barycentrics second; shadow rays stop after the sign
-//! test and the distance check; the three signs are combined without a branch
-//! per edge.
+//! Plücker-coordinate ray/triangle test (Jones 2000, after Shoemake's Plücker
+//! coordinates): a sign test of the ray against the three precomputed edge
+//! lines first, distance and barycentrics second; shadow rays stop after the
+//! sign test and the distance check; the three signs are combined without a
+//! branch per edge.
 //!
 //! # Data
 //!
@@ -18,20 +18,20 @@
 //!   `(d, o × d)` (the moment computed in `f64`, rounded once), `|d|_1`, and
 //!   the moment's share of the tolerance, `32u · |o × d|_1`.
 //!
-//! Why not the paper's compact record (9 floats + 3 ints: the normal reduced
-//! to two components along its dominant axis, projected vertex and edge
-//! terms, an axis-aligned flag)? It normalises every triangle by its own
-//! dominant normal component, so the two triangles sharing an edge no longer
-//! hold exactly negated edge data, and exact negation is what makes the test
-//! watertight. The world-frame edge lines keep it; the power-of-two scale
-//! depends on `|q - p|` only and is exact, so it keeps it too while letting
-//! one tolerance coefficient serve long and short edges alike. The normal and
-//! corner (instead of the paper's plane offset `n·a`) make `t = n·(a - o) /
+//! Why not the compact record of GPU kd-tree tracers (9 floats + 3 ints: the
+//! normal reduced to two components along its dominant axis, projected vertex
+//! and edge terms, an axis-aligned flag)? It normalises every triangle by its
+//! own dominant normal component, so the two triangles sharing an edge no
+//! longer hold exactly negated edge data, and exact negation is what makes the
+//! test watertight. The world-frame edge lines keep it; the power-of-two scale
+//! depends on `|q - p|` only and is exact, so it keeps it too while letting one
+//! tolerance coefficient serve long and short edges alike. The normal and
+//! corner (instead of that record's plane offset `n·a`) make `t = n·(a - o) /
 //! n·d` relative to the triangle, precise far from the world origin.
 //!
 //! # Hit convention
 //!
-//! Side `i` is the permuted inner product `d·M_i + e_i·(o × d)` (eq. (5)).
+//! Side `i` is the permuted inner product `d·M_i + e_i·(o × d)`.
 //! Stage 1: the ray passes the triangle when all three sides are `>= -eps`
 //! or all are `<= eps` (both faces hit), combined with bit operations on
 //! three comparisons each, so a NaN side never passes. Stage 2: `n·d` must
@@ -53,7 +53,7 @@
 //! `|q - p|` only, and the side is evaluated in the same order. Its side is
 //! therefore exactly the negated value, so for a ray through the shared edge
 //! one of the two triangles sees that side `>= 0` and the other `<= 0`, and
-//! (away from the other edges) one of them accepts: the paper's test
+//! (away from the other edges) one of them accepts: the plain test
 //! ([`Plucker::intersect_strict`], no tolerance) never lets a ray through the
 //! inside of a shared edge. Measured in `tests/triangle_tests.rs` on closed
 //! meshes (icospheres, a 12-triangle cube, tori, randomly placed up to 10^4
@@ -65,7 +65,7 @@
 //! Shared corners: the sides of the different edges around a corner are
 //! rounded independently, and a ray through the corner makes all of them
 //! nearly zero, so they can all come out with the sign that every triangle
-//! of the fan rejects. Measured for the paper's test: 99 of 39,587 rays aimed
+//! of the fan rejects. Measured for the plain test: 99 of 39,587 rays aimed
 //! exactly at shared corners slipped (0.25%; 0 of 5,318 on the icosphere at
 //! the origin, up to 22 of 1,421 = 1.5% on the cube 10^3 sizes away).
 //!
@@ -111,7 +111,7 @@
 //! `u (R + |o|) / cos` as a distance in the plane, independent of the
 //! triangle's shape (each edge is its own line) but growing with the
 //! distance from the world origin, unlike Möller's. Against the `f64`
-//! reference on 2,000,000 random pairs, the paper's test disagrees on
+//! reference on 2,000,000 random pairs, the plain test disagrees on
 //! hit/miss only within `1.3 u (R + |o| + size) / cos` of the boundary; `t`
 //! (relative to the corner `a`) is within `1e-5 t + 0.9` such units.
 
@@ -128,7 +128,7 @@ const U: f32 = f32::EPSILON * 0.5;
 /// tolerance itself.
 const K_SIDE: f32 = 16.0;
 
-/// The Plücker test of paper 000 (section 5.1): per triangle the Plücker
+/// The Plücker test (Jones 2000): per triangle the Plücker
 /// coordinates of its three edge lines, per ray the ray's Plücker
 /// coordinates; branch-free sign test first, distance and barycentrics
 /// second; watertight on shared edges and corners by a conservative
@@ -141,7 +141,7 @@ pub struct Plucker;
 /// `c→a`, each scaled by a power of two so that `max|e_i|` lies in `[1, 2)`,
 /// the normal and first corner for the distance, the two scales that turn
 /// sides back into barycentrics, and the triangle's tolerance coefficient
-/// (paper 000, section 5.1, eqs. (1)-(5)).
+/// (Jones 2000).
 #[derive(Clone, Copy, Debug)]
 pub struct PluckerTri {
     /// Edge directions `e_i = (v_{i+1} - v_i) / 2^k_i`.
@@ -165,9 +165,9 @@ pub struct PluckerTri {
     cap: f32,
 }
 
-/// Per-ray data for [`Plucker`] (32 bytes): the ray's Plücker coordinates
-/// `(d, o × d)` (paper 000, eqs. (1)-(4); the moment computed in `f64` and
-/// rounded once), `|d|_1` and the moment's share of the side tolerance.
+/// Per-ray data for [`Plucker`] (32 bytes): the ray's Plücker coordinates `(d,
+/// o × d)` (the moment computed in `f64` and rounded once), `|d|_1` and the
+/// moment's share of the side tolerance.
 #[derive(Clone, Copy, Debug)]
 pub struct PluckerRay {
     /// Direction `d`.
@@ -190,7 +190,7 @@ impl PluckerRay {
 
 impl PluckerTri {
     /// The three side values `d·M_i + e_i·(o × d)` (the permuted inner
-    /// products of paper 000, eq. (5)) for edges `a→b`, `b→c`, `c→a`: the ray
+    /// products of the Plücker test) for edges `a→b`, `b→c`, `c→a`: the ray
     /// passes through the triangle when all three have the same sign. Times
     /// the edges' scales `2^k_i` they are the barycentric weights of `c`, `a`
     /// and `b` times `n·d`.
@@ -268,10 +268,10 @@ fn test<const TOL: bool, const FULL: bool>(
 }
 
 impl Plucker {
-    /// The paper's test without the vertex tolerance: hit when the three
-    /// sides are all `>= 0` or all `<= 0` (paper 000, eq. (5)). Watertight on
-    /// shared edges, but rays through a shared vertex can slip (see the module
-    /// documentation); kept for comparison and measurement.
+    /// The plain sign test without the vertex tolerance: hit when the three
+    /// sides are all `>= 0` or all `<= 0`. Watertight on shared edges, but rays
+    /// through a shared vertex can slip (see the module documentation); kept
+    /// for comparison and measurement.
     #[inline]
     pub fn intersect_strict(
         tri: &PluckerTri,

@@ -1,6 +1,7 @@
 //! Wald's projection ray/triangle test (I. Wald, "Realtime Ray Tracing and
 //! Interactive Global Illumination", PhD thesis, 2004, section 7.1), the
-//! comparison test of paper 000, made watertight by a conservative tolerance.
+//! usual yardstick for the Plücker test, made watertight by a conservative
+//! tolerance.
 //!
 //! # Data
 //!
@@ -104,11 +105,10 @@ const U: f32 = f32::EPSILON * 0.5;
 /// `6u` times the magnitudes of their terms; 16 leaves room.
 const K_PROJ: f32 = 16.0;
 
-/// Wald's projection test (Wald 2004, section 7.1; the comparison of paper
-/// 000): the triangle's plane as `x_k + n_u x_u + n_v x_v = n_d` along the
-/// dominant normal axis `k`, and the barycentrics as 2D edge equations in the
-/// `(u, v)` projection plane; watertight by a conservative tolerance (see the
-/// module documentation).
+/// Wald's projection test (Wald 2004, section 7.1): the triangle's plane as
+/// `x_k + n_u x_u + n_v x_v = n_d` along the dominant normal axis `k`, and the
+/// barycentrics as 2D edge equations in the `(u, v)` projection plane;
+/// watertight by a conservative tolerance (see the module documentation).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Projection;
 

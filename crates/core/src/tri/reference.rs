@@ -6,15 +6,15 @@
 //! The inputs are the `f32` corners and ray widened to `f64`, so the reference
 //! answers the question "what would exact arithmetic say about these `f32`
 //! inputs" up to `f64` rounding (about `1e-16` relative to the coordinates).
-//! It uses the Plücker form of paper 000 in the ray's own frame: the corners
+//! It uses the Plücker form (Jones 2000) in the ray's own frame: the corners
 //! are translated by the ray origin first, so its error does not grow with the
 //! distance of the scene from the world origin, and the three per-edge values
 //! are the signed volumes `dir · (p × q)` of the translated corners.
 
 use glam::DVec3;
 
-/// Two-sided `f64` ray/triangle intersection (the reference for the tests of
-/// paper 000 and 001).
+/// Two-sided `f64` ray/triangle intersection (the reference for the `f32`
+/// triangle tests).
 ///
 /// Returns `(t, u, v)` with `t >= 0` the distance along `dir` (in units of
 /// `dir`, which need not be unit length) and `(u, v)` the barycentric weights

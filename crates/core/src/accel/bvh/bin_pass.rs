@@ -1,17 +1,17 @@
-//! The binning pass of the binned SAH build (issue 8, step 3; Wald 2007,
+//! The binning pass of the binned SAH build (Wald 2007,
 //! "On fast construction of SAH-based bounding volume hierarchies"): one
 //! walk over a node's references puts each into its bin along all three
 //! axes, growing the bin's box and count.
 //!
-//! While binning, a bin keeps its upper corner negated, so that growing a
-//! box by a reference is one minimum over both corners (the reference's
-//! upper corner negated once): with AVX a bin's box and a reference are
-//! one 8-float vector each, and a bin grows by one `vminps` where two
-//! 4-float operations and their loads and stores were needed (issue 8,
-//! step 4f). The corners are turned back when the pass ends, so the sweep
-//! ([`super::sah_sweep`]) and the merge see plain boxes. Negation is exact
-//! and `min(-a, -b) = -max(a, b)` holds for the compare-and-pick forms
-//! used here, NaN included, so the bins are the same to the bit.
+//! While binning, a bin keeps its upper corner negated, so that growing a box
+//! by a reference is one minimum over both corners (the reference's upper
+//! corner negated once): with AVX a bin's box and a reference are one 8-float
+//! vector each, and a bin grows by one `vminps` where two 4-float operations
+//! and their loads and stores would be needed. The corners are turned back when
+//! the pass ends, so the sweep ([`super::sah_sweep`]) and the merge see plain
+//! boxes. Negation is exact and `min(-a, -b) = -max(a, b)` holds for the
+//! compare-and-pick forms used here, NaN included, so the bins are the same to
+//! the bit.
 
 use super::binning::{prefetch_ref, vmin, Bin, Bins, Box4f, Mapping, PrimRef, V4};
 
@@ -19,9 +19,9 @@ use super::binning::{prefetch_ref, vmin, Bin, Bins, Box4f, Mapping, PrimRef, V4}
 /// cache for (2 KiB). The references of a node above the caches stream from
 /// memory, and the hardware prefetcher alone left the build waiting on
 /// them: with the software prefetch in both loops the 1M-triangle terrain
-/// and the full dragon built 1.20-1.25x faster on one thread (issue 8, step
-/// 3y; 16, 32, 48, 64 and 96 references tried; on the Zen 3 host of step
-/// 4f 64, 128 and 256 were alike).
+/// and the full dragon built 1.20-1.25x faster on one thread (16, 32, 48, 64
+/// and 96 references tried; on an AMD Zen 3 host 64, 128 and 256 were
+/// alike).
 const BIN_AHEAD: usize = 64;
 
 /// The empty bin with its boxes' upper corners negated.

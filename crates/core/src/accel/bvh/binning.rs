@@ -1,7 +1,6 @@
-//! The inner loops of the binned SAH build (issue 8, step 3): primitive
-//! references as two 4-float corners, one binning pass for all three axes,
-//! and the in-place partition (the SAH sweep over the bins is
-//! [`super::sah_sweep`]).
+//! The inner loops of the binned SAH build: primitive references as two 4-float
+//! corners, one binning pass for all three axes, and the in-place partition
+//! (the SAH sweep over the bins is [`super::sah_sweep`]).
 //!
 //! This is the layout of Wald 2007 ("On fast construction of SAH-based
 //! bounding volume hierarchies") as Embree's builders use it (Wald et al.
@@ -226,7 +225,7 @@ impl Mapping {
     /// `index` does; `minps` its second, `last`, at equality). Written out
     /// because the portable form compiled to a compare and a branch for the
     /// clamp and to sign extensions for the indices, and binning took 1.1x
-    /// longer (issue 8, step 3y).
+    /// longer.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     unsafe fn bins_sse(&self, p: &PrimRef) -> [usize; 3] {
@@ -369,13 +368,12 @@ pub(super) fn prefetch_ref(p: &PrimRef, ahead: isize) {
 /// `partition_on`); the centroid bounds grow through masks. Which side a
 /// reference goes to is a coin toss for the branch predictor near the top
 /// of the tree: with the two-ended version's branches (and the axis a
-/// variable) the full dragon's build took 15% longer on one thread (issue
-/// 8, step 3r).
+/// variable) the full dragon's build took 15% longer on one thread.
 ///
 /// Kept out of line, as `Bins::best_split`: inlined into the build's node
 /// step, which happened when an unrelated module changed how the crate's
 /// code was split into codegen units, the scatter's build took 7% longer
-/// (one thread; issue 8, step 3w).
+/// (one thread).
 #[inline(never)]
 pub(crate) fn partition(refs: &mut [PrimRef], map: &Mapping, split: &Split) -> (Box4f, Box4f) {
     // One loop per axis, so that the axis is a constant inside it.
@@ -470,7 +468,7 @@ fn partition_on<const AXIS: usize>(
 /// index (`v[1]` left, `v[0]` right) and grown in memory. Picking the
 /// centroid or the empty box's corners for both sides by mask, in
 /// registers, took about 20 instructions per reference where this takes
-/// 9 (issue 8, step 4f).
+/// 9.
 struct SideCentroids {
     v: [Box4f; 2],
 }

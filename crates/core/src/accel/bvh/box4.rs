@@ -1,7 +1,7 @@
 //! Four boxes in structure-of-arrays layout and their ray test, all four at
 //! once: with SSE on x86_64 (baseline there, so no run-time detection is
 //! needed), with a scalar loop elsewhere. This is the box half of the
-//! Embree-style 4-wide BVH of issue 8 ([`super::Bvh4`]).
+//! Embree-style 4-wide BVH ([`super::Bvh4`]).
 //!
 //! The slab test is the one of [`NodeBox::entry`], term for term, with one
 //! change that costs nothing: instead of `min`/`max` of the two plane

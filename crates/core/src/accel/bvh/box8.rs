@@ -1,5 +1,5 @@
 //! Eight boxes in structure-of-arrays layout and their ray test, all eight
-//! at once: the box half of the 8-wide BVH of issue 8 ([`super::Bvh8`]),
+//! at once: the box half of the 8-wide BVH ([`super::Bvh8`]),
 //! as Embree's BVH8 nodes on AVX machines (Wald et al. 2014, "Embree: a
 //! kernel framework for efficient CPU ray tracing").
 //!
@@ -72,7 +72,7 @@ impl RayBox8 {
             origin: ray.origin.to_array(),
             inv_dir: id,
             // Spelled out: `array::map`'s closure became a call inside
-            // the traversals compiled for AVX2 (BENCHMARKS.md, step 4e).
+            // the traversals compiled for AVX2 (BENCHMARKS.md).
             near: [
                 id[0].is_sign_negative() as usize,
                 2 + id[1].is_sign_negative() as usize,
@@ -82,18 +82,18 @@ impl RayBox8 {
     }
 }
 
-/// The box kernel a structure uses, detected once when it is built (issue
-/// 8: run-time detection, not per node).
+/// The box kernel a structure uses, detected once when it is built
+/// (run-time detection, not per node).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum BoxPath {
     /// 256-bit AVX (with AVX2 and FMA present, as the traversal is compiled
     /// for them).
     Avx2,
-    /// The AVX kernel, the traversal around it compiled for AVX-512 (F, VL,
-    /// BW, DQ) besides: the same 256-bit arithmetic, bit for bit, with 32
-    /// vector registers and compares into mask registers, as Embree runs its
-    /// AVX-512 kernels on such CPUs (issue 8, step 3v: single incoherent
-    /// rays 1.09x faster on the scatter).
+    /// The AVX kernel, the traversal around it compiled for AVX-512 (F, VL, BW,
+    /// DQ) besides: the same 256-bit arithmetic, bit for bit, with 32 vector
+    /// registers and compares into mask registers, as Embree runs its AVX-512
+    /// kernels on such CPUs (single incoherent rays 1.09x faster on the
+    /// scatter).
     Avx512,
     /// Two 128-bit SSE halves.
     Sse,

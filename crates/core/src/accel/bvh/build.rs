@@ -7,12 +7,11 @@
 //! Subtrees above [`BuildOptions::parallel_threshold`] triangles are built in
 //! parallel with `rayon::join`, and the nodes above 64k triangles are bounded
 //! and binned in parallel chunks. The inner loops (32-byte references, one
-//! binning pass for all three axes, the sweep, the in-place partition that
-//! also bounds the children's centroids) are in [`super::binning`] (issue 8,
-//! step 3). The result is a pointer tree of [`BuildNode`]s plus the
-//! triangle order, which each layout flattens; it does not depend on the
-//! number of threads. [`BuildQuality::Fast`] selects the linear BVH of
-//! [`super::lbvh`] instead.
+//! binning pass for all three axes, the sweep, the in-place partition that also
+//! bounds the children's centroids) are in [`super::binning`]. The result is a
+//! pointer tree of [`BuildNode`]s plus the triangle order, which each layout
+//! flattens; it does not depend on the number of threads.
+//! [`BuildQuality::Fast`] selects the linear BVH of [`super::lbvh`] instead.
 
 use super::binning::{partition, Bins, Mapping, PrimRef, RangeInfo, Split};
 use super::MAX_DEPTH;
@@ -28,13 +27,12 @@ use rayon::prelude::*;
 pub struct BuildOptions {
     /// Most triangles per leaf (1..=31). Nodes with more are always split.
     pub max_leaf_size: usize,
-    /// Most triangles per leaf of the wide BVHs whose leaves are packs of
-    /// four ([`super::Bvh4`] and [`super::Bvh8`] over Möller), in place of
-    /// `max_leaf_size` (1..=31). The SAH, counting a leaf's pack tests,
-    /// chooses smaller leaves below it, as Embree's builders do for their
-    /// `triangle4` leaves (Wald et al. 2014). 16 by default (issue 8, step
-    /// 3r: larger leaves than 4 gave 2–5% faster shadow and primary rays and
-    /// a faster build on the full dragon).
+    /// Most triangles per leaf of the wide BVHs whose leaves are packs of four
+    /// ([`super::Bvh4`] and [`super::Bvh8`] over Möller), in place of
+    /// `max_leaf_size` (1..=31). The SAH, counting a leaf's pack tests, chooses
+    /// smaller leaves below it, as Embree's builders do for their `triangle4`
+    /// leaves (Wald et al. 2014). 16 by default (larger leaves than 4 gave 2–5%
+    /// faster shadow and primary rays and a faster build on the full dragon).
     pub packed_leaf_size: usize,
     /// Number of SAH bins per axis.
     pub bins: usize,
@@ -51,19 +49,19 @@ pub struct BuildOptions {
     /// its largest children, leaves or not, as Embree's wide builders do
     /// (Wald et al. 2014). The SAH builder only; [`super::Bvh4`] and
     /// [`super::Bvh8`] over packs of four set it for
-    /// [`BuildQuality::High`] (issue 8, step 3v).
+    /// [`BuildQuality::High`].
     pub fill_wide_nodes: bool,
     /// Subtrees with more triangles than this are built on several threads.
     pub parallel_threshold: usize,
     /// Which builder makes the tree: the binned SAH (default) or the fast
-    /// linear BVH for dynamic scenes (issue 8, step 3).
+    /// linear BVH for dynamic scenes.
     pub quality: BuildQuality,
     /// Options of the kd-tree builds (the structures `kd-*`).
     pub kd: crate::accel::KdOptions,
 }
 
-/// The BVH builders (issue 8, step 3: fast builds, with the SAH cost
-/// reported so speed and quality are visible together).
+/// The BVH builders (fast builds, with the SAH cost reported so speed and
+/// quality are visible together).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BuildQuality {
     /// Binned SAH (Wald 2007) with 32-byte references, one binning pass for
@@ -75,8 +73,8 @@ pub enum BuildQuality {
     /// every node's free slots with the halves of its largest children,
     /// leaves or not, as Embree's wide builders do (Wald et al. 2014; see
     /// [`BuildOptions::fill_wide_nodes`]): about a quarter fewer pack tests
-    /// per ray, 2–7% faster incoherent rays, a build about 8% slower (issue
-    /// 8, step 3v). The other structures build as with `Sah`.
+    /// per ray, 2–7% faster incoherent rays, a build about 8% slower. The
+    /// other structures build as with `Sah`.
     High,
     /// Linear BVH (Karras 2012, "Maximizing parallelism in the construction
     /// of BVHs, octrees, and k-d trees"): Morton codes of the centroids,

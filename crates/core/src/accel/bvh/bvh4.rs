@@ -1,4 +1,4 @@
-//! 4-wide BVH with SIMD box tests and ordered stack traversal (issue 8).
+//! 4-wide BVH with SIMD box tests and ordered stack traversal.
 
 use super::box4::RayBox4;
 use super::build::BuildOptions;
@@ -25,11 +25,10 @@ pub(super) const STACK: usize = 3 * MAX_DEPTH + 1;
 /// to set up per ray).
 pub(super) const SMALL_STACK: usize = 64;
 
-/// 4-wide BVH in the style of Embree's (issue 8, "beat Embree on the CPU";
-/// BVHs as in paper 001), made by collapsing the binned-SAH binary tree of
-/// [`super::build`]: each wide node takes up to four children, pulling up
-/// the grandchildren of its largest-area inner child first, and the leaves
-/// are the binary tree's (same triangle ranges).
+/// 4-wide BVH in the style of Embree's (Wald et al. 2014), made by collapsing
+/// the binned-SAH binary tree of [`super::build`]: each wide node takes up to
+/// four children, pulling up the grandchildren of its largest-area inner child
+/// first, and the leaves are the binary tree's (same triangle ranges).
 ///
 /// A node holds its children's boxes in structure-of-arrays layout, padded
 /// exactly as [`super::Bvh2`]'s so that box culling never disagrees with the
@@ -87,7 +86,7 @@ impl<T: TriangleTest> Bvh4<T> {
     /// The single-ray traversal of the subtree `start`, from the ray's
     /// current `tfar` and nearest hit `best` (both updated): from the root
     /// for [`Accel::intersect`] and [`Accel::occluded`], from a packet's
-    /// node for the hand-over of the packet path (issue 8; Benthin et al.
+    /// node for the hand-over of the packet path (Benthin et al.
     /// 2012). Returns true for an any-hit query's hit (`ANY`).
     #[inline(always)]
     fn subtree<const ANY: bool>(
@@ -153,7 +152,7 @@ impl<T: TriangleTest> Bvh4<T> {
         // No separate test of the root's box: the root node's test of its
         // children's boxes culls the same rays (they lie inside it), and a
         // root leaf's triangle test is exact. It cost 4% of a ray's
-        // instructions (callgrind, issue 8 step 3).
+        // instructions (callgrind).
         let rb = RayBox4::new(ray);
         let mut stack = Stack::<N>::new();
         let st = stack.ptr();
@@ -277,7 +276,7 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
     }
 
     /// Coherent packets over Möller, sixteen rays with AVX-512, else eight
-    /// (issue 8, item 4; see `bvh/packet.rs`), single rays otherwise.
+    /// (see `bvh/packet.rs`), single rays otherwise.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         super::packet::intersect_batch(self, rays, hits);
     }
@@ -288,9 +287,8 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
     }
 }
 
-/// The coherent packet path (issue 8, item 4; Wald et al. 2001, Benthin et
-/// al. 2012): `bvh/packet.rs`, handing over to its 4-wide single-ray subtree
-/// traversal.
+/// The coherent packet path (Wald et al. 2001, Benthin et al. 2012):
+/// `bvh/packet.rs`, handing over to its 4-wide single-ray subtree traversal.
 impl<T: TriangleTest> super::packet::PacketTree for Bvh4<T> {
     type Node = Node4;
 
@@ -336,7 +334,7 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh4<T> {
         // `small_stack` says whether it fits `SMALL_STACK`. The small stack
         // where it fits: the kernel's frame with the large one is 48 KB,
         // whose pages were probed on every packet (44 instructions per
-        // packet; BENCHMARKS.md, step 4e).
+        // packet; BENCHMARKS.md).
         unsafe {
             if self.small_stack {
                 W::traverse::<ANY, Self, SMALL_STACK>(self, view, rays, p, switch, out)

@@ -1,4 +1,4 @@
-//! 8-wide BVH with AVX box tests and ordered stack traversal (issue 8).
+//! 8-wide BVH with AVX box tests and ordered stack traversal.
 
 use super::box8::{BoxPath, RayBox8};
 use super::build::BuildOptions;
@@ -27,12 +27,11 @@ mod walk;
 /// The stack of trees that need no more (most do).
 pub(super) const SMALL_STACK: usize = 64;
 
-/// 8-wide BVH as Embree uses on AVX machines for single rays (issue 8, "beat
-/// Embree on the CPU"; Wald et al. 2014, "Embree: a kernel framework for
-/// efficient CPU ray tracing"), made by collapsing the binned-SAH binary
-/// tree of [`super::build`] into nodes of up to eight children (the
-/// largest-area inner child's children pulled up first), the leaves being
-/// the binary tree's.
+/// 8-wide BVH as Embree uses on AVX machines for single rays (Wald et al. 2014,
+/// "Embree: a kernel framework for efficient CPU ray tracing"), made by
+/// collapsing the binned-SAH binary tree of [`super::build`] into nodes of up
+/// to eight children (the largest-area inner child's children pulled up first),
+/// the leaves being the binary tree's.
 ///
 /// A node holds its children's boxes in structure-of-arrays layout, padded
 /// exactly as [`super::Bvh2`]'s, and one ray is tested against all eight at
@@ -98,7 +97,7 @@ impl<T: TriangleTest> Bvh8<T> {
     /// The single-ray traversal of the subtree `start`, from the ray's
     /// current `tfar` and nearest hit `best` (both updated): from the root
     /// for [`Accel::intersect`] and [`Accel::occluded`], from a packet's
-    /// node for the hand-over of the packet path (issue 8; Benthin et al.
+    /// node for the hand-over of the packet path (Benthin et al.
     /// 2012). Returns true for an any-hit query's hit (`ANY`).
     #[inline(always)]
     fn subtree<const ANY: bool>(
@@ -124,8 +123,7 @@ impl<T: TriangleTest> Bvh8<T> {
     /// The traversal for CPUs without AVX2 (and the scalar kernel in
     /// tests), kept out of line: inlined, it sat in the packet kernel's
     /// hand-over and made the kernel's code worse (1M terrain primaries
-    /// took 5% fewer instructions with it out of line; BENCHMARKS.md,
-    /// step 4e).
+    /// took 5% fewer instructions with it out of line; BENCHMARKS.md).
     #[inline(never)]
     fn traverse_portable<const ANY: bool>(
         &self,
@@ -238,7 +236,7 @@ impl<T: TriangleTest> Bvh8<T> {
         // No separate test of the root's box: the root node's test of its
         // children's boxes culls the same rays (they lie inside it), and a
         // root leaf's triangle test is exact. It cost 4% of a ray's
-        // instructions (callgrind, issue 8 step 3).
+        // instructions (callgrind).
         let rb = RayBox8::new(ray);
         let mut stack = Stack::<N>::new();
         let st = stack.ptr();
@@ -363,7 +361,7 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
     }
 
     /// Coherent packets over Möller, sixteen rays with AVX-512, else eight
-    /// (issue 8, item 4; Wald et al. 2001, with Benthin et al. 2012's hand-over to single rays; see
+    /// (Wald et al. 2001, with Benthin et al. 2012's hand-over to single rays; see
     /// `bvh/packet.rs`), single rays otherwise.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         super::packet::intersect_batch(self, rays, hits);
@@ -375,9 +373,9 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
     }
 }
 
-/// The coherent packet path over 8-wide nodes (issue 8, item 4; Wald et al.
-/// 2001, Benthin et al. 2012): `bvh/packet.rs`, the same kernel as
-/// [`super::Bvh4`]'s, handing over to this tree's own single-ray traversal.
+/// The coherent packet path over 8-wide nodes (Wald et al. 2001, Benthin et al.
+/// 2012): `bvh/packet.rs`, the same kernel as [`super::Bvh4`]'s, handing over
+/// to this tree's own single-ray traversal.
 impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
     type Node = Node8;
 
@@ -442,7 +440,7 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
         // `small_stack` says whether it fits `SMALL_STACK`. The small stack
         // where it fits: the kernel's frame with the large one is 48 KB,
         // whose pages were probed on every packet (44 instructions per
-        // packet; BENCHMARKS.md, step 4e).
+        // packet; BENCHMARKS.md).
         unsafe {
             if self.small_stack {
                 W::traverse::<ANY, Self, SMALL_STACK>(self, view, rays, p, switch, out)

@@ -1,5 +1,5 @@
 //! The collapse of a binary build tree into the wide nodes of
-//! [`super::Bvh4`] and [`super::Bvh8`] (issue 8): the usual way to get an
+//! [`super::Bvh4`] and [`super::Bvh8`]: the usual way to get an
 //! Embree-style wide BVH out of a binary build (Wald et al. 2014), written
 //! once for both widths. The linear BVH ([`super::lbvh`]) goes through it;
 //! the SAH builds make the same wide nodes directly

@@ -1,5 +1,5 @@
 //! The choice of the next child in the single-ray traversal of the wide
-//! BVHs (issue 8): written once for [`super::Bvh4`], [`super::Bvh8`] and
+//! BVHs: written once for [`super::Bvh4`], [`super::Bvh8`] and
 //! [`super::Bvh8`]'s interleaved walks.
 
 use super::node4::Child4;
@@ -54,7 +54,7 @@ pub(crate) unsafe fn enter<const ANY: bool, N>(
         // slot next and the others pushed in slot order, so that they are
         // popped highest first, as Embree's any-hit kernels go. On shadow
         // rays this was 1.09x faster on the scatter than the lowest slot
-        // first (single rays, 1 thread; BENCHMARKS.md, step 3u).
+        // first (single rays, 1 thread; BENCHMARKS.md).
         let last = 31 - mask.leading_zeros() as usize;
         let mut m = mask & !(1 << last);
         while m != 0 {

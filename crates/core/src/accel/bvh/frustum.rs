@@ -1,8 +1,8 @@
-//! A packet's rays bounded as one bundle, to skip the children of a node
-//! that no ray of the packet can enter before testing them ray by ray
-//! (issue 8, item 4; the interval-arithmetic culling of Wald, Boulos and
-//! Shirley 2007, "Ray tracing deformable scenes using dynamic bounding
-//! volume hierarchies", and of Embree's coherent packet kernels).
+//! A packet's rays bounded as one bundle, to skip the children of a node that
+//! no ray of the packet can enter before testing them ray by ray (the
+//! interval-arithmetic culling of Wald, Boulos and Shirley 2007, "Ray tracing
+//! deformable scenes using dynamic bounding volume hierarchies", and of
+//! Embree's coherent packet kernels).
 //!
 //! Per axis the packet's origins lie in `[o_min, o_max]` and its
 //! reciprocal directions in `[i_min, i_max]` (all of one sign: a packet's

@@ -1,4 +1,4 @@
-//! Transparent huge pages for the build's large arrays (issue 8): the
+//! Transparent huge pages for the build's large arrays: the
 //! references, the leaf packs and the wide nodes are asked to be backed by
 //! 2 MiB pages before they are first written, as Embree's allocator asks
 //! for its build arrays (`madvise(MADV_HUGEPAGE)`, Wald et al. 2014).
@@ -9,7 +9,7 @@
 //! pages, about 45 per build. Advised, nine builds of ours took 28,000
 //! faults instead of 156,000 (the mesh's generation included), and the
 //! build against Embree MEDIUM gained in three alternated rounds on the
-//! AMD Zen 3 host of step 4f; the traced tree also takes fewer TLB
+//! AMD Zen 3 host; the traced tree also takes fewer TLB
 //! entries. A hint: where the kernel offers no huge pages (or on other
 //! systems) nothing changes.
 

@@ -1,4 +1,4 @@
-//! The SIMD lanes the coherent-ray packet kernel runs on (issue 8, item 4):
+//! The SIMD lanes the coherent-ray packet kernel runs on:
 //! eight rays in a 256-bit AVX register ([`L8`]) or sixteen in a 512-bit
 //! AVX-512 register ([`L16`]), as Embree's packet and stream kernels use
 //! packets of the machine's vector width (Wald et al. 2014).
@@ -15,7 +15,7 @@
 use std::arch::x86_64::*;
 
 /// A vector of `L` single-precision lanes, a mask of `L` lanes and a vector
-/// of `L` 32-bit integers (issue 8, item 4).
+/// of `L` 32-bit integers.
 ///
 /// # Safety
 /// Every method runs instructions of the width's feature set (AVX2 for
@@ -79,13 +79,12 @@ pub(crate) trait Lanes<const L: usize>: Copy {
     fn store_int(v: Self::Int, row: &mut [u32; L]);
 }
 
-/// Eight lanes in an AVX register; masks are all-ones lanes (issue 8,
-/// item 4).
+/// Eight lanes in an AVX register; masks are all-ones lanes.
 #[derive(Clone, Copy)]
 pub(crate) struct L8(__m256);
 
-/// Sixteen lanes in an AVX-512 register; masks are `k` registers (issue 8,
-/// item 4: Embree's packets of sixteen on AVX-512 machines).
+/// Sixteen lanes in an AVX-512 register; masks are `k` registers
+/// (Embree's packets of sixteen on AVX-512 machines).
 #[derive(Clone, Copy)]
 pub(crate) struct L16(__m512);
 

@@ -1,4 +1,4 @@
-//! The fast, lower-quality BVH build for dynamic scenes (issue 8, step 3):
+//! The fast, lower-quality BVH build for dynamic scenes:
 //! a linear BVH after Karras 2012 ("Maximizing parallelism in the
 //! construction of BVHs, octrees, and k-d trees", HPG 2012; the LBVH idea
 //! is Lauterbach et al. 2009).
@@ -39,7 +39,7 @@ pub fn spread_bits(v: u32) -> u32 {
 }
 
 /// The 30-bit Morton code of a point quantised to `q = [x, y, z]` (10 bits
-/// each): x in bits 3i+2, y in 3i+1, z in 3i (issue 8; Karras 2012).
+/// each): x in bits 3i+2, y in 3i+1, z in 3i (Karras 2012).
 #[inline]
 pub fn morton3(q: [u32; 3]) -> u32 {
     (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2])
@@ -81,9 +81,8 @@ fn radix_sort(pairs: &mut Vec<(u32, u32)>) {
 }
 
 /// Build a linear BVH over the triangles of `mesh` (see the module
-/// documentation; issue 8, Karras 2012). Called by
-/// [`super::build::build`] for [`super::BuildQuality::Fast`], with clamped
-/// options.
+/// documentation; Karras 2012). Called by [`super::build::build`] for
+/// [`super::BuildQuality::Fast`], with clamped options.
 pub fn build(mesh: &TriangleMesh, opts: &BuildOptions) -> BuildTree {
     let (refs, info) = prim_refs(mesh);
     let n = refs.len();

@@ -5,21 +5,21 @@
 //! - [`Bvh2`]: binary BVH in depth-first order with sibling pairs side by side,
 //!   traversed with a per-ray stack, nearest child first.
 //! - [`Bvh4`]: 4-wide BVH made directly by the SAH build (`wide_build`) or
-//!   collapsed from the linear BVH's binary tree (issue 8), four
+//!   collapsed from the linear BVH's binary tree, four
 //!   box tests at once with SSE, ordered stack traversal; over Möller its
 //!   leaves are packs of four triangles tested at once (`tri4`, Embree's
 //!   `triangle4`).
 //! - `packet` (with `packet_kernel` and `lanes`): the coherent-ray path
 //!   behind [`Bvh4`]'s and [`Bvh8`]'s `intersect_batch` / `occluded_batch`
-//!   over Möller (issue 8, item 4): packets of rays of one octant traced
+//!   over Möller: packets of rays of one octant traced
 //!   together (Wald et al. 2001), sixteen with AVX-512 or eight with AVX2,
 //!   one kernel generic over the node width and the packet width, handing their last rays to the tree's own single-ray traversal
 //!   (Benthin et al. 2012), with the single-ray answers.
-//! - [`Bvh8`]: 8-wide BVH built the same way (issue 8), eight box tests
+//! - [`Bvh8`]: 8-wide BVH built the same way, eight box tests
 //!   at once with AVX (run-time detected; SSE and scalar fallbacks), the
 //!   same ordered traversal and leaves as [`Bvh4`], and the same packet path.
-//! - [`ThreadedBvh`]: paper 001's layout, nodes in pre-order with escape
-//!   indices, traversed without a stack.
+//! - [`ThreadedBvh`]: the threaded layout (Smits 1998), nodes in pre-order
+//!   with escape indices, traversed without a stack.
 //! - `refit`: [`Bvh4`] and [`Bvh8`] refit to moved vertices in O(n),
 //!   topology kept, with an SAH degradation measure and a rebuild past a
 //!   limit (Embree's refit).

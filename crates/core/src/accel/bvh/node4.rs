@@ -1,4 +1,4 @@
-//! The 4-wide node of [`super::Bvh4`] (issue 8), made by collapsing a
+//! The 4-wide node of [`super::Bvh4`], made by collapsing a
 //! binary build tree ([`super::collapse`]), and the child reference shared
 //! by the wide trees.
 

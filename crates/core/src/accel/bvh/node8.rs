@@ -1,4 +1,4 @@
-//! The 8-wide node of [`super::Bvh8`] (issue 8): Embree's BVH8 layout on
+//! The 8-wide node of [`super::Bvh8`]: Embree's BVH8 layout on
 //! AVX machines (Wald et al. 2014), made by collapsing a binary build tree
 //! ([`super::collapse`]) as the 4-wide one is.
 

@@ -1,5 +1,5 @@
 //! The coherent-ray path of [`super::Bvh4`] and [`super::Bvh8`] over Möller
-//! (issue 8, item 4): `intersect_batch` and `occluded_batch` cut the batch
+//! (Wald et al. 2001): `intersect_batch` and `occluded_batch` cut the batch
 //! into packets of
 //! consecutive rays and trace each coherent packet together through the
 //! tree (Wald et al. 2001 coherent ray packets; Embree's packet kernels,
@@ -41,15 +41,15 @@ use super::lanes::{L16, L8};
 #[cfg(target_arch = "x86_64")]
 use super::packet_kernel::{Packet, PacketHits, Width};
 
-/// An inner node the packet traversal reads (issue 8, item 4): up to
-/// [`WideNode::WIDTH`] children (4 for [`Node4`], 8 for [`Node8`]), their
-/// boxes in structure-of-arrays plane rows (`2·axis` minima, `2·axis + 1`
-/// maxima) and their references, unused slots last.
+/// An inner node the packet traversal reads: up to [`WideNode::WIDTH`] children
+/// (4 for [`Node4`], 8 for [`Node8`]), their boxes in structure-of-arrays plane
+/// rows (`2·axis` minima, `2·axis + 1` maxima) and their references, unused
+/// slots last.
 pub(crate) trait WideNode: Copy + Sync {
     /// Child slots per node (at most 8).
     const WIDTH: usize;
     /// Whether the packet kernel bounds its packets and tests only the
-    /// slots within the bounds ([`WideNode::slots_within`], step 4h); the
+    /// slots within the bounds ([`WideNode::slots_within`]); the
     /// others test every slot, unrolled.
     const BUNDLED: bool = false;
     /// Plane row `row` of the box in slot `slot`.
@@ -84,7 +84,7 @@ impl WideNode for Node4 {
 
 impl WideNode for Node8 {
     const WIDTH: usize = 8;
-    // Four slots a node were too few for the bounds to pay (step 4h), eight
+    // Four slots a node were too few for the bounds to pay (BENCHMARKS.md), eight
     // are not.
     const BUNDLED: bool = true;
     #[cfg(target_arch = "x86_64")]
@@ -103,8 +103,8 @@ impl WideNode for Node8 {
     }
 }
 
-/// A wide BVH that traces coherent packets of rays (issue 8, item 4;
-/// Wald et al. 2001): [`super::Bvh4`] and [`super::Bvh8`] over `tri4`
+/// A wide BVH that traces coherent packets of rays (Wald et al.
+/// 2001): [`super::Bvh4`] and [`super::Bvh8`] over `tri4`
 /// leaves.
 pub(crate) trait PacketTree: Accel + Sync {
     /// The inner node.
@@ -160,9 +160,9 @@ pub(crate) trait PacketTree: Accel + Sync {
 
 /// Active rays at or below which a packet hands its rays over to the
 /// single-ray traversal (Benthin et al. 2012's hybrid), for nearest-hit
-/// queries and for occlusion. Step 3p measured 2 best for shadow rays with
-/// packets of eight (full dragon, AMD host); with packets of sixteen on the
-/// Intel host (step 3y; whole 1024² batches through `bvh8`, 1 thread), 1
+/// queries and for occlusion. With packets of eight, 2 measured best for
+/// shadow rays (full dragon, AMD host); with packets of sixteen on an
+/// Intel host (whole 1024² batches through `bvh8`, 1 thread), 1
 /// beat 2 on primaries by 2.5–3.3% (terrain, dragon) and 0.5–1.5%
 /// (scatter), and 2 stayed best for shadow rays (terrain +3–4% over 1).
 const SWITCH: [u32; 2] = [1, 2];
@@ -276,7 +276,7 @@ const fn lines<T>(n: usize) -> usize {
 /// (`bvh8/walk.rs`): handed a chunk of sixteen, its walks ran dry at the
 /// end of every chunk and started over (with six walks, about a third of
 /// the rays traced with fewer in flight, and the walks' set-up each time;
-/// BENCHMARKS.md, step 3z). Over a whole task of incoherent rays, the walks
+/// BENCHMARKS.md). Over a whole task of incoherent rays, the walks
 /// stay full until its last rays. Without packets (`L` = 1, `packet`
 /// always false) every task goes to the singles whole.
 ///
@@ -285,7 +285,7 @@ const fn lines<T>(n: usize) -> usize {
 /// and a packet's trace takes long enough that the hardware prefetcher
 /// fell behind, leaving the first read of every chunk (the octant check)
 /// waiting on memory. Terrain and dragon primaries went 1.03–1.07×
-/// faster, the scatter's within the noise (BENCHMARKS.md, step 4a).
+/// faster, the scatter's within the noise (BENCHMARKS.md).
 fn in_groups<const ANY: bool, const L: usize, B: PacketTree, R: Send>(
     bvh: &B,
     rays: &[Ray],
@@ -551,8 +551,8 @@ fn packet_occluded<const L: usize, W: Width<L>, B: PacketTree>(
     true
 }
 
-/// What the packet traversal reads of a wide BVH over Möller (issue 8,
-/// item 4): the nodes, the root and the `tri4` leaves (Wald et al. 2014).
+/// What the packet traversal reads of a wide BVH over Möller: the
+/// nodes, the root and the `tri4` leaves (Wald et al. 2014).
 #[derive(Clone, Copy)]
 pub(crate) struct View<'a, N> {
     pub nodes: &'a [N],

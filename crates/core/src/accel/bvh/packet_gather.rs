@@ -1,17 +1,17 @@
 //! The rays of a packet moved from the batch's ray array into the packet's
-//! structure-of-arrays rows with AVX shuffles, eight rays at a time (issue
-//! 8, item 4: the coherent path of [`super::packet`]).
+//! structure-of-arrays rows with AVX shuffles, eight rays at a time (for
+//! the coherent path of [`super::packet`]).
 //!
-//! Eight rays are eight 44-byte [`Ray`]s one after the other. Each is read
-//! as three overlapping 16-byte pieces (origin and `dir.x`; `dir.y`,
-//! `dir.z`, `tnear`, `tfar`; `tfar` and `inv_dir`), rays `i` and `i + 4`
-//! into the two halves of one 256-bit register, and every set of four
-//! registers is transposed within its 128-bit halves (the 4×4 transpose of
-//! Intel's optimization manual). That is 12 loads, 12 inserts and 24
-//! shuffles for 8 rays, where copying the 88 floats one by one took about
-//! 50 instructions per ray, 11% of all instructions of terrain primaries
-//! (callgrind, BENCHMARKS.md, step 4e). The values are moved, not
-//! computed: each row holds exactly the rays' floats.
+//! Eight rays are eight 44-byte [`Ray`]s one after the other. Each is read as
+//! three overlapping 16-byte pieces (origin and `dir.x`; `dir.y`, `dir.z`,
+//! `tnear`, `tfar`; `tfar` and `inv_dir`), rays `i` and `i + 4` into the two
+//! halves of one 256-bit register, and every set of four registers is
+//! transposed within its 128-bit halves (the 4×4 transpose of Intel's
+//! optimization manual). That is 12 loads, 12 inserts and 24 shuffles for 8
+//! rays, where copying the 88 floats one by one took about 50 instructions per
+//! ray, 11% of all instructions of terrain primaries (callgrind,
+//! BENCHMARKS.md). The values are moved, not computed: each row holds exactly
+//! the rays' floats.
 
 use crate::ray::Ray;
 use std::arch::x86_64::*;

@@ -1,5 +1,5 @@
 //! The kernel of the coherent-ray path of [`super::Bvh4`] and
-//! [`super::Bvh8`] (issue 8, item 4): a packet of rays in structure-of-arrays
+//! [`super::Bvh8`]: a packet of rays in structure-of-arrays
 //! lanes traverses the 4- or 8-wide tree together (one kernel, generic over
 //! the node width and over the packet width: eight rays with AVX2, sixteen
 //! with AVX-512, [`super::lanes`]), as in Wald, Slusallek, Benthin, Wagner,
@@ -8,7 +8,7 @@
 //!
 //! At an 8-wide node the children that no ray of the packet can enter are
 //! found first, all eight in one AVX pass over interval bounds of the
-//! packet's rays ([`super::frustum`], formed once per packet; step 4h:
+//! packet's rays ([`super::frustum`], formed once per packet:
 //! shadow rays 1.03–1.15× and primaries 1.12–1.23× faster; 4-wide nodes
 //! test every slot). Each other child box is tested against all active rays at
 //! once (the box broadcast, one ray per lane) with exactly the arithmetic
@@ -91,7 +91,7 @@ impl<const L: usize> Default for PacketHits<L> {
 const MAX_WIDTH: usize = 8;
 
 /// A packet width the kernel runs at, with its entry point compiled for
-/// the width's instructions (issue 8, item 4).
+/// the width's instructions.
 pub(crate) trait Width<const L: usize>: Lanes<L> {
     /// [`traverse`] at this width.
     ///
@@ -259,8 +259,7 @@ fn traverse<const ANY: bool, const L: usize, V: Lanes<L>, B: PacketTree, const S
             // No check for the first unused slot: no lane enters its
             // inverted box (and the bundle's test drops it). One blend per
             // slot (the `near` copy went: 1M terrain
-            // primaries took 4% fewer instructions, BENCHMARKS.md, step
-            // 4e).
+            // primaries took 4% fewer instructions, BENCHMARKS.md).
             let mut ent = [nan; MAX_WIDTH];
             let mut slots = 0u32;
             // The lanes out of this subtree get a NaN limit, which fails
@@ -281,7 +280,7 @@ fn traverse<const ANY: bool, const L: usize, V: Lanes<L>, B: PacketTree, const S
                     ent[s] = nan.blend(enter, m);
                 }
             } else {
-                // Not bundled (`bvh4`): every slot tested, unrolled, as before step 4h (a
+                // Not bundled (`bvh4`): every slot tested, unrolled (a
                 // loop over set bits was 1% slower on `bvh4`, and bounds
                 // for four boxes were not faster).
                 for (s, e) in ent.iter_mut().enumerate().take(B::Node::WIDTH) {
@@ -302,7 +301,7 @@ fn traverse<const ANY: bool, const L: usize, V: Lanes<L>, B: PacketTree, const S
                 // entry; for occlusion in slot order, so the highest slot
                 // is visited first, as by single rays (`enter.rs`): on the
                 // scatter's shadow rays 1.2x faster than near to far (no
-                // reductions, no sort; BENCHMARKS.md, step 3u).
+                // reductions, no sort; BENCHMARKS.md).
                 let mut tmin = [0f32; MAX_WIDTH];
                 let mut order = [0usize; MAX_WIDTH];
                 let mut n = 0;

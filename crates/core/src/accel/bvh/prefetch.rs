@@ -1,14 +1,12 @@
-//! Software prefetch of the children a traversal will visit later (issue 8,
-//! "beat Embree on the CPU").
+//! Software prefetch of the children a traversal will visit later.
 //!
 //! When a node sends a ray into several children, all but the nearest go on
 //! the stack; their cache lines are requested at once, so that they arrive
 //! while the nearest subtree is traversed instead of stalling the pop that
 //! reaches them. Embree's traversal kernels do the same for every child they
-//! pick or push (Wald et al. 2014). On the three meshes of issue 8 it made
+//! pick or push (Wald et al. 2014). On the three benchmark meshes it made
 //! incoherent rays 1.06–1.6× faster (full dragon: 0.62× → 0.74× Embree),
-//! shadow rays 1.05–1.13× and primary rays 1.05–1.2× (BENCHMARKS.md,
-//! step 3r).
+//! shadow rays 1.05–1.13× and primary rays 1.05–1.2× (BENCHMARKS.md).
 
 use super::node4::Child4;
 use super::tri4::Tri4;

@@ -1,8 +1,8 @@
-//! The SAH sweep over a node's bins (issue 8, step 3; Wald 2007, "On fast
-//! construction of SAH-based bounding volume hierarchies"): the bounds and
-//! counts of the bins above each boundary are gathered from the top bin
-//! down, those below it from the bottom up, and the boundary of least SAH
-//! cost over the three axes is the split.
+//! The SAH sweep over a node's bins (Wald 2007, "On fast construction of
+//! SAH-based bounding volume hierarchies"): the bounds and counts of the bins
+//! above each boundary are gathered from the top bin down, those below it from
+//! the bottom up, and the boundary of least SAH cost over the three axes is the
+//! split.
 //!
 //! On x86_64 the three axes are swept at once, one per SSE lane, as
 //! Embree's binner evaluates them (Wald et al. 2014, "Embree: a kernel
@@ -12,8 +12,7 @@
 //! portable sweep does them per axis, and the split is the same to the
 //! bit. The sweep runs at every node the build bins, most of them small:
 //! one axis at a time it took 16% of the 1M-triangle terrain's build
-//! instructions (458M of 2.94G on one thread), in the lanes 215M (issue 8,
-//! step 4f).
+//! instructions (458M of 2.94G on one thread), in the lanes 215M.
 
 use super::binning::{Bins, Box4f, Split};
 
@@ -32,7 +31,7 @@ pub(crate) struct SweepBin {
 /// The SAH's intersection cost of `n` triangles in leaves tested `block`
 /// at a time: `ceil(n / block)` tests, by shift where `block` is a power of
 /// two (the sweep evaluates this twice per candidate split, and with the
-/// integer division it took 7% more samples; issue 8, step 3y).
+/// integer division it took 7% more samples).
 #[inline(always)]
 pub(crate) fn leaf_tests(n: u32, block: u32) -> f32 {
     if block.is_power_of_two() {

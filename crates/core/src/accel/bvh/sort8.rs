@@ -1,5 +1,5 @@
 //! A node's entered children sorted far to near in vector registers and
-//! pushed in two stores (issue 8): the child choice of [`super::Bvh8`]'s
+//! pushed in two stores: the child choice of [`super::Bvh8`]'s
 //! nearest-hit walks on CPUs with AVX-512, where three or more of a node's
 //! eight children are entered. Embree's AVX-512 kernels order a node's hits
 //! the same way, with a sorting network over keys that carry the entry

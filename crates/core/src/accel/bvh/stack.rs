@@ -1,4 +1,4 @@
-//! The traversal stack of the wide BVHs' single-ray walks (issue 8): the
+//! The traversal stack of the wide BVHs' single-ray walks: the
 //! pushed children and their entry distances in two arrays (structure of
 //! arrays), so that a node's sorted children go onto it in two vector
 //! stores ([`super::sort8`], as Embree's AVX-512 kernels push a sorted node;

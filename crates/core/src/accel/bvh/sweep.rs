@@ -1,6 +1,6 @@
 //! The small subtrees below a node the SAH makes a leaf, when the build
-//! fills wide nodes ([`super::BuildOptions::fill_wide_nodes`], issue 8,
-//! step 3v): split by an exact SAH sweep over the sorted centroids instead
+//! fills wide nodes ([`super::BuildOptions::fill_wide_nodes`]):
+//! split by an exact SAH sweep over the sorted centroids instead
 //! of binning, since such a subtree holds at most 31 triangles and is
 //! only looked at when a wide node has free slots to fill.
 //!

@@ -1,4 +1,5 @@
-//! Paper 001's stackless BVH: nodes in pre-order, each with an escape index.
+//! The stackless threaded BVH (Smits 1998): nodes in pre-order, each with an
+//! escape index.
 
 use super::build::{build, BuildNode, BuildOptions};
 use super::node_box::NodeBox;
@@ -26,19 +27,19 @@ struct Node {
     prims: u32,
 }
 
-/// The threaded BVH of paper 001 (after Smits 1998, "Efficiency issues for
-/// ray tracing"): the tree is stored in pre-order, so a node's first child is
-/// the next node in the array, and each node carries an escape index — where
-/// traversal continues when the ray misses its box. Traversal is a single
-/// loop over the array with no stack: hit → next node, miss → escape. The
-/// price is a fixed visiting order (left child first), with no
-/// nearest-child-first ordering and no pruning of subtrees queued before a
-/// nearer hit was found.
+/// The threaded BVH (Smits 1998, "Efficiency issues for ray tracing"): the tree
+/// is stored in pre-order, so a node's first child is the next node in the
+/// array, and each node carries an escape index — where traversal continues
+/// when the ray misses its box. Traversal is a single loop over the array with
+/// no stack: hit → next node, miss → escape. The price is a fixed visiting
+/// order (left child first), with no nearest-child-first ordering and no
+/// pruning of subtrees queued before a nearer hit was found.
 ///
-/// Paper 001 builds it bottom-up as a complete tree with one triangle per
-/// leaf; here it is flattened from the same binned-SAH tree as [`super::Bvh2`]
-/// (leaf size from [`BuildOptions::max_leaf_size`], 1 reproduces the paper's
-/// one-triangle leaves), so the two layouts differ only in traversal.
+/// GPU stream ray tracers after Purcell et al. (2002) build it bottom-up as a
+/// complete tree with one triangle per leaf; here it is flattened from the same
+/// binned-SAH tree as [`super::Bvh2`] (leaf size from
+/// [`BuildOptions::max_leaf_size`], 1 reproduces their one-triangle leaves), so
+/// the two layouts differ only in traversal.
 pub struct ThreadedBvh<T: TriangleTest> {
     nodes: Vec<Node>,
     tris: LeafTriangles<T>,

@@ -1,5 +1,5 @@
 //! Leaves of [`super::Bvh4`] as packs of four Möller triangles in
-//! structure-of-arrays layout, tested four at once (issue 8, step 2).
+//! structure-of-arrays layout, tested four at once.
 //!
 //! This is the idea of Embree's `triangle4` leaves (Wald, Woop, Benthin,
 //! Johnson, Ernst, "Embree: a kernel framework for efficient CPU ray
@@ -151,7 +151,7 @@ impl Ray4 {
         let o = ray.origin.to_array();
         let d = ray.dir.to_array();
         // Spelled out: `array::map`'s closures became calls inside the
-        // traversals compiled for AVX2 (BENCHMARKS.md, step 4e).
+        // traversals compiled for AVX2 (BENCHMARKS.md).
         let a = [d[0].abs(), d[1].abs(), d[2].abs()];
         Ray4 {
             origin: [[o[0]; 4], [o[1]; 4], [o[2]; 4]],
@@ -184,7 +184,7 @@ impl Tri4Leaves {
     /// First the packs' triangle ranges (first position in `order`, lanes
     /// used) are assigned leaf by leaf, rewriting the references; then the
     /// packs are built in parallel straight from the mesh, with no
-    /// intermediate array of all triangles (issue 8 step 3: the packing took
+    /// intermediate array of all triangles (the packing took
     /// 115–150 ms of the full dragon's build on one thread, sequential).
     pub fn from_refs<'a>(
         mesh: &TriangleMesh,

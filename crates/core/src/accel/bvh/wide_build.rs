@@ -1,21 +1,20 @@
-//! The direct wide build (issue 8): the binned-SAH build making the wide
+//! The direct wide build: the binned-SAH build making the wide
 //! nodes of [`super::Bvh4`] and [`super::Bvh8`] as it goes, with no binary
 //! tree in between, as Embree's wide builders do (Wald et al. 2014, "Embree:
 //! a kernel framework for efficient CPU ray tracing").
 //!
-//! A wide node starts from the two halves of its own split and, while it
-//! has free slots, splits the child of largest area that the binary build
-//! would split; a split is planned ([`plan`], [`sweep_plan`]) when its node
-//! becomes a child and carried out when the node is opened, so each binary
-//! split is binned and partitioned once, as in [`super::build`]. The rules
-//! are [`super::collapse`]'s, child order, node numbering and ties
-//! included, so the result is, node for node and triangle for triangle,
-//! the binary build collapsed; what goes is the binary tree's allocation,
-//! walk and release (about 40 of the 1M-triangle terrain's 370 ms on one
-//! thread; with the build's loops prefetching, the direct build is 3-4%
-//! faster than the binary one collapsed; issue 8, step 3y). The splits of
-//! the largest nodes are carried out ahead, in parallel
-//! ([`Build::open_early`]), with the same result.
+//! A wide node starts from the two halves of its own split and, while it has
+//! free slots, splits the child of largest area that the binary build would
+//! split; a split is planned ([`plan`], [`sweep_plan`]) when its node becomes a
+//! child and carried out when the node is opened, so each binary split is
+//! binned and partitioned once, as in [`super::build`]. The rules are
+//! [`super::collapse`]'s, child order, node numbering and ties included, so the
+//! result is, node for node and triangle for triangle, the binary build
+//! collapsed; what goes is the binary tree's allocation, walk and release
+//! (about 40 of the 1M-triangle terrain's 370 ms on one thread; with the
+//! build's loops prefetching, the direct build is 3-4% faster than the binary
+//! one collapsed). The splits of the largest nodes are carried out ahead, in
+//! parallel ([`Build::open_early`]), with the same result.
 
 use super::binning::{Bins, PrimRef, RangeInfo};
 use super::build::{order_of, plan, prim_refs, split_refs, BuildOptions, Plan};
@@ -185,8 +184,7 @@ impl Build<'_> {
     /// below the root's own split runs on all cores. Two threads, builds
     /// alternated in one process: the 1M-triangle terrain 1.04× faster,
     /// the full dragon 1.03×, the 500k scatter 2% slower in one round and
-    /// 2.5% faster in another; one thread alike within 2.6% (issue 8,
-    /// step 4b).
+    /// 2.5% faster in another; one thread alike within 2.6%.
     fn open_early(
         &self,
         refs: &mut [PrimRef],

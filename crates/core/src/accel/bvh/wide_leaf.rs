@@ -1,4 +1,4 @@
-//! The leaves of the wide BVHs of issue 8 and their per-ray test, written
+//! The leaves of the wide BVHs and their per-ray test, written
 //! once for both kinds: Embree-style packs of four Möller triangles
 //! ([`Tri4Leaves`], Wald et al. 2014's `triangle4`) or one triangle after
 //! the other for the other tests. Used by [`super::Bvh4`] and [`super::Bvh8`].
@@ -52,7 +52,7 @@ impl LeafTest for PackedLeaf<'_> {
         // Every pack asked for (any-hit queries ask for the first only,
         // `prefetch::prefetch_with`): on incoherent rays 1.07-1.15x faster
         // on the scatter than the first pack alone, the dragon and the
-        // terrain within the noise (BENCHMARKS.md, step 3u).
+        // terrain within the noise (BENCHMARKS.md).
         for k in 0..count.div_ceil(4) {
             super::prefetch::prefetch_pack(self.packs.packs(), first + k);
         }

@@ -1,4 +1,4 @@
-//! The build shared by the wide BVHs of issue 8 ([`super::Bvh4`],
+//! The build shared by the wide BVHs ([`super::Bvh4`],
 //! [`super::Bvh8`]): the binned SAH making wide nodes directly
 //! ([`super::wide_build`]), or the linear BVH's binary tree
 //! ([`super::lbvh`]) collapsed into wide nodes ([`super::collapse`]); the

@@ -30,7 +30,7 @@ pub struct KdBuildInfo {
     pub empty_leaves: usize,
 }
 
-/// A kd-tree in paper 000's layout: 8-byte nodes breadth-first, leaves
+/// A kd-tree in the compact GPU layout: 8-byte nodes breadth-first, leaves
 /// pointing into one triangle-index list, triangles precomputed once each
 /// for the test `T`. The traversals ([`super::KdStack`], [`super::KdRopes`],
 /// [`super::KdRestart`], [`super::KdBacktrack`]) wrap it.

@@ -1,4 +1,4 @@
-//! Paper 002's split-plane heuristic for kd-trees in games.
+//! Kim's (2013) split-plane heuristic for kd-trees in games.
 //!
 //! Every candidate plane (the bounds of the triangle pieces in the node,
 //! along each axis) sorts the pieces into front, back and straddling
@@ -46,12 +46,12 @@ pub struct GameLeaf {
 pub struct GameBuild {
     /// Leaves in tree order with their pieces.
     pub leaves: Vec<GameLeaf>,
-    /// Pieces cut by a split plane, summed over all splits (paper 002's
+    /// Pieces cut by a split plane, summed over all splits (Kim's (2013)
     /// "number of split polygons").
     pub cuts: usize,
 }
 
-/// Build paper 002's tree with weight `h` over `mesh`: the tree, its root
+/// Build Kim's (2013) tree with weight `h` over `mesh`: the tree, its root
 /// cell, and the leaves' pieces (for [`cut_mesh`]).
 pub fn build_game(mesh: &TriangleMesh, h: u8, opts: &KdOptions) -> (KdBuildNode, Aabb, GameBuild) {
     let set = TriangleSet::new(mesh);

@@ -1,5 +1,5 @@
-//! Paper 000's compact kd-tree node (8 bytes) and the breadth-first layout
-//! of the pointer tree into one array.
+//! The compact kd-tree node (8 bytes) of the per-ray-stack GPU traversal and
+//! the breadth-first layout of the pointer tree into one array.
 
 use super::tree::{split_cell, KdBuildNode};
 use crate::aabb::Aabb;
@@ -9,7 +9,7 @@ const AXIS_SHIFT: u32 = 29;
 /// Largest child offset the 28 offset bits hold.
 pub(crate) const MAX_OFFSET: u32 = (1 << 28) - 1;
 
-/// An 8-byte kd-tree node (paper 000): a word with 1 bit leaf flag, 2 bits
+/// An 8-byte kd-tree node: a word with 1 bit leaf flag, 2 bits
 /// split axis and a 28-bit offset of the first of the two children (stored
 /// next to each other, so one offset serves both), and the split position as
 /// an `f32`. A leaf's word holds the offset of its first entry in the
@@ -99,11 +99,11 @@ pub(crate) struct KdLayout {
     pub parents: Vec<u32>,
 }
 
-/// Lay `root` with cell `cell` out as subtrees laid out breadth-first
-/// (paper 000): the two children of a node are always adjacent; the tree is
-/// cut into subtrees of `levels` levels, each laid out breadth-first, the
-/// subtrees below one after the other depth first. `levels = 0` lays the
-/// whole tree out breadth-first, level by level, as one subtree.
+/// Lay `root` with cell `cell` out as subtrees laid out breadth-first (the
+/// per-ray-stack GPU layout): the two children of a node are always adjacent;
+/// the tree is cut into subtrees of `levels` levels, each laid out
+/// breadth-first, the subtrees below one after the other depth first. `levels =
+/// 0` lays the whole tree out breadth-first, level by level, as one subtree.
 ///
 /// Short subtrees keep a node's descendants for the next few levels within
 /// a few cache lines (with 8-byte nodes, 3 levels below a sibling pair are

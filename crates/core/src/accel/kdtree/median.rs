@@ -1,4 +1,5 @@
-//! The spatial-median kd-tree: the simple baseline of papers 000 and 002.
+//! The spatial-median kd-tree: the simple baseline for the SAH and Kim's (2013)
+//! split-plane heuristic.
 
 use super::refs::{leaf_of, root_refs, split_refs, Ref};
 use super::tree::{split_cell, KdBuildNode};

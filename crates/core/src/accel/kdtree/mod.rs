@@ -1,21 +1,21 @@
-//! kd-trees (papers 000 and 002): three builds, one compact node layout,
-//! four traversals.
+//! kd-trees: three builds (the SAH, Kim's (2013) split-plane heuristic and the
+//! spatial median), one compact node layout, four traversals.
 //!
 //! Builds ([`KdSplit`]), all producing the same [`KdBuildNode`] tree:
 //! - [`KdSplit::Sah`]: the surface area heuristic in O(N log N) with
 //!   perfect splits and automatic termination (Wald & Havran 2006), [`sah`].
-//! - [`KdSplit::Game`]: paper 002's weighted split count / balance score
+//! - [`KdSplit::Game`]: Kim's (2013) weighted split count / balance score
 //!   `|front − back| · (20 − H) + splits · H`, cutting straddling triangles
 //!   into pieces, [`game`].
 //! - [`KdSplit::Median`]: the spatial median of the longest axis, the simple
 //!   baseline.
 //!
-//! Layout: paper 000's 8-byte [`KdNode`], subtrees laid out breadth first,
+//! Layout: the compact 8-byte [`KdNode`], subtrees laid out breadth first,
 //! leaves pointing into one triangle-index list; the triangles are
 //! precomputed once each.
 //!
 //! Traversals, each an [`Accel`](crate::accel::Accel) generic over the
-//! triangle test: [`KdStack`] (paper 000's per-ray stack), [`KdRopes`]
+//! triangle test: [`KdStack`] (a fixed-size per-ray stack), [`KdRopes`]
 //! (stackless with ropes and leaf boxes, Popov et al. 2007), [`KdRestart`]
 //! and [`KdBacktrack`] (Foley & Sugerman 2005).
 //!
@@ -84,7 +84,7 @@ pub const MAX_KD_DEPTH: usize = 64;
 pub enum KdSplit {
     /// Surface area heuristic, O(N log N), perfect splits (Wald & Havran 2006).
     Sah,
-    /// Paper 002's score with weight `H` in `0..=20`: 0 balances only, 20
+    /// Kim's (2013) score with weight `H` in `0..=20`: 0 balances only, 20
     /// counts split triangles only.
     Game(u8),
     /// Middle of the cell's longest axis.

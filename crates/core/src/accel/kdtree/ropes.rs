@@ -1,5 +1,5 @@
 //! Stackless kd-tree traversal with ropes and leaf boxes (Popov, Günther,
-//! Seidel & Slusallek 2007), the stackless comparison of paper 000.
+//! Seidel & Slusallek 2007), the stackless alternative to the per-ray stack.
 
 use super::base::KdTree;
 use super::layout::KdNode;

@@ -1,4 +1,4 @@
-//! Paper 000's kd-tree traversal with a fixed-size per-ray stack.
+//! kd-tree traversal with a fixed-size per-ray stack.
 
 use super::base::KdTree;
 use super::{KdOptions, MAX_KD_DEPTH};
@@ -9,14 +9,13 @@ use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
 
-/// kd-tree traversal with a per-ray stack (paper 000, after Havran's
-/// TA_B^rec): clip the ray to the scene cell; at an inner node compare the
-/// distance to the split plane with the segment `[tmin, tmax]`; visit the
-/// near child and push the far one with its segment when the ray crosses the
-/// plane inside the segment. At a leaf, stop when the nearest hit lies
-/// within the leaf's segment, else pop. The stack is a fixed array of
-/// [`MAX_KD_DEPTH`] entries (the builds never exceed that depth), no node
-/// is visited twice.
+/// kd-tree traversal with a per-ray stack (after Havran's TA_B^rec): clip the
+/// ray to the scene cell; at an inner node compare the distance to the split
+/// plane with the segment `[tmin, tmax]`; visit the near child and push the far
+/// one with its segment when the ray crosses the plane inside the segment. At a
+/// leaf, stop when the nearest hit lies within the leaf's segment, else pop.
+/// The stack is a fixed array of [`MAX_KD_DEPTH`] entries (the builds never
+/// exceed that depth), no node is visited twice.
 pub struct KdStack<T: TriangleTest> {
     tree: KdTree<T>,
 }

@@ -1,6 +1,5 @@
 //! [`Bvh8`]'s single-ray traversal as a state advanced one node or leaf at
-//! a time, and batches that interleave [`WALKS`] rays (issue 8, steps 3r
-//! and 3w).
+//! a time, and batches that interleave [`WALKS`] rays.
 //!
 //! An incoherent ray's traversal is one long chain of dependent loads: the
 //! next node's address comes out of the current node's box test. A core
@@ -265,15 +264,14 @@ impl<T: TriangleTest> Bvh8<T> {
     }
 }
 
-/// How many rays are stepped in turn. On the AMD EPYC of step 3r three or
-/// four were no faster than two on the full dragon; on the Intel Xeon of
-/// step 3w (AVX-512, the sorted child order of `sort8.rs`) six were
-/// 1.1-1.3x faster than two. Those batches handed the walks sixteen rays at
-/// a time, so that they ran dry every sixteen rays; since step 3z they get
-/// a whole task's rays (`packet::in_groups`), and twelve were faster than
-/// six by 11% on the dragon, 18% on the terrain and 3% on the scatter
-/// (incoherent rays, 1 and 2 threads; 8, 10 and 16 in between or below;
-/// BENCHMARKS.md, step 3z).
+/// How many rays are stepped in turn. The walks get a whole task's rays
+/// (`packet::in_groups`), and twelve were faster than six by 11% on the
+/// dragon, 18% on the terrain and 3% on the scatter (incoherent rays, 1 and
+/// 2 threads; 8, 10 and 16 in between or below; BENCHMARKS.md). Handed
+/// sixteen rays at a time, so that they ran dry every sixteen rays, three
+/// or four walks were no faster than two on the full dragon on an AMD EPYC,
+/// and six were 1.1-1.3x faster than two on an Intel Xeon (AVX-512, the
+/// sorted child order of `sort8.rs`).
 const WALKS: usize = 12;
 
 #[cfg(test)]
