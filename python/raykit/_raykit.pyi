@@ -26,7 +26,12 @@ class Scene:
         accel: str = "bvh8",
         test: str = "moller",
         threads: int = 0,
+        structure: Optional[str | os.PathLike[str]] = None,
     ) -> None: ...
+    def save(self, path: str | os.PathLike[str]) -> None: ...
+    def refit(
+        self, vertices: npt.NDArray[np.float32], threads: int = 0, max_degradation: float = 1.5
+    ) -> dict[str, Any]: ...
     def cast_rays(
         self, rays: npt.NDArray[np.float32], threads: int = 0, width: int = 0
     ) -> Tuple[

@@ -5,8 +5,10 @@ Method names, arguments, result keys, shapes and dtypes follow Open3D, so
 code written for Open3D runs after changing its import. Results are numpy
 arrays (of :class:`raykit._arrays.Array`, which also has Open3D's
 ``.numpy()``). Beyond Open3D: ``accel=`` and ``test=`` choose the
-acceleration structure and the ray/triangle test, and inputs may be
-float64 as well as float32.
+acceleration structure and the ray/triangle test, inputs may be float64 as
+well as float32, :meth:`RaycastingScene.save` and
+:meth:`RaycastingScene.load_structure` keep the built structure in a file,
+and :meth:`RaycastingScene.update_vertices` refits it to moved vertices.
 
 Several geometries: each ``add_triangles`` call appends one geometry; they
 are concatenated into one triangle mesh with one acceleration structure,
@@ -18,6 +20,7 @@ the ``add_triangles`` call, from 0) and its index within that geometry.
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -105,30 +108,37 @@ class RaycastingScene:
         self._scene = None
         return len(self._vertices) - 1
 
+    def _mesh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vertices, triangles (indices shifted to the concatenated vertices)
+        and first triangle of each geometry, over every geometry added."""
+        counts = [len(t) for t in self._triangles]
+        offsets = np.zeros(len(counts) + 1, dtype=np.uint64)
+        np.cumsum(counts, out=offsets[1:])
+        if offsets[-1] > np.iinfo(np.uint32).max:
+            raise ValueError("a scene holds at most 4294967295 triangles")
+        base = 0
+        shifted = []
+        for v, t in zip(self._vertices, self._triangles):
+            shifted.append(t + np.uint32(base) if base else t)
+            base += len(v)
+        if base > np.iinfo(np.uint32).max:
+            raise ValueError("a scene holds at most 4294967295 vertices")
+        return (
+            np.ascontiguousarray(self._all_vertices()),
+            np.ascontiguousarray(np.concatenate(shifted) if shifted else np.zeros((0, 3), np.uint32)),
+            offsets.astype(np.uint32),
+        )
+
+    def _all_vertices(self) -> np.ndarray:
+        """The vertices of every geometry, concatenated."""
+        return np.concatenate(self._vertices) if self._vertices else np.zeros((0, 3), np.float32)
+
     def _built(self):
         """The engine's scene over every geometry added so far (built once)."""
         if self._scene is None:
-            counts = [len(t) for t in self._triangles]
-            offsets = np.zeros(len(counts) + 1, dtype=np.uint64)
-            np.cumsum(counts, out=offsets[1:])
-            if offsets[-1] > np.iinfo(np.uint32).max:
-                raise ValueError("a scene holds at most 4294967295 triangles")
-            base = 0
-            shifted = []
-            for v, t in zip(self._vertices, self._triangles):
-                shifted.append(t + np.uint32(base) if base else t)
-                base += len(v)
-            if base > np.iinfo(np.uint32).max:
-                raise ValueError("a scene holds at most 4294967295 vertices")
-            vertices = np.concatenate(self._vertices) if self._vertices else np.zeros((0, 3), np.float32)
-            triangles = np.concatenate(shifted) if shifted else np.zeros((0, 3), np.uint32)
+            vertices, triangles, offsets = self._mesh()
             self._scene = _raykit.Scene(
-                np.ascontiguousarray(vertices),
-                np.ascontiguousarray(triangles),
-                offsets.astype(np.uint32),
-                self._accel_name,
-                self._test_name,
-                self._nthreads,
+                vertices, triangles, offsets, self._accel_name, self._test_name, self._nthreads
             )
         return self._scene
 
@@ -301,6 +311,82 @@ class RaycastingScene:
     def test(self) -> str:
         """The ray/triangle test's name."""
         return self._test_name
+
+    def save(self, path) -> None:
+        """Write the ray acceleration structure (built first if needed) to
+        ``path``, for :meth:`load_structure` (beyond Open3D).
+
+        Only ``"bvh8"`` and ``"bvh4"`` have a saved form. The file is
+        versioned and checksummed, holds a checksum of the mesh, and is
+        written to a temporary file then renamed over ``path``. Raises
+        ``OSError`` when it cannot be written and ``ValueError`` for a scene
+        without triangles or a structure with no saved form.
+        """
+        self._built().save(os.fspath(path))
+
+    def load_structure(self, path) -> None:
+        """Load the ray acceleration structure of the geometries added so
+        far from ``path`` (written by :meth:`save` for the same mesh) instead
+        of building it (beyond Open3D).
+
+        The file's structure and triangle test replace ``accel`` and
+        ``test``. Raises ``OSError`` (``FileNotFoundError``) when the file
+        cannot be read and ``ValueError``, naming the byte offset and field,
+        when it is damaged or was saved for another mesh (its mesh
+        checksum differs). Adding a geometry afterwards builds a new
+        structure at the next query.
+        """
+        vertices, triangles, offsets = self._mesh()
+        scene = _raykit.Scene(
+            vertices,
+            triangles,
+            offsets,
+            self._accel_name,
+            self._test_name,
+            self._nthreads,
+            os.fspath(path),
+        )
+        self._scene = scene
+        self._accel_name = scene.accel
+        self._test_name = scene.test
+
+    def update_vertices(
+        self, geometry_id: int, vertex_positions, *, max_degradation: float = 1.5
+    ) -> dict | None:
+        """Move the vertices of geometry ``geometry_id`` to
+        ``vertex_positions`` (as many as it has, same triangles) and refit
+        the ray acceleration structure to them (beyond Open3D).
+
+        A refit recomputes every box of the BVH bottom-up in O(n) and keeps
+        its topology (Wald, Boulos and Shirley 2007): answers stay exact,
+        but traversal may slow as boxes overlap more. When the refit tree's
+        SAH cost passes ``max_degradation`` times the built tree's, or the
+        structure has no refit (only ``"bvh8"`` and ``"bvh4"`` have), it is
+        rebuilt. The point-query structure is rebuilt at its next use.
+        Returns ``{"rebuilt": bool, "degradation": float}`` (degradation NaN
+        when the structure has no refit), or ``None`` when no structure was
+        built yet (it is built at the next query).
+        """
+        gid = int(geometry_id)
+        if not 0 <= gid < len(self._vertices):
+            raise ValueError(f"geometry_id {geometry_id} out of range: the scene has {len(self._vertices)} geometries")
+        v = _arrays.floats(vertex_positions, "vertex_positions", last=3)
+        old = self._vertices[gid]
+        if v.shape != old.shape:
+            raise ValueError(f"vertex_positions must have shape {old.shape} (geometry {gid}'s), got {v.shape}")
+        if not np.isfinite(v).all():
+            bad = int(np.argmax(~np.isfinite(v).all(axis=1)))
+            raise ValueError(f"vertex {bad} has a NaN or infinite coordinate")
+        self._vertices[gid] = v
+        if self._scene is None:
+            return None
+        try:
+            return self._scene.refit(
+                np.ascontiguousarray(self._all_vertices()), self._nthreads, float(max_degradation)
+            )
+        except BaseException:
+            self._vertices[gid] = old
+            raise
 
     def stats(self) -> dict:
         """Size and quality of the acceleration structure: nodes, leaves,

@@ -4,6 +4,7 @@
 
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyPermissionError, PyValueError};
 use pyo3::PyErr;
+use raykit_core::accel::PersistError;
 use raykit_io::{ErrorKind, LoadError};
 use raykit_terrain::io::DemError;
 use std::error::Error;
@@ -52,4 +53,15 @@ pub fn dem_error(e: DemError) -> PyErr {
 /// A `ValueError` with `message`.
 pub fn value_error(message: impl Into<String>) -> PyErr {
     PyValueError::new_err(message.into())
+}
+
+/// A saved structure's error: the file could not be read or written
+/// (`OSError`), or it is damaged, saved for another mesh, or the
+/// structure has no saved form (`ValueError`).
+pub fn persist_error(e: PersistError) -> PyErr {
+    let message = e.to_string();
+    match e {
+        PersistError::Io { source, .. } => io_error(source.kind(), message),
+        _ => PyValueError::new_err(message),
+    }
 }

@@ -63,7 +63,8 @@ pub fn closest_points<'py>(
         )));
     }
     let (pts, g, p, uv, nrm, dist) = detached(py, threads, || {
-        let bvh = scene.surface();
+        let built = scene.read();
+        let bvh = built.surface();
         let qp = points(q);
         let mut found: Vec<Option<ClosestPoint>> = vec![None; n];
         bvh.closest_points(&qp, max_distance, &mut found);
@@ -88,7 +89,7 @@ pub fn closest_points<'py>(
                     pt.copy_from_slice(&c.point.to_array());
                     (*g, *p) = scene.split(c.prim);
                     uv.copy_from_slice(&[c.u, c.v]);
-                    nrm.copy_from_slice(&scene.normals[c.prim as usize].to_array());
+                    nrm.copy_from_slice(&built.normals[c.prim as usize].to_array());
                     *d = c.distance;
                 }
                 None if !q.is_finite() => *d = f32::NAN,
@@ -131,7 +132,8 @@ fn point_values<'py>(
 ) -> PyResult<Bound<'py, PyArray1<f32>>> {
     let (q, n) = rows(&query_points, 3, "query_points")?;
     let out = detached(py, threads, || {
-        let bvh = scene.surface();
+        let built = scene.read();
+        let bvh = built.surface();
         let qp = points(q);
         let mut out = vec![0.0f32; n];
         match what {
@@ -225,7 +227,8 @@ pub fn count_intersections<'py>(
 ) -> PyResult<Bound<'py, PyArray1<i32>>> {
     let (r, n) = rows(&rays, 6, "rays")?;
     let out = detached(py, threads, || {
-        let bvh = scene.surface();
+        let built = scene.read();
+        let bvh = built.surface();
         let mut counts = vec![0u32; n];
         bvh.count_hits_batch(&self::rays(r), &mut counts);
         counts
@@ -260,7 +263,8 @@ pub fn list_intersections<'py>(
 )> {
     let (r, n) = rows(&rays, 6, "rays")?;
     let (splits, ray_ids, t, g, p, uv) = detached(py, threads, || {
-        let bvh = scene.surface();
+        let built = scene.read();
+        let bvh = built.surface();
         let lists: Vec<Vec<Hit>> = bvh.ray_hits_batch(&self::rays(r), max_hits);
         let mut splits = Vec::with_capacity(n + 1);
         let mut total = 0u32;

@@ -32,7 +32,8 @@ pub fn render<'py>(
     shadows: bool,
     threads: i64,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
-    let Some(accel) = &scene.accel else {
+    let built = scene.read();
+    let Some(accel) = &built.accel else {
         return Err(value_error("the scene has no triangles to render"));
     };
     if width == 0 || width > 16384 || height == 0 || height > 16384 {
@@ -50,7 +51,7 @@ pub fn render<'py>(
             "samples_per_pixel must be between 1 and 4096, got {samples_per_pixel}"
         )));
     }
-    let mesh = &scene.mesh;
+    let mesh = &built.mesh;
     let bounds = mesh.bounds();
     let v = |t: (f32, f32, f32)| Vec3::new(t.0, t.1, t.2);
     let camera = match eye {

@@ -6,6 +6,7 @@
 //! and its own triangle index by a binary search.
 
 use crate::arrays::{flat, rows};
+use crate::errors::persist_error;
 use crate::errors::value_error;
 use crate::image_order::ImageOrder;
 use crate::threads::detached;
@@ -13,12 +14,14 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::accel::bvh::DEFAULT_MAX_DEGRADATION;
+use raykit_core::accel::{build_accel, load_accel, AccelKind, BuildOptions, RefitError};
 use raykit_core::query::SurfaceBvh;
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
-use std::sync::OnceLock;
+use std::path::PathBuf;
+use std::sync::{OnceLock, RwLock, RwLockReadGuard};
 
 /// Rays per rayon task when converting rays and answers.
 const GRAIN: usize = 4096;
@@ -27,21 +30,45 @@ const GRAIN: usize = 4096;
 /// nothing (Open3D's `RaycastingScene.INVALID_ID`).
 pub const INVALID_ID: u32 = u32::MAX;
 
-/// A triangle mesh with its acceleration structure, built once.
+/// A triangle mesh with its acceleration structure, built (or loaded)
+/// once and refit when the vertices move.
 #[pyclass(module = "raykit._raykit", frozen)]
 pub struct Scene {
+    offsets: Vec<u32>,
+    kind: AccelKind,
+    test: TestKind,
+    /// The mesh and its structures; queries read it, a refit
+    /// ([`Scene::refit`]) writes it.
+    built: RwLock<Built>,
+}
+
+/// The mesh of a [`Scene`] and the structures made over it.
+pub(crate) struct Built {
     pub(crate) mesh: TriangleMesh,
     /// Unit normal of each triangle by its winding (zero for degenerate
     /// ones), made once so a hit costs one load instead of an index and
     /// three vertices.
     pub(crate) normals: Vec<Vec3>,
-    offsets: Vec<u32>,
     pub(crate) accel: Option<Box<dyn Accel>>,
     /// The 8-wide BVH of the point and multi-hit queries, built at the
     /// first such query.
-    pub(crate) surface: OnceLock<SurfaceBvh>,
-    kind: AccelKind,
-    test: TestKind,
+    surface: OnceLock<SurfaceBvh>,
+}
+
+impl Built {
+    /// The BVH of the point and multi-hit queries (built on first use).
+    pub(crate) fn surface(&self) -> &SurfaceBvh {
+        self.surface.get_or_init(|| SurfaceBvh::build(&self.mesh))
+    }
+}
+
+/// Unit normal of each triangle of `mesh`.
+fn face_normals(mesh: &TriangleMesh) -> Vec<Vec3> {
+    (0..mesh.num_triangles())
+        .into_par_iter()
+        .with_min_len(GRAIN)
+        .map(|i| mesh.face_normal(i).normalize_or_zero())
+        .collect()
 }
 
 /// The ray in row `r` of `[ox, oy, oz, dx, dy, dz]` over `[tnear, tfar]`.
@@ -72,9 +99,10 @@ fn make_rays(rays: &[f32], tnear: f32, tfar: f32, order: Option<&ImageOrder>) ->
 }
 
 impl Scene {
-    /// The BVH of the point and multi-hit queries (built on first use).
-    pub(crate) fn surface(&self) -> &SurfaceBvh {
-        self.surface.get_or_init(|| SurfaceBvh::build(&self.mesh))
+    /// The mesh and its structures, for reading (waits while a refit
+    /// writes them).
+    pub(crate) fn read(&self) -> RwLockReadGuard<'_, Built> {
+        self.built.read().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Geometry id and the triangle's index within it.
@@ -85,9 +113,9 @@ impl Scene {
 
     /// Nearest hits of the rows of `rays`, traced in image blocks when
     /// the rays form rows of `width` (0: any order).
-    fn nearest(&self, rays: &[f32], width: usize) -> Vec<Option<Hit>> {
+    fn nearest(&self, built: &Built, rays: &[f32], width: usize) -> Vec<Option<Hit>> {
         let n = rays.len() / 6;
-        let Some(a) = &self.accel else {
+        let Some(a) = &built.accel else {
             return vec![None; n];
         };
         let order = ImageOrder::new(n, width);
@@ -107,9 +135,14 @@ impl Scene {
 impl Scene {
     /// Build the structure `accel` with triangle test `test` over the
     /// triangles (`(m, 3)` uint32) of the vertices (`(n, 3)` float32);
-    /// `offsets` (uint32) holds the first triangle of each geometry.
+    /// `offsets` (uint32) holds the first triangle of each geometry. With
+    /// `structure`, the path of a file written by [`Scene::save`] for this
+    /// mesh, the structure is loaded from it instead (its own structure and
+    /// test replace `accel` and `test`), refused when it is damaged or was
+    /// saved for another mesh.
     #[new]
-    #[pyo3(signature = (vertices, triangles, offsets, accel="bvh8", test="moller", threads=0))]
+    #[pyo3(signature = (vertices, triangles, offsets, accel="bvh8", test="moller", threads=0, structure=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         vertices: PyReadonlyArray2<'_, f32>,
@@ -118,6 +151,7 @@ impl Scene {
         accel: &str,
         test: &str,
         threads: i64,
+        structure: Option<PathBuf>,
     ) -> PyResult<Scene> {
         let kind = AccelKind::from_name(accel).ok_or_else(|| {
             let names: Vec<_> = AccelKind::ALL.iter().map(|k| k.name()).collect();
@@ -154,26 +188,126 @@ impl Scene {
             Ok(()) | Err(MeshError::Empty) => {}
             Err(e) => return Err(value_error(e.to_string())),
         }
+        if structure.is_some() && mesh.num_triangles() == 0 {
+            return Err(value_error(
+                "the scene has no triangles to load a structure for",
+            ));
+        }
         let options = BuildOptions::default();
-        let (mesh, normals, accel) = detached(py, threads, move || {
-            let accel =
-                (mesh.num_triangles() > 0).then(|| build_accel(kind, test_kind, &mesh, &options));
-            let normals = (0..mesh.num_triangles())
-                .into_par_iter()
-                .with_min_len(GRAIN)
-                .map(|i| mesh.face_normal(i).normalize_or_zero())
-                .collect();
-            (mesh, normals, accel)
-        })?;
+        let (mesh, normals, accel, kind, test_kind) = detached(py, threads, move || {
+            let (kind, test_kind, accel) = match &structure {
+                Some(path) => {
+                    let (k, t, a) = load_accel(path, &mesh).map_err(persist_error)?;
+                    (k, t, Some(a))
+                }
+                None => (
+                    kind,
+                    test_kind,
+                    (mesh.num_triangles() > 0)
+                        .then(|| build_accel(kind, test_kind, &mesh, &options)),
+                ),
+            };
+            let normals = face_normals(&mesh);
+            Ok::<_, PyErr>((mesh, normals, accel, kind, test_kind))
+        })??;
         Ok(Scene {
-            mesh,
-            normals,
             offsets,
-            accel,
-            surface: OnceLock::new(),
             kind,
             test: test_kind,
+            built: RwLock::new(Built {
+                mesh,
+                normals,
+                accel,
+                surface: OnceLock::new(),
+            }),
         })
+    }
+
+    /// Save the ray structure to `path` (bvh4 and bvh8 have a saved form),
+    /// with the mesh's checksum, for `Scene(..., structure=path)`.
+    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        py.detach(|| {
+            let built = self.read();
+            let Some(accel) = &built.accel else {
+                return Err(value_error("the scene has no triangles to save"));
+            };
+            accel.save(&path, &built.mesh).map_err(persist_error)
+        })
+    }
+
+    /// Move the vertices to `vertices` (`(n, 3)` float32, as many as the
+    /// mesh has, same triangles) and refit the ray structure to them in
+    /// O(n) (Wald, Boulos and Shirley 2007), rebuilding it when the refit
+    /// tree's SAH cost passes `max_degradation` times the built tree's, or
+    /// when the structure has no refit; the point-query BVH is rebuilt at
+    /// its next use. Returns `{"rebuilt": bool, "degradation": float}`
+    /// (degradation NaN when the structure has no refit).
+    #[pyo3(signature = (vertices, threads=0, max_degradation=DEFAULT_MAX_DEGRADATION))]
+    fn refit<'py>(
+        &self,
+        py: Python<'py>,
+        vertices: PyReadonlyArray2<'py, f32>,
+        threads: i64,
+        max_degradation: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (v, n) = rows(&vertices, 3, "vertices")?;
+        if max_degradation.is_nan() || max_degradation < 1.0 {
+            return Err(value_error(format!(
+                "max_degradation must be >= 1, got {max_degradation}"
+            )));
+        }
+        let (rebuilt, degradation) = detached(py, threads, || {
+            let mut built = self.built.write().unwrap_or_else(|e| e.into_inner());
+            let have = built.mesh.positions.len();
+            if n != have {
+                return Err(value_error(format!(
+                    "vertices: the scene has {have} vertices, got {n}"
+                )));
+            }
+            if let Some(i) = v
+                .chunks_exact(3)
+                .position(|p| !p.iter().all(|c| c.is_finite()))
+            {
+                return Err(value_error(format!(
+                    "vertex {i} has a NaN or infinite coordinate"
+                )));
+            }
+            let mesh = TriangleMesh::new(
+                v.chunks_exact(3)
+                    .map(|p| Vec3::new(p[0], p[1], p[2]))
+                    .collect(),
+                built.mesh.indices.clone(),
+            );
+            let (kind, test) = (self.kind, self.test);
+            let rebuild = |accel: &mut Option<Box<dyn Accel>>| {
+                *accel = Some(build_accel(kind, test, &mesh, &BuildOptions::default()));
+            };
+            let outcome = match built.accel.as_mut() {
+                None => (false, 1.0),
+                Some(a) => match a.refit(&mesh) {
+                    Ok(report) => {
+                        let d = report.degradation();
+                        if d > max_degradation {
+                            rebuild(&mut built.accel);
+                        }
+                        (d > max_degradation, d)
+                    }
+                    Err(RefitError::Unsupported) => {
+                        rebuild(&mut built.accel);
+                        (true, f64::NAN)
+                    }
+                    Err(e) => return Err(value_error(e.to_string())),
+                },
+            };
+            built.normals = face_normals(&mesh);
+            built.mesh = mesh;
+            built.surface = OnceLock::new();
+            Ok(outcome)
+        })??;
+        let d = PyDict::new(py);
+        d.set_item("rebuilt", rebuilt)?;
+        d.set_item("degradation", degradation)?;
+        Ok(d)
     }
 
     /// Nearest hits of `(n, 6)` float32 rays: `(t_hit, geometry_ids,
@@ -196,7 +330,8 @@ impl Scene {
     )> {
         let (r, n) = rows(&rays, 6, "rays")?;
         let (t, g, p, uv, nrm) = detached(py, threads, || {
-            let hits = self.nearest(r, width);
+            let built = self.read();
+            let hits = self.nearest(&built, r, width);
             let mut t = vec![f32::INFINITY; n];
             let mut g = vec![INVALID_ID; n];
             let mut p = vec![INVALID_ID; n];
@@ -214,7 +349,7 @@ impl Scene {
                         *t = h.t;
                         (*g, *p) = self.split(h.prim);
                         uv.copy_from_slice(&[h.u, h.v]);
-                        nrm.copy_from_slice(&self.normals[h.prim as usize].to_array());
+                        nrm.copy_from_slice(&built.normals[h.prim as usize].to_array());
                     }
                 });
             (t, g, p, uv, nrm)
@@ -245,7 +380,7 @@ impl Scene {
         let (r, n) = rows(&rays, 6, "rays")?;
         let occluded = detached(py, threads, || {
             let mut occluded = vec![false; n];
-            if let Some(a) = &self.accel {
+            if let Some(a) = &self.read().accel {
                 let order = ImageOrder::new(n, width);
                 a.occluded_batch(&make_rays(r, tnear, tfar, order.as_ref()), &mut occluded);
                 if let Some(o) = order {
@@ -290,7 +425,8 @@ impl Scene {
             return Err(value_error(format!("min_gap must be >= 0, got {min_gap}")));
         }
         let hits: Vec<(u32, Hit)> = detached(py, threads, || {
-            let Some(accel) = &self.accel else {
+            let built = self.read();
+            let Some(accel) = &built.accel else {
                 return Vec::new();
             };
             (0..n)
@@ -331,7 +467,7 @@ impl Scene {
     /// Triangles in the scene.
     #[getter]
     fn num_triangles(&self) -> usize {
-        self.mesh.num_triangles()
+        self.read().mesh.num_triangles()
     }
 
     /// The structure's name (`--accel`).
@@ -350,7 +486,7 @@ impl Scene {
     /// columns); empty for a scene without triangles.
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
-        if let Some(a) = &self.accel {
+        if let Some(a) = &self.read().accel {
             let s = a.stats();
             d.set_item("nodes", s.nodes)?;
             d.set_item("leaves", s.leaves)?;
