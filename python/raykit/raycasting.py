@@ -351,7 +351,7 @@ class RaycastingScene:
         self._test_name = scene.test
 
     def update_vertices(
-        self, geometry_id: int, vertex_positions, *, max_degradation: float = 1.5
+        self, geometry_id: int, vertex_positions, *, max_degradation: float | None = None
     ) -> dict | None:
         """Move the vertices of geometry ``geometry_id`` to
         ``vertex_positions`` (as many as it has, same triangles) and refit
@@ -360,7 +360,8 @@ class RaycastingScene:
         A refit recomputes every box of the BVH bottom-up in O(n) and keeps
         its topology (Wald, Boulos and Shirley 2007): answers stay exact,
         but traversal may slow as boxes overlap more. When the refit tree's
-        SAH cost passes ``max_degradation`` times the built tree's, or the
+        SAH cost passes ``max_degradation`` (default 1.5, the engine's
+        balance of refit and rebuild costs) times the built tree's, or the
         structure has no refit (only ``"bvh8"`` and ``"bvh4"`` have), it is
         rebuilt. The point-query structure is rebuilt at its next use.
         Returns ``{"rebuilt": bool, "degradation": float}`` (degradation NaN
@@ -381,9 +382,8 @@ class RaycastingScene:
         if self._scene is None:
             return None
         try:
-            return self._scene.refit(
-                np.ascontiguousarray(self._all_vertices()), self._nthreads, float(max_degradation)
-            )
+            limit = {} if max_degradation is None else {"max_degradation": float(max_degradation)}
+            return self._scene.refit(np.ascontiguousarray(self._all_vertices()), self._nthreads, **limit)
         except BaseException:
             self._vertices[gid] = old
             raise

@@ -187,6 +187,14 @@ def test_update_vertices_rebuilds_past_the_degradation_limit(bunny):
     fresh = scene_of((scrambled, f))
     assert scene.stats() == fresh.stats()
     np.testing.assert_array_equal(scene.cast_rays(rays)["t_hit"], fresh.cast_rays(rays)["t_hit"])
+    # A limit of infinity keeps the refit tree, which answers the same.
+    kept = scene_of((v, f))
+    kept.stats()
+    report = kept.update_vertices(0, scrambled, max_degradation=float("inf"))
+    assert not report["rebuilt"] and report["degradation"] > 1.5
+    np.testing.assert_array_equal(kept.cast_rays(rays)["t_hit"], fresh.cast_rays(rays)["t_hit"])
+    with pytest.raises(ValueError, match="max_degradation"):
+        kept.update_vertices(0, v, max_degradation=0.5)
 
 
 def test_update_vertices_before_a_build_and_bad_input(bunny):
