@@ -194,6 +194,9 @@ fn crossing(o: V, d: V, [a, b, c]: [V; 3]) -> Option<(f64, f64)> {
     Some((t, u.min(v).min(1.0 - u - v)))
 }
 
+/// A crossing: `t` and the triangle.
+type Crossing = (f64, u32);
+
 struct TestRay {
     o: V,
     d: V,
@@ -203,7 +206,7 @@ struct TestRay {
 
 /// Triangles the ray surely crosses (well inside, `t` well within the
 /// interval) and those it may cross within rounding (edges, ends).
-fn brute_crossings(tris: &[[V; 3]], r: &TestRay) -> (Vec<(f64, u32)>, Vec<(f64, u32)>) {
+fn brute_crossings(tris: &[[V; 3]], r: &TestRay) -> (Vec<Crossing>, Vec<Crossing>) {
     let (mut sure, mut maybe) = (Vec::new(), Vec::new());
     let eps = 1e-4;
     let tol_t = 1e-4 * norm(r.d).recip() + 1e-4 * r.tfar.min(1e6).abs();
@@ -303,7 +306,7 @@ fn point_queries_match_brute_force() {
         decided * 10 >= pts.len() * 9,
         "too few clear cases: {decided}"
     );
-    assert!(inside.iter().any(|&b| b == 1) && inside.contains(&0));
+    assert!(inside.contains(&1) && inside.contains(&0));
 
     let sd = run("signed-distance");
     for (i, (&w, want)) in wind.iter().zip(&dist).enumerate() {
