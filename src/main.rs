@@ -35,6 +35,8 @@ enum Command {
     Rays(cmd::rays::RaysArgs),
     /// Trace a ray file against a mesh and write hits (or occlusion) to a file.
     Trace(cmd::trace::TraceArgs),
+    /// Point and ray queries on a mesh's surface: closest point, distance, signed distance, inside, hit counts, all hits.
+    Query(cmd::query::QueryArgs),
     /// Measure build time, memory and Mrays/s of bvh8 (the default) or of every structure × triangle test.
     Bench(cmd::bench::BenchArgs),
     /// Find and remove T-junctions (vertices inside other triangles' edges).
@@ -59,6 +61,7 @@ fn main() -> ExitCode {
         Command::Render(a) => cmd::render::run(a),
         Command::Rays(a) => cmd::rays::run(a),
         Command::Trace(a) => cmd::trace::run(a),
+        Command::Query(a) => cmd::query::run(a),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Tjunctions(a) => cmd::tjunctions::run(a),
         Command::Cull(a) => cmd::cull::run(a),

@@ -8,6 +8,7 @@ pub mod cull;
 pub mod experiment;
 pub mod export;
 pub mod info;
+pub mod query;
 pub mod rays;
 pub mod render;
 pub mod serve;

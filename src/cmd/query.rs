@@ -1,0 +1,265 @@
+//! `raykit query`: point and multi-hit ray queries on a mesh's surface,
+//! from a point or ray file to a binary answer file.
+
+use crate::measure::{pool, timed};
+use crate::scene_arg;
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use raykit_core::query::{ClosestPoint, SurfaceBvh};
+use raykit_core::{Ray, Vec3};
+use raykit_io::LoadError;
+use serde_json::json;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Bytes per point in a point file.
+const POINT_RECORD_SIZE: usize = 12;
+
+/// The question asked of each point or ray.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Query {
+    /// Per point: the nearest point of the surface and its triangle
+    /// (Ericson 2005's closest point on a triangle, nearest box first).
+    Closest,
+    /// Per point: the unsigned distance to the surface.
+    Distance,
+    /// Per point: the distance, negative inside (inside by the generalized
+    /// winding number).
+    SignedDistance,
+    /// Per point: 1 inside, 0 outside, by the generalized winding number
+    /// (Jacobson et al. 2013, with Barill et al. 2018's fast far-field
+    /// approximation); right on open and self-intersecting meshes too.
+    Inside,
+    /// Per ray: how many triangles it crosses within [tnear, tfar].
+    Count,
+    /// Per ray: every hit within [tnear, tfar], nearest first (at most
+    /// --max-hits).
+    AllHits,
+}
+
+impl Query {
+    fn name(self) -> &'static str {
+        match self {
+            Query::Closest => "closest",
+            Query::Distance => "distance",
+            Query::SignedDistance => "signed-distance",
+            Query::Inside => "inside",
+            Query::Count => "count",
+            Query::AllHits => "all-hits",
+        }
+    }
+
+    fn takes_rays(self) -> bool {
+        matches!(self, Query::Count | Query::AllHits)
+    }
+}
+
+/// Arguments of `raykit query`.
+#[derive(Args)]
+#[command(after_help = "Queries:\n  \
+closest          per point, the nearest point of the surface (Ericson 2005's closest point\n                   \
+on a triangle, searched nearest box first in an 8-wide BVH)\n  \
+distance         per point, the unsigned distance to the surface\n  \
+signed-distance  per point, the distance, negative inside\n  \
+inside           per point, whether it is inside: its generalized winding number (Jacobson\n                   \
+et al. 2013; far triangles grouped by Barill et al. 2018's fast approximation)\n                   \
+is at least 1/2, which is right on open and self-intersecting meshes too\n  \
+count            per ray, the number of triangles it crosses within [tnear, tfar]\n  \
+all-hits         per ray, every hit within [tnear, tfar], nearest first\n\n\
+Files (little-endian):\n  \
+point file (--points): per point 3 f32 x y z (12 bytes)\n  \
+ray file (--rays): the ray file of `raykit rays` and `raykit trace`\n  \
+distance, signed-distance: one f32 per point (NaN for a NaN point)\n  \
+inside: one byte per point (1 = inside)\n  \
+closest: per point f32 x y z distance, u32 triangle (20 bytes; NaN and 4294967295\n    \
+when there is no answer)\n  \
+count: one u32 per ray\n  \
+all-hits: per ray a u32 n, then n pairs f32 t, u32 triangle, nearest first\n\n\
+Prints one JSON line of statistics on stderr:\n\
+{\"query\", \"mesh_triangles\", \"points\" or \"rays\", \"answered\", \"hits\" (count, all-hits),\n\
+\"load_ms\", \"build_ms\", \"query_ms\", \"per_s\", \"threads\"} (query_ms excludes loading and building;\n\
+per_s is points or rays per second).")]
+pub struct QueryArgs {
+    /// The query (see below).
+    #[arg(value_enum)]
+    query: Query,
+    /// Mesh file or builtin:NAME.
+    #[arg(long)]
+    mesh: String,
+    /// Point file (closest, distance, signed-distance, inside).
+    #[arg(long, conflicts_with = "rays")]
+    points: Option<PathBuf>,
+    /// Ray file (count, all-hits).
+    #[arg(long)]
+    rays: Option<PathBuf>,
+    /// Output file.
+    #[arg(long)]
+    out: PathBuf,
+    /// all-hits: keep at most this many hits per ray (the nearest).
+    #[arg(long, default_value_t = 64)]
+    max_hits: u32,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+}
+
+/// Read a point file: 3 little-endian f32 per point. Any values are
+/// accepted (a NaN point has NaN answers); a size that is not a multiple of
+/// 12 is an error naming the byte offset of the incomplete record.
+pub fn read_points(path: &Path) -> Result<Vec<Vec3>> {
+    let data = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let rest = data.len() % POINT_RECORD_SIZE;
+    if rest != 0 {
+        let at = data.len() - rest;
+        return Err(LoadError::at_byte(
+            path,
+            at as u64,
+            format!(
+                "file size {} is not a multiple of the {POINT_RECORD_SIZE}-byte point record: \
+                 {rest} bytes left over after {} points (truncated?)",
+                data.len(),
+                data.len() / POINT_RECORD_SIZE
+            ),
+        )
+        .into());
+    }
+    Ok(data
+        .chunks_exact(POINT_RECORD_SIZE)
+        .map(|r| {
+            let f = |i: usize| f32::from_le_bytes([r[i], r[i + 1], r[i + 2], r[i + 3]]);
+            Vec3::new(f(0), f(4), f(8))
+        })
+        .collect())
+}
+
+/// Write `out` atomically with `write`.
+fn write_out(out: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
+    raykit_io::write_atomic(out, write).with_context(|| format!("{}: cannot write", out.display()))
+}
+
+/// Run the query.
+pub fn run(args: QueryArgs) -> Result<ExitCode> {
+    let q = args.query;
+    let input = match (q.takes_rays(), &args.points, &args.rays) {
+        (false, Some(p), _) => p,
+        (true, _, Some(r)) => r,
+        (false, _, _) => bail!("`query {}` reads points: give --points FILE", q.name()),
+        (true, _, _) => bail!("`query {}` reads rays: give --rays FILE", q.name()),
+    };
+    crate::paths::ensure_not_input(&args.out, &[input, Path::new(&args.mesh)])?;
+    let pool = pool(args.threads)?;
+    let threads = pool.current_num_threads();
+    let (scene, load_s) = timed(|| scene_arg::load(&args.mesh));
+    let mesh = scene?.mesh;
+    let (points, rays): (Vec<Vec3>, Vec<Ray>) = if q.takes_rays() {
+        (Vec::new(), raykit_io::read_rays(input)?)
+    } else {
+        (read_points(input)?, Vec::new())
+    };
+    let (bvh, build_s) = pool.install(|| timed(|| SurfaceBvh::build(&mesh)));
+    let n = points.len() + rays.len();
+    let answered;
+    let mut hits: Option<u64> = None;
+    let query_s;
+    match q {
+        Query::Distance | Query::SignedDistance => {
+            let mut d = vec![0f32; n];
+            query_s = pool.install(|| {
+                timed(|| {
+                    if q == Query::Distance {
+                        bvh.distances(&points, &mut d)
+                    } else {
+                        bvh.signed_distances(&points, &mut d)
+                    }
+                })
+                .1
+            });
+            answered = d.iter().filter(|x| x.is_finite()).count();
+            write_out(&args.out, |w| {
+                d.iter().try_for_each(|x| w.write_all(&x.to_le_bytes()))
+            })?;
+        }
+        Query::Inside => {
+            let mut inside = vec![false; n];
+            query_s = pool.install(|| timed(|| bvh.inside_batch(&points, &mut inside)).1);
+            answered = inside.iter().filter(|&&x| x).count();
+            let bytes: Vec<u8> = inside.iter().map(|&x| u8::from(x)).collect();
+            write_out(&args.out, |w| w.write_all(&bytes))?;
+        }
+        Query::Closest => {
+            let mut found: Vec<Option<ClosestPoint>> = vec![None; n];
+            query_s =
+                pool.install(|| timed(|| bvh.closest_points(&points, f32::INFINITY, &mut found)).1);
+            answered = found.iter().filter(|c| c.is_some()).count();
+            write_out(&args.out, |w| {
+                for c in &found {
+                    let (p, d, prim) = match c {
+                        Some(c) => (c.point.to_array(), c.distance, c.prim),
+                        None => ([f32::NAN; 3], f32::NAN, u32::MAX),
+                    };
+                    for x in p.into_iter().chain([d]) {
+                        w.write_all(&x.to_le_bytes())?;
+                    }
+                    w.write_all(&prim.to_le_bytes())?;
+                }
+                Ok(())
+            })?;
+        }
+        Query::Count => {
+            let mut counts = vec![0u32; n];
+            query_s = pool.install(|| timed(|| bvh.count_hits_batch(&rays, &mut counts)).1);
+            answered = counts.iter().filter(|&&c| c > 0).count();
+            hits = Some(counts.iter().map(|&c| u64::from(c)).sum());
+            write_out(&args.out, |w| {
+                counts
+                    .iter()
+                    .try_for_each(|c| w.write_all(&c.to_le_bytes()))
+            })?;
+        }
+        Query::AllHits => {
+            let cap = args.max_hits as usize;
+            let (lists, s) = pool.install(|| timed(|| bvh.ray_hits_batch(&rays, cap)));
+            query_s = s;
+            answered = lists.iter().filter(|l| !l.is_empty()).count();
+            hits = Some(lists.iter().map(|l| l.len() as u64).sum());
+            write_out(&args.out, |w| {
+                for l in &lists {
+                    w.write_all(&(l.len() as u32).to_le_bytes())?;
+                    for h in l {
+                        w.write_all(&h.t.to_le_bytes())?;
+                        w.write_all(&h.prim.to_le_bytes())?;
+                    }
+                }
+                Ok(())
+            })?;
+        }
+    }
+    let mut stats = json!({
+        "query": q.name(),
+        "mesh_triangles": mesh.num_triangles(),
+    });
+    let obj = stats.as_object_mut().expect("an object");
+    obj.insert(
+        (if q.takes_rays() { "rays" } else { "points" }).into(),
+        json!(n),
+    );
+    obj.insert("answered".into(), json!(answered));
+    if let Some(h) = hits {
+        obj.insert("hits".into(), json!(h));
+    }
+    obj.insert("load_ms".into(), json!(load_s * 1e3));
+    obj.insert("build_ms".into(), json!(build_s * 1e3));
+    obj.insert("query_ms".into(), json!(query_s * 1e3));
+    obj.insert(
+        "per_s".into(),
+        json!(if query_s > 0.0 {
+            n as f64 / query_s
+        } else {
+            0.0
+        }),
+    );
+    obj.insert("threads".into(), json!(threads));
+    eprintln!("{stats}");
+    Ok(ExitCode::SUCCESS)
+}
