@@ -78,6 +78,7 @@ count: one u32 per ray\n  \
 all-hits: per ray a u32 n, then n pairs f32 t, u32 triangle, nearest first\n\n\
 Prints one JSON line of statistics on stderr:\n\
 {\"query\", \"mesh_triangles\", \"points\" or \"rays\", \"answered\", \"hits\" (count, all-hits),\n\
+\"inside\" (inside),\n\
 \"load_ms\", \"build_ms\", \"query_ms\", \"per_s\", \"threads\"} (query_ms excludes loading and building;\n\
 per_s is points or rays per second).")]
 pub struct QueryArgs {
@@ -161,6 +162,7 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
     let n = points.len() + rays.len();
     let answered;
     let mut hits: Option<u64> = None;
+    let mut inside_count: Option<usize> = None;
     let query_s;
     match q {
         Query::Distance | Query::SignedDistance => {
@@ -183,7 +185,8 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
         Query::Inside => {
             let mut inside = vec![false; n];
             query_s = pool.install(|| timed(|| bvh.inside_batch(&points, &mut inside)).1);
-            answered = inside.iter().filter(|&&x| x).count();
+            answered = points.iter().filter(|p| p.is_finite()).count();
+            inside_count = Some(inside.iter().filter(|&&x| x).count());
             let bytes: Vec<u8> = inside.iter().map(|&x| u8::from(x)).collect();
             write_out(&args.out, |w| w.write_all(&bytes))?;
         }
@@ -247,6 +250,9 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
     obj.insert("answered".into(), json!(answered));
     if let Some(h) = hits {
         obj.insert("hits".into(), json!(h));
+    }
+    if let Some(c) = inside_count {
+        obj.insert("inside".into(), json!(c));
     }
     obj.insert("load_ms".into(), json!(load_s * 1e3));
     obj.insert("build_ms".into(), json!(build_s * 1e3));
