@@ -4,7 +4,8 @@ one process on the same input.
     python python/bench/bench_queries_vs_open3d.py [MESH] [--points N] [--rays N] [--reps R] [--threads 1,2]
 
 Default mesh: the full Stanford dragon (871,414 triangles),
-/work/data-cache/dragon_vrip.ply (or RAYKIT_DRAGON). Queries:
+data-cache/dragon_vrip.ply.gz in the checkout, which
+scripts/fetch-bench-data fetches (or RAYKIT_DRAGON). Queries:
 compute_closest_points, compute_distance, compute_signed_distance and
 compute_occupancy on points uniform in the mesh's bounding box grown by
 10% on each side (an SDF grid's samples; with --near, points within 1% of
@@ -29,12 +30,15 @@ import os
 import statistics
 import subprocess
 import time
+from pathlib import Path
 
 import numpy as np
 
 import raykit
 
-DRAGON = os.environ.get("RAYKIT_DRAGON", "/work/data-cache/dragon_vrip.ply")
+DRAGON = os.environ.get(
+    "RAYKIT_DRAGON", str(Path(__file__).resolve().parents[2] / "data-cache" / "dragon_vrip.ply.gz")
+)
 
 
 def timed(fn, reps):

@@ -8,7 +8,8 @@ In the environment scripts/test-python makes (raykit, Open3D):
     target/py-venv/bin/python python/bench/bench_vs_open3d.py
 
 Default mesh: the full Stanford dragon (871,414 triangles) from
-/work/data-cache/package/models/dragon_vrip.ply.gz (or RAYKIT_DRAGON).
+data-cache/dragon_vrip.ply.gz in the checkout, which
+scripts/fetch-bench-data fetches (or RAYKIT_DRAGON).
 Ray sets: `primary` (a 1024 × 1024 pinhole camera framing the mesh, as
 Open3D's create_rays_pinhole makes them, shape (1024, 1024, 6)) and `incoherent` (from a sphere
 around the mesh towards random points of its bounding box). Queries:
@@ -29,12 +30,15 @@ import os
 import statistics
 import subprocess
 import time
+from pathlib import Path
 
 import numpy as np
 
 import raykit
 
-DRAGON = os.environ.get("RAYKIT_DRAGON", "/work/data-cache/package/models/dragon_vrip.ply.gz")
+DRAGON = os.environ.get(
+    "RAYKIT_DRAGON", str(Path(__file__).resolve().parents[2] / "data-cache" / "dragon_vrip.ply.gz")
+)
 
 
 def interleaved(engines: dict, reps: int) -> tuple[dict, dict, dict]:
