@@ -4,8 +4,10 @@
 //! that are not finite.
 
 mod query_support;
+mod shared_meshes;
 
 use query_support::{random_soup, sphere, without};
+use shared_meshes::shared_obj;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::query::closest::{closest_on_triangle64, closest_point_brute, closest_point_in};
 use raykit_core::query::{ClosestPoint, SurfaceBvh};
@@ -82,6 +84,43 @@ fn surface_bvh_matches_brute_force_on_random_soups() {
             check(&mesh, *p, one, "surface bvh");
             let d = bvh.distance(*p);
             assert_eq!(Some(d), one.map(|c| c.distance));
+        }
+    }
+}
+
+/// Batches larger than one task are answered in Morton order, each search
+/// bounded by the previous point's triangle: on a real mesh (shared
+/// corners and edges, so ties between triangles) with points that are not
+/// finite mixed in, every batch answer is a right one and has the distance
+/// of the single query.
+#[test]
+fn large_batches_answer_as_single_queries() {
+    let bunny = shared_obj("bunny_3674.obj");
+    let bvh = SurfaceBvh::build(&bunny);
+    let mut pts = query_points(&bunny, 5000, 21);
+    for i in (0..pts.len()).step_by(97) {
+        pts[i] = Vec3::new(f32::NAN, 0.0, f32::INFINITY * (i % 2) as f32);
+    }
+    let mut batch = vec![None; pts.len()];
+    bvh.closest_points(&pts, f32::INFINITY, &mut batch);
+    let mut dists = vec![0.0; pts.len()];
+    bvh.distances(&pts, &mut dists);
+    for (i, (p, b)) in pts.iter().zip(&batch).enumerate() {
+        let one = bvh.closest_point(*p, f32::INFINITY);
+        if !p.is_finite() {
+            assert!(b.is_none() && dists[i].is_nan(), "point {i} is not finite");
+            continue;
+        }
+        let (one, got) = (one.unwrap(), b.unwrap());
+        assert!(
+            (one.distance - got.distance).abs() <= 1e-6 * (1.0 + one.distance),
+            "point {i}: batch {} vs single {}",
+            got.distance,
+            one.distance
+        );
+        assert_eq!(dists[i], got.distance, "point {i}: distances() vs closest_points()");
+        if i % 10 == 1 {
+            check(&bunny, *p, Some(got), "bunny batch");
         }
     }
 }

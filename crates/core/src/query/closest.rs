@@ -13,7 +13,7 @@
 //! through any [`Accel`]'s regions, and [`closest_point_brute`] tests every
 //! triangle in `f64` (the reference of the tests).
 
-use super::batch::answer_each;
+use super::batch::answer_coherent;
 use super::exact::Triangle64;
 use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::accel::Accel;
@@ -163,6 +163,16 @@ impl SurfaceBvh {
     /// is not finite. Ties between triangles at the same distance (a shared
     /// edge or corner) go to either.
     pub fn closest_point(&self, p: Vec3, max_distance: f32) -> Option<ClosestPoint> {
+        self.nearest_triangle(p, max_distance, None)
+            .map(|t| answer(p, &self.tris[t], self.prims[t]))
+    }
+
+    /// The search behind [`SurfaceBvh::closest_point`]: the nearest
+    /// triangle's index in leaf order. `hint`, a triangle near `p` (in leaf
+    /// order; the answer for a neighbouring point), starts the search with
+    /// its distance as the bound, which prunes the tree from the first node
+    /// on; the answer is the same with or without it.
+    fn nearest_triangle(&self, p: Vec3, max_distance: f32, hint: Option<usize>) -> Option<usize> {
         if !p.is_finite() || self.nodes.is_empty() || max_distance.is_nan() || max_distance < 0.0 {
             return None;
         }
@@ -173,6 +183,13 @@ impl SurfaceBvh {
         };
         let limit2 = best2;
         let mut best: Option<usize> = None;
+        if let Some(h) = hint.filter(|&h| h < self.tris.len()) {
+            let (dh, _, _) = triangle_distance2(p, &self.tris[h]);
+            if dh <= limit2 {
+                best2 = dh;
+                best = Some(h);
+            }
+        }
         let (mut small, mut big) = ([(0u32, 0u32, 0f32); SMALL_STACK], Vec::new());
         let stack = stack_of(&mut small, &mut big, self.stack_need);
         let mut sp = 1;
@@ -215,7 +232,7 @@ impl SurfaceBvh {
                 }
             }
         }
-        best.map(|t| answer(p, &self.tris[t], self.prims[t]))
+        best
     }
 
     /// Unsigned distance from `p` to the surface: `+inf` for an empty mesh,
@@ -229,20 +246,40 @@ impl SurfaceBvh {
     }
 
     /// [`SurfaceBvh::closest_point`] for many points, in parallel over the
-    /// rayon pool.
+    /// rayon pool. The points are searched in Morton order, each search
+    /// bounded from the start by the previous point's triangle, which is
+    /// what makes a grid or cloud of points several times faster per point
+    /// than single queries; the answers are the same.
     pub fn closest_points(
         &self,
         points: &[Vec3],
         max_distance: f32,
         out: &mut [Option<ClosestPoint>],
     ) {
-        answer_each(points, out, |p| self.closest_point(*p, max_distance));
+        answer_coherent(points, out, |p, hint: &mut Option<usize>| {
+            let found = self.nearest_triangle(p, max_distance, *hint);
+            *hint = found.or(*hint);
+            found.map(|t| answer(p, &self.tris[t], self.prims[t]))
+        });
     }
 
     /// [`SurfaceBvh::distance`] for many points, in parallel over the rayon
-    /// pool.
+    /// pool, searched as [`SurfaceBvh::closest_points`] does.
     pub fn distances(&self, points: &[Vec3], out: &mut [f32]) {
-        answer_each(points, out, |p| self.distance(*p));
+        answer_coherent(points, out, |p, hint| self.distance_hinted(p, hint));
+    }
+
+    /// [`SurfaceBvh::distance`] with the search bounded from the start by
+    /// triangle `hint` (leaf order), which becomes the nearest triangle.
+    pub(crate) fn distance_hinted(&self, p: Vec3, hint: &mut Option<usize>) -> f32 {
+        if !p.is_finite() {
+            return f32::NAN;
+        }
+        let found = self.nearest_triangle(p, f32::INFINITY, *hint);
+        *hint = found.or(*hint);
+        found.map_or(f32::INFINITY, |t| {
+            answer(p, &self.tris[t], self.prims[t]).distance
+        })
     }
 }
 

@@ -31,7 +31,7 @@
 //! as `(ρ / r)⁴`; at β = 2 the tests find it below 1% of a unit winding
 //! number, far from the ½ threshold.
 
-use super::batch::answer_each;
+use super::batch::answer_coherent;
 use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
@@ -291,7 +291,13 @@ impl SurfaceBvh {
     /// [`SurfaceBvh::is_inside`], the winding number), as Open3D's
     /// `compute_signed_distance`. NaN for a point that is not finite.
     pub fn signed_distance(&self, q: Vec3) -> f32 {
-        let d = self.distance(q);
+        self.signed_distance_hinted(q, &mut None)
+    }
+
+    /// [`SurfaceBvh::signed_distance`] with the distance search bounded
+    /// from the start by triangle `hint`, as in [`SurfaceBvh::distances`].
+    fn signed_distance_hinted(&self, q: Vec3, hint: &mut Option<usize>) -> f32 {
+        let d = self.distance_hinted(q, hint);
         if d.is_nan() {
             return d;
         }
@@ -302,22 +308,25 @@ impl SurfaceBvh {
         }
     }
 
-    /// [`SurfaceBvh::winding_number`] for many points, in parallel.
+    /// [`SurfaceBvh::winding_number`] for many points, in parallel, in
+    /// Morton order so that neighbouring points share cached nodes.
     pub fn winding_numbers(&self, points: &[Vec3], out: &mut [f32]) {
         self.moments();
-        answer_each(points, out, |p| self.winding_number(*p));
+        answer_coherent(points, out, |p, _: &mut ()| self.winding_number(p));
     }
 
-    /// [`SurfaceBvh::is_inside`] for many points, in parallel.
+    /// [`SurfaceBvh::is_inside`] for many points, in parallel, in Morton
+    /// order.
     pub fn inside_batch(&self, points: &[Vec3], out: &mut [bool]) {
         self.moments();
-        answer_each(points, out, |p| self.is_inside(*p));
+        answer_coherent(points, out, |p, _: &mut ()| self.is_inside(p));
     }
 
-    /// [`SurfaceBvh::signed_distance`] for many points, in parallel.
+    /// [`SurfaceBvh::signed_distance`] for many points, in parallel, the
+    /// distances searched as in [`SurfaceBvh::distances`].
     pub fn signed_distances(&self, points: &[Vec3], out: &mut [f32]) {
         self.moments();
-        answer_each(points, out, |p| self.signed_distance(*p));
+        answer_coherent(points, out, |p, hint| self.signed_distance_hinted(p, hint));
     }
 }
 
