@@ -104,6 +104,7 @@ struct Row {
 
 /// Run the experiment.
 pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
+    let head = super::provenance();
     let models = models(&args)?;
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
@@ -143,7 +144,7 @@ pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
         }
     }
     write_csv(&args.out, "results.csv", &rows)?;
-    let md = markdown(&rows, &skipped);
+    let md = markdown(&rows, &skipped, &head);
     write_text(&args.out, "results.md", &md)?;
     print!("{md}");
     plots(&rows, &args.out)?;
@@ -369,10 +370,13 @@ fn measure(
     })
 }
 
-fn markdown(rows: &[Row], skipped: &[String]) -> String {
+fn markdown(rows: &[Row], skipped: &[String], head: &str) -> String {
     let opt = |v: Option<usize>| v.map_or("–".to_string(), |v| v.to_string());
     let optf = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.1}"));
-    let mut md = String::from(
+    let mut md = format!(
+        "# Culling experiment: paper 003's global visibility culling\n\n{head}\n"
+    );
+    md.push_str(
         "| model | triangles | parts | resolution | grid | mode | distance field s | propagation s | \
          visible set s | total s (median) | triangles removed | removed % (triangles / area) | \
          parts removed | truly hidden | false removals | missed % of hidden | ground truth |\n\

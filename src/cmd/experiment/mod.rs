@@ -91,6 +91,28 @@ pub fn cached_dragon() -> Option<String> {
     p.is_file().then(|| p.to_string_lossy().into_owned())
 }
 
+/// The command line and the machine of a run, for the head of a results
+/// file: the arguments, the CPU model from `/proc/cpuinfo`, the cores
+/// rayon uses and the 1-minute load average when the run started (a load
+/// above the core count means other work shared the machine).
+pub fn provenance() -> String {
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let cpu = cpuinfo
+        .lines()
+        .find_map(|l| l.strip_prefix("model name"))
+        .and_then(|l| l.split_once(':'))
+        .map_or("unknown CPU".to_string(), |(_, m)| m.trim().to_string());
+    let load = std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|l| l.split_whitespace().next().map(str::to_string))
+        .unwrap_or_else(|| "unknown".into());
+    format!(
+        "`{command}`\n\nMachine: {cpu}, {} threads; load average {load} at the start.\n",
+        rayon::current_num_threads()
+    )
+}
+
 /// Write `text` to `dir/name` atomically.
 pub fn write_text(dir: &Path, name: &str, text: &str) -> Result<PathBuf> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
