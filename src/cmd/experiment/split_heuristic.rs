@@ -16,6 +16,7 @@ use raykit_core::rng::Pcg32;
 use raykit_core::tjunction::{eliminate, Method, TJunctionOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::{raysets, Aabb, Camera, Hit, Ray, TriangleMesh};
+use raykit_render::raster::primary_visibility;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -76,9 +77,16 @@ struct Row {
     naive_equals_fast: Option<bool>,
     ray_mrays: f64,
     frustum_queries_per_s: f64,
+    /// Frames per second: frustum culling of the parts, then rasterizing the
+    /// pieces of the parts kept at [`FRAME_WIDTH`] × [`FRAME_HEIGHT`].
+    culled_fps: f64,
     ray_disagreements: usize,
     frustum_disagreements: usize,
 }
+
+/// Size of the frames drawn after frustum culling (16:9, as the frustums).
+const FRAME_WIDTH: u32 = 512;
+const FRAME_HEIGHT: u32 = 288;
 
 /// Run the experiment.
 pub fn run(args: SplitHeuristicArgs) -> Result<ExitCode> {
@@ -96,7 +104,9 @@ pub fn run(args: SplitHeuristicArgs) -> Result<ExitCode> {
     let reference = build_accel(AccelKind::Bvh2, TestKind::Moller, mesh, &base);
     let mut want = vec![None; rays.len()];
     reference.intersect_batch(&rays, &mut want);
-    let frustums = random_frustums(&mesh.bounds(), args.frustums, 7);
+    let views = random_views(&mesh.bounds(), args.frustums, 7);
+    let frustums: Vec<Frustum> = views.iter().map(|v| v.1).collect();
+    let cameras: Vec<Camera> = views.iter().map(|v| v.0).collect();
     let frustum_ref: Vec<Vec<u32>> = frustums
         .iter()
         .map(|f| parts_overlapping_brute(mesh, f))
@@ -127,7 +137,7 @@ pub fn run(args: SplitHeuristicArgs) -> Result<ExitCode> {
             ..base.clone()
         };
         let row = threads
-            .install(|| sweep_point(mesh, &opts, &rays, &want, &frustums, &frustum_ref, reps));
+            .install(|| sweep_point(mesh, &opts, &rays, &want, &frustums, &frustum_ref, &cameras, reps));
         rows.push(row?);
         bar.inc(1);
     }
@@ -159,6 +169,7 @@ fn sweep_point(
     want: &[Option<Hit>],
     frustums: &[Frustum],
     frustum_ref: &[Vec<u32>],
+    cameras: &[Camera],
     reps: usize,
 ) -> Result<Row> {
     let mut build_times = Vec::new();
@@ -200,8 +211,21 @@ fn sweep_point(
     let mut split_triangles = stats.triangle_refs.saturating_sub(mesh.num_triangles());
     let (mut split_polygons, mut cut_tris) = (split_triangles, 0);
     let (mut tj, mut fast_ms, mut naive_ms, mut same) = (None, None, None, None);
+    // What a frame draws: the pieces of the cut mesh (the whole triangles
+    // for the SAH tree), grouped by the part of their source triangle.
+    let mut drawn = TriangleMesh::new(mesh.positions.clone(), Vec::new());
+    let mut part_pieces: Vec<Vec<[u32; 3]>> = vec![Vec::new(); mesh.parts.len().max(1)];
+    if game.is_none() {
+        for (t, tri) in mesh.indices.iter().enumerate() {
+            part_pieces[mesh.part_of(t) as usize].push(*tri);
+        }
+    }
     if let Some(game) = &game {
         let cut = cut_mesh(mesh, game);
+        drawn.positions = cut.mesh.positions.clone();
+        for (piece, &source) in cut.source.iter().enumerate() {
+            part_pieces[mesh.part_of(source as usize) as usize].push(cut.mesh.indices[piece]);
+        }
         split_polygons = game.cuts;
         split_triangles = cut.split_triangles;
         cut_tris = cut.mesh.num_triangles();
@@ -249,6 +273,27 @@ fn sweep_point(
                 .count();
         }
     }
+    // Frames: cull the parts against each view's frustum, then draw the
+    // pieces of the parts kept (the CPU rasterizer's visibility buffer).
+    let mut fps = Vec::new();
+    for _ in 0..reps {
+        let (_, t) = timed(|| {
+            for (f, camera) in frustums.iter().zip(cameras) {
+                drawn.indices.clear();
+                for part in parts_in_frustum(accel.as_ref(), mesh, f) {
+                    drawn.indices.extend_from_slice(&part_pieces[part as usize]);
+                }
+                std::hint::black_box(primary_visibility(
+                    &drawn,
+                    TestKind::Moller,
+                    camera,
+                    FRAME_WIDTH,
+                    FRAME_HEIGHT,
+                ));
+            }
+        });
+        fps.push(frustums.len() as f64 / t);
+    }
     Ok(Row {
         split: opts.kd.split.name(),
         h,
@@ -264,6 +309,7 @@ fn sweep_point(
         naive_equals_fast: same,
         ray_mrays: median_min_max(&ray_speed).0,
         frustum_queries_per_s: median_min_max(&q_speed).0,
+        culled_fps: median_min_max(&fps).0,
         ray_disagreements,
         frustum_disagreements,
     })
@@ -271,7 +317,7 @@ fn sweep_point(
 
 /// View frustums of random cameras outside the mesh looking at random
 /// points of its box (60° field of view, aspect 16:9).
-fn random_frustums(bounds: &Aabb, n: usize, seed: u64) -> Vec<Frustum> {
+fn random_views(bounds: &Aabb, n: usize, seed: u64) -> Vec<(Camera, Frustum)> {
     let mut rng = Pcg32::new(seed);
     let r = bounds.diagonal() * 0.5;
     (0..n)
@@ -284,7 +330,8 @@ fn random_frustums(bounds: &Aabb, n: usize, seed: u64) -> Vec<Frustum> {
                 up: raykit_core::Vec3::Y,
                 vfov_deg: 60.0,
             };
-            Frustum::from_camera(&camera, 16.0 / 9.0, 0.01 * r, 4.0 * r)
+            let frustum = Frustum::from_camera(&camera, 16.0 / 9.0, 0.01 * r, 4.0 * r);
+            (camera, frustum)
         })
         .collect()
 }
@@ -295,13 +342,13 @@ fn fmt_opt<T: std::fmt::Display>(v: Option<T>) -> String {
 
 fn markdown(rows: &[Row], name: &str, tris: usize, args: &SplitHeuristicArgs) -> String {
     let mut s = format!(
-        "# Split-heuristic experiment (Kim 2013)\n\n`raykit experiment split-heuristic --size {} --frustums {} --reps {} --threads {} --game-leaf {}` on {name} ({tris} triangles).\n\n",
-        args.size, args.frustums, args.reps, args.threads, args.game_leaf
+        "# Split-heuristic experiment (Kim 2013)\n\n`raykit experiment split-heuristic --size {} --frustums {} --reps {} --threads {} --game-leaf {}` on {name} ({tris} triangles).\n\n{}\nCulled frames/s: per view, the parts in the frustum are found through the tree and the pieces of those parts (the cut mesh's, for the game trees) are rasterized at {FRAME_WIDTH}×{FRAME_HEIGHT} by the CPU rasterizer (paper 002's Fig. 7 measured rendering frames of the culled level).\n\n",
+        args.size, args.frustums, args.reps, args.threads, args.game_leaf, super::provenance()
     );
-    s += "| split | split polygons | split triangles | depth | leaves | build ms | T-junctions | fast ms | naive ms | naive = fast | Mrays/s | frustum queries/s |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|\n";
+    s += "| split | split polygons | split triangles | depth | leaves | build ms | T-junctions | fast ms | naive ms | naive = fast | Mrays/s | frustum queries/s | culled frames/s |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n";
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {:.2} | {:.1} |\n",
+            "| {} | {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {:.2} | {:.1} | {:.1} |\n",
             r.split,
             r.split_polygons,
             r.split_triangles,
@@ -313,7 +360,8 @@ fn markdown(rows: &[Row], name: &str, tris: usize, args: &SplitHeuristicArgs) ->
             fmt_opt(r.tjunction_naive_ms.map(|v| format!("{v:.0}"))),
             fmt_opt(r.naive_equals_fast),
             r.ray_mrays,
-            r.frustum_queries_per_s
+            r.frustum_queries_per_s,
+            r.culled_fps
         );
     }
     let bad: usize = rows
@@ -380,6 +428,16 @@ fn plots(rows: &[Row], out: &std::path::Path, name: &str) -> Result<()> {
             },
         ),
         (
+            "fig7c_culled_frames.svg",
+            LineChart {
+                title: format!("Fig. 7: frames/s drawing the frustum-culled parts vs H ({name})"),
+                x_label: "H",
+                y_label: "frames/s (cull + rasterize 512×288)",
+                series: vec![series("game heuristic", &|r| Some(r.culled_fps))],
+                reference: reference(&|r| r.culled_fps),
+            },
+        ),
+        (
             "fig7b_frustum_queries.svg",
             LineChart {
                 title: format!("Fig. 7b: frustum culling queries/s vs H ({name})"),
@@ -392,10 +450,15 @@ fn plots(rows: &[Row], out: &std::path::Path, name: &str) -> Result<()> {
         (
             "fig8_build_time.svg",
             LineChart {
-                title: format!("Fig. 8: tree build time vs H ({name})"),
+                title: format!("Fig. 8: build, and build + T-junction elimination, vs H ({name})"),
                 x_label: "H",
                 y_label: "ms",
-                series: vec![series("game heuristic", &|r| Some(r.build_ms))],
+                series: vec![
+                    series("build", &|r| Some(r.build_ms)),
+                    series("build + T-junction elimination (grid)", &|r| {
+                        Some(r.build_ms + r.tjunction_fast_ms?)
+                    }),
+                ],
                 reference: reference(&|r| r.build_ms),
             },
         ),
