@@ -62,6 +62,11 @@ pub struct TerrainExperimentArgs {
     /// DEM sides of part (b).
     #[arg(long, value_delimiter = ',', default_value = "256,512,1024,2048,4096")]
     shadow_sizes: Vec<usize>,
+    /// Views of part (a): 1 is the single view of paper 004's Table 1; more
+    /// fly along the DEM's diagonal (each view moved by an equal step to the
+    /// north-east, same direction), and part (a) reports the average frame.
+    #[arg(long, default_value_t = 1)]
+    flythrough: usize,
     /// Repetitions (medians are reported); the brute-force shadow masks of
     /// DEMs above 1024² run once.
     #[arg(long, default_value_t = 3)]
@@ -111,20 +116,28 @@ struct GdalRow {
     note: String,
 }
 
-/// A camera flying over the DEM from the south-west, like a flight over terrain.
-fn flight_camera(field: &HeightField, width: u32, height: u32) -> TerrainCamera {
+/// Views flying over the DEM from the south-west, like a flight over
+/// terrain: the first looks from the south-west corner towards the middle,
+/// the others are moved along the diagonal by equal steps (at most 35% of
+/// the DEM's width and height in all), looking the same way.
+fn flight_cameras(field: &HeightField, width: u32, height: u32, views: usize) -> Vec<TerrainCamera> {
     let (wx, wy) = (
         (field.width - 1) as f64 * field.sx,
         (field.height - 1) as f64 * field.sy,
     );
     let z = field.zmax as f64;
-    TerrainCamera {
-        eye: [0.08 * wx, -0.92 * wy, z + 0.05 * wx.max(wy)],
-        target: [0.55 * wx, -0.45 * wy, field.zmin as f64],
-        vfov_deg: 45.0,
-        width,
-        height,
-    }
+    (0..views.max(1))
+        .map(|i| {
+            let s = if views > 1 { 0.35 * i as f64 / (views - 1) as f64 } else { 0.0 };
+            TerrainCamera {
+                eye: [(0.08 + s) * wx, (-0.92 + s) * wy, z + 0.05 * wx.max(wy)],
+                target: [(0.55 + s) * wx, (-0.45 + s) * wy, field.zmin as f64],
+                vfov_deg: 45.0,
+                width,
+                height,
+            }
+        })
+        .collect()
 }
 
 fn differing(a: &CastImage, b: &CastImage) -> usize {
@@ -152,17 +165,23 @@ fn write_heatmap(path: &Path, img: &CastImage, width: u32, height: u32, max: f64
 fn part_a(args: &TerrainExperimentArgs, dem: &Dem) -> Result<Vec<CastRow>> {
     let field = HeightField::new(dem).map_err(anyhow::Error::msg)?;
     let pyramid = MaxMipmap::new(&field);
-    let cam = flight_camera(&field, args.width, args.height);
-    let rays = (args.width * args.height) as f64;
-    let run = |caster: Caster| -> (CastImage, Vec<f64>) {
+    let cams = flight_cameras(&field, args.width, args.height, args.flythrough);
+    let rays = (args.width * args.height) as f64 * cams.len() as f64;
+    // Per repetition the average frame over the views; the images of every
+    // view kept from the last repetition.
+    let run = |caster: Caster| -> (Vec<CastImage>, Vec<f64>) {
         let mut times = Vec::new();
-        let mut last = None;
+        let mut last = Vec::new();
         for _ in 0..args.reps.max(1) {
-            let (img, s) = timed(|| cast_image(&field, &pyramid, &cam, caster));
-            times.push(s);
-            last = Some(img);
+            let (imgs, s) = timed(|| {
+                cams.iter()
+                    .map(|cam| cast_image(&field, &pyramid, cam, caster))
+                    .collect::<Vec<_>>()
+            });
+            times.push(s / cams.len() as f64);
+            last = imgs;
         }
-        (last.expect("at least one repetition"), times)
+        (last, times)
     };
     eprintln!(
         "(a) per-cell march, {}x{} on {}²",
@@ -173,27 +192,31 @@ fn part_a(args: &TerrainExperimentArgs, dem: &Dem) -> Result<Vec<CastRow>> {
     let (mm_img, mm_t) = run(Caster::MaxMipmap);
     let (march_ms, march_noise) = median_ms(&march_t);
     let (mm_ms, mm_noise) = median_ms(&mm_t);
-    let steps = |img: &CastImage| -> (f64, f64) {
+    let steps = |imgs: &[CastImage]| -> (f64, f64) {
+        let all = || imgs.iter().flat_map(|img| img.steps.iter());
         (
-            img.steps.iter().map(|s| s.cells as f64).sum::<f64>() / rays,
-            img.steps.iter().map(|s| s.nodes as f64).sum::<f64>() / rays,
+            all().map(|s| s.cells as f64).sum::<f64>() / rays,
+            all().map(|s| s.nodes as f64).sum::<f64>() / rays,
         )
     };
-    let heat_max = march_img
+    let differing_all = |a: &[CastImage], b: &[CastImage]| -> usize {
+        a.iter().zip(b).map(|(x, y)| differing(x, y)).sum()
+    };
+    let heat_max = march_img[0]
         .steps
         .iter()
         .map(|s| (s.cells + s.nodes) as f64)
         .fold(1.0, f64::max);
     write_heatmap(
         &args.out.join("heat-march.png"),
-        &march_img,
+        &march_img[0],
         args.width,
         args.height,
         heat_max,
     )?;
     write_heatmap(
         &args.out.join("heat-maxmip.png"),
-        &mm_img,
+        &mm_img[0],
         args.width,
         args.height,
         heat_max,
@@ -225,7 +248,7 @@ fn part_a(args: &TerrainExperimentArgs, dem: &Dem) -> Result<Vec<CastRow>> {
             speedup_vs_maxmip: 1.0,
             paper_vs_march: None,
             paper_vs_maxmip: None,
-            pixels_differing_from_march: differing(&march_img, &mm_img),
+            pixels_differing_from_march: differing_all(&march_img, &mm_img),
         },
     ];
     for &tau in &args.taus {
@@ -235,7 +258,7 @@ fn part_a(args: &TerrainExperimentArgs, dem: &Dem) -> Result<Vec<CastRow>> {
         if tau == 16.0 {
             write_heatmap(
                 &args.out.join("heat-boxes-tau16.png"),
-                &img,
+                &img[0],
                 args.width,
                 args.height,
                 heat_max,
@@ -247,14 +270,14 @@ fn part_a(args: &TerrainExperimentArgs, dem: &Dem) -> Result<Vec<CastRow>> {
             tau: Some(tau),
             ms,
             noise,
-            boxes: img.boxes,
+            boxes: img.iter().map(|i| i.boxes).sum::<usize>() / img.len().max(1),
             cells_per_ray: steps(&img).0,
             nodes_per_ray: steps(&img).1,
             speedup_vs_march: march_ms / ms,
             speedup_vs_maxmip: mm_ms / ms,
             paper_vs_march: paper.map(|p| p.1),
             paper_vs_maxmip: paper.map(|p| p.2),
-            pixels_differing_from_march: differing(&march_img, &img),
+            pixels_differing_from_march: differing_all(&march_img, &img),
         });
     }
     Ok(rows)
@@ -432,7 +455,7 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let head = super::provenance();
     let dem = raykit_terrain::fractal::fractal(args.size, 1, 0.55);
     let a = part_a(&args, &dem)?;
     let b = part_b(&args)?;
@@ -441,11 +464,19 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
     write_csv(&args.out, "shadow.csv", &b)?;
     write_csv(&args.out, "gdal.csv", std::slice::from_ref(&c))?;
     let mut md = format!(
-        "# Terrain experiment ({} threads)\n\n`{command}`\n\n\
-         ## (a) Per-frame quadtree boxes against per-cell and maximum-mipmap casting: fractal:{} DEM, {}x{}, median of {} runs\n\n\
+        "# Terrain experiment\n\n{head}\n\
+         ## (a) Per-frame quadtree boxes against per-cell and maximum-mipmap casting: fractal:{} DEM, {}x{}, {}, median of {} runs\n\n\
          | method | τ | ms | noise | boxes | cells/ray | nodes or boxes/ray | A:B (ours) | A:B (paper) | A:C (ours) | A:C (paper) | pixels ≠ march |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-        rayon::current_num_threads(), args.size, args.width, args.height, args.reps
+        args.size,
+        args.width,
+        args.height,
+        if args.flythrough > 1 {
+            format!("the average frame of a {}-view fly-through (ms per frame; counts per ray over all views)", args.flythrough)
+        } else {
+            "one view".to_string()
+        },
+        args.reps
     );
     for r in &a {
         md += &format!(
