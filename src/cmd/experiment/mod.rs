@@ -92,9 +92,9 @@ pub fn cached_dragon() -> Option<String> {
 }
 
 /// The command line and the machine of a run, for the head of a results
-/// file: the arguments, the CPU model from `/proc/cpuinfo`, the cores
-/// rayon uses and the 1-minute load average when the run started (a load
-/// above the core count means other work shared the machine).
+/// file: the arguments, the CPU model from `/proc/cpuinfo`, the machine's
+/// cores and the 1-minute load average when the run started (a load above
+/// the core count means other work shared the machine).
 pub fn provenance() -> String {
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
@@ -108,8 +108,8 @@ pub fn provenance() -> String {
         .and_then(|l| l.split_whitespace().next().map(str::to_string))
         .unwrap_or_else(|| "unknown".into());
     format!(
-        "`{command}`\n\nMachine: {cpu}, {} threads; load average {load} at the start.\n",
-        rayon::current_num_threads()
+        "`{command}`\n\nMachine: {cpu}, {} cores; load average {load} at the start.\n",
+        std::thread::available_parallelism().map_or(1, |n| n.get())
     )
 }
 
