@@ -7,13 +7,13 @@ mod query_support;
 mod shared_meshes;
 
 use query_support::{random_soup, sphere, without};
-use shared_meshes::shared_obj;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::query::closest::{closest_on_triangle64, closest_point_brute, closest_point_in};
 use raykit_core::query::{ClosestPoint, SurfaceBvh};
 use raykit_core::rng::Pcg32;
 use raykit_core::tri::TestKind;
 use raykit_core::{TriangleMesh, Vec3};
+use shared_meshes::shared_obj;
 
 /// Query points: uniform in a box around the mesh, and near the surface
 /// (a random point of a random triangle moved a little off it).
@@ -118,7 +118,10 @@ fn large_batches_answer_as_single_queries() {
             got.distance,
             one.distance
         );
-        assert_eq!(dists[i], got.distance, "point {i}: distances() vs closest_points()");
+        assert_eq!(
+            dists[i], got.distance,
+            "point {i}: distances() vs closest_points()"
+        );
         if i % 10 == 1 {
             check(&bunny, *p, Some(got), "bunny batch");
         }

@@ -9,6 +9,8 @@ pub mod serve;
 pub mod split_heuristic;
 pub mod terrain;
 pub mod whitted;
+pub mod whitted_env;
+pub mod whitted_structures;
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
@@ -47,6 +49,10 @@ enum Which {
     /// primaries × shadow rays against shadow maps × recursive against
     /// wavefront, at 1 and 2 passes, with the image differences.
     Whitted(whitted::WhittedExperimentArgs),
+    /// Triangle tests per ray and frame rate of the Whitted renderer with
+    /// no acceleration, the linear BVH of 8 triangles per box, the complete
+    /// threaded BVH in mesh order and the SAH threaded BVH.
+    WhittedStructures(whitted_structures::WhittedStructuresArgs),
     /// Mrays/s of the stack kd-tree
     /// and threaded BVH kernels × Plücker and Möller, node memory, the CPU
     /// beside them, every answer checked.
@@ -62,6 +68,7 @@ pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
         Which::Serve(a) => serve::run(a),
         Which::Terrain(a) => terrain::run(a),
         Which::Whitted(a) => whitted::run(a),
+        Which::WhittedStructures(a) => whitted_structures::run(a),
         Which::Gpu(a) => gpu::run(a),
     }
 }

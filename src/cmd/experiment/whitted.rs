@@ -1,7 +1,8 @@
 //! `raykit experiment whitted`: time per frame for {traced, rasterized primaries} × {shadow rays, shadow maps}
 //! × {recursive, wavefront} × passes 1 and 2, with the speed-ups next to the
 //! 1.6× (1 pass) and 1.2× (2 passes) that GPU hybrid renderers reported, and the image differences
-//! between the variants.
+//! between the variants; and the environment box against environment
+//! mapping at 5 bounces.
 
 use super::{shared_data, shared_mesh, write_csv, write_text};
 use crate::cmd::render::setup::{setup, RenderSetup, SceneArgs};
@@ -24,9 +25,12 @@ use std::process::ExitCode;
 #[derive(Args)]
 #[command(
     after_help = "Scenes: whitted (the built-in Cornell box with a mirror and a glass sphere),\n\
-dragon (the 202k-triangle dragon in gold in the courtyard HDR map, environment box) and engine\n\
-(the 2CylinderEngine glTF assembly, 121k triangles, with two lights), all from the repository's data/ folder.\n\
-Writes results.md, results.csv, results.json and the images compared into --out."
+dragon (the 202k-triangle dragon in plastic — diffuse with reflectivity 0.08 — in the courtyard\n\
+HDR map, environment box) and engine (the 2CylinderEngine glTF assembly, 121k triangles, its\n\
+materials given reflectivity 0.1, two lights), all from the repository's data/ folder: every\n\
+scene casts shadow rays and reflection rays. Then the environment table: the 11k-triangle\n\
+glass dragon (dragon_vrip_res4) in the courtyard map at depth 5, environment box against\n\
+environment mapping. Writes results.md, results.csv, results.json and the images compared into --out."
 )]
 pub struct WhittedExperimentArgs {
     /// Scenes to run: whitted, dragon, engine.
@@ -47,6 +51,9 @@ pub struct WhittedExperimentArgs {
     /// Output folder.
     #[arg(long, default_value = "experiments/whitted")]
     out: PathBuf,
+    /// Leave out the environment box against environment mapping table.
+    #[arg(long)]
+    skip_env_table: bool,
 }
 
 #[derive(Serialize, Clone)]
@@ -60,7 +67,8 @@ struct Row {
     ms: f64,
     noise: f64,
     raster_ms: f64,
-    mrays: f64,
+    /// Rays traced per frame, millions.
+    rays_millions: f64,
 }
 
 #[derive(Serialize)]
@@ -76,6 +84,9 @@ struct SceneSummary {
     raster_vs_traced_pixels_differing: usize,
     wavefront_vs_recursive_pixels_differing: usize,
 }
+
+/// Reflectivity given to the engine assembly's materials.
+const ENGINE_REFLECTIVITY: f32 = 0.1;
 
 /// The scene arguments of one named experiment scene.
 fn scene_args(name: &str) -> Result<SceneArgs> {
@@ -97,7 +108,7 @@ fn scene_args(name: &str) -> Result<SceneArgs> {
         "whitted" => a.scene = "builtin:whitted".into(),
         "dragon" => {
             a.scene = shared_mesh("dragon_vrip_res2.ply.gz");
-            a.material = Some("gold".into());
+            a.material = Some("plastic".into());
             a.env = shared_data()
                 .join("envmaps/courtyard.exr")
                 .to_string_lossy()
@@ -119,7 +130,7 @@ fn scene_args(name: &str) -> Result<SceneArgs> {
 
 /// Fraction of pixels whose 8-bit colour differs by more than 2 levels in
 /// some channel, and the RMSE of the linear radiance.
-fn image_difference(a: &Image, b: &Image) -> (usize, f64) {
+pub fn image_difference(a: &Image, b: &Image) -> (usize, f64) {
     let differing = a
         .rgb
         .chunks_exact(3)
@@ -136,7 +147,7 @@ fn image_difference(a: &Image, b: &Image) -> (usize, f64) {
 }
 
 /// An image of |a − b| × 4, for looking at where two renders differ.
-fn difference_png(path: &Path, a: &Image, b: &Image) -> Result<()> {
+pub fn difference_png(path: &Path, a: &Image, b: &Image) -> Result<()> {
     let rgb: Vec<u8> = a
         .rgb
         .iter()
@@ -154,12 +165,19 @@ fn run_scene(
 ) -> Result<SceneSummary> {
     let sa = scene_args(name)?;
     let RenderSetup {
-        scene,
+        mut scene,
         camera,
         lights,
         environment,
     } = setup(&sa, args.width as f32 / args.height as f32)
         .with_context(|| format!("scene {name}"))?;
+    if name == "engine" {
+        // The assembly's own materials are matte: a little reflectivity
+        // makes the second pass trace reflection rays.
+        for m in &mut scene.mesh.materials {
+            m.reflectivity = m.reflectivity.max(ENGINE_REFLECTIVITY);
+        }
+    }
     let mesh = &scene.mesh;
     let (accel, build_s) = timed(|| {
         build_accel(
@@ -222,7 +240,7 @@ fn run_scene(
                         ms,
                         noise,
                         raster_ms: median_ms(&raster).0,
-                        mrays: f.stats.rays() as f64 / 1e6,
+                        rays_millions: f.stats.rays() as f64 / 1e6,
                     });
                     eprintln!(
                         "{name}: {passes} pass(es), {:?} shadows, {:?}, {:?}: {ms:.1} ms (noise {:.0}%)",
@@ -270,6 +288,33 @@ fn run_scene(
         raster_vs_traced_pixels_differing: image_difference(&rays.image, &raster.image).0,
         wavefront_vs_recursive_pixels_differing: image_difference(&rays.image, &wave.image).0,
     })
+}
+
+/// The pairs of rows, alike but for the passes or but for the shadow
+/// test, that traced the same number of rays: comparisons of identical work.
+fn identical_ray_counts(rows: &[Row]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, a) in rows.iter().enumerate() {
+        for b in &rows[i + 1..] {
+            let same_setting =
+                a.scene == b.scene && a.primary == b.primary && a.integrator == b.integrator;
+            let one_apart = (a.passes != b.passes) != (a.shadows != b.shadows);
+            if same_setting && one_apart && a.rays_millions == b.rays_millions {
+                out.push(format!(
+                    "{} {} primaries {}: {} pass(es) {} shadows and {} pass(es) {} shadows ({:.2} M rays)",
+                    a.scene,
+                    a.primary,
+                    a.integrator,
+                    a.passes,
+                    a.shadows,
+                    b.passes,
+                    b.shadows,
+                    a.rays_millions
+                ));
+            }
+        }
+    }
+    out
 }
 
 /// Median over rows matching `f` of the ratio traced / rasterized.
@@ -321,19 +366,35 @@ pub fn run(args: WhittedExperimentArgs) -> Result<ExitCode> {
     for name in &args.scenes {
         summaries.push(pool.install(|| run_scene(&args, name, &mut rows))?);
     }
+    let env = if args.skip_env_table {
+        None
+    } else {
+        Some(pool.install(|| {
+            super::whitted_env::env_table(args.width, args.height, args.reps, &args.out)
+        })?)
+    };
+    let same_work = identical_ray_counts(&rows);
+    for s in &same_work {
+        eprintln!("same rays: {s}");
+    }
     write_csv(&args.out, "results.csv", &rows)?;
     write_text(
         &args.out,
         "results.json",
-        &serde_json::to_string_pretty(
-            &serde_json::json!({"command": command, "rows": rows, "scenes": summaries}),
-        )?,
+        &serde_json::to_string_pretty(&serde_json::json!({
+            "command": command,
+            "rows": rows,
+            "scenes": summaries,
+            "environment": env,
+            "identical_ray_counts": same_work,
+        }))?,
     )?;
     let mut md = format!(
         "# Whitted experiment: traced against rasterized primaries on this CPU ({} threads)\n\n`{command}`\n\n\
          {}×{} pixels, 1 sample per pixel, median of {} frames. Passes: 1 = camera ray + shadow tests, \
-         2 = plus one reflection/refraction ray. Shadow-map frames exclude the map build (listed below).\n\n\
-         | scene | triangles | passes | shadows | primaries | integrator | ms | noise | raster ms | Mrays |\n\
+         2 = plus one reflection/refraction ray. Shadow-map frames exclude the map build (listed below). \
+         rays (M): rays traced per frame, in millions.\n\n\
+         | scene | triangles | passes | shadows | primaries | integrator | ms | noise | raster ms | rays (M) |\n\
          |---|---:|---:|---|---|---|---:|---:|---:|---:|\n",
         rayon::current_num_threads(),
         args.width,
@@ -352,7 +413,7 @@ pub fn run(args: WhittedExperimentArgs) -> Result<ExitCode> {
             r.ms,
             100.0 * r.noise,
             r.raster_ms,
-            r.mrays
+            r.rays_millions
         );
     }
     md += "\n## Speed-ups (median over the other settings)\n\n\
@@ -391,7 +452,24 @@ pub fn run(args: WhittedExperimentArgs) -> Result<ExitCode> {
     }
     md += "\nPixels differing: some channel off by more than 2 of 255. Images: SCENE-rays.png, SCENE-maps.png, \
            SCENE-rays-vs-maps-x4.png (difference × 4).\n";
+    if let Some(env) = &env {
+        md += &super::whitted_env::markdown(env, args.reps);
+    }
+    md += "\n## Check: compared configurations trace different rays\n\n\
+           1 against 2 passes, and shadow rays against shadow maps, with the other settings equal, \
+           must trace different numbers of rays, or the comparison measures identical work.\n\n";
+    if same_work.is_empty() {
+        md += "Every such pair traces a different number of rays.\n";
+    } else {
+        for s in &same_work {
+            md += &format!("- identical ray counts: {s}\n");
+        }
+    }
     write_text(&args.out, "results.md", &md)?;
     print!("{md}");
-    Ok(ExitCode::SUCCESS)
+    Ok(if same_work.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
 }

@@ -6,7 +6,10 @@
 //! - [`Bvh4`]: 4-wide BVH collapsed from the binary build, SSE box tests of
 //!   four children at once.
 //! - [`ThreadedBvh`]: BVH in pre-order with escape indices (Smits 1998),
-//!   traversed without a stack.
+//!   traversed without a stack; [`ThreadedBvh::complete`] builds it as the
+//!   complete tree over the triangles in mesh order.
+//! - [`LinearBoxes`]: one level of boxes over runs of eight triangles in
+//!   mesh order, scanned in order.
 
 use crate::aabb::Aabb;
 use crate::hit::Hit;
@@ -20,6 +23,7 @@ pub mod bvh;
 pub mod flat;
 pub mod kdtree;
 mod leaf;
+mod linear_boxes;
 mod registry;
 
 pub use brute::BruteForce;
@@ -29,6 +33,7 @@ pub use bvh::{
 };
 pub use flat::{FlatKdTree, FlatThreadedBvh, FlatTriangles};
 pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
+pub use linear_boxes::{LinearBoxes, LINEAR_BOX_SIZE};
 pub use registry::{build_accel, kd_accel_from_tree, load_accel, AccelKind};
 
 /// Rays per rayon task in the batch queries: large enough to amortise task

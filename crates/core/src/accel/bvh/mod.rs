@@ -47,7 +47,7 @@ pub mod lbvh;
 mod mapped;
 mod node4;
 mod node8;
-mod node_box;
+pub(crate) mod node_box;
 mod packet;
 #[cfg(target_arch = "x86_64")]
 mod packet_gather;

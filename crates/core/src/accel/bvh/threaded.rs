@@ -1,7 +1,7 @@
 //! The stackless threaded BVH (Smits 1998): nodes in pre-order, each with an
 //! escape index.
 
-use super::build::{build, BuildNode, BuildOptions};
+use super::build::{build, BuildNode, BuildOptions, BuildTree};
 use super::node_box::NodeBox;
 use crate::aabb::Aabb;
 use crate::accel::leaf::LeafTriangles;
@@ -36,10 +36,10 @@ struct Node {
 /// pruning of subtrees queued before a nearer hit was found.
 ///
 /// GPU stream ray tracers after Purcell et al. (2002) build it bottom-up as a
-/// complete tree with one triangle per leaf; here it is flattened from the same
-/// binned-SAH tree as [`super::Bvh2`] (leaf size from
-/// [`BuildOptions::max_leaf_size`], 1 reproduces their one-triangle leaves), so
-/// the two layouts differ only in traversal.
+/// complete tree with one triangle per leaf: [`ThreadedBvh::complete`]
+/// builds that tree. [`ThreadedBvh::build`] flattens the same binned-SAH tree
+/// as [`super::Bvh2`] instead (leaf size from [`BuildOptions::max_leaf_size`],
+/// 1 gives one-triangle leaves), so the two layouts differ only in traversal.
 pub struct ThreadedBvh<T: TriangleTest> {
     nodes: Vec<Node>,
     tris: LeafTriangles<T>,
@@ -57,6 +57,33 @@ impl<T: TriangleTest> ThreadedBvh<T> {
         let mut nodes = Vec::with_capacity(tree.root.count_nodes());
         preorder(&tree.root, &mut nodes);
         let (tris, stats) = tree.into_leaves(mesh, std::mem::size_of_val(&nodes[..]), options);
+        ThreadedBvh { nodes, tris, stats }
+    }
+
+    /// The threaded BVH of Kim et al.'s GPU stream ray tracer (after Purcell
+    /// et al. 2002): a complete binary tree built bottom-up over the
+    /// triangles in mesh index order, one triangle per leaf. The leaves are
+    /// paired in order, then the pairs, and so on (an odd node at the end of
+    /// a level moves up unpaired), so the pre-order visits the leaves in
+    /// index order and the depth is ⌈log2 n⌉. No sorting and no cost model:
+    /// the boxes are as tight as the mesh's triangle order is coherent.
+    pub fn complete(mesh: &TriangleMesh) -> Self {
+        let n = mesh.num_triangles();
+        assert!(
+            n <= FIRST_MASK as usize + 1,
+            "threaded BVH holds at most 2^27 triangles"
+        );
+        let tree = BuildTree {
+            root: complete_tree(mesh),
+            order: (0..n as u32).collect(),
+        };
+        let mut nodes = Vec::with_capacity(tree.root.count_nodes());
+        preorder(&tree.root, &mut nodes);
+        let options = BuildOptions {
+            max_leaf_size: 1,
+            ..BuildOptions::default()
+        };
+        let (tris, stats) = tree.into_leaves(mesh, std::mem::size_of_val(&nodes[..]), &options);
         ThreadedBvh { nodes, tris, stats }
     }
 
@@ -104,6 +131,43 @@ impl<T: TriangleTest> ThreadedBvh<T> {
         }
         (best, false)
     }
+}
+
+/// The complete binary tree over the triangles of `mesh` in index order,
+/// built level by level from one-triangle leaves (see
+/// [`ThreadedBvh::complete`]); an empty mesh gives one empty leaf.
+fn complete_tree(mesh: &TriangleMesh) -> BuildNode {
+    let mut level: Vec<BuildNode> = (0..mesh.num_triangles())
+        .map(|i| BuildNode::Leaf {
+            bounds: mesh.triangle_bounds(i),
+            first: i as u32,
+            count: 1,
+        })
+        .collect();
+    while level.len() > 1 {
+        let mut next = Vec::with_capacity(level.len().div_ceil(2));
+        let mut nodes = level.into_iter();
+        while let Some(a) = nodes.next() {
+            match nodes.next() {
+                Some(b) => {
+                    let bounds = a.bounds().union(b.bounds());
+                    next.push(BuildNode::Inner {
+                        bounds,
+                        axis: bounds.extent().max_position() as u8,
+                        children: Box::new([a, b]),
+                        leaf_ok: false,
+                    });
+                }
+                None => next.push(a),
+            }
+        }
+        level = next;
+    }
+    level.pop().unwrap_or(BuildNode::Leaf {
+        bounds: Aabb::EMPTY,
+        first: 0,
+        count: 0,
+    })
 }
 
 /// Append `node`'s subtree in pre-order and fill in escape indices.
