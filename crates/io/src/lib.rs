@@ -8,6 +8,8 @@
 //!   `KHR_lights_punctual` lights and first perspective camera
 //!   ([`LoadedMesh::lights`], [`LoadedMesh::camera`]), and features it uses
 //!   that are not supported are named in [`LoadedMesh::warnings`];
+//!   [`load_gltf_instances`] reads a glTF file with its instancing kept
+//!   (one geometry per mesh, one instance per node) for an instanced scene;
 //!   [`save_mesh`] writes OBJ, PLY,
 //!   STL, OFF, glTF and GLB. Every loader error is a [`LoadError`] naming the
 //!   file and the line, byte or JSON element where the problem is.
@@ -26,6 +28,7 @@ mod gltf;
 mod gltf_accessor;
 mod gltf_glb;
 mod gltf_image;
+mod gltf_instances;
 mod gltf_scene;
 mod gltf_support;
 mod hashing;
@@ -48,6 +51,7 @@ mod write;
 pub use atomic::{write_atomic, write_atomic_file};
 pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
+pub use gltf_instances::{load_gltf_instances, parse_gltf_instances, GltfInstance, GltfInstances};
 pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
 pub use png::write_png;
 pub use rays::{

@@ -20,10 +20,11 @@ pub struct SceneHit {
     pub geometry: u32,
     /// The instance hit.
     pub instance: u32,
-    /// Unit normal of the world-space triangle, along its `e1 × e2`
-    /// (`e1 = v1 - v0`, `e2 = v2 - v0` of the transformed corners): the
-    /// front side for counter-clockwise triangles, whichever side the ray
-    /// came from.
+    /// Unit geometric normal in world space of the triangle's front (the
+    /// side from which its corners run counter-clockwise in object space,
+    /// `e1 × e2` with `e1 = v1 - v0`, `e2 = v2 - v0`), whichever side the
+    /// ray came from; a mirroring instance keeps the front (see
+    /// [`super::InstanceTransform::world_normal`]).
     pub normal: Vec3,
 }
 

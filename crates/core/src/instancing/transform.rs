@@ -59,9 +59,8 @@ const MIN_RELATIVE_DETERMINANT: f64 = 1e-9;
 pub struct InstanceTransform {
     to_world: Affine3A,
     to_object: Affine3A,
-    /// Inverse transpose of the linear part times the sign of its
-    /// determinant: takes an object-space face normal `e1 × e2` to the
-    /// direction of the world-space triangle's `e1 × e2`.
+    /// Inverse transpose of the linear part: takes an object-space face
+    /// normal to the world-space normal of the same side.
     normal: Mat3A,
 }
 
@@ -90,7 +89,7 @@ impl InstanceTransform {
         if !to_object.to_cols_array().iter().all(|c| c.is_finite()) {
             return Err(singular);
         }
-        let normal = inv.matrix3.transpose() * det.signum();
+        let normal = inv.matrix3.transpose();
         let normal = Mat3A::from_cols_array(&normal.to_cols_array().map(|c| c as f32));
         Ok(InstanceTransform {
             to_world,
@@ -121,9 +120,11 @@ impl InstanceTransform {
         )
     }
 
-    /// The world-space unit normal of the object-space triangle whose edge
-    /// cross product is `face` (same side as the world-space triangle's
-    /// `e1 × e2`, also under mirroring transforms).
+    /// The world-space unit normal of the side of an object-space triangle
+    /// whose normal is `face` (the inverse transpose applied). Under a
+    /// mirroring transform the transformed corners wind the other way
+    /// round that side, which stays the front: glTF's rule for nodes with a
+    /// negative determinant, pbrt-v4's and Embree's normals of instances.
     #[inline]
     pub fn world_normal(&self, face: Vec3) -> Vec3 {
         (self.normal * face).normalize_or_zero()

@@ -3,10 +3,12 @@
 //! on the object-space corners mapped to world space in `f64`.
 #![allow(dead_code)]
 
+use raykit_core::accel::{Accel, BuildOptions, Bvh8};
 use raykit_core::glam::{Affine3A, DAffine3, DVec3, Quat, Vec3};
 use raykit_core::instancing::{InstancedScene, SceneBuilder, SceneHit};
 use raykit_core::rng::Pcg32;
 use raykit_core::tri::reference::{edge_distance_f64, intersect_f64};
+use raykit_core::tri::Moller;
 use raykit_core::{Aabb, Ray, TriangleMesh};
 
 /// A scene description kept beside the built scene: the meshes and, per
@@ -66,7 +68,9 @@ impl Placed {
     }
 
     /// The scene flattened: every instance's triangles mapped to world
-    /// space in `f32` and concatenated, and per triangle its
+    /// space in `f32` and concatenated (the triangles of mirroring instances
+    /// re-wound, as glTF does, so that each front stays the front), and per
+    /// triangle its
     /// `(geometry, instance, prim)`. Only instances whose mask shares a bit
     /// with `mask`.
     pub fn flattened(&self, mask: u32) -> (TriangleMesh, Vec<(u32, u32, u32)>) {
@@ -80,8 +84,11 @@ impl Placed {
             let mesh = &self.meshes[*g as usize];
             let base = positions.len() as u32;
             positions.extend(mesh.positions.iter().map(|p| t.transform_point3(*p)));
+            let mirror = t.matrix3.determinant() < 0.0;
             for (k, tri) in mesh.indices.iter().enumerate() {
-                indices.push(tri.map(|v| v + base));
+                let [a, b, c] = tri.map(|v| v + base);
+                // Re-wound under a mirror so that the front stays the front.
+                indices.push(if mirror { [a, c, b] } else { [a, b, c] });
                 ids.push((*g, i as u32, k as u32));
             }
         }
@@ -95,7 +102,8 @@ impl Placed {
     }
 
     /// Every world triangle in `f64`: object corners mapped by the `f64`
-    /// transform, with its `(geometry, instance, prim)`; instances whose
+    /// transform (re-wound under a mirror), with its `(geometry, instance,
+    /// prim)`; instances whose
     /// mask misses `mask` left out.
     pub fn world_f64(&self, mask: u32) -> Vec<WorldTri> {
         let mut out = Vec::new();
@@ -105,8 +113,12 @@ impl Placed {
             }
             let d = DAffine3::from_cols_array(&t.to_cols_array().map(f64::from));
             let mesh = &self.meshes[*g as usize];
+            let mirror = d.matrix3.determinant() < 0.0;
             for k in 0..mesh.num_triangles() {
-                let c = mesh.triangle(k).map(|v| d.transform_point3(v.as_dvec3()));
+                let mut c = mesh.triangle(k).map(|v| d.transform_point3(v.as_dvec3()));
+                if mirror {
+                    c.swap(1, 2);
+                }
                 out.push((c, (*g, i as u32, k as u32)));
             }
         }
@@ -194,4 +206,73 @@ pub fn close_on_plane(a: f64, b: f64, n: DVec3, dir: DVec3, scale: f64) -> bool 
 /// The ids of a scene hit.
 pub fn ids(h: &SceneHit) -> (u32, u32, u32) {
     (h.geometry, h.instance, h.prim)
+}
+
+/// Whether a disagreement at the nearest hit of a ray with direction `dir`
+/// is a graze or tie that `f32` rounding decides: the reference's nearest
+/// crossing lies within `1e-3` of its triangle's boundary, or the next
+/// crossing lies within rounding distance of it (two surfaces that touch
+/// or nearly coincide, as in CAD models; see [`close_on_plane`], `scale`
+/// the scene's size).
+pub fn near_edge(reference: &[Crossing], dir: DVec3, scale: f64) -> bool {
+    match reference {
+        [] => false,
+        [first, rest @ ..] => {
+            first.margin < 1e-3
+                || rest
+                    .first()
+                    .is_some_and(|c| close_on_plane(c.t, first.t, c.normal, dir, scale))
+        }
+    }
+}
+
+/// The flattened scene's `Bvh8` answers and the instanced scene's agree:
+/// same hit or miss and same `t`, and the same ids unless the reference
+/// says the ray grazes an edge or meets two triangles at one `t`.
+pub fn agree_with_flattened(
+    placed: &Placed,
+    scene: &InstancedScene,
+    mask: u32,
+    rays: &[Ray],
+) -> (usize, usize) {
+    let (flat, flat_ids) = placed.flattened(mask);
+    let bvh = Bvh8::<Moller>::build(&flat, &BuildOptions::default());
+    let world = placed.world_f64(mask);
+    let (mut same, mut excused) = (0, 0);
+    let scale = flat.bounds().extent().max_element() as f64;
+    for (k, ray) in rays.iter().enumerate() {
+        let a = scene.intersect(ray, mask);
+        let b = bvh.intersect(ray);
+        assert_eq!(scene.occluded(ray, mask), bvh.occluded(ray), "ray {k}");
+        match (a, b) {
+            (None, None) => same += 1,
+            (Some(a), Some(b)) if ids(&a) == flat_ids[b.prim as usize] => {
+                let (t, d) = (b.t as f64, ray.dir.as_dvec3());
+                let n = a.normal.as_dvec3();
+                assert!(
+                    close_on_plane(a.t as f64, t, n, d, scale),
+                    "ray {k}: {a:?} vs {b:?}"
+                );
+                same += 1;
+            }
+            (a, b) => {
+                let reference = crossings(&world, ray);
+                let tie =
+                    matches!((a, b), (Some(a), Some(b)) if close(a.t as f64, b.t as f64, 1e-5));
+                assert!(
+                    tie || near_edge(&reference, ray.dir.as_dvec3(), scale),
+                    "ray {k}: {a:?} vs {b:?} (reference {:?})",
+                    reference.first()
+                );
+                excused += 1;
+            }
+        }
+    }
+    assert!(
+        excused * 100 <= rays.len(),
+        "{excused} of {} rays differ",
+        rays.len()
+    );
+    assert!(same > 0);
+    (same, excused)
 }
