@@ -14,7 +14,8 @@
 //!   STL, OFF, glTF and GLB. Every loader error is a [`LoadError`] naming the
 //!   file and the line, byte or JSON element where the problem is.
 //! * Ray, hit and occlusion files in the project's fixed binary layouts
-//!   ([`read_rays`], [`write_hits`], …).
+//!   ([`read_rays`], [`write_hits`], …), and the hit file of an instanced
+//!   scene with geometry and instance ids ([`write_scene_hits`]).
 //! * Safe output: [`write_atomic`] (temporary file + rename) under every writer,
 //!   and [`write_png`].
 
@@ -41,6 +42,7 @@ mod ply;
 mod ply_header;
 mod png;
 mod rays;
+mod scene_hits;
 mod stl;
 mod text;
 mod texture_image;
@@ -57,6 +59,10 @@ pub use png::write_png;
 pub use rays::{
     read_hits, read_occlusion, read_rays, write_hits, write_occlusion, write_rays, HIT_RECORD_SIZE,
     RAY_RECORD_SIZE,
+};
+pub use scene_hits::{
+    read_scene_hits, scene_hit_record, write_scene_hit_record, write_scene_hits, SceneHitRecord,
+    SCENE_HIT_RECORD_SIZE,
 };
 pub use write::{
     save_mesh, save_mesh_as, write_exr_channels, write_exr_rgb, write_gltf, write_gltf_scene,
