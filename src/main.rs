@@ -7,6 +7,7 @@ mod cmd;
 #[cfg(feature = "embree")]
 mod embree;
 mod gpu_measure;
+mod instanced_arg;
 mod measure;
 mod paths;
 mod plot;

@@ -5,13 +5,15 @@
 //! and Wald's projection (Wald 2004); the structures include the binned-SAH BVH
 //! (Wald 2007), the threaded (escape-index) BVH (Smits 1998) and kd-trees
 //! traversed with a per-ray stack, ropes (Popov et al. 2007) or restart and
-//! backtrack (Foley & Sugerman 2005).
+//! backtrack (Foley & Sugerman 2005). [`instancing`] puts several meshes and
+//! their instances under a two-level BVH (Wald et al. 2014).
 
 pub mod aabb;
 pub mod accel;
 pub mod camera;
 pub mod hit;
 pub mod icosphere;
+pub mod instancing;
 pub mod light;
 pub mod mesh;
 pub mod query;

@@ -43,8 +43,17 @@ pub(crate) struct GltfScene {
     pub glb: bool,
 }
 
-/// Parse the glTF or GLB file `data` read from `path`.
-pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadError> {
+/// A parsed glTF document with its buffers loaded.
+pub(crate) struct OpenedGltf<'a> {
+    pub doc: Document,
+    pub buffers: Vec<Cow<'a, [u8]>>,
+    pub warnings: Vec<String>,
+    pub glb: bool,
+}
+
+/// Split a GLB, parse and validate the JSON and load the buffers of the
+/// glTF or GLB file `data` read from `path`.
+pub(crate) fn open_gltf<'a>(path: &Path, data: &'a [u8]) -> Result<OpenedGltf<'a>, LoadError> {
     let glb = is_glb(data);
     let (json, bin, mut warnings) = if glb {
         let (g, w) = split_glb(path, data)?;
@@ -55,22 +64,30 @@ pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadErro
     let doc = parse_document(path, json, glb)?;
     warnings.extend(unsupported_warnings(doc.as_json()));
     let buffers = load_buffers(path, &doc, bin)?;
-    let mut b = Builder {
-        path,
-        doc: &doc,
-        buffers: &buffers,
-        limit: data.len(),
-        mesh: TriangleMesh::default(),
-        normals: Vec::new(),
-        uvs: Vec::new(),
-        all_normals: true,
-        all_uvs: true,
-        material_of: vec![None; doc.materials().len() + 1],
-        images: ImageCache::new(doc.images().len()),
-        scene: SceneCollector::default(),
-        warnings: &mut warnings,
-    };
-    b.walk()?;
+    Ok(OpenedGltf {
+        doc,
+        buffers,
+        warnings,
+        glb,
+    })
+}
+
+/// Parse the glTF or GLB file `data` read from `path`.
+pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadError> {
+    let OpenedGltf {
+        doc,
+        buffers,
+        mut warnings,
+        glb,
+    } = open_gltf(path, data)?;
+    let mut b = Builder::new(path, &doc, &buffers, data.len(), &mut warnings);
+    walk_nodes(path, &doc, &mut |node, world| {
+        b.scene.visit(doc.as_json(), node.index(), world);
+        match node.mesh() {
+            Some(mesh) => b.add_instance(node, &mesh, world),
+            None => Ok(()),
+        }
+    })?;
     let (mesh, scene) = b.finish();
     warnings.extend(scene.warnings());
     let mesh = finish(path, mesh, Location::Json("scene".into()))?;
@@ -81,6 +98,51 @@ pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadErro
         warnings,
         glb,
     })
+}
+
+/// Walk the default scene (or the first scene, or else every root node)
+/// depth first, children in order, calling `visit` with each node and its
+/// world transform (its own composed with its parents'). A cycle in the
+/// hierarchy is an error naming the node.
+pub(crate) fn walk_nodes(
+    path: &Path,
+    doc: &Document,
+    visit: &mut dyn FnMut(&::gltf::Node<'_>, &Mat4) -> Result<(), LoadError>,
+) -> Result<(), LoadError> {
+    let n_nodes = doc.nodes().len();
+    let roots: Vec<::gltf::Node<'_>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; n_nodes];
+            for node in doc.nodes() {
+                for c in node.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            doc.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+    let mut stack: Vec<(::gltf::Node<'_>, Mat4, usize)> = roots
+        .into_iter()
+        .rev()
+        .map(|n| (n, Mat4::IDENTITY, 0))
+        .collect();
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > n_nodes {
+            return Err(LoadError::at_json(
+                path,
+                format!("nodes[{}].children", node.index()),
+                "the node hierarchy has a cycle",
+            ));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        visit(&node, &world)?;
+        let children: Vec<_> = node.children().collect();
+        for c in children.into_iter().rev() {
+            stack.push((c, world, depth + 1));
+        }
+    }
+    Ok(())
 }
 
 /// Deserialize and validate the JSON. The `gltf` crate's validation indexes
@@ -221,7 +283,8 @@ fn load_buffers<'a>(
     Ok(out)
 }
 
-struct Builder<'a, 'b> {
+/// Collects the triangles of the mesh nodes into one mesh.
+pub(crate) struct Builder<'a, 'b> {
     path: &'a Path,
     doc: &'a Document,
     buffers: &'a [Cow<'b, [u8]>],
@@ -240,50 +303,36 @@ struct Builder<'a, 'b> {
     warnings: &'a mut Vec<String>,
 }
 
-impl Builder<'_, '_> {
-    fn walk(&mut self) -> Result<(), LoadError> {
-        let doc = self.doc;
-        let n_nodes = doc.nodes().len();
-        let roots: Vec<::gltf::Node<'_>> = match doc.default_scene().or_else(|| doc.scenes().next())
-        {
-            Some(scene) => scene.nodes().collect(),
-            None => {
-                let mut is_child = vec![false; n_nodes];
-                for node in doc.nodes() {
-                    for c in node.children() {
-                        is_child[c.index()] = true;
-                    }
-                }
-                doc.nodes().filter(|n| !is_child[n.index()]).collect()
-            }
-        };
-        let mut stack: Vec<(::gltf::Node<'_>, Mat4, usize)> = roots
-            .into_iter()
-            .rev()
-            .map(|n| (n, Mat4::IDENTITY, 0))
-            .collect();
-        while let Some((node, parent, depth)) = stack.pop() {
-            if depth > n_nodes {
-                return Err(LoadError::at_json(
-                    self.path,
-                    format!("nodes[{}].children", node.index()),
-                    "the node hierarchy has a cycle",
-                ));
-            }
-            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-            self.scene.visit(doc.as_json(), node.index(), &world);
-            if let Some(mesh) = node.mesh() {
-                self.add_instance(&node, &mesh, &world)?;
-            }
-            let children: Vec<_> = node.children().collect();
-            for c in children.into_iter().rev() {
-                stack.push((c, world, depth + 1));
-            }
+impl<'a, 'b> Builder<'a, 'b> {
+    /// A builder of one mesh from `doc`'s meshes (`limit`: the file size,
+    /// bounding accessor reads).
+    pub(crate) fn new(
+        path: &'a Path,
+        doc: &'a Document,
+        buffers: &'a [Cow<'b, [u8]>],
+        limit: usize,
+        warnings: &'a mut Vec<String>,
+    ) -> Self {
+        Builder {
+            path,
+            doc,
+            buffers,
+            limit,
+            mesh: TriangleMesh::default(),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            all_normals: true,
+            all_uvs: true,
+            material_of: vec![None; doc.materials().len() + 1],
+            images: ImageCache::new(doc.images().len()),
+            scene: SceneCollector::default(),
+            warnings,
         }
-        Ok(())
     }
 
-    fn add_instance(
+    /// Append the primitives of `mesh`, placed by `node`'s world transform
+    /// `world`, as one part.
+    pub(crate) fn add_instance(
         &mut self,
         node: &::gltf::Node<'_>,
         mesh: &::gltf::Mesh<'_>,
@@ -451,7 +500,8 @@ impl Builder<'_, '_> {
             .get(self.path, json, self.buffers, image, self.warnings)
     }
 
-    fn finish(mut self) -> (TriangleMesh, SceneCollector) {
+    /// The mesh collected and the lights and camera met.
+    pub(crate) fn finish(mut self) -> (TriangleMesh, SceneCollector) {
         if self.all_normals && !self.mesh.positions.is_empty() {
             self.mesh.normals = Some(self.normals);
         }

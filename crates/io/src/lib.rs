@@ -8,11 +8,14 @@
 //!   `KHR_lights_punctual` lights and first perspective camera
 //!   ([`LoadedMesh::lights`], [`LoadedMesh::camera`]), and features it uses
 //!   that are not supported are named in [`LoadedMesh::warnings`];
+//!   [`load_gltf_instances`] reads a glTF file with its instancing kept
+//!   (one geometry per mesh, one instance per node) for an instanced scene;
 //!   [`save_mesh`] writes OBJ, PLY,
 //!   STL, OFF, glTF and GLB. Every loader error is a [`LoadError`] naming the
 //!   file and the line, byte or JSON element where the problem is.
 //! * Ray, hit and occlusion files in the project's fixed binary layouts
-//!   ([`read_rays`], [`write_hits`], …).
+//!   ([`read_rays`], [`write_hits`], …), and the hit file of an instanced
+//!   scene with geometry and instance ids ([`write_scene_hits`]).
 //! * Safe output: [`write_atomic`] (temporary file + rename) under every writer,
 //!   and [`write_png`].
 
@@ -26,6 +29,7 @@ mod gltf;
 mod gltf_accessor;
 mod gltf_glb;
 mod gltf_image;
+mod gltf_instances;
 mod gltf_scene;
 mod gltf_support;
 mod hashing;
@@ -38,6 +42,7 @@ mod ply;
 mod ply_header;
 mod png;
 mod rays;
+mod scene_hits;
 mod stl;
 mod text;
 mod texture_image;
@@ -48,11 +53,16 @@ mod write;
 pub use atomic::{write_atomic, write_atomic_file};
 pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
+pub use gltf_instances::{load_gltf_instances, parse_gltf_instances, GltfInstance, GltfInstances};
 pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
 pub use png::write_png;
 pub use rays::{
     read_hits, read_occlusion, read_rays, write_hits, write_occlusion, write_rays, HIT_RECORD_SIZE,
     RAY_RECORD_SIZE,
+};
+pub use scene_hits::{
+    read_scene_hits, scene_hit_record, write_scene_hit_record, write_scene_hits, SceneHitRecord,
+    SCENE_HIT_RECORD_SIZE,
 };
 pub use write::{
     save_mesh, save_mesh_as, write_exr_channels, write_exr_rgb, write_gltf, write_gltf_scene,

@@ -29,7 +29,7 @@
 //! [`crate::accel::AccelKind`].
 
 pub mod all_hits;
-mod batch;
+pub(crate) mod batch;
 pub mod closest;
 pub mod exact;
 pub mod frustum;

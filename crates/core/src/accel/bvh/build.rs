@@ -238,8 +238,28 @@ pub(crate) fn range_info(refs: &[PrimRef]) -> RangeInfo {
     }
 }
 
+/// The binned SAH build over arbitrary boxes instead of a mesh's
+/// triangles: `order` and the leaves refer to indices into `boxes`. The
+/// top level of a two-level BVH is built this way over its instances'
+/// world boxes (Wald et al. 2014). Every box must be finite and not empty.
+/// `options.quality` is ignored (always the binned SAH).
+pub fn build_over_boxes(boxes: &[Aabb], options: &BuildOptions) -> BuildTree {
+    let opts = clamped(options);
+    let refs: Vec<PrimRef> = boxes
+        .iter()
+        .enumerate()
+        .map(|(i, b)| PrimRef::new(b, i as u32))
+        .collect();
+    let info = range_info(&refs);
+    sah_over_refs(refs, info, &opts)
+}
+
 fn sah_build(mesh: &TriangleMesh, opts: &BuildOptions) -> BuildTree {
-    let (mut refs, info) = prim_refs(mesh);
+    let (refs, info) = prim_refs(mesh);
+    sah_over_refs(refs, info, opts)
+}
+
+fn sah_over_refs(mut refs: Vec<PrimRef>, info: RangeInfo, opts: &BuildOptions) -> BuildTree {
     let mut bins = Bins::new(opts.bins);
     let root = sah_node(&mut refs, info, 0, 0, opts, &mut bins);
     BuildTree {

@@ -1,0 +1,90 @@
+//! A geometry of an instanced scene: one triangle mesh with its own
+//! bottom-level BVH, stored once however many instances place it.
+
+use crate::aabb::Aabb;
+use crate::accel::{Accel, BuildOptions, Bvh8};
+use crate::mesh::TriangleMesh;
+use crate::query::SurfaceBvh;
+use crate::tri::{Moller, MAX_EDGE_TOLERANCE};
+use glam::Vec3;
+use std::sync::OnceLock;
+
+/// A triangle mesh in its own object space with the bottom-level
+/// [`Bvh8`] over Möller–Trumbore triangles that answers nearest-hit and
+/// occlusion queries, and, made on the first multi-hit query, the
+/// [`SurfaceBvh`] behind all-hits, counts and filtered any-hit queries.
+pub struct Geometry {
+    mesh: TriangleMesh,
+    bvh: Bvh8<Moller>,
+    /// Bounds padded by the triangle tests' tolerance band, as the BVHs'
+    /// own node boxes are (`accel/bvh/node_box.rs`).
+    bounds: Aabb,
+    mask: u32,
+    surface: OnceLock<SurfaceBvh>,
+}
+
+impl Geometry {
+    /// Build the bottom-level BVH over `mesh` (checked by the caller).
+    pub(crate) fn build(mesh: TriangleMesh, mask: u32, options: &BuildOptions) -> Self {
+        let bvh = Bvh8::build(&mesh, options);
+        let b = mesh.bounds();
+        let bounds = if mesh.indices.is_empty() {
+            Aabb::EMPTY
+        } else {
+            let pad = Vec3::splat(4.0 * MAX_EDGE_TOLERANCE * b.extent().max_element());
+            Aabb::new(b.min - pad, b.max + pad)
+        };
+        Geometry {
+            mesh,
+            bvh,
+            bounds,
+            mask,
+            surface: OnceLock::new(),
+        }
+    }
+
+    /// The mesh, in object space.
+    pub fn mesh(&self) -> &TriangleMesh {
+        &self.mesh
+    }
+
+    /// The bottom-level BVH.
+    pub fn bvh(&self) -> &Bvh8<Moller> {
+        &self.bvh
+    }
+
+    /// The mesh's bounds widened by the triangle tests' tolerance band
+    /// (empty for a mesh without triangles).
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// The geometry's ray mask: a ray with mask `m` sees it when
+    /// `mask & m != 0`.
+    pub fn mask(&self) -> u32 {
+        self.mask
+    }
+
+    /// The 8-wide BVH of the multi-hit queries, built on first use.
+    pub fn surface(&self) -> &SurfaceBvh {
+        self.surface.get_or_init(|| SurfaceBvh::build(&self.mesh))
+    }
+
+    /// `e1 × e2` of triangle `prim` in object space.
+    pub(crate) fn face_cross(&self, prim: u32) -> Vec3 {
+        let [a, b, c] = self.mesh.triangle(prim as usize);
+        (b - a).cross(c - a)
+    }
+
+    /// Bytes held: the mesh's positions and indices, the bottom-level BVH,
+    /// and the multi-hit BVH if it has been made.
+    pub fn bytes(&self) -> usize {
+        let mesh = self.mesh.positions.len() * std::mem::size_of::<Vec3>()
+            + self.mesh.indices.len() * std::mem::size_of::<[u32; 3]>();
+        let surface = self.surface.get().map_or(0, |s| {
+            s.num_nodes() * std::mem::size_of::<crate::query::surface_bvh::SurfaceNode>()
+                + s.num_triangles() * (std::mem::size_of::<[Vec3; 3]>() + 4)
+        });
+        mesh + self.bvh.stats().bytes + surface
+    }
+}
