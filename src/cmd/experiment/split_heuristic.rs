@@ -136,8 +136,18 @@ pub fn run(args: SplitHeuristicArgs) -> Result<ExitCode> {
             kd: kd.clone(),
             ..base.clone()
         };
-        let row = threads
-            .install(|| sweep_point(mesh, &opts, &rays, &want, &frustums, &frustum_ref, &cameras, reps));
+        let row = threads.install(|| {
+            sweep_point(
+                mesh,
+                &opts,
+                &rays,
+                &want,
+                &frustums,
+                &frustum_ref,
+                &cameras,
+                reps,
+            )
+        });
         rows.push(row?);
         bar.inc(1);
     }

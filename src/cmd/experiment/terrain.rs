@@ -120,7 +120,12 @@ struct GdalRow {
 /// terrain: the first looks from the south-west corner towards the middle,
 /// the others are moved along the diagonal by equal steps (at most 35% of
 /// the DEM's width and height in all), looking the same way.
-fn flight_cameras(field: &HeightField, width: u32, height: u32, views: usize) -> Vec<TerrainCamera> {
+fn flight_cameras(
+    field: &HeightField,
+    width: u32,
+    height: u32,
+    views: usize,
+) -> Vec<TerrainCamera> {
     let (wx, wy) = (
         (field.width - 1) as f64 * field.sx,
         (field.height - 1) as f64 * field.sy,
@@ -128,7 +133,11 @@ fn flight_cameras(field: &HeightField, width: u32, height: u32, views: usize) ->
     let z = field.zmax as f64;
     (0..views.max(1))
         .map(|i| {
-            let s = if views > 1 { 0.35 * i as f64 / (views - 1) as f64 } else { 0.0 };
+            let s = if views > 1 {
+                0.35 * i as f64 / (views - 1) as f64
+            } else {
+                0.0
+            };
             TerrainCamera {
                 eye: [(0.08 + s) * wx, (-0.92 + s) * wy, z + 0.05 * wx.max(wy)],
                 target: [(0.55 + s) * wx, (-0.45 + s) * wy, field.zmin as f64],
