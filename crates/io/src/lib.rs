@@ -14,7 +14,8 @@
 //! * Ray, hit and occlusion files in the project's fixed binary layouts
 //!   ([`read_rays`], [`write_hits`], …).
 //! * Safe output: [`write_atomic`] (temporary file + rename) under every writer,
-//!   and [`write_png`].
+//!   and [`write_png`]; parts of a split image ([`write_png_part`],
+//!   [`read_png_part`]) carry their place in the picture.
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -29,6 +30,7 @@ mod gltf_image;
 mod gltf_scene;
 mod gltf_support;
 mod hashing;
+mod image_part;
 mod input;
 mod load;
 mod mtl;
@@ -48,6 +50,7 @@ mod write;
 pub use atomic::{write_atomic, write_atomic_file};
 pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
+pub use image_part::{read_png_part, write_png_part, ImagePart, PART_KEYWORD};
 pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
 pub use png::write_png;
 pub use rays::{
