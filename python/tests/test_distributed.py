@@ -54,6 +54,7 @@ def camera_of(vertices):
     return centre + [0.0, 0.3 * (hi - lo)[1], 2.2 * np.linalg.norm(hi - lo)], centre
 
 
+@pytest.mark.filterwarnings("ignore::rasterio.errors.NotGeoreferencedWarning")
 def test_render_bands_and_frames_equal_the_in_process_render(client, scene, bunny, tmp_path):
     eye, target = camera_of(bunny[0])
     frames = rkd.orbit(3, eye, target, fov=30.0)
