@@ -31,7 +31,7 @@ fn render(extra: &[&str], out: &Path) {
 fn merged_bands_equal_the_one_process_render() {
     let dir = tempfile::tempdir().unwrap();
     for (name, opts) in [
-        ("jittered", &["--spp", "3", "--threads", "2"][..]),
+        ("jittered", &["--spp", "3"][..]),
         (
             "wavefront-raster-maps",
             &[
