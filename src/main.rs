@@ -32,6 +32,8 @@ struct Cli {
 enum Command {
     /// Render a scene with the Whitted ray tracer: mirrors, glass, lights, shadows, HDR environments.
     Render(cmd::render::RenderArgs),
+    /// Assemble the PNG parts of `raykit render --tile I/N` into the whole image.
+    MergeTiles(cmd::merge_tiles::MergeTilesArgs),
     /// Generate a standard ray set (primary, shadow, incoherent) as a binary ray file.
     Rays(cmd::rays::RaysArgs),
     /// Trace a ray file against a mesh and write hits (or occlusion) to a file.
@@ -60,6 +62,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(a) => cmd::render::run(a),
+        Command::MergeTiles(a) => cmd::merge_tiles::run(a),
         Command::Rays(a) => cmd::rays::run(a),
         Command::Trace(a) => cmd::trace::run(a),
         Command::Query(a) => cmd::query::run(a),

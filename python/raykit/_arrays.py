@@ -46,14 +46,16 @@ def _check_real(a: np.ndarray, name: str) -> None:
 
 
 def floats(a, name: str, last: int | None = None, min_ndim: int = 1) -> np.ndarray:
-    """``a`` as C-contiguous float32 whose last axis has ``last`` entries."""
+    """``a`` as C-contiguous, aligned float32 whose last axis has ``last``
+    entries (buffers received over a network, as Dask's, can be contiguous
+    but misaligned; those are copied)."""
     a = to_numpy(a)
     _check_real(a, name)
     if a.ndim < min_ndim:
         raise ValueError(f"{name} must have at least {min_ndim} dimensions, got shape {a.shape}")
     if last is not None and (a.ndim == 0 or a.shape[-1] != last):
         raise ValueError(f"the last dimension of {name} must be {last}, got shape {a.shape}")
-    return np.ascontiguousarray(a, dtype=np.float32)
+    return np.require(a, dtype=np.float32, requirements=["C", "A"])
 
 
 def rows(a, name: str, width: int, min_ndim: int = 2) -> tuple[np.ndarray, tuple[int, ...]]:
@@ -64,7 +66,8 @@ def rows(a, name: str, width: int, min_ndim: int = 2) -> tuple[np.ndarray, tuple
 
 
 def indices(a, name: str) -> np.ndarray:
-    """Triangle corners: ``(m, 3)`` non-negative integers as C-contiguous uint32."""
+    """Triangle corners: ``(m, 3)`` non-negative integers as C-contiguous,
+    aligned uint32."""
     a = to_numpy(a)
     if a.dtype.kind not in "iu":
         raise ValueError(f"{name} must hold integers, got dtype {a.dtype}")
@@ -72,7 +75,7 @@ def indices(a, name: str) -> np.ndarray:
         raise ValueError(f"{name} must have shape (m, 3), got {a.shape}")
     if a.size and (a.min() < 0 or int(a.max()) > np.iinfo(np.uint32).max):
         raise ValueError(f"{name} must lie between 0 and {np.iinfo(np.uint32).max}")
-    return np.ascontiguousarray(a, dtype=np.uint32)
+    return np.require(a, dtype=np.uint32, requirements=["C", "A"])
 
 
 def threads(n) -> int:

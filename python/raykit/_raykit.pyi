@@ -136,7 +136,16 @@ def render(
     samples_per_pixel: int = 1,
     shadows: bool = True,
     threads: int = 0,
+    window: Optional[Tuple[int, int, int, int]] = None,
 ) -> npt.NDArray[np.uint8]: ...
+def write_geotiff(
+    path: str | os.PathLike[str],
+    values: npt.NDArray[np.uint8] | npt.NDArray[np.float32],
+    transform: Optional[Transform] = None,
+    geographic: bool = False,
+    nodata: Optional[float] = None,
+    like: Optional[str | os.PathLike[str]] = None,
+) -> None: ...
 def cull(
     vertices: npt.NDArray[np.float32],
     triangles: npt.NDArray[np.uint32],

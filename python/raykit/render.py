@@ -29,6 +29,7 @@ def render(
     samples_per_pixel: int = 1,
     shadows: bool = True,
     threads: int = 0,
+    window: tuple[int, int, int, int] | None = None,
 ) -> np.ndarray:
     """Render ``scene`` to an ``(height, width, 3)`` uint8 sRGB image.
 
@@ -41,6 +42,11 @@ def render(
     by one white point light above the scene, hard shadows by shadow rays
     (``shadows=False`` turns them off), ``samples_per_pixel`` jittered
     samples; the same renderer ``raykit serve`` streams.
+
+    ``window=(x, y, w, h)`` renders only that rectangle of the
+    ``width`` × ``height`` frame, as an ``(h, w, 3)`` image whose pixels
+    equal the whole frame's bit for bit (so rectangles rendered apart, as
+    :func:`raykit.distributed.render` does, assemble into the whole image).
     """
     if not isinstance(scene, RaycastingScene):
         mesh = scene
@@ -57,4 +63,5 @@ def render(
         int(samples_per_pixel),
         bool(shadows),
         _arrays.threads(threads),
+        None if window is None else tuple(int(c) for c in window),
     )

@@ -6,6 +6,7 @@
 mod arrays;
 mod cull;
 mod errors;
+mod geotiff;
 mod image_order;
 mod mesh_io;
 mod queries;
@@ -34,6 +35,7 @@ fn _raykit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(terrain::shadow, m)?)?;
     m.add_function(wrap_pyfunction!(terrain::cast, m)?)?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add_function(wrap_pyfunction!(geotiff::write_geotiff, m)?)?;
     m.add_function(wrap_pyfunction!(cull::cull, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -9,15 +9,17 @@ use numpy::{IntoPyArray, PyArray3};
 use pyo3::prelude::*;
 use raykit_core::raysets::standard_light;
 use raykit_core::{Camera, Light, PointLight, Vec3};
-use raykit_render::RenderOptions;
+use raykit_render::{RenderOptions, Tile};
 
 /// Render `scene` (its structure is reused) through a pinhole camera at
 /// `eye` looking at `target` (default: the scene's bounding box centre)
 /// with vertical field of view `fov` degrees; without `eye`, the camera
 /// frames the triangles as `raykit render` frames a mesh. One white point
-/// light above the scene, as the command line's default.
+/// light above the scene, as the command line's default. `window =
+/// (x, y, w, h)` renders only that rectangle of the frame (pixels equal to
+/// the whole frame's), as an `(h, w, 3)` image.
 #[pyfunction]
-#[pyo3(signature = (scene, width=800, height=600, eye=None, target=None, up=(0.0, 1.0, 0.0), fov=40.0, samples_per_pixel=1, shadows=true, threads=0))]
+#[pyo3(signature = (scene, width=800, height=600, eye=None, target=None, up=(0.0, 1.0, 0.0), fov=40.0, samples_per_pixel=1, shadows=true, threads=0, window=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -31,6 +33,7 @@ pub fn render<'py>(
     samples_per_pixel: u32,
     shadows: bool,
     threads: i64,
+    window: Option<(u32, u32, u32, u32)>,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
     let built = scene.read();
     let Some(accel) = &built.accel else {
@@ -51,6 +54,23 @@ pub fn render<'py>(
             "samples_per_pixel must be between 1 and 4096, got {samples_per_pixel}"
         )));
     }
+    let window = match window {
+        None => Tile::whole(width, height),
+        Some((x, y, w, h)) => {
+            let t = Tile {
+                x,
+                y,
+                width: w,
+                height: h,
+            };
+            if w == 0 || h == 0 || t.clipped(width, height) != t {
+                return Err(value_error(format!(
+                    "window ({x}, {y}, {w}, {h}) must be a non-empty rectangle inside the {width} x {height} frame"
+                )));
+            }
+            t
+        }
+    };
     let mesh = &built.mesh;
     let bounds = mesh.bounds();
     let v = |t: (f32, f32, f32)| Vec3::new(t.0, t.1, t.2);
@@ -83,12 +103,13 @@ pub fn render<'py>(
         height,
         samples_per_pixel,
         shadows,
+        window: Some(window),
         ..RenderOptions::default()
     };
     let image = detached(py, threads, || {
         raykit_render::render(mesh, &lights, accel.as_ref(), &camera, &options, &|_| {})
     })?;
-    let rgb = Array3::from_shape_vec((height as usize, width as usize, 3), image.rgb)
+    let rgb = Array3::from_shape_vec((image.height as usize, image.width as usize, 3), image.rgb)
         .expect("three bytes a pixel");
     Ok(rgb.into_pyarray(py))
 }

@@ -8,6 +8,7 @@ pub mod cull;
 pub mod experiment;
 pub mod export;
 pub mod info;
+pub mod merge_tiles;
 pub mod query;
 pub mod rays;
 pub mod render;

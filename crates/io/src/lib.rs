@@ -17,7 +17,8 @@
 //!   ([`read_rays`], [`write_hits`], …), and the hit file of an instanced
 //!   scene with geometry and instance ids ([`write_scene_hits`]).
 //! * Safe output: [`write_atomic`] (temporary file + rename) under every writer,
-//!   and [`write_png`].
+//!   and [`write_png`]; parts of a split image ([`write_png_part`],
+//!   [`read_png_part`]) carry their place in the picture.
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -33,6 +34,7 @@ mod gltf_instances;
 mod gltf_scene;
 mod gltf_support;
 mod hashing;
+mod image_part;
 mod input;
 mod load;
 mod mtl;
@@ -54,6 +56,7 @@ pub use atomic::{write_atomic, write_atomic_file};
 pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
 pub use gltf_instances::{load_gltf_instances, parse_gltf_instances, GltfInstance, GltfInstances};
+pub use image_part::{read_png_part, write_png_part, ImagePart, PART_KEYWORD};
 pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
 pub use png::write_png;
 pub use rays::{

@@ -1,6 +1,7 @@
 //! What [`crate::render`] is asked to do.
 
 use crate::image::Encoding;
+use crate::tiles::Tile;
 use raykit_core::glam::Vec3;
 
 /// Image size, sampling and shading settings.
@@ -24,11 +25,17 @@ pub struct RenderOptions {
     pub exposure: f32,
     /// Transfer function to 8 bits.
     pub encoding: Encoding,
+    /// Crop window (pbrt's "cropwindow"): render only this rectangle of the
+    /// `width` × `height` frame; the image is the rectangle's size and its
+    /// pixels equal those of the whole frame's render bit for bit, so
+    /// separately rendered windows assemble into the whole image. `None`
+    /// renders the whole frame.
+    pub window: Option<Tile>,
 }
 
 impl Default for RenderOptions {
     /// 800 × 600, one sample per pixel, ambient 0.06, shadows on, exposure 1,
-    /// sRGB.
+    /// sRGB, the whole frame.
     fn default() -> Self {
         RenderOptions {
             width: 800,
@@ -39,6 +46,7 @@ impl Default for RenderOptions {
             shadows: true,
             exposure: 1.0,
             encoding: Encoding::Srgb,
+            window: None,
         }
     }
 }

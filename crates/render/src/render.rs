@@ -3,7 +3,7 @@
 use crate::image::Image;
 use crate::options::RenderOptions;
 use crate::shade::Shader;
-use crate::tiles::map_pixels;
+use crate::tiles::{map_pixels, Tile};
 use raykit_core::glam::Vec3;
 use raykit_core::rng::Pcg32;
 use raykit_core::{Accel, Camera, TriangleMesh};
@@ -14,7 +14,9 @@ use raykit_core::{Accel, Camera, TriangleMesh};
 /// after each tile `progress` is called with its number of pixels. Each pixel
 /// averages `opts.samples_per_pixel` samples of [`Shader::radiance`] (see
 /// [`crate::shade`] for the shading), times `opts.exposure`, then encodes it.
-/// The result does not depend on the number of threads.
+/// The result does not depend on the number of threads. With
+/// `opts.window` only that rectangle of the frame is rendered (clipped to
+/// the frame), each pixel as in the whole frame.
 pub fn render(
     mesh: &TriangleMesh,
     lights: &[raykit_core::Light],
@@ -41,6 +43,15 @@ pub fn render(
             .sum();
         sum / spp as f32
     };
-    let linear = map_pixels(width, height, &|x, y| pixel(x, y) * opts.exposure, progress);
-    Image::from_linear(width, height, linear, opts.encoding)
+    let window = opts
+        .window
+        .unwrap_or(Tile::whole(width, height))
+        .clipped(width, height);
+    let linear = map_pixels(
+        window.width,
+        window.height,
+        &|x, y| pixel(window.x + x, window.y + y) * opts.exposure,
+        progress,
+    );
+    Image::from_linear(window.width, window.height, linear, opts.encoding)
 }

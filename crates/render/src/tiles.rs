@@ -19,6 +19,46 @@ pub struct Tile {
 }
 
 impl Tile {
+    /// The whole `width` × `height` frame.
+    pub fn whole(width: u32, height: u32) -> Tile {
+        Tile {
+            x: 0,
+            y: 0,
+            width,
+            height,
+        }
+    }
+
+    /// Band `index` of `count` horizontal bands of a `width` × `height`
+    /// frame: rows `index·height/count` up to `(index+1)·height/count`
+    /// (rounded down), so the bands cover the frame without overlap and
+    /// differ in height by at most one row. `None` when `index ≥ count`.
+    pub fn band(index: u32, count: u32, width: u32, height: u32) -> Option<Tile> {
+        if index >= count {
+            return None;
+        }
+        let row = |i: u32| (i as u64 * height as u64 / count as u64) as u32;
+        let (y0, y1) = (row(index), row(index + 1));
+        Some(Tile {
+            x: 0,
+            y: y0,
+            width,
+            height: y1 - y0,
+        })
+    }
+
+    /// This rectangle clipped to a `width` × `height` frame (possibly empty).
+    pub fn clipped(&self, width: u32, height: u32) -> Tile {
+        let x = self.x.min(width);
+        let y = self.y.min(height);
+        Tile {
+            x,
+            y,
+            width: self.width.min(width - x),
+            height: self.height.min(height - y),
+        }
+    }
+
     /// Number of pixels.
     pub fn pixels(&self) -> u64 {
         self.width as u64 * self.height as u64
@@ -95,5 +135,43 @@ mod tests {
             assert!(seen.iter().all(|&n| n == 1), "{w}x{h}");
             assert_eq!(ts.iter().map(Tile::pixels).sum::<u64>(), (w * h) as u64);
         }
+    }
+
+    #[test]
+    fn bands_cover_every_row_once() {
+        for (h, n) in [(1, 1), (7, 3), (600, 4), (5, 8), (480, 7)] {
+            let mut seen = vec![0u8; h as usize];
+            for i in 0..n {
+                let b = Tile::band(i, n, 3, h).unwrap();
+                assert_eq!((b.x, b.width), (0, 3));
+                assert!(b.height >= h / n && b.height <= h.div_ceil(n), "{h} {n}");
+                for y in b.y..b.y + b.height {
+                    seen[y as usize] += 1;
+                }
+            }
+            assert!(seen.iter().all(|&c| c == 1), "{h} rows in {n} bands");
+            assert_eq!(Tile::band(n, n, 3, h), None);
+        }
+    }
+
+    #[test]
+    fn clipping_keeps_the_rectangle_inside_the_frame() {
+        let t = Tile {
+            x: 30,
+            y: 5,
+            width: 20,
+            height: 100,
+        };
+        assert_eq!(
+            t.clipped(40, 50),
+            Tile {
+                x: 30,
+                y: 5,
+                width: 10,
+                height: 45
+            }
+        );
+        assert_eq!(t.clipped(10, 10).pixels(), 0);
+        assert_eq!(Tile::whole(4, 3).clipped(4, 3), Tile::whole(4, 3));
     }
 }

@@ -9,6 +9,7 @@ mod gpu;
 pub mod lights_arg;
 mod output;
 pub mod setup;
+pub mod split;
 
 use crate::cmd::trace::parse_names;
 use crate::measure::{pool, timed};
@@ -102,7 +103,9 @@ impl From<IntegratorArg> for IntegratorKind {
 raykit render --scene examples/cornell-glass.gltf         # a glTF scene with its own camera and lights\n  \
 raykit render --scene dragon.ply.gz --material glass --env data/envmaps/courtyard.exr --env-box\n  \
 raykit render --shadows maps --pcf 5 --primary raster --integrator wavefront --out frame.exr --aov depth,normal,id\n  \
-raykit render --scene bunny.obj --light dir:-1,-2,-1 --light spot:0,3,2:0,0,0:25:1,0.8,0.6\n\n\
+raykit render --scene bunny.obj --light dir:-1,-2,-1 --light spot:0,3,2:0,0,0:25:1,0.8,0.6\n  \
+raykit render --tile 2/8 --out part2.png && raykit merge-tiles render.png part*.png   # one band per process\n  \
+raykit render --orbit 120 --frames 30..60 --out anim/f.png   # frames 30 to 59 of a 120-frame orbit\n\n\
 Without --eye the scene's own camera is used, or one framing the whole mesh.\n\
 Without --light the scene's lights are used, or one point light above the mesh.\n\
 --depth counts rays per path: 1 is direct light only, 2 adds one reflection/refraction bounce.\n\n\
@@ -176,9 +179,23 @@ pub struct RenderArgs {
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Output image: `.png` (8-bit sRGB) or `.exr` (linear float).
+    /// Output image: `.png` (8-bit sRGB) or `.exr` (linear float). With
+    /// --orbit each frame goes to OUT's name with the frame number before
+    /// the extension (render.0007.png).
     #[arg(long, default_value = "render.png")]
     out: PathBuf,
+    /// Render only horizontal band I of N (I from 0; rows I·H/N up to
+    /// (I+1)·H/N) as a PNG part that `raykit merge-tiles` assembles into the
+    /// image a one-process render gives, bit for bit.
+    #[arg(long, value_name = "I/N", value_parser = split::parse_tile)]
+    tile: Option<split::TileArg>,
+    /// Camera path: FRAMES frames orbiting the camera target about the up
+    /// axis (a full turn; frame 0 is the camera itself).
+    #[arg(long, value_name = "FRAMES")]
+    orbit: Option<u32>,
+    /// Render only frames A..B (B excluded; A..=B includes it) of --orbit.
+    #[arg(long, value_name = "A..B", value_parser = split::parse_frames)]
+    frames: Option<split::FrameRange>,
     #[command(flatten)]
     build: crate::build_args::BuildArgs,
 }
@@ -220,7 +237,18 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         BackendArg::Gpu => Some(gpu::gpu_accel(args.accel.as_deref())?),
         BackendArg::Cpu => None,
     };
-    crate::paths::ensure_not_input(&args.out, &[std::path::Path::new(&args.scene.scene)])?;
+    let window = match args.tile {
+        Some(t) => {
+            if format != output::Format::Png {
+                bail!("--tile writes PNG parts (with their place in the image) for `raykit merge-tiles`: --out must end in .png");
+            }
+            if !aovs.is_empty() || backend == BackendArg::Gpu {
+                bail!("--tile renders on the CPU without --aov");
+            }
+            Some(t.window(args.width, args.height)?)
+        }
+        None => None,
+    };
     let shadows: ShadowMode = if args.no_shadows {
         ShadowMode::Off
     } else {
@@ -237,6 +265,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         integrator: args.integrator.into(),
         exposure: args.exposure,
         encoding: Encoding::Srgb,
+        window,
         ..WhittedOptions::default()
     };
     if gpu_kind.is_some() {
@@ -245,9 +274,13 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let pool = pool(args.threads)?;
     let aspect = args.width as f32 / args.height as f32;
     let (setup, load_s) = timed(|| setup::setup(&args.scene, aspect));
-    let setup = setup?;
-    let mesh = &setup.scene.mesh;
-    let samples = args.width as u64 * args.height as u64 * args.spp as u64;
+    let mut setup = setup?;
+    let frames = split::frames(&setup.camera, &args.out, args.orbit, args.frames)?;
+    for (_, _, out) in &frames {
+        crate::paths::ensure_not_input(out, &[std::path::Path::new(&args.scene.scene)])?;
+    }
+    let window = window.unwrap_or(raykit_render::Tile::whole(args.width, args.height));
+    let samples = window.pixels() * args.spp as u64 * frames.len() as u64;
     let bar = ProgressBar::new(samples).with_style(
         ProgressStyle::with_template("{bar:30} {percent:>3}% {msg} [{elapsed}<{eta}]")
             .expect("valid template"),
@@ -261,22 +294,32 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         bar.set_message(format!("{:.2} Mrays/s", rays as f64 / secs / 1e6));
     };
     let mut maps_note = String::new();
-    let (frame, build_s, structure) = match gpu_kind {
+    let mut rendered = Vec::with_capacity(frames.len());
+    let (build_s, structure) = match gpu_kind {
         Some(gkind) => {
-            let g = pool.install(|| {
-                gpu::render(
-                    gkind,
-                    test,
-                    mesh,
-                    &setup,
-                    &opts,
-                    &args.build.options(),
-                    &progress,
-                )
-            })?;
-            (g.frame, g.build_seconds, g.describe)
+            let mut build_s = 0.0;
+            let mut describe = String::new();
+            for (number, camera, out) in &frames {
+                setup.camera = *camera;
+                let g = pool.install(|| {
+                    gpu::render(
+                        gkind,
+                        test,
+                        &setup.scene.mesh,
+                        &setup,
+                        &opts,
+                        &args.build.options(),
+                        &progress,
+                    )
+                })?;
+                build_s += g.build_seconds;
+                describe = g.describe;
+                rendered.push((*number, *camera, out.clone(), g.frame));
+            }
+            (build_s, describe)
         }
         None => {
+            let mesh = &setup.scene.mesh;
             let (accel, build_s) =
                 pool.install(|| timed(|| build_accel(kind, test, mesh, &args.build.options())));
             let maps = if shadows == ShadowMode::Maps {
@@ -304,46 +347,71 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                 environment: &setup.environment,
                 shadow_maps: maps.as_ref(),
             };
-            let frame = pool.install(|| render_whitted(&scene, &setup.camera, &opts, &progress))?;
+            for (number, camera, out) in &frames {
+                let frame = pool.install(|| render_whitted(&scene, camera, &opts, &progress))?;
+                rendered.push((*number, *camera, out.clone(), frame));
+            }
             let build = crate::build_args::quality_name(args.build.options().quality);
             (
-                frame,
                 build_s,
                 format!("{} ({build} build), {}", kind.name(), test.name()),
             )
         }
     };
     bar.finish_and_clear();
-    output::write_image(&args.out, format, &frame.image)?;
-    for kind in &aovs {
-        output::write_aov(&args.out, *kind, mesh, &setup.camera, &frame)?;
+    let mesh = &setup.scene.mesh;
+    for (number, camera, out, frame) in &rendered {
+        match args.tile {
+            Some(_) => {
+                let part = raykit_io::ImagePart {
+                    x: window.x,
+                    y: window.y,
+                    width: window.width,
+                    height: window.height,
+                    full_width: args.width,
+                    full_height: args.height,
+                };
+                raykit_io::write_png_part(out, &part, &frame.image.rgb)?;
+            }
+            None => output::write_image(out, format, &frame.image)?,
+        }
+        for kind in &aovs {
+            output::write_aov(out, *kind, mesh, camera, frame)?;
+        }
+        let st = &frame.stats;
+        let what = match (number, args.tile) {
+            (Some(k), Some(t)) => format!("frame {k}, band {}/{} ", t.index, t.count),
+            (Some(k), None) => format!("frame {k} "),
+            (None, Some(t)) => format!("band {}/{} ", t.index, t.count),
+            (None, None) => String::new(),
+        };
+        eprintln!(
+            "{}: {} triangles, {} lights, env {}; load {:.0} ms, build {:.0} ms ({}){}, render {}{:.0} ms \
+             ({}×{}, {} spp, depth {}, {:?} shadows, {:?} primaries, {:?}; {:.2} Mrays: {} primary, {} shadow, {} secondary; {:.2} Mrays/s) -> {}",
+            setup.scene.name,
+            mesh.num_triangles(),
+            setup.lights.len(),
+            setup.environment.describe(),
+            load_s * 1e3,
+            build_s * 1e3,
+            structure,
+            maps_note,
+            what,
+            st.seconds * 1e3,
+            args.width,
+            args.height,
+            args.spp,
+            args.depth,
+            shadows,
+            opts.primary,
+            opts.integrator,
+            st.rays() as f64 / 1e6,
+            st.primary_rays,
+            st.shadow_rays,
+            st.secondary_rays,
+            st.rays() as f64 / st.seconds.max(1e-9) / 1e6,
+            out.display()
+        );
     }
-    let st = &frame.stats;
-    eprintln!(
-        "{}: {} triangles, {} lights, env {}; load {:.0} ms, build {:.0} ms ({}){}, render {:.0} ms \
-         ({}×{}, {} spp, depth {}, {:?} shadows, {:?} primaries, {:?}; {:.2} Mrays: {} primary, {} shadow, {} secondary; {:.2} Mrays/s) -> {}",
-        setup.scene.name,
-        mesh.num_triangles(),
-        setup.lights.len(),
-        setup.environment.describe(),
-        load_s * 1e3,
-        build_s * 1e3,
-        structure,
-        maps_note,
-        st.seconds * 1e3,
-        args.width,
-        args.height,
-        args.spp,
-        args.depth,
-        shadows,
-        opts.primary,
-        opts.integrator,
-        st.rays() as f64 / 1e6,
-        st.primary_rays,
-        st.shadow_rays,
-        st.secondary_rays,
-        st.rays() as f64 / st.seconds.max(1e-9) / 1e6,
-        args.out.display()
-    );
     Ok(ExitCode::SUCCESS)
 }

@@ -9,7 +9,7 @@ use crate::env::Environment;
 use crate::image::Image;
 use crate::raster;
 use crate::shadowmap::ShadowMaps;
-use crate::tiles::map_pixels;
+use crate::tiles::{map_pixels, Tile};
 use raykit_core::glam::Vec3;
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Camera, Hit, Light, Ray, TriangleMesh};
@@ -97,6 +97,8 @@ impl std::error::Error for FrameError {}
 /// finish. Sample positions come from [`sample_position`], so the recursive
 /// and wavefront integrators and the traced and rasterized primaries all
 /// see the same camera rays; the result does not depend on the thread count.
+/// With `opts.window` only that rectangle of the frame is rendered (clipped
+/// to the frame), each pixel as in the whole frame.
 pub fn render_whitted(
     scene: &WhittedScene,
     camera: &Camera,
@@ -118,18 +120,25 @@ pub fn render_whitted(
         opts.ambient,
         opts.max_depth,
     );
-    let (width, height) = (opts.width, opts.height);
+    let (frame_width, frame_height) = (opts.width, opts.height);
+    let window = opts
+        .window
+        .unwrap_or(Tile::whole(frame_width, frame_height))
+        .clipped(frame_width, frame_height);
+    let (width, height) = (window.width, window.height);
     let n = width as usize * height as usize;
     let spp = opts.samples_per_pixel.max(1);
-    let rays = camera.rays(width, height);
+    let rays = camera.rays(frame_width, frame_height);
     let mut sum = vec![Vec3::ZERO; n];
     let mut first_hits = Vec::new();
     let mut raster_seconds = 0.0;
     for sample in 0..spp {
-        let ray_of = |x: u32, y: u32| {
-            let (fx, fy) = sample_position(opts.seed, width, spp, x, y, sample);
+        // Camera rays by frame pixel, and by window pixel for the passes.
+        let frame_ray = |x: u32, y: u32| {
+            let (fx, fy) = sample_position(opts.seed, frame_width, spp, x, y, sample);
             rays.ray(fx, fy)
         };
+        let ray_of = |x: u32, y: u32| frame_ray(window.x + x, window.y + y);
         let primary = match opts.primary {
             // The wavefront integrator traces its primaries as one batch
             // itself; the recursive one gets them here as one batch too.
@@ -139,10 +148,18 @@ pub fn render_whitted(
             PrimaryMode::Traced => None,
             PrimaryMode::Rasterized => {
                 let t = Instant::now();
-                let vis =
-                    raster::visibility(scene.mesh, scene.test, camera, width, height, &ray_of);
+                // The rasterizer's setup depends on the frame, so the whole
+                // visibility buffer is rasterized and the window cut out.
+                let vis = raster::visibility(
+                    scene.mesh,
+                    scene.test,
+                    camera,
+                    frame_width,
+                    frame_height,
+                    &frame_ray,
+                );
                 raster_seconds += t.elapsed().as_secs_f64();
-                Some(vis)
+                Some(crop(&vis, frame_width, &window))
             }
         };
         let hits = match opts.integrator {
@@ -182,6 +199,18 @@ pub fn render_whitted(
         first_hits,
         stats,
     })
+}
+
+/// The values of `window` in a row-major buffer `frame_width` wide.
+fn crop<T: Copy>(values: &[T], frame_width: u32, window: &Tile) -> Vec<T> {
+    (window.y..window.y + window.height)
+        .flat_map(|y| {
+            let row = y as usize * frame_width as usize;
+            values[row + window.x as usize..row + (window.x + window.width) as usize]
+                .iter()
+                .copied()
+        })
+        .collect()
 }
 
 /// The nearest hit of every pixel's camera ray (from `ray_of`), row-major,

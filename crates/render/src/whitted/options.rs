@@ -1,6 +1,7 @@
 //! What the Whitted renderer is asked to do.
 
 use crate::image::Encoding;
+use crate::tiles::Tile;
 use raykit_core::glam::Vec3;
 
 /// How direct light is tested for occlusion.
@@ -61,6 +62,13 @@ pub struct WhittedOptions {
     pub exposure: f32,
     /// Transfer function to 8 bits.
     pub encoding: Encoding,
+    /// Crop window (pbrt's "cropwindow"): render only this rectangle of the
+    /// `width` × `height` frame. The image, the first hits and the counts
+    /// cover the rectangle only, and its pixels equal those of the whole
+    /// frame's render bit for bit (each camera sample depends on its pixel
+    /// alone), so separately rendered windows assemble into the whole
+    /// image. `None` renders the whole frame.
+    pub window: Option<Tile>,
 }
 
 /// Default recursion depth.
@@ -68,7 +76,7 @@ pub const DEFAULT_MAX_DEPTH: u32 = 5;
 
 impl Default for WhittedOptions {
     /// 800 × 600, 1 sample, depth 5, ambient 0.06, shadow rays, traced
-    /// primaries, recursive, exposure 1, sRGB.
+    /// primaries, recursive, exposure 1, sRGB, the whole frame.
     fn default() -> Self {
         WhittedOptions {
             width: 800,
@@ -82,6 +90,7 @@ impl Default for WhittedOptions {
             integrator: IntegratorKind::Recursive,
             exposure: 1.0,
             encoding: Encoding::Srgb,
+            window: None,
         }
     }
 }
