@@ -43,6 +43,7 @@ pub fn cpu_twin(kind: GpuAccelKind) -> AccelKind {
     match kind {
         GpuAccelKind::KdStack => AccelKind::KdStack,
         GpuAccelKind::BvhThreaded => AccelKind::ThreadedBvh,
+        GpuAccelKind::Cwbvh => AccelKind::Bvh8,
         GpuAccelKind::Brute => AccelKind::Brute,
     }
 }

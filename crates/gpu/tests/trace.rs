@@ -4,7 +4,10 @@
 
 mod support;
 
-use raykit_core::accel::{Accel, BruteForce, BuildOptions, KdOptions, KdStack, ThreadedBvh};
+use raykit_core::accel::{
+    Accel, BruteForce, BuildOptions, Bvh8, KdOptions, KdStack, ThreadedBvh,
+};
+use raykit_gpu::cwbvh::cwbvh_build_options;
 use raykit_core::raysets::standard_sets;
 use raykit_core::tri::{Moller, Plucker, TestKind, TriangleTest};
 use raykit_core::TriangleMesh;
@@ -17,6 +20,10 @@ fn cpu_accel<T: TriangleTest>(mesh: &TriangleMesh, kind: GpuAccelKind) -> Box<dy
         GpuAccelKind::BvhThreaded => {
             Box::new(ThreadedBvh::<T>::build(mesh, &BuildOptions::default()))
         }
+        GpuAccelKind::Cwbvh => Box::new(Bvh8::<T>::build(
+            mesh,
+            &cwbvh_build_options(&BuildOptions::default()),
+        )),
         GpuAccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)),
     }
 }
@@ -96,7 +103,11 @@ fn shared_meshes_agree_with_cpu() {
             file,
             &mesh,
             96,
-            &[GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded],
+            &[
+                GpuAccelKind::KdStack,
+                GpuAccelKind::BvhThreaded,
+                GpuAccelKind::Cwbvh,
+            ],
         );
     }
     let dragon = raykit_io::load_mesh(&dir.join("dragon_vrip_res4.ply.gz")).unwrap();
@@ -104,7 +115,11 @@ fn shared_meshes_agree_with_cpu() {
         "dragon_res4",
         &dragon,
         96,
-        &[GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded],
+        &[
+            GpuAccelKind::KdStack,
+            GpuAccelKind::BvhThreaded,
+            GpuAccelKind::Cwbvh,
+        ],
     );
 }
 
@@ -189,4 +204,39 @@ fn triangle_records_split_across_bindings_give_the_same_answers() {
     .err()
     .expect("does not fit four bindings");
     assert!(err.to_string().contains("in 4 bindings"), "{err}");
+}
+
+/// A soup of random triangles of mixed sizes and orientations (slivers
+/// included), seeded, with overlaps and intersections everywhere.
+fn triangle_soup(n: usize, seed: u64) -> TriangleMesh {
+    let mut s = seed;
+    let mut r = move || {
+        // SplitMix64.
+        s = s.wrapping_add(0x9e3779b97f4a7c15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut v = Vec::with_capacity(3 * n);
+    for i in 0..n {
+        let c = glam::Vec3::new(r(), r(), r()) * 20.0;
+        let size = [2.0, 0.5, 0.05][i % 3];
+        for _ in 0..3 {
+            v.push(c + (glam::Vec3::new(r(), r(), r()) - 0.5) * size);
+        }
+    }
+    let idx = (0..n as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+    TriangleMesh::new(v, idx)
+}
+
+#[test]
+fn random_triangle_soup_agrees_with_cpu() {
+    let mesh = triangle_soup(30_000, 40);
+    agree(
+        "soup",
+        &mesh,
+        64,
+        &[GpuAccelKind::Cwbvh, GpuAccelKind::BvhThreaded],
+    );
 }
