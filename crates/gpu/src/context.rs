@@ -54,9 +54,7 @@ impl GpuContext {
         .map_err(|e| GpuError::NoAdapter(format!("{e} (backends {backends:?})")))?;
         let info = adapter.get_info();
         let limits = adapter.limits();
-        let timestamps = adapter
-            .features()
-            .contains(wgpu::Features::TIMESTAMP_QUERY);
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("raykit"),
             required_features: if timestamps {

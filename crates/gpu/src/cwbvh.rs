@@ -83,7 +83,9 @@ fn quantize(p: [f32; 3], e: [u8; 3], lo: [f32; 3], hi: [f32; 3]) -> Option<([u8;
     let mut qh = [0u8; 3];
     for a in 0..3 {
         let s = scale(e[a]);
-        let mut l = (((lo[a] as f64) - (p[a] as f64)) / s as f64).floor().max(0.0) as i32;
+        let mut l = (((lo[a] as f64) - (p[a] as f64)) / s as f64)
+            .floor()
+            .max(0.0) as i32;
         while l > 0 && p[a] + l as f32 * s > lo[a] {
             l -= 1;
         }
@@ -285,9 +287,7 @@ pub fn compress(tree: &FlatBvh8) -> GpuResult<Cwbvh> {
                              (the compressed wide BVH holds at most {MAX_LEAF} per leaf, 24 per node)"
                         )));
                     }
-                    prims.extend_from_slice(
-                        &tree.prims[first as usize..first as usize + count],
-                    );
+                    prims.extend_from_slice(&tree.prims[first as usize..first as usize + count]);
                     (((1u32 << count) - 1) << 5) | offset as u32
                 }
                 FlatChild::Empty => unreachable!("empty slots are skipped"),
@@ -313,10 +313,10 @@ pub fn compress(tree: &FlatBvh8) -> GpuResult<Cwbvh> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
     use raykit_core::accel::Bvh8;
     use raykit_core::tri::{Moller, Plucker, TriangleTest};
     use raykit_core::TriangleMesh;
-    use glam::Vec3;
 
     /// A triangle soup over several orders of magnitude of size and
     /// position, so that exponents and roundings vary.
@@ -336,7 +336,9 @@ mod tests {
                 v.push(c + (Vec3::new(r(), r(), r()) - 0.5) * size);
             }
         }
-        let idx = (0..n as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let idx = (0..n as u32)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect();
         TriangleMesh::new(v, idx)
     }
 
@@ -345,10 +347,17 @@ mod tests {
     fn flat_min(f: &FlatBvh8, c: FlatChild) -> u32 {
         match c {
             FlatChild::Empty => u32::MAX,
-            FlatChild::Leaf { first, count } => {
-                f.prims[first as usize..(first + count) as usize].iter().copied().min().unwrap()
-            }
-            FlatChild::Inner(i) => f.nodes[i as usize].child.iter().map(|&k| flat_min(f, k)).min().unwrap(),
+            FlatChild::Leaf { first, count } => f.prims[first as usize..(first + count) as usize]
+                .iter()
+                .copied()
+                .min()
+                .unwrap(),
+            FlatChild::Inner(i) => f.nodes[i as usize]
+                .child
+                .iter()
+                .map(|&k| flat_min(f, k))
+                .min()
+                .unwrap(),
         }
     }
 
@@ -361,7 +370,9 @@ mod tests {
         if imask >> s & 1 == 1 {
             let child = w[4] as usize + (imask & ((1 << s) - 1)).count_ones() as usize;
             let m = (0..8)
-                .filter(|&k| (cw.nodes[child * NODE_WORDS + 6 + k / 4] >> (8 * (k % 4))) & 0xff != 0)
+                .filter(|&k| {
+                    (cw.nodes[child * NODE_WORDS + 6 + k / 4] >> (8 * (k % 4))) & 0xff != 0
+                })
                 .map(|k| cw_slot(cw, child, k).1)
                 .min()
                 .unwrap();
@@ -369,7 +380,14 @@ mod tests {
         } else {
             let first = w[5] as usize + (meta & 31) as usize;
             let count = (meta >> 5).count_ones() as usize;
-            (None, cw.prims[first..first + count].iter().copied().min().unwrap())
+            (
+                None,
+                cw.prims[first..first + count]
+                    .iter()
+                    .copied()
+                    .min()
+                    .unwrap(),
+            )
         }
     }
 
@@ -393,8 +411,9 @@ mod tests {
         let mut slots = 0;
         while let Some((at, n)) = todo.pop() {
             let w = &cw.nodes[at * NODE_WORDS..(at + 1) * NODE_WORDS];
-            let used: Vec<usize> =
-                (0..8).filter(|&s| (w[6 + s / 4] >> (8 * (s % 4))) & 0xff != 0).collect();
+            let used: Vec<usize> = (0..8)
+                .filter(|&s| (w[6 + s / 4] >> (8 * (s % 4))) & 0xff != 0)
+                .collect();
             let kids = n.child.iter().filter(|&&c| c != FlatChild::Empty).count();
             assert_eq!(used.len(), kids, "one slot per child");
             for s in used {
@@ -421,7 +440,11 @@ mod tests {
     }
 
     fn flat_leaves(f: &FlatBvh8) -> usize {
-        f.nodes.iter().flat_map(|n| n.child).filter(|c| matches!(c, FlatChild::Leaf { .. })).count()
+        f.nodes
+            .iter()
+            .flat_map(|n| n.child)
+            .filter(|c| matches!(c, FlatChild::Leaf { .. }))
+            .count()
     }
 
     #[test]

@@ -35,9 +35,9 @@ mod trace;
 
 pub use buffers::{check_binding, output, read_words, storage, uniform};
 pub use context::GpuContext;
+pub use counts::{count_traversal, TraversalCounts};
 pub use error::{GpuError, GpuResult};
 pub use render::{check_options, render_whitted_gpu, GpuFrame, ShadeScene, MAX_GPU_DEPTH};
 pub use scene::{gpu_test_supported, GpuAccelKind, GpuScene};
 pub use terrain::{time_terrain_boxes, time_terrain_casts, GpuCaster, GpuTerrain, TerrainTiming};
-pub use counts::{count_traversal, TraversalCounts};
 pub use trace::{Clock, GpuRays, GpuTracer, CHUNK};

@@ -88,7 +88,9 @@ mod tests {
                 v.push(c + Vec3::new(r(), r(), r()) - 0.5);
             }
         }
-        let idx = (0..n as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let idx = (0..n as u32)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect();
         TriangleMesh::new(v, idx)
     }
 
