@@ -72,3 +72,48 @@ fn structures_count_a_few_nodes_per_ray() {
         }
     }
 }
+
+/// The counts on a mesh named by `RAYKIT_COUNT_MESH` (the full dragon for
+/// the GPU prediction in BENCHMARKS.md), every structure × test, printed;
+/// `cargo test -p raykit-gpu --test counts -- --ignored --nocapture`.
+#[test]
+#[ignore = "needs RAYKIT_COUNT_MESH; minutes on lavapipe"]
+fn counts_on_a_large_mesh() {
+    let path = std::env::var("RAYKIT_COUNT_MESH").expect("set RAYKIT_COUNT_MESH to a mesh file");
+    let size: u32 = std::env::var("RAYKIT_COUNT_SIZE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(128);
+    let mesh = raykit_io::load_mesh(std::path::Path::new(&path)).unwrap();
+    let helper = raykit_core::accel::Bvh2::<Moller>::build(&mesh, &BuildOptions::default());
+    let sets = standard_sets(&mesh, &helper, size, 1);
+    for test in [TestKind::Plucker, TestKind::Moller] {
+        for kind in [
+            GpuAccelKind::KdStack,
+            GpuAccelKind::BvhThreaded,
+            GpuAccelKind::Cwbvh,
+        ] {
+            let scene =
+                GpuScene::build(gpu(), &mesh, kind, test, &BuildOptions::default()).unwrap();
+            for (set, any) in [("primary", false), ("shadow", true), ("incoherent", false)] {
+                let i = ["primary", "shadow", "incoherent"]
+                    .iter()
+                    .position(|s| *s == set)
+                    .unwrap();
+                let c = count_traversal(gpu(), &scene, &sets[i], any).unwrap();
+                let n = c.nodes as f64 / c.rays.max(1) as f64;
+                assert!(c.nodes >= c.rays);
+                println!(
+                    "COUNT {} {} {} {set}: {} rays, {n:.1} nodes, {:.1} tris, {:.0} bytes per ray; node bytes {}",
+                    mesh.num_triangles(),
+                    kind.name(),
+                    test.name(),
+                    c.rays,
+                    c.tris_per_ray(),
+                    c.bytes_per_ray(),
+                    scene.node_bytes
+                );
+            }
+        }
+    }
+}
