@@ -242,8 +242,8 @@ pub fn compress(tree: &FlatBvh8) -> GpuResult<Cwbvh> {
         let boxes: Vec<([f32; 3], [f32; 3])> = kids.iter().map(|&s| (n.min[s], n.max[s])).collect();
         let mut p = [f32::INFINITY; 3];
         for b in &boxes {
-            for a in 0..3 {
-                p[a] = p[a].min(b.0[a]);
+            for (a, pa) in p.iter_mut().enumerate() {
+                *pa = pa.min(b.0[a]);
             }
         }
         let e = [
