@@ -27,7 +27,7 @@ pub fn open_gpu() -> Result<GpuContext> {
     Ok(ctx)
 }
 
-/// The GPU structure named `name` (`kd-stack`, `bvh-threaded`, `brute`).
+/// The GPU structure named `name` (`kd-stack`, `bvh-threaded`, `cwbvh`, `brute`).
 pub fn gpu_accel(name: &str) -> Result<GpuAccelKind> {
     GpuAccelKind::from_name(name).ok_or_else(|| {
         let names: Vec<_> = GpuAccelKind::ALL.iter().map(|k| k.name()).collect();

@@ -254,3 +254,33 @@ fn random_triangle_soup_agrees_with_cpu() {
         &[GpuAccelKind::Cwbvh, GpuAccelKind::BvhThreaded],
     );
 }
+
+#[test]
+fn timed_runs_give_the_same_answers_on_either_clock() {
+    let mesh = raykit_io::load_mesh(&shared_data().join("meshes/bunny_3674.obj")).unwrap();
+    let reference = BruteForce::<Moller>::new(&mesh);
+    let rays = &standard_sets(&mesh, &reference, 32, 3)[0];
+    let scene = GpuScene::build(
+        gpu(),
+        &mesh,
+        GpuAccelKind::Cwbvh,
+        TestKind::Moller,
+        &BuildOptions::default(),
+    )
+    .unwrap();
+    let tracer = GpuTracer::new(gpu(), &scene).unwrap();
+    eprintln!("clock on this adapter: {}", tracer.clock().name());
+    let up = tracer.upload(rays).unwrap();
+    let mut answers = Vec::new();
+    for clock in [tracer.clock(), raykit_gpu::Clock::WallClock] {
+        let secs = tracer.run_clocked(&up, false, clock).unwrap();
+        assert!(secs.is_finite() && secs >= 0.0, "{}: {secs}", clock.name());
+        answers.push(tracer.hits(&up).unwrap());
+    }
+    let mut want = vec![None; rays.len()];
+    reference.intersect_batch(rays, &mut want);
+    assert!(answers[0].iter().any(|h| h.is_some()));
+    assert_eq!(answers[0], answers[1]);
+    let d = compare(&want, &answers[0]);
+    assert!(d.hit_miss.is_empty() && d.distance.is_empty());
+}
