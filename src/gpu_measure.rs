@@ -9,7 +9,7 @@ use anyhow::{anyhow, Result};
 use raykit_core::accel::{build_accel, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::{Ray, TriangleMesh};
-use raykit_gpu::{GpuAccelKind, GpuContext, GpuScene, GpuTracer, CHUNK};
+use raykit_gpu::{count_traversal, cwbvh, GpuAccelKind, GpuContext, GpuScene, GpuTracer, CHUNK};
 use serde::Serialize;
 
 /// Speed on one ray set.
@@ -19,10 +19,23 @@ pub struct GpuCell {
     pub set: &'static str,
     /// Rays traced.
     pub rays: usize,
-    /// Mrays/s from submission to completion of the kernel (median).
+    /// Mrays/s of the kernel (median run), timed with [`GpuRow::clock`].
     pub mrays: f64,
+    /// Mrays/s of the slowest run.
+    pub mrays_lo: f64,
+    /// Mrays/s of the fastest run.
+    pub mrays_hi: f64,
     /// (max − min) / median of the kernel times.
     pub spread: f64,
+    /// A one-ray dispatch's time (median) as a share of a full dispatch's:
+    /// the fixed cost of a launch that the batch carries.
+    pub launch_share: f64,
+    /// Nodes visited per ray (the counting kernel).
+    pub nodes_per_ray: f64,
+    /// Triangle records tested per ray.
+    pub tris_per_ray: f64,
+    /// Bytes of nodes, index entries and triangle records fetched per ray.
+    pub bytes_per_ray: f64,
     /// GPU answers against the CPU twin's, every ray.
     pub verify: Verdict,
 }
@@ -44,6 +57,8 @@ pub struct GpuRow {
     pub node_bytes: usize,
     /// Nodes.
     pub nodes: usize,
+    /// How the kernels were timed ([`raykit_gpu::Clock::name`]).
+    pub clock: &'static str,
     /// Per ray set.
     pub cells: Vec<GpuCell>,
 }
@@ -65,8 +80,11 @@ pub struct Workload<'a> {
 }
 
 /// Build `kind` × `test` on the GPU and its CPU twin, trace every set
-/// `reps` times on the GPU (after one warm-up run whose answers are
-/// checked against the CPU twin's on every ray).
+/// `reps` times on the GPU after two warm-up runs (the first one's answers
+/// checked against the CPU twin's on every ray), each run timed with the
+/// GPU's timestamps where the device has them, else the wall clock; time a
+/// one-ray dispatch the same way for the launch cost, and count the
+/// traversal's nodes and bytes per ray with the counting kernel.
 pub fn measure(
     ctx: &GpuContext,
     work: &Workload,
@@ -87,7 +105,14 @@ pub fn measure(
     ));
     let scene = GpuScene::build(ctx, mesh, kind, test, opts).map_err(|e| anyhow!("{e}"))?;
     let tracer = GpuTracer::new(ctx, &scene).map_err(|e| anyhow!("{e}"))?;
-    let twin = build_accel(cpu_twin(kind), test, mesh, opts);
+    let clock = tracer.clock();
+    // The compressed wide BVH is made from the 8-wide BVH with leaves of
+    // at most three triangles: its twin is that tree.
+    let twin_opts = match kind {
+        GpuAccelKind::Cwbvh => cwbvh::cwbvh_build_options(opts),
+        _ => opts.clone(),
+    };
+    let twin = build_accel(cpu_twin(kind), test, mesh, &twin_opts);
     let mut cells = Vec::new();
     for (si, set) in SETS.iter().enumerate() {
         progress(&format!("{} × {}: {set} rays", kind.name(), test.name()));
@@ -147,8 +172,13 @@ pub fn measure(
             verdict.distance += v.distance;
             verdict.ties += v.ties;
             verdict.edge_grazes += v.edge_grazes;
+            tracer
+                .run_clocked(&up, any, clock)
+                .map_err(|e| anyhow!("{e}"))?;
             for r in 0..reps.max(1) {
-                let secs = tracer.run(&up, any).map_err(|e| anyhow!("{e}"))?;
+                let secs = tracer
+                    .run_clocked(&up, any, clock)
+                    .map_err(|e| anyhow!("{e}"))?;
                 if times.len() <= r {
                     times.push(0.0);
                 }
@@ -156,11 +186,27 @@ pub fn measure(
             }
         }
         let (med, lo, hi) = median_min_max(&times);
+        let one = tracer
+            .upload(&sets[si][..sets[si].len().min(1)])
+            .map_err(|e| anyhow!("{e}"))?;
+        let launch: Vec<f64> = (0..reps.max(1) + 1)
+            .map(|_| tracer.run_clocked(&one, any, clock))
+            .collect::<Result<_, _>>()
+            .map_err(|e| anyhow!("{e}"))?;
+        let dispatches = sets[si].len().div_ceil(CHUNK).max(1) as f64;
+        let counts = count_traversal(ctx, &scene, &sets[si], any).map_err(|e| anyhow!("{e}"))?;
+        let n = sets[si].len() as f64;
         cells.push(GpuCell {
             set,
             rays: sets[si].len(),
-            mrays: sets[si].len() as f64 / med / 1e6,
+            mrays: n / med / 1e6,
+            mrays_lo: n / hi / 1e6,
+            mrays_hi: n / lo / 1e6,
             spread: (hi - lo) / med,
+            launch_share: median_min_max(&launch[1..]).0 * dispatches / med,
+            nodes_per_ray: counts.nodes_per_ray(),
+            tris_per_ray: counts.tris_per_ray(),
+            bytes_per_ray: counts.bytes_per_ray(),
             verify: verdict,
         });
     }
@@ -172,6 +218,7 @@ pub fn measure(
         bytes: scene.bytes,
         node_bytes: scene.node_bytes,
         nodes: scene.num_nodes,
+        clock: clock.name(),
         cells,
     })
 }

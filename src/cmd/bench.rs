@@ -71,9 +71,9 @@ pub struct BenchArgs {
     /// build instead of its HIGH one.
     #[arg(long, value_name = "ENGINE")]
     compare: Option<String>,
-    /// `gpu` measures the GPU kernels (kd-stack, bvh-threaded × plucker,
-    /// moller) instead, every answer checked against the CPU structure of
-    /// the same name; see also `raykit experiment gpu`.
+    /// `gpu` measures the GPU kernels (kd-stack, bvh-threaded, cwbvh ×
+    /// plucker, moller) instead, every answer checked against the CPU
+    /// structure it mirrors (cwbvh: bvh8); see also `raykit experiment gpu`.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     backend: Backend,
     #[command(flatten)]

@@ -45,7 +45,11 @@ struct GpuReport {
 /// The structures and tests named, GPU-capable ones only.
 pub fn gpu_lists(accel: &str, test: &str) -> Result<(Vec<GpuAccelKind>, Vec<TestKind>)> {
     let accels = if accel == "all" {
-        vec![GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded]
+        vec![
+            GpuAccelKind::KdStack,
+            GpuAccelKind::BvhThreaded,
+            GpuAccelKind::Cwbvh,
+        ]
     } else {
         accel
             .split(',')

@@ -18,6 +18,10 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// The limits the device was opened with (the adapter's own).
     pub limits: wgpu::Limits,
+    /// Whether the device was opened with timestamp queries
+    /// (`wgpu::Features::TIMESTAMP_QUERY`, taken whenever the adapter has
+    /// them): kernels are then timed on the GPU's own clock.
+    pub timestamps: bool,
     errors: Arc<std::sync::Mutex<Vec<String>>>,
     /// Compiled kernels by source, entry point and layout, so a kernel is
     /// compiled once per device however many scenes use it.
@@ -50,9 +54,14 @@ impl GpuContext {
         .map_err(|e| GpuError::NoAdapter(format!("{e} (backends {backends:?})")))?;
         let info = adapter.get_info();
         let limits = adapter.limits();
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("raykit"),
-            required_features: wgpu::Features::empty(),
+            required_features: if timestamps {
+                wgpu::Features::TIMESTAMP_QUERY
+            } else {
+                wgpu::Features::empty()
+            },
             required_limits: limits.clone(),
             ..Default::default()
         }))
@@ -67,6 +76,7 @@ impl GpuContext {
             queue,
             info,
             limits,
+            timestamps,
             errors,
             kernels: Arc::default(),
         })

@@ -20,6 +20,12 @@ pub mod wgsl {
     pub const KD_STACK: &str = include_str!("shaders/kd_stack.wgsl");
     /// The Purcell-style stream tracer's threaded BVH.
     pub const BVH_THREADED: &str = include_str!("shaders/bvh_threaded.wgsl");
+    /// The compressed wide BVH (Ylitie et al. 2017).
+    pub const CWBVH: &str = include_str!("shaders/cwbvh.wgsl");
+    /// Traversal counts switched off (the notes compile to nothing).
+    pub const COUNT_OFF: &str = include_str!("shaders/count_off.wgsl");
+    /// Traversal counts into group 2 (the counting kernels).
+    pub const COUNT_ON: &str = include_str!("shaders/count_on.wgsl");
     /// Brute force.
     pub const BRUTE: &str = include_str!("shaders/brute.wgsl");
     /// Batch ray queries.
@@ -212,11 +218,28 @@ pub fn dispatch(
     enc: &mut wgpu::CommandEncoder,
     kernel: &Kernel,
     groups: &[&wgpu::BindGroup],
+    xy: (u32, u32),
+) {
+    dispatch_timed(enc, kernel, groups, xy, None);
+}
+
+/// [`dispatch`] in a pass that writes the GPU's clock into queries 0 and
+/// 1 of `timestamps` at its start and end (a device with
+/// `wgpu::Features::TIMESTAMP_QUERY`).
+pub fn dispatch_timed(
+    enc: &mut wgpu::CommandEncoder,
+    kernel: &Kernel,
+    groups: &[&wgpu::BindGroup],
     (x, y): (u32, u32),
+    timestamps: Option<&wgpu::QuerySet>,
 ) {
     let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: None,
-        timestamp_writes: None,
+        timestamp_writes: timestamps.map(|query_set| wgpu::ComputePassTimestampWrites {
+            query_set,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: Some(1),
+        }),
     });
     pass.set_pipeline(&kernel.pipeline);
     for (i, g) in groups.iter().enumerate() {

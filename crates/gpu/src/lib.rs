@@ -7,7 +7,9 @@
 //! - [`GpuScene`]: a structure uploaded: the stack kd-tree GPU tracer's kd-tree with 8-byte
 //!   nodes traversed with a fixed-size per-thread stack
 //!   (`shaders/kd_stack.wgsl`), the threaded BVH (Smits 1998) with escape indices
-//!   (`shaders/bvh_threaded.wgsl`), or brute force; triangles precomputed for
+//!   (`shaders/bvh_threaded.wgsl`), the compressed wide BVH (Ylitie, Karras
+//!   and Laine 2017; [`cwbvh`], `shaders/cwbvh.wgsl`), or brute force;
+//!   triangles precomputed for
 //!   the stack kd-tree GPU tracer's Plücker test or Möller–Trumbore (1997).
 //! - [`GpuTracer`]: batch nearest-hit and occlusion queries.
 //! - [`GpuTerrain`]: height-field ray casting by per-ray maximum-mipmap
@@ -22,6 +24,8 @@
 
 mod buffers;
 mod context;
+mod counts;
+pub mod cwbvh;
 mod error;
 pub mod kernel;
 pub mod render;
@@ -31,8 +35,9 @@ mod trace;
 
 pub use buffers::{check_binding, output, read_words, storage, uniform};
 pub use context::GpuContext;
+pub use counts::{count_traversal, TraversalCounts};
 pub use error::{GpuError, GpuResult};
 pub use render::{check_options, render_whitted_gpu, GpuFrame, ShadeScene, MAX_GPU_DEPTH};
 pub use scene::{gpu_test_supported, GpuAccelKind, GpuScene};
 pub use terrain::{time_terrain_boxes, time_terrain_casts, GpuCaster, GpuTerrain, TerrainTiming};
-pub use trace::{GpuRays, GpuTracer, CHUNK};
+pub use trace::{Clock, GpuRays, GpuTracer, CHUNK};

@@ -1,12 +1,14 @@
 //! A triangle mesh's acceleration structure uploaded to the GPU: the
-//! stack kd-tree, the threaded BVH (Smits 1998) or brute force, with the
-//! triangles precomputed for the Plücker or Möller test.
+//! stack kd-tree, the threaded BVH (Smits 1998), the compressed wide BVH
+//! (Ylitie et al. 2017) or brute force, with the triangles precomputed for
+//! the Plücker or Möller test.
 
 use crate::buffers::{storage, uniform};
 use crate::context::GpuContext;
+use crate::cwbvh::{compress, cwbvh_build_options};
 use crate::error::{GpuError, GpuResult};
 use crate::kernel::{wgsl, Kernel};
-use raykit_core::accel::{BuildOptions, FlatTriangles, KdStack, ThreadedBvh};
+use raykit_core::accel::{BuildOptions, Bvh8, FlatTriangles, KdStack, ThreadedBvh};
 use raykit_core::tri::{Moller, Plucker, TestKind, TriangleTest};
 use raykit_core::TriangleMesh;
 use std::time::Instant;
@@ -18,15 +20,20 @@ pub enum GpuAccelKind {
     KdStack,
     /// Threaded BVH (Smits 1998): BVH in pre-order with escape indices, no stack.
     BvhThreaded,
+    /// Compressed wide BVH (Ylitie, Karras and Laine 2017): raykit's 8-wide
+    /// BVH with 80-byte nodes of quantized child boxes, traversed with a
+    /// short per-thread stack in ray-octant order.
+    Cwbvh,
     /// Every ray against every triangle (the reference).
     Brute,
 }
 
 impl GpuAccelKind {
     /// Every kind, fastest-first in the usual case.
-    pub const ALL: [GpuAccelKind; 3] = [
+    pub const ALL: [GpuAccelKind; 4] = [
         GpuAccelKind::KdStack,
         GpuAccelKind::BvhThreaded,
+        GpuAccelKind::Cwbvh,
         GpuAccelKind::Brute,
     ];
 
@@ -35,6 +42,7 @@ impl GpuAccelKind {
         match self {
             GpuAccelKind::KdStack => "kd-stack",
             GpuAccelKind::BvhThreaded => "bvh-threaded",
+            GpuAccelKind::Cwbvh => "cwbvh",
             GpuAccelKind::Brute => "brute",
         }
     }
@@ -48,6 +56,7 @@ impl GpuAccelKind {
         match self {
             GpuAccelKind::KdStack => wgsl::KD_STACK,
             GpuAccelKind::BvhThreaded => wgsl::BVH_THREADED,
+            GpuAccelKind::Cwbvh => wgsl::CWBVH,
             GpuAccelKind::Brute => wgsl::BRUTE,
         }
     }
@@ -132,13 +141,40 @@ struct Flat {
     tris: FlatTriangles,
 }
 
+/// Records of `T` for the mesh triangles `prims`, in that order.
+fn records<T: TriangleTest>(mesh: &TriangleMesh, prims: Vec<u32>) -> FlatTriangles {
+    let mut words = Vec::with_capacity(prims.len() * T::WORDS);
+    for &p in &prims {
+        let [a, b, c] = mesh.triangle(p as usize);
+        T::write_words(&T::precompute(a, b, c), &mut words);
+    }
+    FlatTriangles {
+        test: T::NAME,
+        words_per_tri: T::WORDS,
+        words,
+        prims,
+    }
+}
+
 fn flat_for<T: TriangleTest>(
     mesh: &TriangleMesh,
     kind: GpuAccelKind,
     opts: &BuildOptions,
-) -> (Flat, f64) {
+) -> GpuResult<(Flat, f64)> {
     let start = Instant::now();
-    match kind {
+    Ok(match kind {
+        GpuAccelKind::Cwbvh => {
+            let accel = Bvh8::<T>::build(mesh, &cwbvh_build_options(opts));
+            let secs = start.elapsed().as_secs_f64();
+            let cw = compress(&accel.flat())?;
+            let flat = Flat {
+                nodes: cw.nodes,
+                indices: Vec::new(),
+                root: ([0.0; 3], [0.0; 3]),
+                tris: records::<T>(mesh, cw.prims),
+            };
+            (flat, secs)
+        }
         GpuAccelKind::KdStack => {
             let accel = KdStack::<T>::build(mesh, &opts.kd);
             let secs = start.elapsed().as_secs_f64();
@@ -164,26 +200,15 @@ fn flat_for<T: TriangleTest>(
             (flat, secs)
         }
         GpuAccelKind::Brute => {
-            let mut words = Vec::with_capacity(mesh.num_triangles() * T::WORDS);
-            for i in 0..mesh.num_triangles() {
-                let [a, b, c] = mesh.triangle(i);
-                T::write_words(&T::precompute(a, b, c), &mut words);
-            }
-            let tris = FlatTriangles {
-                test: T::NAME,
-                words_per_tri: T::WORDS,
-                words,
-                prims: (0..mesh.num_triangles() as u32).collect(),
-            };
             let flat = Flat {
                 nodes: Vec::new(),
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
-                tris,
+                tris: records::<T>(mesh, (0..mesh.num_triangles() as u32).collect()),
             };
             (flat, 0.0)
         }
-    }
+    })
 }
 
 impl GpuScene {
@@ -198,8 +223,8 @@ impl GpuScene {
         opts: &BuildOptions,
     ) -> GpuResult<GpuScene> {
         let (flat, build_seconds) = match test {
-            TestKind::Moller => flat_for::<Moller>(mesh, kind, opts),
-            TestKind::Plucker => flat_for::<Plucker>(mesh, kind, opts),
+            TestKind::Moller => flat_for::<Moller>(mesh, kind, opts)?,
+            TestKind::Plucker => flat_for::<Plucker>(mesh, kind, opts)?,
             TestKind::Projection => {
                 return Err(GpuError::Unsupported(
                     "the projection test; the GPU kernels implement plucker and moller".into(),
@@ -210,6 +235,7 @@ impl GpuScene {
         let num_nodes = match kind {
             GpuAccelKind::KdStack => flat.nodes.len() / 2,
             GpuAccelKind::BvhThreaded => flat.nodes.len() / 8,
+            GpuAccelKind::Cwbvh => flat.nodes.len() / crate::cwbvh::NODE_WORDS,
             GpuAccelKind::Brute => 0,
         };
         let params = AccelParams {
@@ -265,7 +291,23 @@ impl GpuScene {
             TestKind::Plucker => wgsl::TRI_PLUCKER,
             _ => wgsl::TRI_MOLLER,
         };
-        vec![wgsl::COMMON, wgsl::SCENE, tri, self.kind.wgsl()]
+        vec![
+            wgsl::COMMON,
+            wgsl::SCENE,
+            tri,
+            self.kind.wgsl(),
+            wgsl::COUNT_OFF,
+        ]
+    }
+
+    /// [`GpuScene::wgsl`] with the traversal counts switched on: the
+    /// kernel then needs group 2 (six words of 64-bit counters, see
+    /// `shaders/count_on.wgsl`).
+    pub fn wgsl_counting(&self) -> Vec<&'static str> {
+        let mut src = self.wgsl();
+        src.pop();
+        src.push(wgsl::COUNT_ON);
+        src
     }
 
     /// Group 0 of `kernel`, bound to this scene.

@@ -4,7 +4,7 @@
 use crate::buffers::{output, read_words, storage, uniform};
 use crate::context::GpuContext;
 use crate::error::GpuResult;
-use crate::kernel::{dispatch, grid, wgsl, BindingKind, Kernel, SCENE_GROUP};
+use crate::kernel::{dispatch_timed, grid, wgsl, BindingKind, Kernel, SCENE_GROUP};
 use crate::scene::GpuScene;
 use raykit_core::{Hit, Ray};
 use std::time::Instant;
@@ -12,7 +12,7 @@ use std::time::Instant;
 /// Rays per dispatch: bounds the ray and hit buffers (32 MB and 16 MB).
 pub const CHUNK: usize = 1 << 20;
 
-const TRACE_GROUP: [BindingKind; 3] = [
+pub(crate) const TRACE_GROUP: [BindingKind; 3] = [
     BindingKind::Storage,
     BindingKind::StorageRw,
     BindingKind::Uniform,
@@ -36,11 +36,32 @@ pub struct GpuTracer<'a> {
 
 /// Rays uploaded once, for repeated timing runs.
 pub struct GpuRays {
-    rays: wgpu::Buffer,
-    out: wgpu::Buffer,
-    params: wgpu::Buffer,
+    pub(crate) rays: wgpu::Buffer,
+    pub(crate) out: wgpu::Buffer,
+    pub(crate) params: wgpu::Buffer,
     count: usize,
-    groups: (u32, u32),
+    pub(crate) groups: (u32, u32),
+}
+
+/// The clock a kernel run is timed with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Clock {
+    /// The GPU's timestamps written at the start and end of the compute
+    /// pass: the kernel alone, without submission or the wait.
+    Timestamps,
+    /// Wall-clock time from submission until `device.poll` has waited for
+    /// the queue: the kernel plus submission and completion latency.
+    WallClock,
+}
+
+impl Clock {
+    /// The name the experiment reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Clock::Timestamps => "GPU timestamp queries",
+            Clock::WallClock => "wall clock, submission to device.poll wait",
+        }
+    }
 }
 
 impl<'a> GpuTracer<'a> {
@@ -99,6 +120,22 @@ impl<'a> GpuTracer<'a> {
     /// Trace uploaded rays (nearest hits, or occlusion when `any`) and wait;
     /// returns the seconds from submission to completion.
     pub fn run(&self, rays: &GpuRays, any: bool) -> GpuResult<f64> {
+        self.run_clocked(rays, any, Clock::WallClock)
+    }
+
+    /// The best clock the device offers: its timestamps where it has them.
+    pub fn clock(&self) -> Clock {
+        if self.ctx.timestamps {
+            Clock::Timestamps
+        } else {
+            Clock::WallClock
+        }
+    }
+
+    /// [`GpuTracer::run`] timed with `clock` ([`Clock::Timestamps`] needs a
+    /// device with timestamp queries, see [`GpuTracer::clock`]); returns
+    /// seconds.
+    pub fn run_clocked(&self, rays: &GpuRays, any: bool, clock: Clock) -> GpuResult<f64> {
         let kernel = if any { &self.any } else { &self.nearest };
         let g0 = self.scene.bind(self.ctx, kernel);
         let g1 = kernel.bind(self.ctx, 1, &[&rays.rays, &rays.out, &rays.params]);
@@ -108,13 +145,45 @@ impl<'a> GpuTracer<'a> {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("trace"),
             });
-        dispatch(&mut enc, kernel, &[&g0, &g1], rays.groups);
+        let queries = (clock == Clock::Timestamps).then(|| {
+            let set = self.ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("kernel timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            });
+            let resolved = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("kernel timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (set, resolved)
+        });
+        dispatch_timed(
+            &mut enc,
+            kernel,
+            &[&g0, &g1],
+            rays.groups,
+            queries.as_ref().map(|q| &q.0),
+        );
+        if let Some((set, resolved)) = &queries {
+            enc.resolve_query_set(set, 0..2, resolved, 0);
+        }
         let start = Instant::now();
         self.ctx.queue.submit([enc.finish()]);
         self.ctx.wait()?;
         let secs = start.elapsed().as_secs_f64();
         self.ctx.take_error()?;
-        Ok(secs)
+        match &queries {
+            None => Ok(secs),
+            Some((_, resolved)) => {
+                let w = crate::buffers::read_words(self.ctx, resolved, 4)?;
+                let begin = w[0] as u64 | (w[1] as u64) << 32;
+                let end = w[2] as u64 | (w[3] as u64) << 32;
+                let period = self.ctx.queue.get_timestamp_period() as f64;
+                Ok(end.saturating_sub(begin) as f64 * period * 1e-9)
+            }
+        }
     }
 
     /// Nearest hits of a finished [`GpuTracer::run`].

@@ -4,10 +4,11 @@
 
 mod support;
 
-use raykit_core::accel::{Accel, BruteForce, BuildOptions, KdOptions, KdStack, ThreadedBvh};
+use raykit_core::accel::{Accel, BruteForce, BuildOptions, Bvh8, KdOptions, KdStack, ThreadedBvh};
 use raykit_core::raysets::standard_sets;
 use raykit_core::tri::{Moller, Plucker, TestKind, TriangleTest};
 use raykit_core::TriangleMesh;
+use raykit_gpu::cwbvh::cwbvh_build_options;
 use raykit_gpu::{GpuAccelKind, GpuScene, GpuTracer};
 use support::{compare, describe, gpu, shared_data};
 
@@ -17,6 +18,10 @@ fn cpu_accel<T: TriangleTest>(mesh: &TriangleMesh, kind: GpuAccelKind) -> Box<dy
         GpuAccelKind::BvhThreaded => {
             Box::new(ThreadedBvh::<T>::build(mesh, &BuildOptions::default()))
         }
+        GpuAccelKind::Cwbvh => Box::new(Bvh8::<T>::build(
+            mesh,
+            &cwbvh_build_options(&BuildOptions::default()),
+        )),
         GpuAccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)),
     }
 }
@@ -59,6 +64,20 @@ fn agree(name: &str, mesh: &TriangleMesh, size: u32, kinds: &[GpuAccelKind]) {
                     describe(rays, &d.hit_miss, &want, &got),
                     describe(rays, &d.distance, &want, &got)
                 );
+                // A different triangle only at exactly the same distance
+                // (a shared edge or vertex, or coincident triangles): the
+                // structures test a node's triangles in different orders.
+                let near: Vec<usize> = (0..rays.len())
+                    .filter(|&i| match (want[i], got[i]) {
+                        (Some(c), Some(g)) => c.prim != g.prim && c.t != g.t,
+                        _ => false,
+                    })
+                    .collect();
+                assert!(
+                    near.is_empty(),
+                    "{label}: other triangle at another distance\n{}",
+                    describe(rays, &near, &want, &got)
+                );
                 let mut occ = vec![false; rays.len()];
                 cpu.occluded_batch(rays, &mut occ);
                 let gocc = tracer.occluded_batch(rays).unwrap();
@@ -96,7 +115,11 @@ fn shared_meshes_agree_with_cpu() {
             file,
             &mesh,
             96,
-            &[GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded],
+            &[
+                GpuAccelKind::KdStack,
+                GpuAccelKind::BvhThreaded,
+                GpuAccelKind::Cwbvh,
+            ],
         );
     }
     let dragon = raykit_io::load_mesh(&dir.join("dragon_vrip_res4.ply.gz")).unwrap();
@@ -104,7 +127,11 @@ fn shared_meshes_agree_with_cpu() {
         "dragon_res4",
         &dragon,
         96,
-        &[GpuAccelKind::KdStack, GpuAccelKind::BvhThreaded],
+        &[
+            GpuAccelKind::KdStack,
+            GpuAccelKind::BvhThreaded,
+            GpuAccelKind::Cwbvh,
+        ],
     );
 }
 
@@ -189,4 +216,71 @@ fn triangle_records_split_across_bindings_give_the_same_answers() {
     .err()
     .expect("does not fit four bindings");
     assert!(err.to_string().contains("in 4 bindings"), "{err}");
+}
+
+/// A soup of random triangles of mixed sizes and orientations (slivers
+/// included), seeded, with overlaps and intersections everywhere.
+fn triangle_soup(n: usize, seed: u64) -> TriangleMesh {
+    let mut s = seed;
+    let mut r = move || {
+        // SplitMix64.
+        s = s.wrapping_add(0x9e3779b97f4a7c15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut v = Vec::with_capacity(3 * n);
+    for i in 0..n {
+        let c = glam::Vec3::new(r(), r(), r()) * 20.0;
+        let size = [2.0, 0.5, 0.05][i % 3];
+        for _ in 0..3 {
+            v.push(c + (glam::Vec3::new(r(), r(), r()) - 0.5) * size);
+        }
+    }
+    let idx = (0..n as u32)
+        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+        .collect();
+    TriangleMesh::new(v, idx)
+}
+
+#[test]
+fn random_triangle_soup_agrees_with_cpu() {
+    let mesh = triangle_soup(30_000, 40);
+    agree(
+        "soup",
+        &mesh,
+        64,
+        &[GpuAccelKind::Cwbvh, GpuAccelKind::BvhThreaded],
+    );
+}
+
+#[test]
+fn timed_runs_give_the_same_answers_on_either_clock() {
+    let mesh = raykit_io::load_mesh(&shared_data().join("meshes/bunny_3674.obj")).unwrap();
+    let reference = BruteForce::<Moller>::new(&mesh);
+    let rays = &standard_sets(&mesh, &reference, 32, 3)[0];
+    let scene = GpuScene::build(
+        gpu(),
+        &mesh,
+        GpuAccelKind::Cwbvh,
+        TestKind::Moller,
+        &BuildOptions::default(),
+    )
+    .unwrap();
+    let tracer = GpuTracer::new(gpu(), &scene).unwrap();
+    eprintln!("clock on this adapter: {}", tracer.clock().name());
+    let up = tracer.upload(rays).unwrap();
+    let mut answers = Vec::new();
+    for clock in [tracer.clock(), raykit_gpu::Clock::WallClock] {
+        let secs = tracer.run_clocked(&up, false, clock).unwrap();
+        assert!(secs.is_finite() && secs >= 0.0, "{}: {secs}", clock.name());
+        answers.push(tracer.hits(&up).unwrap());
+    }
+    let mut want = vec![None; rays.len()];
+    reference.intersect_batch(rays, &mut want);
+    assert!(answers[0].iter().any(|h| h.is_some()));
+    assert_eq!(answers[0], answers[1]);
+    let d = compare(&want, &answers[0]);
+    assert!(d.hit_miss.is_empty() && d.distance.is_empty());
 }

@@ -1,7 +1,11 @@
 //! `raykit experiment gpu`: Mrays/s
-//! of each kernel (stack kd-tree, threaded BVH) × triangle test (Plücker,
-//! Möller) on primary, shadow and incoherent rays, with the node memory of
-//! each layout (Table 1) and the CPU's speed on the same structure beside it.
+//! of each kernel (stack kd-tree, threaded BVH, compressed wide BVH) ×
+//! triangle test (Plücker, Möller) on primary, shadow and incoherent rays,
+//! timed on the GPU's own clock where it has one (the median of the runs,
+//! with their spread and the share a launch costs), with the nodes and
+//! bytes each ray fetches (counted by the kernels), the node memory of each
+//! layout (Table 1) and the CPU's speed on the same structure beside it.
+//! A ratio whose two sides' run ranges overlap is marked not significant.
 
 use super::{cached_dragon, gpu_terrain, shared_mesh, write_csv, write_text};
 use crate::backend::{cpu_twin, open_gpu};
@@ -37,10 +41,11 @@ pub struct GpuExperimentArgs {
     /// Image side of the ray sets (SIZE² primary and incoherent rays).
     #[arg(long, default_value_t = 512)]
     size: u32,
-    /// Repetitions of every measurement (the median is reported).
-    #[arg(long, default_value_t = 3)]
+    /// Timed runs of every measurement, after two warm-up runs (the median
+    /// is reported; at least 5).
+    #[arg(long, default_value_t = 5)]
     reps: usize,
-    /// Structures (`all` = kd-stack,bvh-threaded).
+    /// Structures (`all` = kd-stack,bvh-threaded,cwbvh).
     #[arg(long, default_value = "all")]
     accel: String,
     /// Triangle tests (`all` = plucker,moller).
@@ -72,6 +77,26 @@ struct Row {
     gpu_primary: f64,
     gpu_shadow: f64,
     gpu_incoherent: f64,
+    /// Slowest and fastest runs (Mrays/s) per set, for the significance of
+    /// ratios.
+    gpu_primary_lo: f64,
+    gpu_primary_hi: f64,
+    gpu_shadow_lo: f64,
+    gpu_shadow_hi: f64,
+    gpu_incoherent_lo: f64,
+    gpu_incoherent_hi: f64,
+    /// Largest share of a dispatch's time that a one-ray dispatch takes.
+    launch_share: f64,
+    nodes_primary: f64,
+    nodes_shadow: f64,
+    nodes_incoherent: f64,
+    bytes_primary: f64,
+    bytes_shadow: f64,
+    bytes_incoherent: f64,
+    tris_primary: f64,
+    tris_shadow: f64,
+    tris_incoherent: f64,
+    clock: &'static str,
     cpu_primary: f64,
     cpu_shadow: f64,
     cpu_incoherent: f64,
@@ -140,7 +165,7 @@ pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
     };
     let opts = args.build.options();
     let all = pool(0)?;
-    let reps = args.reps.max(1);
+    let reps = args.reps.max(5);
     let mut rows = Vec::new();
     for spec in &meshes {
         let scene = scene_arg::load(spec)?;
@@ -202,6 +227,23 @@ pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
                     gpu_primary: g.cells[0].mrays,
                     gpu_shadow: g.cells[1].mrays,
                     gpu_incoherent: g.cells[2].mrays,
+                    gpu_primary_lo: g.cells[0].mrays_lo,
+                    gpu_primary_hi: g.cells[0].mrays_hi,
+                    gpu_shadow_lo: g.cells[1].mrays_lo,
+                    gpu_shadow_hi: g.cells[1].mrays_hi,
+                    gpu_incoherent_lo: g.cells[2].mrays_lo,
+                    gpu_incoherent_hi: g.cells[2].mrays_hi,
+                    launch_share: g.cells.iter().map(|c| c.launch_share).fold(0.0, f64::max),
+                    nodes_primary: g.cells[0].nodes_per_ray,
+                    nodes_shadow: g.cells[1].nodes_per_ray,
+                    nodes_incoherent: g.cells[2].nodes_per_ray,
+                    bytes_primary: g.cells[0].bytes_per_ray,
+                    bytes_shadow: g.cells[1].bytes_per_ray,
+                    bytes_incoherent: g.cells[2].bytes_per_ray,
+                    tris_primary: g.cells[0].tris_per_ray,
+                    tris_shadow: g.cells[1].tris_per_ray,
+                    tris_incoherent: g.cells[2].tris_per_ray,
+                    clock: g.clock,
                     cpu_primary: cpu_rates[0],
                     cpu_shadow: cpu_rates[1],
                     cpu_incoherent: cpu_rates[2],
@@ -254,58 +296,99 @@ pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
 }
 
 fn markdown(rows: &[Row], args: &GpuExperimentArgs, adapter: &str, threads: usize) -> String {
+    let clock = rows.first().map_or("–", |r| r.clock);
     let mut s = format!(
         "# GPU kernels\n\n`raykit experiment gpu --size {} --reps {}` on {adapter}; CPU figures on {threads} threads.\n\n",
-        args.size, args.reps
+        args.size,
+        args.reps.max(5)
     );
-    s += "Mrays/s, median of the runs: GPU kernel time from submission to completion (uploads and read-back excluded); CPU the same structure and test through the batch API. Shadow = occlusion (any hit).\n\n";
-    s += "| mesh | triangles | accel | test | node KB | device MB | GPU primary | GPU shadow | GPU incoherent | CPU primary | CPU shadow | CPU incoherent | noise | checked | differ | of which edge grazes | ties |\n|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    s += &format!(
+        "Mrays/s, median of {} timed runs after two warm-up runs, timed with {clock}; uploads and read-back excluded. \
+         CPU: the structure the kernel mirrors (cwbvh: bvh8) through the batch API. Shadow = occlusion (any hit). \
+         noise = (slowest − fastest) / median over every cell of the row; launch = a one-ray dispatch's time as a share \
+         of the batch's (the fixed cost each measurement carries; below 5% the batch is large enough).\n\n",
+        args.reps.max(5)
+    );
+    s += "| mesh | triangles | accel | test | node KB | device MB | GPU primary | GPU shadow | GPU incoherent | CPU primary | CPU shadow | CPU incoherent | noise | launch | checked | differ | of which edge grazes | ties |\n|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.0}% | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.0}% | {:.1}% | {} | {} | {} | {} |\n",
             r.mesh, r.triangles, r.accel, r.test, r.node_kb, r.device_mb, r.gpu_primary, r.gpu_shadow,
             r.gpu_incoherent, r.cpu_primary, r.cpu_shadow, r.cpu_incoherent, r.spread * 100.0,
-            r.checked, r.disagreements, r.edge_grazes, r.ties
+            r.launch_share * 100.0, r.checked, r.disagreements, r.edge_grazes, r.ties
         );
     }
-    s += "\n## Ratios on the GPU (the stack kd-tree against the stackless BVH, Plücker against Möller–Trumbore)\n\n| mesh | set | kd-stack ÷ bvh-threaded (plucker) | kd-stack ÷ bvh-threaded (moller) | plucker ÷ moller (kd-stack) | plucker ÷ moller (bvh-threaded) |\n|---|---|---:|---:|---:|---:|\n";
+    s += "\n## What each ray fetches (counted by the kernels; the same on any device)\n\nPer ray: nodes visited, triangle records tested, bytes of nodes, index entries and triangle records fetched.\n\n| mesh | accel | test | primary nodes | primary tris | primary bytes | shadow nodes | shadow tris | shadow bytes | incoherent nodes | incoherent tris | incoherent bytes |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {:.1} | {:.1} | {:.0} | {:.1} | {:.1} | {:.0} | {:.1} | {:.1} | {:.0} |\n",
+            r.mesh, r.accel, r.test, r.nodes_primary, r.tris_primary, r.bytes_primary,
+            r.nodes_shadow, r.tris_shadow, r.bytes_shadow, r.nodes_incoherent,
+            r.tris_incoherent, r.bytes_incoherent
+        );
+    }
     let mut meshes: Vec<&str> = Vec::new();
     for r in rows {
         if !meshes.contains(&r.mesh.as_str()) {
             meshes.push(&r.mesh);
         }
     }
+    // (median, slowest, fastest) Mrays/s of a cell.
     let get = |m: &str, a: &str, t: &str, set: usize| {
         rows.iter()
             .find(|r| r.mesh == m && r.accel == a && r.test == t)
-            .map(|r| [r.gpu_primary, r.gpu_shadow, r.gpu_incoherent][set])
+            .map(|r| {
+                [
+                    (r.gpu_primary, r.gpu_primary_lo, r.gpu_primary_hi),
+                    (r.gpu_shadow, r.gpu_shadow_lo, r.gpu_shadow_hi),
+                    (r.gpu_incoherent, r.gpu_incoherent_lo, r.gpu_incoherent_hi),
+                ][set]
+            })
     };
-    let ratio = |x: Option<f64>, y: Option<f64>| match (x, y) {
-        (Some(x), Some(y)) if y > 0.0 => format!("{:.2}×", x / y),
-        _ => "–".to_string(),
-    };
+    let pairs: [(&str, &str, &str, &str); 7] = [
+        ("kd-stack", "plucker", "bvh-threaded", "plucker"),
+        ("kd-stack", "moller", "bvh-threaded", "moller"),
+        ("cwbvh", "plucker", "kd-stack", "plucker"),
+        ("cwbvh", "moller", "kd-stack", "moller"),
+        ("kd-stack", "plucker", "kd-stack", "moller"),
+        ("bvh-threaded", "plucker", "bvh-threaded", "moller"),
+        ("cwbvh", "plucker", "cwbvh", "moller"),
+    ];
+    s += "\n## Ratios on the GPU\n\nMedian ÷ median; *not significant* where the two cells' ranges of runs (slowest to fastest) overlap.\n\n| mesh | set |";
+    for (a, t, b, u) in pairs {
+        s += &if t == u {
+            format!(" {a} ÷ {b} ({t}) |")
+        } else {
+            format!(" {t} ÷ {u} ({a}) |")
+        };
+    }
+    s += "\n|---|---|";
+    s += &"---:|".repeat(pairs.len());
+    s += "\n";
     for m in meshes {
         for (si, set) in SETS.iter().enumerate() {
-            s += &format!(
-                "| {m} | {set} | {} | {} | {} | {} |\n",
-                ratio(
-                    get(m, "kd-stack", "plucker", si),
-                    get(m, "bvh-threaded", "plucker", si)
-                ),
-                ratio(
-                    get(m, "kd-stack", "moller", si),
-                    get(m, "bvh-threaded", "moller", si)
-                ),
-                ratio(
-                    get(m, "kd-stack", "plucker", si),
-                    get(m, "kd-stack", "moller", si)
-                ),
-                ratio(
-                    get(m, "bvh-threaded", "plucker", si),
-                    get(m, "bvh-threaded", "moller", si)
-                ),
-            );
+            s += &format!("| {m} | {set} |");
+            for (a, t, b, u) in pairs {
+                s += &format!(" {} |", ratio(get(m, a, t, si), get(m, b, u, si)));
+            }
+            s += "\n";
         }
     }
     s
+}
+
+/// `x ÷ y` of two (median, slowest, fastest) cells, marked not significant
+/// when their ranges overlap.
+fn ratio(x: Option<(f64, f64, f64)>, y: Option<(f64, f64, f64)>) -> String {
+    match (x, y) {
+        (Some(x), Some(y)) if y.0 > 0.0 => {
+            let significant = x.1 > y.2 || x.2 < y.1;
+            if significant {
+                format!("{:.2}×", x.0 / y.0)
+            } else {
+                format!("{:.2}× *not significant*", x.0 / y.0)
+            }
+        }
+        _ => "–".to_string(),
+    }
 }

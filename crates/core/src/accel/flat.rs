@@ -63,3 +63,49 @@ impl FlatTriangles {
         self.prims.is_empty()
     }
 }
+
+/// A child slot of a [`FlatNode8`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlatChild {
+    /// An unused slot.
+    Empty,
+    /// An inner node: its index in [`FlatBvh8::nodes`].
+    Inner(u32),
+    /// A leaf: `count` triangles from position `first` of
+    /// [`FlatBvh8::prims`].
+    Leaf {
+        /// First position in the leaf order.
+        first: u32,
+        /// Triangles in the leaf.
+        count: u32,
+    },
+}
+
+/// An inner node of the 8-wide BVH: the padded box of each child slot and
+/// the child references (unused slots hold inverted boxes and
+/// [`FlatChild::Empty`]).
+#[derive(Clone, Copy, Debug)]
+pub struct FlatNode8 {
+    /// Lower corner of each slot's padded box.
+    pub min: [[f32; 3]; 8],
+    /// Upper corner of each slot's padded box.
+    pub max: [[f32; 3]; 8],
+    /// The slots' references.
+    pub child: [FlatChild; 8],
+}
+
+/// The 8-wide BVH ([`crate::accel::Bvh8`]) as plain nodes and the mesh
+/// triangle indices in leaf order, for devices that store the tree in a
+/// layout of their own (the GPU's compressed wide BVH).
+#[derive(Clone, Debug)]
+pub struct FlatBvh8 {
+    /// Inner nodes, the root's first when the root is an inner node.
+    pub nodes: Vec<FlatNode8>,
+    /// The root reference (an inner node, one leaf, or empty for no
+    /// triangles).
+    pub root: FlatChild,
+    /// The root's padded box (lower, upper corner).
+    pub root_box: ([f32; 3], [f32; 3]),
+    /// Mesh triangle index at each leaf position.
+    pub prims: Vec<u32>,
+}

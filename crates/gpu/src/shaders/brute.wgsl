@@ -1,5 +1,7 @@
 // Every ray against every triangle: the GPU reference.
 
+@group(0) @binding(0) var<storage, read> nodes: array<u32>;
+
 fn brute_trace(r: RayIn, any: bool) -> Hit {
     var best = miss_hit();
     let rd = tri_prepare(r);

@@ -3,6 +3,8 @@
 // the count in the top 5 bits); one loop, hit -> next node, miss or leaf ->
 // escape.
 
+@group(0) @binding(0) var<storage, read> nodes: array<u32>;
+
 const BVH_COUNT_SHIFT: u32 = 27u;
 const BVH_FIRST_MASK: u32 = 0x07ffffffu;
 
@@ -10,6 +12,7 @@ const BVH_FIRST_MASK: u32 = 0x07ffffffu;
 // (NodeBox::entry: the exit widened by 3 ulps, NaNs from 0 * inf dropped).
 fn box_entry(n: u32, r: RayIn, tnear: f32, tfar: f32) -> f32 {
     let b = 8u * n;
+    note_node(32u);
     let lo = vec3f(bitcast<f32>(nodes[b]), bitcast<f32>(nodes[b + 1u]), bitcast<f32>(nodes[b + 2u]));
     let hi = vec3f(bitcast<f32>(nodes[b + 3u]), bitcast<f32>(nodes[b + 4u]), bitcast<f32>(nodes[b + 5u]));
     let t0 = (lo - r.o) * r.inv;

@@ -4,6 +4,8 @@
 // child first, far child pushed with its segment, stop at the first leaf
 // whose segment holds the nearest hit; no node is visited twice.
 
+@group(0) @binding(0) var<storage, read> nodes: array<u32>;
+
 const KD_LEAF: u32 = 0x80000000u;
 const KD_OFFSET: u32 = 0x0fffffffu;
 const KD_STACK: u32 = 64u;
@@ -35,6 +37,7 @@ fn kd_trace(r: RayIn, any: bool) -> Hit {
     loop {
         let word = nodes[2u * node];
         let data = nodes[2u * node + 1u];
+        note_node(8u);
         if (word & KD_LEAF) == 0u {
             let a = (word >> 29u) & 3u;
             let split = bitcast<f32>(data);
@@ -63,6 +66,7 @@ fn kd_trace(r: RayIn, any: bool) -> Hit {
         }
         let start = word & ~KD_LEAF;
         for (var k = 0u; k < data; k++) {
+            note_bytes(4u);
             if test_triangle(indices[start + k], r, rd, any, &best) {
                 return Hit(0.0, 0.0, 0.0, 0u);
             }

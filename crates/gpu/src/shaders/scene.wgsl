@@ -4,8 +4,10 @@
 // beyond one storage binding's limit continue in up to three more bindings
 // of chunk_words words each (whole records); a scene that fits one binding
 // has chunk_words = 0xffffffff and never reads the others.
-// Accel files (kd_stack.wgsl, bvh_threaded.wgsl, brute.wgsl) define
+// Accel files (kd_stack.wgsl, bvh_threaded.wgsl, cwbvh.wgsl, brute.wgsl)
+// declare binding 0 (the nodes, as words or as 16-byte vectors) and define
 // scene_intersect(ray) -> Hit and scene_occluded(ray) -> bool over them.
+// Every triangle record fetched is noted (note_tri, see count_off.wgsl).
 
 struct AccelParams {
     root_min: vec3f,
@@ -18,7 +20,6 @@ struct AccelParams {
     _pad2: u32,
 }
 
-@group(0) @binding(0) var<storage, read> nodes: array<u32>;
 @group(0) @binding(1) var<storage, read> indices: array<u32>;
 @group(0) @binding(2) var<storage, read> tri_words: array<u32>;
 @group(0) @binding(3) var<storage, read> prims: array<u32>;
@@ -66,6 +67,7 @@ fn cross3(a: vec3f, b: vec3f) -> vec3f {
 // any-hit mode returns true at a hit.
 fn test_triangle(i: u32, r: RayIn, rd: TriRay, any: bool, best: ptr<function, Hit>) -> bool {
     let tfar = (*best).t;
+    note_tri(TRI_BYTES);
     if any {
         return tri_occluded(i, r, rd, fmin(tfar, r.tfar));
     }

@@ -29,6 +29,7 @@ fn trace_nearest(@builtin(global_invocation_id) gid: vec3u) {
     out[4u * i + 1u] = h.prim;
     out[4u * i + 2u] = bitcast<u32>(h.u);
     out[4u * i + 3u] = bitcast<u32>(h.v);
+    flush_counts();
 }
 
 @compute @workgroup_size(64)
@@ -38,4 +39,5 @@ fn trace_any(@builtin(global_invocation_id) gid: vec3u) {
         return;
     }
     out[i] = select(0u, 1u, scene_occluded(load_ray(i)));
+    flush_counts();
 }

@@ -2,6 +2,9 @@
 // crates/core/src/tri/moller.rs, on its 11-word record:
 // v0, e1, e2, max|e1_i|, max|e2_i|.
 
+// Bytes of one record, for the traversal counts.
+const TRI_BYTES: u32 = 44u;
+
 const MOLLER_K_BARY: f32 = 64.0;
 
 struct TriRay {

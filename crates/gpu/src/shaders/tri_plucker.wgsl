@@ -3,6 +3,9 @@
 // (e_i, M_i) for the three edges, n, a, scale_v, scale_u, tol_m, cap.
 // The sign test is branch-free; shadow rays skip the barycentrics.
 
+// Bytes of one record, for the traversal counts.
+const TRI_BYTES: u32 = 112u;
+
 const PLUCKER_K_SIDE: f32 = 16.0;
 
 struct TriRay {

@@ -36,6 +36,7 @@ pub mod build;
 mod bvh2;
 mod bvh4;
 mod bvh8;
+mod bvh8_flat;
 mod collapse;
 mod enter;
 #[cfg(target_arch = "x86_64")]
