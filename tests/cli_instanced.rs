@@ -147,9 +147,12 @@ fn engine_traced_with_its_instancing_equals_the_flattened_trace() {
     assert!(differ * 100 <= rays.len(), "{differ} rays differ");
 }
 
-/// Every `f64` crossing of `ray` with the meshes: `(t, geometry, prim,
-/// edge margin)`, sorted by `t`.
-fn crossings(meshes: &[TriangleMesh], ray: &Ray) -> Vec<(f64, u32, u32, f64)> {
+/// One `f64` crossing of a ray with a mesh: `(t, geometry, prim, edge
+/// margin)`.
+type Crossing = (f64, u32, u32, f64);
+
+/// Every `f64` crossing of `ray` with the meshes, sorted by `t`.
+fn crossings(meshes: &[TriangleMesh], ray: &Ray) -> Vec<Crossing> {
     let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
     let mut out = Vec::new();
     for (g, m) in meshes.iter().enumerate() {
@@ -181,7 +184,7 @@ fn two_meshes_trace_and_query_with_geometry_ids_as_brute_force() {
     let bounds = meshes[0].bounds().union(meshes[1].bounds());
     let all = rays_at(&bounds, 1500, 7);
     // Rays clear of triangle edges, where f32 tests may disagree.
-    let cases: Vec<(Ray, Vec<(f64, u32, u32, f64)>)> = all
+    let cases: Vec<(Ray, Vec<Crossing>)> = all
         .into_iter()
         .map(|r| {
             let c = crossings(&meshes, &r);
@@ -230,9 +233,9 @@ fn two_meshes_trace_and_query_with_geometry_ids_as_brute_force() {
         at += 4;
         assert_eq!(n, want.len(), "ray {k}");
         let mut got_ids = Vec::new();
-        for i in 0..n {
+        for (i, w) in want.iter().enumerate().take(n) {
             let r = at + 16 * i;
-            assert!((f32_at(&lists, r) as f64 - want[i].0).abs() <= 1e-4 * want[i].0);
+            assert!((f32_at(&lists, r) as f64 - w.0).abs() <= 1e-4 * w.0);
             got_ids.push((u32_at(&lists, r + 8), u32_at(&lists, r + 4)));
         }
         at += 16 * n;

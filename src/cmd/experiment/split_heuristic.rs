@@ -104,13 +104,18 @@ pub fn run(args: SplitHeuristicArgs) -> Result<ExitCode> {
     let reference = build_accel(AccelKind::Bvh2, TestKind::Moller, mesh, &base);
     let mut want = vec![None; rays.len()];
     reference.intersect_batch(&rays, &mut want);
-    let views = random_views(&mesh.bounds(), args.frustums, 7);
-    let frustums: Vec<Frustum> = views.iter().map(|v| v.1).collect();
-    let cameras: Vec<Camera> = views.iter().map(|v| v.0).collect();
-    let frustum_ref: Vec<Vec<u32>> = frustums
-        .iter()
-        .map(|f| parts_overlapping_brute(mesh, f))
-        .collect();
+    let (cameras, frustums): (Vec<Camera>, Vec<Frustum>) =
+        random_views(&mesh.bounds(), args.frustums, 7)
+            .into_iter()
+            .unzip();
+    let views = Views {
+        reference: frustums
+            .iter()
+            .map(|f| parts_overlapping_brute(mesh, f))
+            .collect(),
+        frustums,
+        cameras,
+    };
 
     eprintln!(
         "{}: {} triangles, {} parts",
@@ -136,18 +141,7 @@ pub fn run(args: SplitHeuristicArgs) -> Result<ExitCode> {
             kd: kd.clone(),
             ..base.clone()
         };
-        let row = threads.install(|| {
-            sweep_point(
-                mesh,
-                &opts,
-                &rays,
-                &want,
-                &frustums,
-                &frustum_ref,
-                &cameras,
-                reps,
-            )
-        });
+        let row = threads.install(|| sweep_point(mesh, &opts, &rays, &want, &views, reps));
         rows.push(row?);
         bar.inc(1);
     }
@@ -177,11 +171,10 @@ fn sweep_point(
     opts: &BuildOptions,
     rays: &[Ray],
     want: &[Option<Hit>],
-    frustums: &[Frustum],
-    frustum_ref: &[Vec<u32>],
-    cameras: &[Camera],
+    views: &Views,
     reps: usize,
 ) -> Result<Row> {
+    let (frustums, cameras) = (&views.frustums, &views.cameras);
     let mut build_times = Vec::new();
     let mut built = None;
     for _ in 0..reps {
@@ -278,7 +271,7 @@ fn sweep_point(
         if rep == 0 {
             frustum_disagreements = found
                 .iter()
-                .zip(frustum_ref)
+                .zip(&views.reference)
                 .filter(|(a, b)| a != b)
                 .count();
         }
@@ -323,6 +316,14 @@ fn sweep_point(
         ray_disagreements,
         frustum_disagreements,
     })
+}
+
+/// The views of the frustum measurements: each camera, its frustum, and
+/// the parts a brute force finds in it.
+struct Views {
+    cameras: Vec<Camera>,
+    frustums: Vec<Frustum>,
+    reference: Vec<Vec<u32>>,
 }
 
 /// View frustums of random cameras outside the mesh looking at random
