@@ -5,7 +5,7 @@
 //! written here; the single-mesh hit file keeps its 8-byte records.
 
 use raykit_core::rng::Pcg32;
-use raykit_core::tri::reference::{edge_distance_f64, intersect_f64};
+use raykit_core::tri::reference::{edge_distance_f64, intersect_f64, plane_t_f64};
 use raykit_core::{Ray, TriangleMesh, Vec3};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -174,6 +174,24 @@ fn crossings(meshes: &[TriangleMesh], ray: &Ray) -> Vec<Crossing> {
     out
 }
 
+/// Whether `ray` meets the plane of some triangle, within its reach, at a
+/// point within `margin` (relative to the triangle's size) of the
+/// triangle's boundary, inside or outside: there f32 tests with a
+/// tolerance band and the f64 reference may disagree.
+fn grazes(meshes: &[TriangleMesh], ray: &Ray, margin: f64) -> bool {
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    meshes.iter().any(|m| {
+        (0..m.num_triangles()).any(|t| {
+            let [a, b, c] = m.triangle(t).map(|v| v.as_dvec3());
+            plane_t_f64(a, b, c, o, d).is_some_and(|th| {
+                th >= ray.tnear as f64
+                    && th <= ray.tfar as f64
+                    && edge_distance_f64(a, b, c, o + d * th) <= margin
+            })
+        })
+    })
+}
+
 #[test]
 fn two_meshes_trace_and_query_with_geometry_ids_as_brute_force() {
     let (bunny, teapot) = (data("meshes/bunny_3674.obj"), data("meshes/teapot_992.obj"));
@@ -190,7 +208,7 @@ fn two_meshes_trace_and_query_with_geometry_ids_as_brute_force() {
             let c = crossings(&meshes, &r);
             (r, c)
         })
-        .filter(|(_, c)| c.iter().all(|x| x.3 > 1e-4))
+        .filter(|(r, c)| c.iter().all(|x| x.3 > 1e-4) && !grazes(&meshes, r, 1e-4))
         .collect();
     let rays: Vec<Ray> = cases.iter().map(|c| c.0).collect();
     let dir = tempfile::tempdir().unwrap();
@@ -223,8 +241,17 @@ fn two_meshes_trace_and_query_with_geometry_ids_as_brute_force() {
         match want.first() {
             None => assert_eq!(got.1, u32::MAX, "ray {k}"),
             Some(w) => {
-                assert_eq!((got.2, got.1), (w.1, w.2), "ray {k}: {got:?} vs {w:?}");
-                assert_eq!(got.3, w.1, "ray {k}: each file is one instance");
+                // The nearest crossing, or one within f32 rounding of it
+                // (the teapot's overlapping spout and body meet at near-ties).
+                let same = want
+                    .iter()
+                    .find(|x| (x.1, x.2) == (got.2, got.1))
+                    .unwrap_or_else(|| panic!("ray {k}: {got:?} crosses no triangle it names"));
+                assert!(
+                    (same.0 - w.0).abs() <= 1e-5 * w.0,
+                    "ray {k}: {got:?} vs {w:?}"
+                );
+                assert_eq!(got.3, got.2, "ray {k}: each file is one instance");
                 assert!((got.0 as f64 - w.0).abs() <= 1e-4 * w.0, "ray {k}");
             }
         }
