@@ -13,6 +13,8 @@
 use crate::aabb::Aabb;
 use crate::accel::bvh::build::{build_over_boxes, BuildNode};
 use crate::accel::BuildOptions;
+use crate::query::all_hits::slab8;
+use crate::query::surface_bvh::widen;
 use crate::ray::Ray;
 
 /// Children per node.
@@ -165,7 +167,7 @@ impl TopLevelBvh {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let entry = slab8(node, ray, tfar);
+            let entry = slab8(&node.min, &node.max, &node.child, ray, tfar);
             // Far children pushed first, so that the nearest is popped first.
             let mut order = [(0f32, 0usize); WIDTH];
             let mut n = 0;
@@ -186,60 +188,4 @@ impl TopLevelBvh {
             }
         }
     }
-}
-
-/// Entry distances of `ray` into the eight boxes of `node` within
-/// `[ray.tnear, tfar]`; NaN for boxes missed and unused slots, so every
-/// comparison with a reach rejects them. The exit is widened by a few ulps
-/// so that rounding never drops a box holding a hit.
-#[inline(always)]
-fn slab8(node: &TopNode, ray: &Ray, tfar: f32) -> [f32; WIDTH] {
-    let mut lo = [ray.tnear; WIDTH];
-    let mut hi = [tfar; WIDTH];
-    for a in 0..3 {
-        let (o, inv) = (ray.origin[a], ray.inv_dir[a]);
-        for k in 0..WIDTH {
-            let t0 = (node.min[a][k] - o) * inv;
-            let t1 = (node.max[a][k] - o) * inv;
-            let (near, far) = if t0 < t1 { (t0, t1) } else { (t1, t0) };
-            lo[k] = if near > lo[k] { near } else { lo[k] };
-            hi[k] = if far < hi[k] { far } else { hi[k] };
-        }
-    }
-    let mut entry = [f32::NAN; WIDTH];
-    for k in 0..WIDTH {
-        if lo[k] <= hi[k] * (1.0 + 4.0 * f32::EPSILON) && node.child[k] != EMPTY {
-            entry[k] = lo[k];
-        }
-    }
-    entry
-}
-
-/// The up to eight nodes that replace the inner node `node`: its two
-/// children, then repeatedly the inner one of largest surface area replaced
-/// by its own two children.
-fn widen(node: &BuildNode) -> Vec<&BuildNode> {
-    let BuildNode::Inner { children, .. } = node else {
-        return vec![node];
-    };
-    let mut slots: Vec<&BuildNode> = vec![&children[0], &children[1]];
-    while slots.len() < WIDTH {
-        let pick = slots
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| matches!(s, BuildNode::Inner { .. }))
-            .max_by(|a, b| {
-                a.1.bounds()
-                    .surface_area()
-                    .total_cmp(&b.1.bounds().surface_area())
-            })
-            .map(|(i, _)| i);
-        let Some(i) = pick else { break };
-        let BuildNode::Inner { children, .. } = slots[i] else {
-            break;
-        };
-        slots[i] = &children[0];
-        slots.push(&children[1]);
-    }
-    slots
 }

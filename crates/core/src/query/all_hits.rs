@@ -46,7 +46,7 @@ fn moller(ray: &Ray, tri: &[Vec3; 3], tfar: f32) -> Option<(f32, f32, f32)> {
 /// distances, NaN for boxes missed or unused (so that every comparison
 /// with a reach rejects them).
 #[inline(always)]
-fn slab8(
+pub(crate) fn slab8(
     min: &[[f32; WIDTH]; 3],
     max: &[[f32; WIDTH]; 3],
     child: &[u32; WIDTH],

@@ -183,7 +183,7 @@ impl SurfaceBvh {
 /// The up to eight nodes that replace the inner node `node`: its two
 /// children, then repeatedly the inner one of largest surface area replaced
 /// by its own two children, as the wide collapse of the ray-casting BVHs.
-fn widen(node: &BuildNode) -> Vec<&BuildNode> {
+pub(crate) fn widen(node: &BuildNode) -> Vec<&BuildNode> {
     let BuildNode::Inner { children, .. } = node else {
         return vec![node];
     };
