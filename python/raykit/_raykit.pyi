@@ -67,6 +67,52 @@ class Scene:
     def test(self) -> str: ...
     def stats(self) -> dict[str, Any]: ...
 
+class InstancedScene:
+    """Geometries stored once, placed by instances under a two-level BVH."""
+
+    def __init__(
+        self,
+        geometries: list[Tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32], int]],
+        instances: list[Tuple[int, npt.NDArray[np.float64], int]],
+        threads: int = 0,
+    ) -> None: ...
+    def cast_rays(
+        self, rays: npt.NDArray[np.float32], mask: int = ..., threads: int = 0
+    ) -> Tuple[
+        npt.NDArray[np.float32],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.float32],
+        npt.NDArray[np.float32],
+    ]: ...
+    def test_occlusions(
+        self,
+        rays: npt.NDArray[np.float32],
+        tnear: float = 0.0,
+        tfar: float = ...,
+        mask: int = ...,
+        threads: int = 0,
+    ) -> npt.NDArray[np.bool_]: ...
+    def count_intersections(
+        self, rays: npt.NDArray[np.float32], mask: int = ..., threads: int = 0
+    ) -> npt.NDArray[np.int32]: ...
+    def list_intersections(
+        self, rays: npt.NDArray[np.float32], max_hits: int = ..., mask: int = ..., threads: int = 0
+    ) -> Tuple[
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.float32],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.uint32],
+        npt.NDArray[np.float32],
+    ]: ...
+    @property
+    def stored_triangles(self) -> int: ...
+    @property
+    def placed_triangles(self) -> int: ...
+
 def closest_points(
     scene: Scene, query_points: npt.NDArray[np.float32], max_distance: float = ..., threads: int = 0
 ) -> Tuple[

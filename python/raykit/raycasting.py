@@ -10,11 +10,23 @@ well as float32, :meth:`RaycastingScene.save` and
 :meth:`RaycastingScene.load_structure` keep the built structure in a file,
 and :meth:`RaycastingScene.update_vertices` refits it to moved vertices.
 
-Several geometries: each ``add_triangles`` call appends one geometry; they
-are concatenated into one triangle mesh with one acceleration structure,
-built at the first query after a change (as Open3D commits its scene),
-and each hit's triangle is mapped back to its geometry id (the number of
-the ``add_triangles`` call, from 0) and its index within that geometry.
+Several geometries: each ``add_triangles`` call appends one geometry,
+placed once where its vertices are. While every geometry is placed once and
+nothing else, they are concatenated into one triangle mesh with one
+acceleration structure, built at the first query after a change (as Open3D
+commits its scene), and each hit's triangle is mapped back to its geometry
+id (the number of the ``add_triangles`` call, from 0) and its index within
+that geometry.
+
+Instances (beyond Open3D): :meth:`RaycastingScene.add_instance` places a
+geometry again with an affine transform, and ``add_triangles(...,
+place=False)`` stores a geometry only for instances. A scene with instances
+(or ray masks) keeps each geometry once with its own BVH under a top-level
+BVH over the instances (a two-level BVH as in Embree and pbrt-v4), so
+repeated parts cost memory once. Every placement is an instance: instance
+ids count the placements from 0 in the order they were made, and the
+results of such a scene carry ``instance_ids`` beside ``geometry_ids``
+(the results of a scene without instances keep Open3D's keys exactly).
 """
 
 from __future__ import annotations
@@ -28,6 +40,19 @@ from . import _arrays, _raykit
 
 INVALID_ID = 4294967295
 """``geometry_ids`` and ``primitive_ids`` of a ray that hits nothing (Open3D's value)."""
+
+_MASK_ALL = 0xFFFFFFFF
+"""A ray mask that sees everything (the default of every mask)."""
+
+_IDENTITY = np.ascontiguousarray(np.eye(4)[:3])
+"""The (3, 4) matrix of an instance placed where its vertices are."""
+
+
+def _check_mask(mask, what: str) -> int:
+    """A 32-bit mask as an int, or ``ValueError``."""
+    if isinstance(mask, bool) or not isinstance(mask, (int, np.integer)) or not 0 <= int(mask) <= _MASK_ALL:
+        raise ValueError(f"{what} must be an integer in [0, 2**32 - 1], got {mask!r}")
+    return int(mask)
 
 def _mesh_arrays(mesh) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and triangles of an Open3D (tensor or legacy) or trimesh mesh."""
@@ -74,13 +99,20 @@ class RaycastingScene:
         self._test_name = test
         self._vertices: list[np.ndarray] = []
         self._triangles: list[np.ndarray] = []
+        self._geometry_masks: list[int] = []
+        # (geometry id, (3, 4) float64 object-to-world matrix or None for
+        # the identity, mask) of each instance, by instance id.
+        self._placements: list[tuple[int, np.ndarray | None, int]] = []
         self._scene = None
+        self._flat_of_instances = None
         # Check the names now rather than at the first query.
         _raykit.Scene(
             np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32), np.zeros(1, np.uint32), accel, test
         )
 
-    def add_triangles(self, vertex_positions, triangle_indices=None) -> int:
+    def add_triangles(
+        self, vertex_positions, triangle_indices=None, *, place: bool = True, mask: int = _MASK_ALL
+    ) -> int:
         """Add a triangle mesh; returns its geometry id (0, 1, 2, ...).
 
         Either ``add_triangles(vertex_positions, triangle_indices)`` with an
@@ -88,7 +120,14 @@ class RaycastingScene:
         ``add_triangles(mesh)`` with an Open3D ``TriangleMesh`` (tensor or
         legacy) or a ``trimesh.Trimesh``. Indices out of range, NaN or
         infinite coordinates raise ``ValueError``.
+
+        Beyond Open3D: ``place=False`` stores the mesh for
+        :meth:`add_instance` without placing it where its vertices are;
+        ``mask`` (32 bits, all set by default) is the geometry's ray mask:
+        a ray query with ``mask=m`` sees the geometry only when ``m``
+        shares a bit with it (and with the instance's mask).
         """
+        mask = _check_mask(mask, "mask")
         if triangle_indices is None:
             vertex_positions, triangle_indices = _mesh_arrays(vertex_positions)
         v = _arrays.floats(vertex_positions, "vertex_positions", last=3)
@@ -105,8 +144,62 @@ class RaycastingScene:
             raise ValueError(f"vertex {bad} has a NaN or infinite coordinate")
         self._vertices.append(v)
         self._triangles.append(t)
+        self._geometry_masks.append(mask)
+        gid = len(self._vertices) - 1
+        if place:
+            self._placements.append((gid, None, _MASK_ALL))
+        self._changed()
+        return gid
+
+    def add_instance(self, geometry_id: int, transform, *, mask: int = _MASK_ALL) -> int:
+        """Place geometry ``geometry_id`` again, moved by the affine
+        ``transform``; returns the instance id (beyond Open3D; Embree's
+        instances).
+
+        ``transform``: a 4×4 object-to-world matrix whose last row is
+        ``[0, 0, 0, 1]``, or its top 3×4 part. The geometry is stored once
+        however often it is placed. ``mask`` (32 bits) is the instance's
+        ray mask. A geometry id that does not exist, and a matrix that is
+        not affine, not finite or not invertible, raise ``ValueError``.
+        """
+        gid = int(geometry_id)
+        if not 0 <= gid < len(self._vertices):
+            raise ValueError(f"geometry_id {geometry_id} out of range: the scene has {len(self._vertices)} geometries")
+        m = np.array(_arrays.to_numpy(transform), dtype=np.float64)
+        iid = len(self._placements)
+        if m.shape == (4, 4):
+            if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
+                raise ValueError(f"instance {iid}: the transform's last row must be [0, 0, 0, 1], got {m[3].tolist()}")
+            m = m[:3]
+        elif m.shape != (3, 4):
+            raise ValueError(f"instance {iid}: the transform must have shape (4, 4) or (3, 4), got {m.shape}")
+        mask = _check_mask(mask, "mask")
+        m = np.ascontiguousarray(m)
+        # The engine's own check (finite, invertible in float32), on an
+        # empty geometry so that it costs nothing.
+        try:
+            _raykit.InstancedScene([(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32), 0)], [(0, m, 0)])
+        except ValueError as e:
+            raise ValueError(f"instance {iid}: {str(e).split(': ', 1)[-1]}") from None
+        self._placements.append((gid, m, mask))
+        self._changed()
+        return iid
+
+    def _changed(self) -> None:
+        """Forget the built structures (rebuilt at the next query)."""
         self._scene = None
-        return len(self._vertices) - 1
+        self._flat_of_instances = None
+
+    @property
+    def instanced(self) -> bool:
+        """Whether the scene is traced as instances over per-geometry BVHs
+        (it has an instance, a geometry stored for instances only, or a
+        mask) rather than as one concatenated mesh."""
+        if any(m != _MASK_ALL for m in self._geometry_masks):
+            return True
+        return len(self._placements) != len(self._vertices) or any(
+            g != k or t is not None or m != _MASK_ALL for k, (g, t, m) in enumerate(self._placements)
+        )
 
     def _mesh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Vertices, triangles (indices shifted to the concatenated vertices)
@@ -134,15 +227,60 @@ class RaycastingScene:
         return np.concatenate(self._vertices) if self._vertices else np.zeros((0, 3), np.float32)
 
     def _built(self):
-        """The engine's scene over every geometry added so far (built once)."""
+        """The engine's scene over every geometry added so far (built once):
+        a ``_raykit.Scene`` over the concatenated mesh, or a
+        ``_raykit.InstancedScene`` when the scene is :attr:`instanced`."""
         if self._scene is None:
-            vertices, triangles, offsets = self._mesh()
-            self._scene = _raykit.Scene(
-                vertices, triangles, offsets, self._accel_name, self._test_name, self._nthreads
-            )
+            if self.instanced:
+                self._scene = _raykit.InstancedScene(
+                    [
+                        (np.ascontiguousarray(v, dtype=np.float32), np.ascontiguousarray(t), m)
+                        for v, t, m in zip(self._vertices, self._triangles, self._geometry_masks)
+                    ],
+                    [(g, _IDENTITY if t is None else t, m) for g, t, m in self._placements],
+                    self._nthreads,
+                )
+            else:
+                vertices, triangles, offsets = self._mesh()
+                self._scene = _raykit.Scene(
+                    vertices, triangles, offsets, self._accel_name, self._test_name, self._nthreads
+                )
         return self._scene
 
-    def cast_rays(self, rays, nthreads: int = 0) -> dict:
+    def _point_scene(self):
+        """The scene the point queries search, and the geometry id of each
+        of its geometries: the scene itself, or, for an instanced scene, one
+        mesh of every instance moved into place (concatenated by instance,
+        so its geometry ids are instance ids)."""
+        if not self.instanced:
+            return self._built(), None
+        if self._flat_of_instances is None:
+            vertices, triangles, counts = [], [], [0]
+            base = 0
+            for g, t, _ in self._placements:
+                v = self._vertices[g].astype(np.float64)
+                if t is not None:
+                    v = v @ t[:, :3].T + t[:, 3]
+                vertices.append(v.astype(np.float32))
+                triangles.append(self._triangles[g] + np.uint32(base))
+                base += len(v)
+                counts.append(len(self._triangles[g]))
+            offsets = np.cumsum(counts).astype(np.uint64)
+            if base > np.iinfo(np.uint32).max or offsets[-1] > np.iinfo(np.uint32).max:
+                raise ValueError("the placed instances hold more than 4294967295 vertices or triangles")
+            scene = _raykit.Scene(
+                np.ascontiguousarray(np.concatenate(vertices) if vertices else np.zeros((0, 3), np.float32)),
+                np.ascontiguousarray(np.concatenate(triangles) if triangles else np.zeros((0, 3), np.uint32)),
+                offsets.astype(np.uint32),
+                "bvh8",
+                "moller",
+                self._nthreads,
+            )
+            geometry_of = np.array([g for g, _, _ in self._placements] + [INVALID_ID], dtype=np.uint32)
+            self._flat_of_instances = (scene, geometry_of)
+        return self._flat_of_instances
+
+    def cast_rays(self, rays, nthreads: int = 0, *, mask: int = _MASK_ALL) -> dict:
         """First intersection of each ray.
 
         ``rays``: shape ``(..., 6)`` (at least two dimensions), rows
@@ -154,32 +292,54 @@ class RaycastingScene:
         ``(1-u-v)·v0 + u·v1 + v·v2``) and ``primitive_normals`` ``(..., 3)``
         float32 (the hit triangle's unit normal, by its winding; 0 on a miss).
         Rays with NaN or infinite coordinates miss.
+
+        Beyond Open3D: in a scene with instances (:attr:`instanced`), the
+        key ``instance_ids`` ``(...)`` uint32 gives the instance hit (see
+        :meth:`add_instance`) and normals are in world space; ``mask`` is
+        the rays' 32-bit mask (see :meth:`add_triangles`).
         """
         flat, lead = _arrays.rows(rays, "rays", 6)
-        t, g, p, uv, n = self._built().cast_rays(flat, _arrays.threads(nthreads), _image_width(lead))
-        return {
+        mask = _check_mask(mask, "mask")
+        if self.instanced:
+            t, g, inst, p, uv, n = self._built().cast_rays(flat, mask, _arrays.threads(nthreads))
+        else:
+            t, g, p, uv, n = self._built().cast_rays(flat, _arrays.threads(nthreads), _image_width(lead))
+            if mask == 0:
+                t, g, p, uv, n = _missed(t, g, p, uv, n)
+            inst = None
+        out = {
             "primitive_uvs": _arrays.result(uv.reshape(lead + (2,))),
             "primitive_ids": _arrays.result(p.reshape(lead)),
             "geometry_ids": _arrays.result(g.reshape(lead)),
             "primitive_normals": _arrays.result(n.reshape(lead + (3,))),
             "t_hit": _arrays.result(t.reshape(lead)),
         }
+        if inst is not None:
+            out["instance_ids"] = _arrays.result(inst.reshape(lead))
+        return out
 
-    def test_occlusions(self, rays, tnear: float = 0.0, tfar: float = math.inf, nthreads: int = 0):
+    def test_occlusions(
+        self, rays, tnear: float = 0.0, tfar: float = math.inf, nthreads: int = 0, *, mask: int = _MASK_ALL
+    ):
         """Whether each ray meets a triangle with ``t`` in ``[tnear, tfar]``.
 
         ``rays`` as in :meth:`cast_rays`; returns a bool array of shape
         ``(...)``. Stops at the first triangle found, so it is faster than
-        :meth:`cast_rays`.
+        :meth:`cast_rays`. ``mask`` as in :meth:`cast_rays`.
         """
         flat, lead = _arrays.rows(rays, "rays", 6)
         tnear, tfar = float(tnear), float(tfar)
         if math.isnan(tnear) or math.isnan(tfar):
             raise ValueError(f"tnear and tfar must be numbers, got {tnear} and {tfar}")
-        hit = self._built().test_occlusions(flat, tnear, tfar, _arrays.threads(nthreads), _image_width(lead))
+        mask = _check_mask(mask, "mask")
+        if self.instanced:
+            hit = self._built().test_occlusions(flat, tnear, tfar, mask, _arrays.threads(nthreads))
+        else:
+            hit = self._built().test_occlusions(flat, tnear, tfar, _arrays.threads(nthreads), _image_width(lead))
+            hit &= mask != 0
         return _arrays.result(hit.reshape(lead))
 
-    def count_intersections(self, rays, nthreads: int = 0):
+    def count_intersections(self, rays, nthreads: int = 0, *, mask: int = _MASK_ALL):
         """Number of triangles each ray crosses for ``t >= 0``.
 
         ``rays`` as in :meth:`cast_rays`; returns an int32 array of shape
@@ -187,13 +347,20 @@ class RaycastingScene:
         Möller–Trumbore without tolerance, so a crossing near a shared edge
         is not counted on both neighbours; a ray exactly through an edge may
         count it on both or neither). Rays with NaN or infinite coordinates
-        count 0.
+        count 0. ``mask`` as in :meth:`cast_rays`.
         """
         flat, lead = _arrays.rows(rays, "rays", 6)
-        counts = _raykit.count_intersections(self._built(), flat, _arrays.threads(nthreads))
+        mask = _check_mask(mask, "mask")
+        if self.instanced:
+            counts = self._built().count_intersections(flat, mask, _arrays.threads(nthreads))
+        else:
+            counts = _raykit.count_intersections(self._built(), flat, _arrays.threads(nthreads))
+            counts *= mask != 0
         return _arrays.result(counts.reshape(lead))
 
-    def list_intersections(self, rays, nthreads: int = 0, *, max_hits: int | None = None) -> dict:
+    def list_intersections(
+        self, rays, nthreads: int = 0, *, max_hits: int | None = None, mask: int = _MASK_ALL
+    ) -> dict:
         """Every intersection along each ray for ``t >= 0``, sorted by ``t``.
 
         ``rays`` as in :meth:`cast_rays`. Returns a dict in Open3D's layout:
@@ -201,16 +368,25 @@ class RaycastingScene:
         ``ray_splits[i]:ray_splits[i+1]``), ``ray_ids``, ``t_hit``,
         ``geometry_ids``, ``primitive_ids`` ``(num_intersections,)`` and
         ``primitive_uvs`` ``(num_intersections, 2)``. Beyond Open3D:
-        ``max_hits`` keeps only the first ``max_hits`` hits of each ray.
+        ``max_hits`` keeps only the first ``max_hits`` hits of each ray,
+        ``mask`` is as in :meth:`cast_rays`, and in a scene with instances
+        ``instance_ids`` gives each hit's instance.
         """
         flat, _ = _arrays.rows(rays, "rays", 6)
         cap = np.iinfo(np.uint64).max if max_hits is None else int(max_hits)
         if cap < 0:
             raise ValueError(f"max_hits must be >= 0, got {max_hits}")
-        splits, ray_ids, t, g, p, uv = _raykit.list_intersections(
-            self._built(), flat, cap, _arrays.threads(nthreads)
-        )
-        return {
+        mask = _check_mask(mask, "mask")
+        if self.instanced:
+            splits, ray_ids, t, g, inst, p, uv = self._built().list_intersections(
+                flat, cap, mask, _arrays.threads(nthreads)
+            )
+        else:
+            splits, ray_ids, t, g, p, uv = _raykit.list_intersections(
+                self._built(), flat, 0 if mask == 0 else cap, _arrays.threads(nthreads)
+            )
+            inst = None
+        out = {
             "ray_splits": _arrays.result(splits),
             "ray_ids": _arrays.result(ray_ids),
             "t_hit": _arrays.result(t),
@@ -218,6 +394,9 @@ class RaycastingScene:
             "primitive_ids": _arrays.result(p),
             "primitive_uvs": _arrays.result(uv),
         }
+        if inst is not None:
+            out["instance_ids"] = _arrays.result(inst)
+        return out
 
     def compute_closest_points(self, query_points, nthreads: int = 0, *, max_distance: float = math.inf) -> dict:
         """Closest surface point to each query point (Ericson's point-triangle
@@ -230,13 +409,18 @@ class RaycastingScene:
         ``(..., 3)`` float32 (the triangle's unit normal). Beyond Open3D:
         ``max_distance`` limits the search; points with no surface within
         it, and points with NaN or infinite coordinates, get NaN points and
-        ``INVALID_ID``.
+        ``INVALID_ID``. In a scene with instances the search covers every
+        instance (masks do not apply) and the key ``instance_ids`` says
+        which.
         """
         flat, lead = _arrays.rows(query_points, "query_points", 3)
-        pts, g, p, uv, n, _ = _raykit.closest_points(
-            self._built(), flat, float(max_distance), _arrays.threads(nthreads)
-        )
-        return {
+        scene, geometry_of = self._point_scene()
+        pts, g, p, uv, n, _ = _raykit.closest_points(scene, flat, float(max_distance), _arrays.threads(nthreads))
+        out = {}
+        if geometry_of is not None:
+            out["instance_ids"] = _arrays.result(g.reshape(lead))
+            g = geometry_of[np.minimum(g, len(geometry_of) - 1)]
+        return out | {
             "points": _arrays.result(pts.reshape(lead + (3,))),
             "geometry_ids": _arrays.result(g.reshape(lead)),
             "primitive_ids": _arrays.result(p.reshape(lead)),
@@ -248,7 +432,7 @@ class RaycastingScene:
         """Distance from each query point to the surface: float32 ``(...)``
         (NaN for points with NaN or infinite coordinates)."""
         flat, lead = _arrays.rows(query_points, "query_points", 3)
-        d = _raykit.distance(self._built(), flat, _arrays.threads(nthreads))
+        d = _raykit.distance(self._point_scene()[0], flat, _arrays.threads(nthreads))
         return _arrays.result(d.reshape(lead))
 
     def compute_signed_distance(self, query_points, nthreads: int = 0, nsamples: int = 1):
@@ -264,7 +448,7 @@ class RaycastingScene:
         """
         _check_nsamples(nsamples)
         flat, lead = _arrays.rows(query_points, "query_points", 3)
-        d = _raykit.signed_distance(self._built(), flat, _arrays.threads(nthreads))
+        d = _raykit.signed_distance(self._point_scene()[0], flat, _arrays.threads(nthreads))
         return _arrays.result(d.reshape(lead))
 
     def compute_occupancy(self, query_points, nthreads: int = 0, nsamples: int = 1):
@@ -274,7 +458,7 @@ class RaycastingScene:
         accepted for Open3D compatibility and must be odd."""
         _check_nsamples(nsamples)
         flat, lead = _arrays.rows(query_points, "query_points", 3)
-        occ = _raykit.occupancy(self._built(), flat, _arrays.threads(nthreads))
+        occ = _raykit.occupancy(self._point_scene()[0], flat, _arrays.threads(nthreads))
         return _arrays.result(occ.reshape(lead))
 
     def compute_winding_number(self, query_points, nthreads: int = 0, *, beta: float = 2.0):
@@ -284,7 +468,7 @@ class RaycastingScene:
         triangles is approximated by a dipole when the point is farther than
         ``beta`` times its radius; ``inf`` sums every triangle exactly)."""
         flat, lead = _arrays.rows(query_points, "query_points", 3)
-        w = _raykit.winding_number(self._built(), flat, float(beta), _arrays.threads(nthreads))
+        w = _raykit.winding_number(self._point_scene()[0], flat, float(beta), _arrays.threads(nthreads))
         return _arrays.result(w.reshape(lead))
 
     @staticmethod
@@ -320,8 +504,10 @@ class RaycastingScene:
         versioned and checksummed, holds a checksum of the mesh, and is
         written to a temporary file then renamed over ``path``. Raises
         ``OSError`` when it cannot be written and ``ValueError`` for a scene
-        without triangles or a structure with no saved form.
+        without triangles, a structure with no saved form, or a scene with
+        instances (whose two-level structure has no saved form).
         """
+        self._not_instanced("save")
         self._built().save(os.fspath(path))
 
     def load_structure(self, path) -> None:
@@ -334,8 +520,9 @@ class RaycastingScene:
         cannot be read and ``ValueError``, naming the byte offset and field,
         when it is damaged or was saved for another mesh (its mesh
         checksum differs). Adding a geometry afterwards builds a new
-        structure at the next query.
+        structure at the next query. Not for a scene with instances.
         """
+        self._not_instanced("load_structure")
         vertices, triangles, offsets = self._mesh()
         scene = _raykit.Scene(
             vertices,
@@ -379,8 +566,13 @@ class RaycastingScene:
             bad = int(np.argmax(~np.isfinite(v).all(axis=1)))
             raise ValueError(f"vertex {bad} has a NaN or infinite coordinate")
         self._vertices[gid] = v
+        self._flat_of_instances = None
         if self._scene is None:
             return None
+        if self.instanced:
+            # The geometry's own BVH is rebuilt with the scene at the next query.
+            self._scene = None
+            return {"rebuilt": True, "degradation": math.nan}
         try:
             limit = {} if max_degradation is None else {"max_degradation": float(max_degradation)}
             return self._scene.refit(np.ascontiguousarray(self._all_vertices()), self._nthreads, **limit)
@@ -390,8 +582,28 @@ class RaycastingScene:
 
     def stats(self) -> dict:
         """Size and quality of the acceleration structure: nodes, leaves,
-        bytes, node_bytes, depth, sah_cost, triangle_refs (builds it if needed)."""
-        return self._built().stats()
+        bytes, node_bytes, depth, sah_cost, triangle_refs (builds it if
+        needed); for a scene with instances, the triangles stored (each
+        geometry once) and placed (as a flattened scene would store them)."""
+        scene = self._built()
+        if self.instanced:
+            return {"stored_triangles": scene.stored_triangles, "placed_triangles": scene.placed_triangles}
+        return scene.stats()
+
+    def _not_instanced(self, what: str) -> None:
+        if self.instanced:
+            raise ValueError(f"{what}: a scene with instances has no saved form; only single-level scenes do")
+
+
+def _missed(t, g, p, uv, n):
+    """The arrays of ``cast_rays`` for rays that all miss."""
+    return (
+        np.full_like(t, np.inf),
+        np.full_like(g, INVALID_ID),
+        np.full_like(p, INVALID_ID),
+        np.zeros_like(uv),
+        np.zeros_like(n),
+    )
 
 
 def _check_nsamples(nsamples) -> None:

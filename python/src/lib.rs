@@ -8,6 +8,7 @@ mod cull;
 mod errors;
 mod geotiff;
 mod image_order;
+mod instances;
 mod mesh_io;
 mod queries;
 mod render;
@@ -22,6 +23,7 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _raykit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::Scene>()?;
+    m.add_class::<instances::InstancedScene>()?;
     m.add("INVALID_ID", scene::INVALID_ID)?;
     m.add_function(wrap_pyfunction!(mesh_io::load_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(queries::closest_points, m)?)?;

@@ -1,0 +1,286 @@
+//! `_raykit.InstancedScene`: several geometries, each stored once with its
+//! own BVH, placed by instances (an affine transform each) under a top-level
+//! BVH — the core's two-level scene (Wald et al. 2014's instancing, as in
+//! Embree and pbrt-v4) — and its ray queries.
+
+use crate::arrays::rows;
+use crate::errors::value_error;
+use crate::scene::INVALID_ID;
+use crate::threads::detached;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use raykit_core::accel::BuildOptions;
+use raykit_core::glam::{Affine3A, Vec3A};
+use raykit_core::instancing::{InstancedScene as CoreScene, SceneBuilder, SceneHit};
+use raykit_core::{Ray, TriangleMesh, Vec3};
+use rayon::prelude::*;
+
+/// Rays per rayon task when converting rays and answers.
+const GRAIN: usize = 4096;
+
+/// A geometry as Python passes it: vertices `(n, 3)` float32, triangles
+/// `(m, 3)` uint32 and its ray mask.
+type GeometryIn<'py> = (PyReadonlyArray2<'py, f32>, PyReadonlyArray2<'py, u32>, u32);
+
+/// An instance as Python passes it: geometry id, a `(3, 4)` float64
+/// object-to-world matrix `[R | t]` and its ray mask.
+type InstanceIn<'py> = (u32, PyReadonlyArray2<'py, f64>, u32);
+
+/// The rays of the rows of `[ox, oy, oz, dx, dy, dz]` over `[tnear, tfar]`.
+fn make_rays(r: &[f32], tnear: f32, tfar: f32) -> Vec<Ray> {
+    r.par_chunks_exact(6)
+        .with_min_len(GRAIN)
+        .map(|r| {
+            Ray::segment(
+                Vec3::from_slice(&r[..3]),
+                Vec3::from_slice(&r[3..]),
+                tnear,
+                tfar,
+            )
+        })
+        .collect()
+}
+
+/// The affine map of a row-major `(3, 4)` matrix `[R | t]`.
+fn affine(m: &[f64]) -> Affine3A {
+    let col = |j: usize| Vec3A::new(m[j] as f32, m[4 + j] as f32, m[8 + j] as f32);
+    Affine3A::from_cols(col(0), col(1), col(2), col(3))
+}
+
+/// Several triangle meshes placed by instances, with the two-level BVH
+/// over them.
+#[pyclass(module = "raykit._raykit", frozen)]
+pub struct InstancedScene {
+    scene: CoreScene,
+}
+
+#[pymethods]
+impl InstancedScene {
+    /// Build the scene: `geometries` is a list of `(vertices, triangles,
+    /// mask)`, `instances` a list of `(geometry_id, matrix, mask)` with a
+    /// `(3, 4)` float64 object-to-world matrix. A bad mesh, an unknown
+    /// geometry and a transform that is not finite or not invertible are
+    /// refused with `ValueError`, naming the geometry or instance.
+    #[new]
+    #[pyo3(signature = (geometries, instances, threads=0))]
+    fn new(
+        py: Python<'_>,
+        geometries: Vec<GeometryIn<'_>>,
+        instances: Vec<InstanceIn<'_>>,
+        threads: i64,
+    ) -> PyResult<InstancedScene> {
+        let mut builder = SceneBuilder::new();
+        for (i, (vertices, triangles, mask)) in geometries.iter().enumerate() {
+            let (v, _) = rows(vertices, 3, &format!("geometry {i}'s vertices"))?;
+            let (t, _) = rows(triangles, 3, &format!("geometry {i}'s triangles"))?;
+            let mesh = TriangleMesh::new(
+                v.chunks_exact(3).map(Vec3::from_slice).collect(),
+                t.chunks_exact(3).map(|i| [i[0], i[1], i[2]]).collect(),
+            );
+            let id = builder
+                .add_geometry(mesh)
+                .map_err(|e| value_error(e.to_string()))?;
+            builder
+                .set_geometry_mask(id, *mask)
+                .map_err(|e| value_error(e.to_string()))?;
+        }
+        for (i, (geometry, matrix, mask)) in instances.iter().enumerate() {
+            if matrix.shape() != [3, 4] {
+                return Err(value_error(format!(
+                    "instance {i}: the transform must have shape (3, 4), got {:?}",
+                    matrix.shape()
+                )));
+            }
+            let m = matrix.as_slice().map_err(|_| {
+                value_error(format!("instance {i}: the transform must be C-contiguous"))
+            })?;
+            let id = builder
+                .add_instance(*geometry, affine(m))
+                .map_err(|e| value_error(e.to_string()))?;
+            builder
+                .set_instance_mask(id, *mask)
+                .map_err(|e| value_error(e.to_string()))?;
+        }
+        let scene = detached(py, threads, move || builder.build(&BuildOptions::default()))?;
+        Ok(InstancedScene { scene })
+    }
+
+    /// Nearest hits of `(n, 6)` float32 rays seen by `mask`: `(t_hit,
+    /// geometry_ids, instance_ids, primitive_ids, primitive_uvs,
+    /// primitive_normals)`, the normal in world space; a miss has `t_hit`
+    /// inf, `INVALID_ID` ids and zero uvs and normal.
+    #[pyo3(signature = (rays, mask=u32::MAX, threads=0))]
+    #[allow(clippy::type_complexity)]
+    fn cast_rays<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        mask: u32,
+        threads: i64,
+    ) -> PyResult<(
+        Bound<'py, PyArray1<f32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray2<f32>>,
+        Bound<'py, PyArray2<f32>>,
+    )> {
+        let (r, n) = rows(&rays, 6, "rays")?;
+        let (t, g, inst, p, uv, nrm) = detached(py, threads, || {
+            let mut hits: Vec<Option<SceneHit>> = vec![None; n];
+            self.scene
+                .intersect_batch(&make_rays(r, 0.0, f32::INFINITY), mask, &mut hits);
+            let mut t = vec![f32::INFINITY; n];
+            let mut g = vec![INVALID_ID; n];
+            let mut inst = vec![INVALID_ID; n];
+            let mut p = vec![INVALID_ID; n];
+            let mut uv = vec![0.0f32; 2 * n];
+            let mut nrm = vec![0.0f32; 3 * n];
+            hits.par_iter()
+                .zip(t.par_iter_mut())
+                .zip(g.par_iter_mut())
+                .zip(inst.par_iter_mut())
+                .zip(p.par_iter_mut())
+                .zip(uv.par_chunks_exact_mut(2))
+                .zip(nrm.par_chunks_exact_mut(3))
+                .with_min_len(GRAIN)
+                .for_each(|((((((h, t), g), inst), p), uv), nrm)| {
+                    if let Some(h) = h {
+                        (*t, *g, *inst, *p) = (h.t, h.geometry, h.instance, h.prim);
+                        uv.copy_from_slice(&[h.u, h.v]);
+                        nrm.copy_from_slice(&h.normal.to_array());
+                    }
+                });
+            (t, g, inst, p, uv, nrm)
+        })?;
+        Ok((
+            t.into_pyarray(py),
+            g.into_pyarray(py),
+            inst.into_pyarray(py),
+            p.into_pyarray(py),
+            Array2::from_shape_vec((n, 2), uv)
+                .expect("two per ray")
+                .into_pyarray(py),
+            Array2::from_shape_vec((n, 3), nrm)
+                .expect("three per ray")
+                .into_pyarray(py),
+        ))
+    }
+
+    /// Whether each `(n, 6)` float32 ray meets a triangle seen by `mask`
+    /// with `t` in `[tnear, tfar]`.
+    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, mask=u32::MAX, threads=0))]
+    fn test_occlusions<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        tnear: f32,
+        tfar: f32,
+        mask: u32,
+        threads: i64,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let (r, n) = rows(&rays, 6, "rays")?;
+        let occluded = detached(py, threads, || {
+            let mut occluded = vec![false; n];
+            self.scene
+                .occluded_batch(&make_rays(r, tnear, tfar), mask, &mut occluded);
+            occluded
+        })?;
+        Ok(occluded.into_pyarray(py))
+    }
+
+    /// Number of triangles seen by `mask` that each `(n, 6)` float32 ray
+    /// crosses for `t >= 0` (int32, as Open3D).
+    #[pyo3(signature = (rays, mask=u32::MAX, threads=0))]
+    fn count_intersections<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        mask: u32,
+        threads: i64,
+    ) -> PyResult<Bound<'py, PyArray1<i32>>> {
+        let (r, n) = rows(&rays, 6, "rays")?;
+        let counts = detached(py, threads, || {
+            let mut counts = vec![0u32; n];
+            self.scene
+                .count_hits_batch(&make_rays(r, 0.0, f32::INFINITY), mask, &mut counts);
+            counts
+                .into_par_iter()
+                .with_min_len(GRAIN)
+                .map(|c| c.min(i32::MAX as u32) as i32)
+                .collect::<Vec<i32>>()
+        })?;
+        Ok(counts.into_pyarray(py))
+    }
+
+    /// Every hit seen by `mask` of each `(n, 6)` float32 ray for `t >= 0`,
+    /// sorted by `t`, at most `max_hits` per ray: `(ray_splits, ray_ids,
+    /// t_hit, geometry_ids, instance_ids, primitive_ids, primitive_uvs)` in
+    /// Open3D's layout.
+    #[pyo3(signature = (rays, max_hits=usize::MAX, mask=u32::MAX, threads=0))]
+    #[allow(clippy::type_complexity)]
+    fn list_intersections<'py>(
+        &self,
+        py: Python<'py>,
+        rays: PyReadonlyArray2<'py, f32>,
+        max_hits: usize,
+        mask: u32,
+        threads: i64,
+    ) -> PyResult<(
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<f32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray1<u32>>,
+        Bound<'py, PyArray2<f32>>,
+    )> {
+        let (r, n) = rows(&rays, 6, "rays")?;
+        let lists = detached(py, threads, || {
+            self.scene
+                .ray_hits_batch(&make_rays(r, 0.0, f32::INFINITY), mask, max_hits)
+        })?;
+        let mut splits = Vec::with_capacity(n + 1);
+        splits.push(0u32);
+        let mut total = 0u32;
+        for l in &lists {
+            total = total.saturating_add(l.len() as u32);
+            splits.push(total);
+        }
+        let hits = lists
+            .iter()
+            .enumerate()
+            .flat_map(|(i, l)| l.iter().map(move |h| (i as u32, h)));
+        let ray_ids: Vec<u32> = hits.clone().map(|(i, _)| i).collect();
+        let t: Vec<f32> = hits.clone().map(|(_, h)| h.t).collect();
+        let g: Vec<u32> = hits.clone().map(|(_, h)| h.geometry).collect();
+        let inst: Vec<u32> = hits.clone().map(|(_, h)| h.instance).collect();
+        let p: Vec<u32> = hits.clone().map(|(_, h)| h.prim).collect();
+        let uv: Vec<f32> = hits.flat_map(|(_, h)| [h.u, h.v]).collect();
+        let k = t.len();
+        Ok((
+            splits.into_pyarray(py),
+            ray_ids.into_pyarray(py),
+            t.into_pyarray(py),
+            g.into_pyarray(py),
+            inst.into_pyarray(py),
+            p.into_pyarray(py),
+            Array2::from_shape_vec((k, 2), uv)
+                .expect("two per hit")
+                .into_pyarray(py),
+        ))
+    }
+
+    /// Triangles stored (each geometry once, however many instances).
+    #[getter]
+    fn stored_triangles(&self) -> usize {
+        self.scene.stats().stored_triangles
+    }
+
+    /// Triangles the instances place in the world.
+    #[getter]
+    fn placed_triangles(&self) -> usize {
+        self.scene.stats().instanced_triangles
+    }
+}

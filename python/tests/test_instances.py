@@ -1,0 +1,214 @@
+"""Instances in RaycastingScene: geometries stored once and placed by affine
+transforms, with ray masks, against the same scene flattened (every
+instance's vertices moved in float64) and traced by a float64 brute force."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import raykit
+from conftest import brute_force, rays_at
+from test_point_queries import closest_brute, intersections_brute
+
+
+def random_transforms(n: int, seed: int, spread: float) -> list[np.ndarray]:
+    """``n`` random (3, 4) affine maps: a rotation, a non-uniform scale
+    (one of them mirroring) and a translation within ``spread``."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for k in range(n):
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        scale = np.diag(rng.uniform(0.6, 1.6, 3) * (-1 if k == 1 else 1) ** np.array([1, 0, 0]))
+        m = np.zeros((3, 4))
+        m[:, :3] = q @ scale
+        m[:, 3] = rng.uniform(-spread, spread, 3)
+        out.append(m)
+    return out
+
+
+def moved(vertices: np.ndarray, m: np.ndarray) -> np.ndarray:
+    return vertices.astype(np.float64) @ m[:, :3].T + m[:, 3]
+
+
+def instanced_scene(bunny, n=10, seed=3, masks=None):
+    """The bunny stored once (not placed itself) and placed ``n`` times, plus
+    a small box placed where it is; and the flattened vertices, triangles,
+    geometry and instance of each flattened triangle."""
+    v, f, _ = bunny
+    size = float(np.linalg.norm(v.max(0) - v.min(0)))
+    box_v = (np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], np.float32) - 0.5) * size * 0.4
+    box_f = np.array(
+        [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]],
+        np.uint32,
+    )
+    scene = raykit.RaycastingScene()
+    bunny_id = scene.add_triangles(v, f, place=False)
+    box_id = scene.add_triangles(box_v, box_f)
+    assert (bunny_id, box_id) == (0, 1)
+    flat_v, flat_f, geom, inst = [box_v.astype(np.float64)], [box_f], [np.full(len(box_f), box_id)], [np.zeros(len(box_f), int)]
+    dets = [1.0]
+    base = len(box_v)
+    for k, m in enumerate(random_transforms(n, seed, 1.5 * size)):
+        mask = 0xFFFFFFFF if masks is None else masks[k]
+        iid = scene.add_instance(bunny_id, m if k % 2 else np.vstack([m, [0, 0, 0, 1]]), mask=mask)
+        assert iid == k + 1
+        flat_v.append(moved(v, m))
+        flat_f.append(f + base)
+        base += len(v)
+        geom.append(np.full(len(f), bunny_id))
+        inst.append(np.full(len(f), iid))
+        dets.append(float(np.linalg.det(m[:, :3])))
+    scene.dets = np.array(dets)  # the sign says which instances mirror
+    return scene, np.concatenate(flat_v), np.concatenate(flat_f), np.concatenate(geom), np.concatenate(inst)
+
+
+def test_instances_trace_as_the_flattened_scene_and_a_float64_brute_force(bunny):
+    scene, fv, ff, geom, inst = instanced_scene(bunny)
+    assert scene.instanced
+    stats = scene.stats()
+    assert stats["stored_triangles"] == len(bunny[1]) + 12
+    assert stats["placed_triangles"] == len(ff)
+
+    flat = raykit.RaycastingScene()
+    flat.add_triangles(fv.astype(np.float32), ff)
+    rays = rays_at(fv.astype(np.float32), 3000, seed=11)
+    ours, theirs = scene.cast_rays(rays), flat.cast_rays(rays)
+    hit, hit_flat = np.isfinite(ours["t_hit"]), np.isfinite(theirs["t_hit"])
+    assert hit.mean() > 0.2
+    assert (hit != hit_flat).sum() <= 3  # grazes decided by rounding in object space
+    both = hit & hit_flat
+    np.testing.assert_allclose(ours["t_hit"][both], theirs["t_hit"][both], rtol=1e-4)
+    # Map our (instance, triangle-in-geometry) to the flattened triangle.
+    first = {int(i): int(np.flatnonzero(inst == i)[0]) for i in np.unique(inst)}
+    ours_flat = np.array([first[int(i)] + int(p) for i, p in zip(ours["instance_ids"][both], ours["primitive_ids"][both])])
+    same = ours_flat == theirs["primitive_ids"][both]
+    assert same.mean() > 0.99
+    np.testing.assert_array_equal(ours["geometry_ids"][both], geom[ours_flat])
+    # World normals: unit, and the flattened triangle's own winding's normal.
+    a, b, c = (fv[ff[ours_flat[same], j]] for j in range(3))
+    ref_n = np.cross(b - a, c - a)
+    ref_n /= np.linalg.norm(ref_n, axis=1, keepdims=True)
+    got_n = ours["primitive_normals"][both][same].astype(np.float64)
+    # A mirroring instance keeps its front side: its moved triangle's
+    # winding turns, so its e1 x e2 points the other way.
+    side = np.sign(scene.dets[inst[ours_flat[same]]])
+    assert (scene.dets < 0).any() and (scene.dets > 0).any()
+    assert ((got_n * ref_n).sum(1) * side > 0.999).all()
+
+    sub = np.flatnonzero(both)[:150]
+    ref_t, ref_i = brute_force(fv, ff, rays[sub])
+    np.testing.assert_allclose(ours["t_hit"][sub], ref_t, rtol=1e-4)
+
+    # Occlusion, counts and hit lists against the flattened scene's.
+    assert (scene.test_occlusions(rays) != flat.test_occlusions(rays)).sum() <= 3
+    few = rays[:400]
+    lists, clean = intersections_brute(fv, ff, few)
+    counts = scene.count_intersections(few)
+    ref_counts = np.array([len(i) for i, _ in lists])
+    np.testing.assert_array_equal(counts[clean], ref_counts[clean])
+    listed = scene.list_intersections(few)
+    splits = listed["ray_splits"]
+    for r in np.flatnonzero(clean)[:200]:
+        got = listed["t_hit"][splits[r] : splits[r + 1]]
+        np.testing.assert_allclose(got, lists[r][1], rtol=1e-4)
+        ids = listed["instance_ids"][splits[r] : splits[r + 1]]
+        np.testing.assert_array_equal(ids, inst[lists[r][0]])
+
+
+def test_masks_hide_instances_as_if_they_were_absent(bunny):
+    masks = [1 if k % 3 else 2 for k in range(9)]
+    scene, fv, ff, geom, inst = instanced_scene(bunny, n=9, seed=5, masks=masks)
+    rays = rays_at(fv.astype(np.float32), 2000, seed=2)
+    for ray_mask in (1, 2):
+        # The box (instance 0) has every bit set; instance k + 1 has masks[k].
+        seen = np.array([True] + [bool(m & ray_mask) for m in masks])
+        keep = seen[inst]
+        flat = raykit.RaycastingScene()
+        flat.add_triangles(fv.astype(np.float32), ff[keep])
+        ours, theirs = scene.cast_rays(rays, mask=ray_mask), flat.cast_rays(rays)
+        hit, hit_flat = np.isfinite(ours["t_hit"]), np.isfinite(theirs["t_hit"])
+        assert (hit != hit_flat).sum() <= 3
+        assert seen[ours["instance_ids"][hit]].all()
+        both = hit & hit_flat
+        np.testing.assert_allclose(ours["t_hit"][both], theirs["t_hit"][both], rtol=1e-4)
+        np.testing.assert_array_equal(
+            scene.count_intersections(rays[:300], mask=ray_mask) > 0, scene.test_occlusions(rays[:300], mask=ray_mask)
+        )
+    assert not np.isfinite(scene.cast_rays(rays, mask=0)["t_hit"]).any()
+    # A geometry mask hides every instance of the geometry.
+    hidden = raykit.RaycastingScene()
+    g = hidden.add_triangles(*bunny[:2], mask=4)
+    hidden.add_instance(g, np.eye(4))
+    assert hidden.test_occlusions(rays, mask=4).any()
+    assert not hidden.test_occlusions(rays, mask=3).any()
+
+
+def test_point_queries_cover_every_instance(bunny):
+    scene, fv, ff, geom, inst = instanced_scene(bunny, n=6, seed=8)
+    rng = np.random.default_rng(1)
+    lo, hi = fv.min(0), fv.max(0)
+    pts = (lo + rng.random((60, 3)) * (hi - lo)).astype(np.float32)
+    found = scene.compute_closest_points(pts)
+    ref = closest_brute(fv, ff, pts)
+    got = np.linalg.norm(found["points"].astype(np.float64) - pts, axis=1)
+    np.testing.assert_allclose(got, ref, rtol=1e-4, atol=1e-6 * np.linalg.norm(hi - lo))
+    np.testing.assert_allclose(scene.compute_distance(pts), ref, rtol=1e-4, atol=1e-6 * np.linalg.norm(hi - lo))
+    # The reported instance and triangle are one at the reported distance.
+    first = {int(i): int(np.flatnonzero(inst == i)[0]) for i in np.unique(inst)}
+    tri = np.array([first[int(i)] + int(p) for i, p in zip(found["instance_ids"], found["primitive_ids"])])
+    np.testing.assert_array_equal(found["geometry_ids"], geom[tri])
+    np.testing.assert_allclose(closest_brute(fv, ff[tri[:1]], pts[:1]), ref[:1], rtol=1e-4)
+
+
+def test_an_instance_moved_by_the_identity_is_the_plain_scene(bunny):
+    v, f, _ = bunny
+    plain = raykit.RaycastingScene()
+    plain.add_triangles(v, f)
+    inst = raykit.RaycastingScene()
+    g = inst.add_triangles(v, f, place=False)
+    assert not plain.instanced and inst.instanced
+    inst.add_instance(g, np.eye(4))
+    assert inst.instanced
+    rays = rays_at(v, 2000, seed=4)
+    a, b = plain.cast_rays(rays), inst.cast_rays(rays)
+    np.testing.assert_array_equal(np.isfinite(a["t_hit"]), np.isfinite(b["t_hit"]))
+    hit = np.isfinite(a["t_hit"])
+    np.testing.assert_allclose(a["t_hit"][hit], b["t_hit"][hit], rtol=1e-5)
+    np.testing.assert_array_equal(b["instance_ids"][hit], 0)
+    assert "instance_ids" not in a  # a plain scene keeps Open3D's keys
+
+
+def test_bad_instances_are_refused_by_name(bunny):
+    v, f, _ = bunny
+    scene = raykit.RaycastingScene()
+    g = scene.add_triangles(v, f)
+    singular = np.eye(4)
+    singular[2, 2] = 0
+    with pytest.raises(ValueError, match=r"instance 1: .*invertible"):
+        scene.add_instance(g, singular)
+    nan = np.eye(4)
+    nan[0, 3] = np.nan
+    with pytest.raises(ValueError, match="instance 1"):
+        scene.add_instance(g, nan)
+    projective = np.eye(4)
+    projective[3, 0] = 1
+    with pytest.raises(ValueError, match="last row"):
+        scene.add_instance(g, projective)
+    with pytest.raises(ValueError, match="shape"):
+        scene.add_instance(g, np.eye(3))
+    with pytest.raises(ValueError, match="out of range"):
+        scene.add_instance(5, np.eye(4))
+    with pytest.raises(ValueError, match="mask"):
+        scene.add_instance(g, np.eye(4), mask=-1)
+    with pytest.raises(ValueError, match="mask"):
+        scene.cast_rays(rays_at(v, 4, 0), mask=2**32)
+    # Nothing refused was added; a good instance still works, and rays with
+    # NaN miss.
+    assert scene.add_instance(g, np.eye(4)) == 1
+    rays = rays_at(v, 50, 1)
+    rays[0, 0] = np.nan
+    out = scene.cast_rays(rays)
+    assert not np.isfinite(out["t_hit"][0]) and out["instance_ids"][0] == raykit.RaycastingScene.INVALID_ID
+    with pytest.raises(ValueError, match="saved form"):
+        scene.save("unused.rkb")
