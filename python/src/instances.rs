@@ -5,9 +5,8 @@
 
 use crate::arrays::rows;
 use crate::errors::value_error;
-use crate::scene::INVALID_ID;
+use crate::hit_arrays::{column, laid_out, matrix, HitColumns, HitRow};
 use crate::threads::detached;
-use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use raykit_core::accel::BuildOptions;
@@ -40,6 +39,18 @@ fn make_rays(r: &[f32], tnear: f32, tfar: f32) -> Vec<Ray> {
             )
         })
         .collect()
+}
+
+/// A scene hit as the result columns hold it.
+fn row(h: &SceneHit) -> HitRow {
+    HitRow {
+        t: h.t,
+        geometry: h.geometry,
+        instance: h.instance,
+        prim: h.prim,
+        uv: [h.u, h.v],
+        normal: h.normal.to_array(),
+    }
 }
 
 /// The affine map of a row-major `(3, 4)` matrix `[R | t]`.
@@ -127,44 +138,19 @@ impl InstancedScene {
         Bound<'py, PyArray2<f32>>,
     )> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let (t, g, inst, p, uv, nrm) = detached(py, threads, || {
+        let c = detached(py, threads, || {
             let mut hits: Vec<Option<SceneHit>> = vec![None; n];
             self.scene
                 .intersect_batch(&make_rays(r, 0.0, f32::INFINITY), mask, &mut hits);
-            let mut t = vec![f32::INFINITY; n];
-            let mut g = vec![INVALID_ID; n];
-            let mut inst = vec![INVALID_ID; n];
-            let mut p = vec![INVALID_ID; n];
-            let mut uv = vec![0.0f32; 2 * n];
-            let mut nrm = vec![0.0f32; 3 * n];
-            hits.par_iter()
-                .zip(t.par_iter_mut())
-                .zip(g.par_iter_mut())
-                .zip(inst.par_iter_mut())
-                .zip(p.par_iter_mut())
-                .zip(uv.par_chunks_exact_mut(2))
-                .zip(nrm.par_chunks_exact_mut(3))
-                .with_min_len(GRAIN)
-                .for_each(|((((((h, t), g), inst), p), uv), nrm)| {
-                    if let Some(h) = h {
-                        (*t, *g, *inst, *p) = (h.t, h.geometry, h.instance, h.prim);
-                        uv.copy_from_slice(&[h.u, h.v]);
-                        nrm.copy_from_slice(&h.normal.to_array());
-                    }
-                });
-            (t, g, inst, p, uv, nrm)
+            HitColumns::of(&hits, |h| h.as_ref().map(row))
         })?;
         Ok((
-            t.into_pyarray(py),
-            g.into_pyarray(py),
-            inst.into_pyarray(py),
-            p.into_pyarray(py),
-            Array2::from_shape_vec((n, 2), uv)
-                .expect("two per ray")
-                .into_pyarray(py),
-            Array2::from_shape_vec((n, 3), nrm)
-                .expect("three per ray")
-                .into_pyarray(py),
+            c.t.into_pyarray(py),
+            c.geometry.into_pyarray(py),
+            c.instance.into_pyarray(py),
+            c.prim.into_pyarray(py),
+            matrix(py, c.uv, 2),
+            matrix(py, c.normal, 3),
         ))
     }
 
@@ -236,39 +222,21 @@ impl InstancedScene {
         Bound<'py, PyArray1<u32>>,
         Bound<'py, PyArray2<f32>>,
     )> {
-        let (r, n) = rows(&rays, 6, "rays")?;
+        let (r, _) = rows(&rays, 6, "rays")?;
         let lists = detached(py, threads, || {
             self.scene
                 .ray_hits_batch(&make_rays(r, 0.0, f32::INFINITY), mask, max_hits)
         })?;
-        let mut splits = Vec::with_capacity(n + 1);
-        splits.push(0u32);
-        let mut total = 0u32;
-        for l in &lists {
-            total = total.saturating_add(l.len() as u32);
-            splits.push(total);
-        }
-        let hits = lists
-            .iter()
-            .enumerate()
-            .flat_map(|(i, l)| l.iter().map(move |h| (i as u32, h)));
-        let ray_ids: Vec<u32> = hits.clone().map(|(i, _)| i).collect();
-        let t: Vec<f32> = hits.clone().map(|(_, h)| h.t).collect();
-        let g: Vec<u32> = hits.clone().map(|(_, h)| h.geometry).collect();
-        let inst: Vec<u32> = hits.clone().map(|(_, h)| h.instance).collect();
-        let p: Vec<u32> = hits.clone().map(|(_, h)| h.prim).collect();
-        let uv: Vec<f32> = hits.flat_map(|(_, h)| [h.u, h.v]).collect();
-        let k = t.len();
+        let (splits, ray_ids, hits) = laid_out(&lists);
+        let rows: Vec<HitRow> = hits.into_iter().map(row).collect();
         Ok((
             splits.into_pyarray(py),
             ray_ids.into_pyarray(py),
-            t.into_pyarray(py),
-            g.into_pyarray(py),
-            inst.into_pyarray(py),
-            p.into_pyarray(py),
-            Array2::from_shape_vec((k, 2), uv)
-                .expect("two per hit")
-                .into_pyarray(py),
+            column(py, &rows, |h| h.t),
+            column(py, &rows, |h| h.geometry),
+            column(py, &rows, |h| h.instance),
+            column(py, &rows, |h| h.prim),
+            matrix(py, rows.iter().flat_map(|h| h.uv).collect(), 2),
         ))
     }
 

@@ -7,6 +7,7 @@ mod arrays;
 mod cull;
 mod errors;
 mod geotiff;
+mod hit_arrays;
 mod image_order;
 mod instances;
 mod mesh_io;
@@ -24,7 +25,7 @@ use pyo3::prelude::*;
 fn _raykit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::Scene>()?;
     m.add_class::<instances::InstancedScene>()?;
-    m.add("INVALID_ID", scene::INVALID_ID)?;
+    m.add("INVALID_ID", hit_arrays::INVALID_ID)?;
     m.add_function(wrap_pyfunction!(mesh_io::load_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(queries::closest_points, m)?)?;
     m.add_function(wrap_pyfunction!(queries::distance, m)?)?;

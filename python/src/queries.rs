@@ -5,7 +5,8 @@
 
 use crate::arrays::rows;
 use crate::errors::value_error;
-use crate::scene::{Scene, INVALID_ID};
+use crate::hit_arrays::{column, laid_out, matrix, INVALID_ID};
+use crate::scene::Scene;
 use crate::threads::detached;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
@@ -261,45 +262,21 @@ pub fn list_intersections<'py>(
     Bound<'py, PyArray1<u32>>,
     Bound<'py, PyArray2<f32>>,
 )> {
-    let (r, n) = rows(&rays, 6, "rays")?;
-    let (splits, ray_ids, t, g, p, uv) = detached(py, threads, || {
-        let built = scene.read();
-        let bvh = built.surface();
-        let lists: Vec<Vec<Hit>> = bvh.ray_hits_batch(&self::rays(r), max_hits);
-        let mut splits = Vec::with_capacity(n + 1);
-        let mut total = 0u32;
-        splits.push(0u32);
-        for l in &lists {
-            total += l.len() as u32;
-            splits.push(total);
-        }
-        let k = total as usize;
-        let mut ray_ids = Vec::with_capacity(k);
-        let mut t = Vec::with_capacity(k);
-        let mut g = Vec::with_capacity(k);
-        let mut p = Vec::with_capacity(k);
-        let mut uv = Vec::with_capacity(2 * k);
-        for (i, l) in lists.iter().enumerate() {
-            for h in l {
-                let (gi, pi) = scene.split(h.prim);
-                ray_ids.push(i as u32);
-                t.push(h.t);
-                g.push(gi);
-                p.push(pi);
-                uv.extend([h.u, h.v]);
-            }
-        }
-        (splits, ray_ids, t, g, p, uv)
+    let (r, _) = rows(&rays, 6, "rays")?;
+    let lists: Vec<Vec<Hit>> = detached(py, threads, || {
+        scene
+            .read()
+            .surface()
+            .ray_hits_batch(&self::rays(r), max_hits)
     })?;
-    let k = t.len();
+    let (splits, ray_ids, hits) = laid_out(&lists);
+    let (g, p): (Vec<u32>, Vec<u32>) = hits.iter().map(|h| scene.split(h.prim)).unzip();
     Ok((
         splits.into_pyarray(py),
         ray_ids.into_pyarray(py),
-        t.into_pyarray(py),
+        column(py, &hits, |h| h.t),
         g.into_pyarray(py),
         p.into_pyarray(py),
-        Array2::from_shape_vec((k, 2), uv)
-            .expect("two per hit")
-            .into_pyarray(py),
+        matrix(py, hits.iter().flat_map(|h| [h.u, h.v]).collect(), 2),
     ))
 }

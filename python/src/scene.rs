@@ -8,6 +8,7 @@
 use crate::arrays::{flat, rows};
 use crate::errors::persist_error;
 use crate::errors::value_error;
+use crate::hit_arrays::{matrix, HitColumns, HitRow};
 use crate::image_order::ImageOrder;
 use crate::threads::detached;
 use numpy::ndarray::Array2;
@@ -25,10 +26,6 @@ use std::sync::{OnceLock, RwLock, RwLockReadGuard};
 
 /// Rays per rayon task when converting rays and answers.
 const GRAIN: usize = 4096;
-
-/// The value of `geometry_ids` and `primitive_ids` for a ray that hits
-/// nothing (Open3D's `RaycastingScene.INVALID_ID`).
-pub const INVALID_ID: u32 = u32::MAX;
 
 /// A triangle mesh with its acceleration structure, built (or loaded)
 /// once and refit when the vertices move.
@@ -328,40 +325,30 @@ impl Scene {
         Bound<'py, PyArray2<f32>>,
         Bound<'py, PyArray2<f32>>,
     )> {
-        let (r, n) = rows(&rays, 6, "rays")?;
-        let (t, g, p, uv, nrm) = detached(py, threads, || {
+        let (r, _) = rows(&rays, 6, "rays")?;
+        let c = detached(py, threads, || {
             let built = self.read();
             let hits = self.nearest(&built, r, width);
-            let mut t = vec![f32::INFINITY; n];
-            let mut g = vec![INVALID_ID; n];
-            let mut p = vec![INVALID_ID; n];
-            let mut uv = vec![0.0f32; 2 * n];
-            let mut nrm = vec![0.0f32; 3 * n];
-            hits.par_iter()
-                .zip(t.par_iter_mut())
-                .zip(g.par_iter_mut())
-                .zip(p.par_iter_mut())
-                .zip(uv.par_chunks_exact_mut(2))
-                .zip(nrm.par_chunks_exact_mut(3))
-                .with_min_len(GRAIN)
-                .for_each(|(((((h, t), g), p), uv), nrm)| {
-                    if let Some(h) = h {
-                        *t = h.t;
-                        (*g, *p) = self.split(h.prim);
-                        uv.copy_from_slice(&[h.u, h.v]);
-                        nrm.copy_from_slice(&built.normals[h.prim as usize].to_array());
+            HitColumns::of(&hits, |h| {
+                h.map(|h| {
+                    let (geometry, prim) = self.split(h.prim);
+                    HitRow {
+                        t: h.t,
+                        geometry,
+                        instance: geometry,
+                        prim,
+                        uv: [h.u, h.v],
+                        normal: built.normals[h.prim as usize].to_array(),
                     }
-                });
-            (t, g, p, uv, nrm)
+                })
+            })
         })?;
-        let uv = Array2::from_shape_vec((n, 2), uv).expect("two per ray");
-        let nrm = Array2::from_shape_vec((n, 3), nrm).expect("three per ray");
         Ok((
-            t.into_pyarray(py),
-            g.into_pyarray(py),
-            p.into_pyarray(py),
-            uv.into_pyarray(py),
-            nrm.into_pyarray(py),
+            c.t.into_pyarray(py),
+            c.geometry.into_pyarray(py),
+            c.prim.into_pyarray(py),
+            matrix(py, c.uv, 2),
+            matrix(py, c.normal, 3),
         ))
     }
 

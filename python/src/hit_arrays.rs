@@ -1,0 +1,107 @@
+//! Ray answers as the columns of Open3D's result dicts: the nearest hit of
+//! each ray (`t_hit`, ids, uvs, normals), and the hits of many rays laid
+//! out one ray after another with `ray_splits`.
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2};
+use pyo3::prelude::*;
+use rayon::prelude::*;
+
+/// Rays per rayon task when filling the columns.
+const GRAIN: usize = 4096;
+
+/// The value of `geometry_ids` and `primitive_ids` for a ray that hits
+/// nothing (Open3D's `RaycastingScene.INVALID_ID`).
+pub const INVALID_ID: u32 = u32::MAX;
+
+/// One ray's nearest hit as the columns hold it.
+pub(crate) struct HitRow {
+    pub(crate) t: f32,
+    pub(crate) geometry: u32,
+    pub(crate) instance: u32,
+    pub(crate) prim: u32,
+    pub(crate) uv: [f32; 2],
+    pub(crate) normal: [f32; 3],
+}
+
+/// The nearest hits of `n` rays, one column per field; a miss has `t`
+/// inf, [`INVALID_ID`] ids and zero uvs and normal.
+pub(crate) struct HitColumns {
+    pub(crate) t: Vec<f32>,
+    pub(crate) geometry: Vec<u32>,
+    pub(crate) instance: Vec<u32>,
+    pub(crate) prim: Vec<u32>,
+    pub(crate) uv: Vec<f32>,
+    pub(crate) normal: Vec<f32>,
+}
+
+impl HitColumns {
+    /// The columns of `hits`, each turned into a row by `row` (in
+    /// parallel).
+    pub(crate) fn of<H: Sync>(hits: &[H], row: impl Fn(&H) -> Option<HitRow> + Sync) -> Self {
+        let n = hits.len();
+        let mut c = HitColumns {
+            t: vec![f32::INFINITY; n],
+            geometry: vec![INVALID_ID; n],
+            instance: vec![INVALID_ID; n],
+            prim: vec![INVALID_ID; n],
+            uv: vec![0.0; 2 * n],
+            normal: vec![0.0; 3 * n],
+        };
+        hits.par_iter()
+            .zip(c.t.par_iter_mut())
+            .zip(c.geometry.par_iter_mut())
+            .zip(c.instance.par_iter_mut())
+            .zip(c.prim.par_iter_mut())
+            .zip(c.uv.par_chunks_exact_mut(2))
+            .zip(c.normal.par_chunks_exact_mut(3))
+            .with_min_len(GRAIN)
+            .for_each(|((((((h, t), g), inst), p), uv), nrm)| {
+                if let Some(r) = row(h) {
+                    (*t, *g, *inst, *p) = (r.t, r.geometry, r.instance, r.prim);
+                    uv.copy_from_slice(&r.uv);
+                    nrm.copy_from_slice(&r.normal);
+                }
+            });
+        c
+    }
+}
+
+/// A row-major `(len / width, width)` array.
+pub(crate) fn matrix<'py>(
+    py: Python<'py>,
+    values: Vec<f32>,
+    width: usize,
+) -> Bound<'py, PyArray2<f32>> {
+    Array2::from_shape_vec((values.len() / width, width), values)
+        .expect("a whole number of rows")
+        .into_pyarray(py)
+}
+
+/// One field of every row, as a numpy array.
+pub(crate) fn column<'py, R, T: numpy::Element>(
+    py: Python<'py>,
+    rows: &[R],
+    field: impl Fn(&R) -> T,
+) -> Bound<'py, numpy::PyArray1<T>> {
+    rows.iter().map(field).collect::<Vec<T>>().into_pyarray(py)
+}
+
+/// The hits of many rays one ray after another: `ray_splits` (the hits of
+/// ray `i` are `splits[i]..splits[i + 1]`), the ray of each hit, and the
+/// hits.
+pub(crate) fn laid_out<H>(lists: &[Vec<H>]) -> (Vec<u32>, Vec<u32>, Vec<&H>) {
+    let mut splits = Vec::with_capacity(lists.len() + 1);
+    splits.push(0u32);
+    let mut total = 0u32;
+    for l in lists {
+        total = total.saturating_add(l.len() as u32);
+        splits.push(total);
+    }
+    let (ray_ids, hits) = lists
+        .iter()
+        .enumerate()
+        .flat_map(|(i, l)| l.iter().map(move |h| (i as u32, h)))
+        .unzip();
+    (splits, ray_ids, hits)
+}
