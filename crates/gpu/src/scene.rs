@@ -1,5 +1,5 @@
 //! A triangle mesh's acceleration structure uploaded to the GPU: the
-//! stack kd-tree, the threaded BVH (Smits 1998), the compressed wide BVH
+//! stack kd-tree, the kd-tree with ropes (Popov et al. 2007), the threaded BVH (Smits 1998), the compressed wide BVH
 //! (Ylitie et al. 2017) or brute force, with the triangles precomputed for
 //! the Plücker or Möller test.
 
@@ -8,7 +8,9 @@ use crate::context::GpuContext;
 use crate::cwbvh::{compress, cwbvh_build_options};
 use crate::error::{GpuError, GpuResult};
 use crate::kernel::{wgsl, Kernel};
-use raykit_core::accel::{BuildOptions, Bvh8, FlatTriangles, KdStack, ThreadedBvh};
+use raykit_core::accel::{
+    BuildOptions, Bvh8, FlatKdRopes, FlatTriangles, KdRopes, KdStack, ThreadedBvh,
+};
 use raykit_core::tri::{Moller, Plucker, TestKind, TriangleTest};
 use raykit_core::TriangleMesh;
 use std::time::Instant;
@@ -18,6 +20,11 @@ use std::time::Instant;
 pub enum GpuAccelKind {
     /// Stack kd-tree: kd-tree with 8-byte nodes and a fixed-size per-thread stack.
     KdStack,
+    /// Kd-tree with ropes and leaf boxes (Popov, Günther, Seidel &
+    /// Slusallek 2007): the same tree, no stack; each leaf record holds its
+    /// cell and a link per face to the node across it, and the ray walks
+    /// from leaf to leaf through the exit face's rope.
+    KdRopes,
     /// Threaded BVH (Smits 1998): BVH in pre-order with escape indices, no stack.
     BvhThreaded,
     /// Compressed wide BVH (Ylitie, Karras and Laine 2017): raykit's 8-wide
@@ -30,8 +37,9 @@ pub enum GpuAccelKind {
 
 impl GpuAccelKind {
     /// Every kind, fastest-first in the usual case.
-    pub const ALL: [GpuAccelKind; 4] = [
+    pub const ALL: [GpuAccelKind; 5] = [
         GpuAccelKind::KdStack,
+        GpuAccelKind::KdRopes,
         GpuAccelKind::BvhThreaded,
         GpuAccelKind::Cwbvh,
         GpuAccelKind::Brute,
@@ -41,6 +49,7 @@ impl GpuAccelKind {
     pub fn name(self) -> &'static str {
         match self {
             GpuAccelKind::KdStack => "kd-stack",
+            GpuAccelKind::KdRopes => "kd-ropes",
             GpuAccelKind::BvhThreaded => "bvh-threaded",
             GpuAccelKind::Cwbvh => "cwbvh",
             GpuAccelKind::Brute => "brute",
@@ -55,6 +64,7 @@ impl GpuAccelKind {
     fn wgsl(self) -> &'static str {
         match self {
             GpuAccelKind::KdStack => wgsl::KD_STACK,
+            GpuAccelKind::KdRopes => wgsl::KD_ROPES,
             GpuAccelKind::BvhThreaded => wgsl::BVH_THREADED,
             GpuAccelKind::Cwbvh => wgsl::CWBVH,
             GpuAccelKind::Brute => wgsl::BRUTE,
@@ -135,7 +145,10 @@ pub struct GpuScene {
 
 /// The structure's arrays before upload.
 struct Flat {
+    /// The nodes (for kd-ropes followed by the leaf records).
     nodes: Vec<u32>,
+    /// Nodes in `nodes`.
+    num_nodes: usize,
     indices: Vec<u32>,
     root: ([f32; 3], [f32; 3]),
     tris: FlatTriangles,
@@ -168,6 +181,7 @@ fn flat_for<T: TriangleTest>(
             let secs = start.elapsed().as_secs_f64();
             let cw = compress(&accel.flat())?;
             let flat = Flat {
+                num_nodes: cw.nodes.len() / crate::cwbvh::NODE_WORDS,
                 nodes: cw.nodes,
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
@@ -180,7 +194,27 @@ fn flat_for<T: TriangleTest>(
             let secs = start.elapsed().as_secs_f64();
             let f = accel.tree().flat();
             let flat = Flat {
+                num_nodes: f.nodes.len() / 2,
                 nodes: f.nodes,
+                indices: f.indices,
+                root: (f.root_min, f.root_max),
+                tris: f.tris,
+            };
+            (flat, secs)
+        }
+        GpuAccelKind::KdRopes => {
+            let accel = KdRopes::<T>::build(mesh, &opts.kd);
+            let secs = start.elapsed().as_secs_f64();
+            let f = accel.flat();
+            debug_assert_eq!(f.leaves.len() % FlatKdRopes::LEAF_WORDS, 0);
+            // One binding: the nodes, then the leaf records (the kernel
+            // finds them after `num_nodes` nodes).
+            let num_nodes = f.nodes.len() / 2;
+            let mut nodes = f.nodes;
+            nodes.extend_from_slice(&f.leaves);
+            let flat = Flat {
+                nodes,
+                num_nodes,
                 indices: f.indices,
                 root: (f.root_min, f.root_max),
                 tris: f.tris,
@@ -192,6 +226,7 @@ fn flat_for<T: TriangleTest>(
             let secs = start.elapsed().as_secs_f64();
             let f = accel.flat();
             let flat = Flat {
+                num_nodes: f.nodes.len() / 8,
                 nodes: f.nodes,
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
@@ -202,6 +237,7 @@ fn flat_for<T: TriangleTest>(
         GpuAccelKind::Brute => {
             let flat = Flat {
                 nodes: Vec::new(),
+                num_nodes: 0,
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
                 tris: records::<T>(mesh, (0..mesh.num_triangles() as u32).collect()),
@@ -232,12 +268,7 @@ impl GpuScene {
             }
         };
         let start = Instant::now();
-        let num_nodes = match kind {
-            GpuAccelKind::KdStack => flat.nodes.len() / 2,
-            GpuAccelKind::BvhThreaded => flat.nodes.len() / 8,
-            GpuAccelKind::Cwbvh => flat.nodes.len() / crate::cwbvh::NODE_WORDS,
-            GpuAccelKind::Brute => 0,
-        };
+        let num_nodes = flat.num_nodes;
         let params = AccelParams {
             root_min: flat.root.0,
             num_indices: flat.indices.len() as u32,
