@@ -95,14 +95,16 @@ pub enum BindingKind {
 }
 
 /// The scene's group 0: nodes, indices, triangle records, prims (storage),
-/// accel parameters (uniform), and three more bindings for triangle records
-/// beyond one binding's limit; see `shaders/scene.wgsl`.
-pub const SCENE_GROUP: [BindingKind; 8] = [
+/// accel parameters (uniform), three more bindings for triangle records
+/// beyond one binding's limit, and the kd-tree's leaf records with ropes;
+/// see `shaders/scene.wgsl`.
+pub const SCENE_GROUP: [BindingKind; 9] = [
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Uniform,
+    BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,

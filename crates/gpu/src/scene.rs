@@ -132,26 +132,42 @@ pub struct GpuScene {
     pub num_tris: usize,
     /// Nodes.
     pub num_nodes: usize,
-    /// Bytes uploaded (nodes, indices, triangle records, prims).
+    /// Bytes uploaded (nodes, leaf records, indices, triangle records, prims).
     pub bytes: usize,
-    /// Bytes of the nodes alone.
+    /// Bytes of the nodes alone (with kd-ropes' leaf records).
     pub node_bytes: usize,
     /// Seconds to build the structure on the CPU.
     pub build_seconds: f64,
     /// Seconds to precompute, flatten and upload.
     pub upload_seconds: f64,
-    buffers: [wgpu::Buffer; 8],
+    buffers: [wgpu::Buffer; 9],
 }
 
 /// The structure's arrays before upload.
 struct Flat {
-    /// The nodes (for kd-ropes followed by the leaf records).
     nodes: Vec<u32>,
+    /// Kd-ropes' leaf records, [`ROPE_LEAF_WORDS`] words each (empty for the
+    /// other structures).
+    leaves: Vec<u32>,
     /// Nodes in `nodes`.
     num_nodes: usize,
     indices: Vec<u32>,
     root: ([f32; 3], [f32; 3]),
     tris: FlatTriangles,
+}
+
+/// Words per kd-ropes leaf record on the GPU: the core's record
+/// ([`FlatKdRopes::LEAF_WORDS`]: cell, six ropes, first entry, entry count)
+/// without the entry count, which the leaf node's second word already holds.
+const ROPE_LEAF_WORDS: usize = FlatKdRopes::LEAF_WORDS - 1;
+
+/// The GPU's leaf records from the core's.
+fn rope_records(leaves: &[u32]) -> Vec<u32> {
+    leaves
+        .chunks_exact(FlatKdRopes::LEAF_WORDS)
+        .flat_map(|r| &r[..ROPE_LEAF_WORDS])
+        .copied()
+        .collect()
 }
 
 /// Records of `T` for the mesh triangles `prims`, in that order.
@@ -183,6 +199,7 @@ fn flat_for<T: TriangleTest>(
             let flat = Flat {
                 num_nodes: cw.nodes.len() / crate::cwbvh::NODE_WORDS,
                 nodes: cw.nodes,
+                leaves: Vec::new(),
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
                 tris: records::<T>(mesh, cw.prims),
@@ -196,6 +213,7 @@ fn flat_for<T: TriangleTest>(
             let flat = Flat {
                 num_nodes: f.nodes.len() / 2,
                 nodes: f.nodes,
+                leaves: Vec::new(),
                 indices: f.indices,
                 root: (f.root_min, f.root_max),
                 tris: f.tris,
@@ -206,15 +224,10 @@ fn flat_for<T: TriangleTest>(
             let accel = KdRopes::<T>::build(mesh, &opts.kd);
             let secs = start.elapsed().as_secs_f64();
             let f = accel.flat();
-            debug_assert_eq!(f.leaves.len() % FlatKdRopes::LEAF_WORDS, 0);
-            // One binding: the nodes, then the leaf records (the kernel
-            // finds them after `num_nodes` nodes).
-            let num_nodes = f.nodes.len() / 2;
-            let mut nodes = f.nodes;
-            nodes.extend_from_slice(&f.leaves);
             let flat = Flat {
-                nodes,
-                num_nodes,
+                num_nodes: f.nodes.len() / 2,
+                nodes: f.nodes,
+                leaves: rope_records(&f.leaves),
                 indices: f.indices,
                 root: (f.root_min, f.root_max),
                 tris: f.tris,
@@ -228,6 +241,7 @@ fn flat_for<T: TriangleTest>(
             let flat = Flat {
                 num_nodes: f.nodes.len() / 8,
                 nodes: f.nodes,
+                leaves: Vec::new(),
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
                 tris: f.tris,
@@ -238,6 +252,7 @@ fn flat_for<T: TriangleTest>(
             let flat = Flat {
                 nodes: Vec::new(),
                 num_nodes: 0,
+                leaves: Vec::new(),
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
                 tris: records::<T>(mesh, (0..mesh.num_triangles() as u32).collect()),
@@ -296,8 +311,9 @@ impl GpuScene {
             storage(ctx, "scene triangle records, second binding", part(1))?,
             storage(ctx, "scene triangle records, third binding", part(2))?,
             storage(ctx, "scene triangle records, fourth binding", part(3))?,
+            storage(ctx, "scene leaf records with ropes", &flat.leaves)?,
         ];
-        let node_bytes = flat.nodes.len() * 4;
+        let node_bytes = (flat.nodes.len() + flat.leaves.len()) * 4;
         let bytes =
             node_bytes + (flat.indices.len() + flat.tris.words.len() + flat.tris.prims.len()) * 4;
         ctx.wait()?;

@@ -2,21 +2,22 @@
 // Seidel & Slusallek 2007; crates/core/src/accel/kdtree/ropes.rs): the
 // 8-byte nodes of kd_stack.wgsl, a leaf's first word holding the leaf bit
 // and the index of its leaf record, its second word the entry count. The
-// records follow the nodes in the same binding, 14 words each: cell min
-// x, y, z, cell max x, y, z, six ropes (the node across face
-// 2 * axis + (1 for the max face), 0xffffffff on the scene boundary), the
-// first entry in the triangle-index list and the entry count. The ray
+// leaf records (binding 8) are 13 words each: cell min x, y, z, cell max
+// x, y, z, six ropes (the node across face 2 * axis + (1 for the max
+// face), 0xffffffff on the scene boundary) and the first entry in the
+// triangle-index list. The ray
 // enters the leaf holding its entry point, then walks from leaf to leaf
 // through the exit face's rope, descending from the rope's node to the
 // leaf holding the exit point: no stack, and every step moves forward
 // along the ray, so no leaf is visited twice.
 
 @group(0) @binding(0) var<storage, read> nodes: array<u32>;
+@group(0) @binding(8) var<storage, read> leaves: array<u32>;
 
 const ROPE_LEAF: u32 = 0x80000000u;
 const ROPE_OFFSET: u32 = 0x0fffffffu;
 const ROPE_NONE: u32 = 0xffffffffu;
-const ROPE_LEAF_WORDS: u32 = 14u;
+const ROPE_LEAF_WORDS: u32 = 13u;
 
 // Descend from node start to the leaf whose cell holds p, a point on a
 // split plane going to the side the ray moves into; returns the word
@@ -28,8 +29,7 @@ fn rope_locate(start: u32, p: vec3f, d: vec3f) -> vec2u {
         let data = nodes[2u * node + 1u];
         note_node(8u);
         if (word & ROPE_LEAF) != 0u {
-            let rec = 2u * accel.num_nodes + ROPE_LEAF_WORDS * (word & ~ROPE_LEAF);
-            return vec2u(rec, data);
+            return vec2u(ROPE_LEAF_WORDS * (word & ~ROPE_LEAF), data);
         }
         let a = (word >> 29u) & 3u;
         let s = bitcast<f32>(data);
@@ -58,14 +58,14 @@ fn ropes_trace(r: RayIn, any: bool) -> Hit {
         return best;
     }
     let rd = tri_prepare(r);
-    let num_leaves = (arrayLength(&nodes) - 2u * accel.num_nodes) / ROPE_LEAF_WORDS;
+    let num_leaves = arrayLength(&leaves) / ROPE_LEAF_WORDS;
     var leaf = rope_locate(0u, r.o + r.d * tmin, r.d);
     // The bound only guards against a broken tree.
     for (var step = 0u; step < num_leaves; step++) {
         let rec = leaf.x;
         let count = leaf.y;
         if count > 0u {
-            let first = nodes[rec + 12u];
+            let first = leaves[rec + 12u];
             note_bytes(4u);
             for (var k = 0u; k < count; k++) {
                 note_bytes(4u);
@@ -82,7 +82,7 @@ fn ropes_trace(r: RayIn, any: bool) -> Hit {
             let da = r.d[a];
             if da != 0.0 {
                 let up = da > 0.0;
-                let pl = bitcast<f32>(nodes[rec + a + select(0u, 3u, up)]);
+                let pl = bitcast<f32>(leaves[rec + a + select(0u, 3u, up)]);
                 note_bytes(4u);
                 let te = (pl - r.o[a]) * r.inv[a];
                 if !is_nan(te) && te < exit {
@@ -96,7 +96,7 @@ fn ropes_trace(r: RayIn, any: bool) -> Hit {
         if (tfar <= exit) | (exit >= scene_exit) {
             return best;
         }
-        let next = nodes[rec + 6u + face];
+        let next = leaves[rec + 6u + face];
         note_bytes(4u);
         if next == ROPE_NONE {
             return best;
