@@ -27,7 +27,8 @@ pub fn open_gpu() -> Result<GpuContext> {
     Ok(ctx)
 }
 
-/// The GPU structure named `name` (`kd-stack`, `bvh-threaded`, `cwbvh`, `brute`).
+/// The GPU structure named `name` (`kd-stack`, `kd-ropes`, `bvh-threaded`, `cwbvh`,
+/// `brute`).
 pub fn gpu_accel(name: &str) -> Result<GpuAccelKind> {
     GpuAccelKind::from_name(name).ok_or_else(|| {
         let names: Vec<_> = GpuAccelKind::ALL.iter().map(|k| k.name()).collect();
@@ -42,6 +43,7 @@ pub fn gpu_accel(name: &str) -> Result<GpuAccelKind> {
 pub fn cpu_twin(kind: GpuAccelKind) -> AccelKind {
     match kind {
         GpuAccelKind::KdStack => AccelKind::KdStack,
+        GpuAccelKind::KdRopes => AccelKind::KdRopes,
         GpuAccelKind::BvhThreaded => AccelKind::ThreadedBvh,
         GpuAccelKind::Cwbvh => AccelKind::Bvh8,
         GpuAccelKind::Brute => AccelKind::Brute,

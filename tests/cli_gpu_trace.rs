@@ -144,8 +144,8 @@ fn gpu_bench_checks_every_answer() {
     let rows = v["rows"].as_array().unwrap();
     assert_eq!(
         rows.len(),
-        6,
-        "kd-stack, bvh-threaded and cwbvh × plucker and moller"
+        8,
+        "kd-stack, kd-ropes, bvh-threaded and cwbvh × plucker and moller"
     );
     for r in rows {
         for c in r["cells"].as_array().unwrap() {

@@ -71,8 +71,8 @@ pub struct BenchArgs {
     /// build instead of its HIGH one.
     #[arg(long, value_name = "ENGINE")]
     compare: Option<String>,
-    /// `gpu` measures the GPU kernels (kd-stack, bvh-threaded, cwbvh ×
-    /// plucker, moller) instead, every answer checked against the CPU
+    /// `gpu` measures the GPU kernels (kd-stack, kd-ropes, bvh-threaded,
+    /// cwbvh × plucker, moller) instead, every answer checked against the CPU
     /// structure it mirrors (cwbvh: bvh8); see also `raykit experiment gpu`.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     backend: Backend,

@@ -19,7 +19,7 @@ use std::process::ExitCode;
 pub struct GpuBenchSetup<'a> {
     /// `--mesh`.
     pub mesh: &'a str,
-    /// `--accel` (`all` = kd-stack and bvh-threaded).
+    /// `--accel` (`all` = kd-stack, kd-ropes, bvh-threaded and cwbvh).
     pub accel: &'a str,
     /// `--test` (`all` = plucker and moller).
     pub test: &'a str,
@@ -47,6 +47,7 @@ pub fn gpu_lists(accel: &str, test: &str) -> Result<(Vec<GpuAccelKind>, Vec<Test
     let accels = if accel == "all" {
         vec![
             GpuAccelKind::KdStack,
+            GpuAccelKind::KdRopes,
             GpuAccelKind::BvhThreaded,
             GpuAccelKind::Cwbvh,
         ]

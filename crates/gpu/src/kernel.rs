@@ -18,6 +18,8 @@ pub mod wgsl {
     pub const TRI_PLUCKER: &str = include_str!("shaders/tri_plucker.wgsl");
     /// The stack kd-tree GPU tracer's kd-tree with a per-thread stack.
     pub const KD_STACK: &str = include_str!("shaders/kd_stack.wgsl");
+    /// The stackless kd-tree with ropes and leaf boxes (Popov et al. 2007).
+    pub const KD_ROPES: &str = include_str!("shaders/kd_ropes.wgsl");
     /// The Purcell-style stream tracer's threaded BVH.
     pub const BVH_THREADED: &str = include_str!("shaders/bvh_threaded.wgsl");
     /// The compressed wide BVH (Ylitie et al. 2017).
@@ -93,14 +95,16 @@ pub enum BindingKind {
 }
 
 /// The scene's group 0: nodes, indices, triangle records, prims (storage),
-/// accel parameters (uniform), and three more bindings for triangle records
-/// beyond one binding's limit; see `shaders/scene.wgsl`.
-pub const SCENE_GROUP: [BindingKind; 8] = [
+/// accel parameters (uniform), three more bindings for triangle records
+/// beyond one binding's limit, and the kd-tree's leaf records with ropes;
+/// see `shaders/scene.wgsl`.
+pub const SCENE_GROUP: [BindingKind; 9] = [
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Uniform,
+    BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,
     BindingKind::Storage,

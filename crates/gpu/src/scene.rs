@@ -1,5 +1,5 @@
 //! A triangle mesh's acceleration structure uploaded to the GPU: the
-//! stack kd-tree, the threaded BVH (Smits 1998), the compressed wide BVH
+//! stack kd-tree, the kd-tree with ropes (Popov et al. 2007), the threaded BVH (Smits 1998), the compressed wide BVH
 //! (Ylitie et al. 2017) or brute force, with the triangles precomputed for
 //! the Plücker or Möller test.
 
@@ -8,7 +8,9 @@ use crate::context::GpuContext;
 use crate::cwbvh::{compress, cwbvh_build_options};
 use crate::error::{GpuError, GpuResult};
 use crate::kernel::{wgsl, Kernel};
-use raykit_core::accel::{BuildOptions, Bvh8, FlatTriangles, KdStack, ThreadedBvh};
+use raykit_core::accel::{
+    BuildOptions, Bvh8, FlatKdRopes, FlatTriangles, KdRopes, KdStack, ThreadedBvh,
+};
 use raykit_core::tri::{Moller, Plucker, TestKind, TriangleTest};
 use raykit_core::TriangleMesh;
 use std::time::Instant;
@@ -18,6 +20,11 @@ use std::time::Instant;
 pub enum GpuAccelKind {
     /// Stack kd-tree: kd-tree with 8-byte nodes and a fixed-size per-thread stack.
     KdStack,
+    /// Kd-tree with ropes and leaf boxes (Popov, Günther, Seidel &
+    /// Slusallek 2007): the same tree, no stack; each leaf record holds its
+    /// cell and a link per face to the node across it, and the ray walks
+    /// from leaf to leaf through the exit face's rope.
+    KdRopes,
     /// Threaded BVH (Smits 1998): BVH in pre-order with escape indices, no stack.
     BvhThreaded,
     /// Compressed wide BVH (Ylitie, Karras and Laine 2017): raykit's 8-wide
@@ -30,8 +37,9 @@ pub enum GpuAccelKind {
 
 impl GpuAccelKind {
     /// Every kind, fastest-first in the usual case.
-    pub const ALL: [GpuAccelKind; 4] = [
+    pub const ALL: [GpuAccelKind; 5] = [
         GpuAccelKind::KdStack,
+        GpuAccelKind::KdRopes,
         GpuAccelKind::BvhThreaded,
         GpuAccelKind::Cwbvh,
         GpuAccelKind::Brute,
@@ -41,6 +49,7 @@ impl GpuAccelKind {
     pub fn name(self) -> &'static str {
         match self {
             GpuAccelKind::KdStack => "kd-stack",
+            GpuAccelKind::KdRopes => "kd-ropes",
             GpuAccelKind::BvhThreaded => "bvh-threaded",
             GpuAccelKind::Cwbvh => "cwbvh",
             GpuAccelKind::Brute => "brute",
@@ -55,6 +64,7 @@ impl GpuAccelKind {
     fn wgsl(self) -> &'static str {
         match self {
             GpuAccelKind::KdStack => wgsl::KD_STACK,
+            GpuAccelKind::KdRopes => wgsl::KD_ROPES,
             GpuAccelKind::BvhThreaded => wgsl::BVH_THREADED,
             GpuAccelKind::Cwbvh => wgsl::CWBVH,
             GpuAccelKind::Brute => wgsl::BRUTE,
@@ -122,23 +132,42 @@ pub struct GpuScene {
     pub num_tris: usize,
     /// Nodes.
     pub num_nodes: usize,
-    /// Bytes uploaded (nodes, indices, triangle records, prims).
+    /// Bytes uploaded (nodes, leaf records, indices, triangle records, prims).
     pub bytes: usize,
-    /// Bytes of the nodes alone.
+    /// Bytes of the nodes alone (with kd-ropes' leaf records).
     pub node_bytes: usize,
     /// Seconds to build the structure on the CPU.
     pub build_seconds: f64,
     /// Seconds to precompute, flatten and upload.
     pub upload_seconds: f64,
-    buffers: [wgpu::Buffer; 8],
+    buffers: [wgpu::Buffer; 9],
 }
 
 /// The structure's arrays before upload.
 struct Flat {
     nodes: Vec<u32>,
+    /// Kd-ropes' leaf records, [`ROPE_LEAF_WORDS`] words each (empty for the
+    /// other structures).
+    leaves: Vec<u32>,
+    /// Nodes in `nodes`.
+    num_nodes: usize,
     indices: Vec<u32>,
     root: ([f32; 3], [f32; 3]),
     tris: FlatTriangles,
+}
+
+/// Words per kd-ropes leaf record on the GPU: the core's record
+/// ([`FlatKdRopes::LEAF_WORDS`]: cell, six ropes, first entry, entry count)
+/// without the entry count, which the leaf node's second word already holds.
+const ROPE_LEAF_WORDS: usize = FlatKdRopes::LEAF_WORDS - 1;
+
+/// The GPU's leaf records from the core's.
+fn rope_records(leaves: &[u32]) -> Vec<u32> {
+    leaves
+        .chunks_exact(FlatKdRopes::LEAF_WORDS)
+        .flat_map(|r| &r[..ROPE_LEAF_WORDS])
+        .copied()
+        .collect()
 }
 
 /// Records of `T` for the mesh triangles `prims`, in that order.
@@ -168,7 +197,9 @@ fn flat_for<T: TriangleTest>(
             let secs = start.elapsed().as_secs_f64();
             let cw = compress(&accel.flat())?;
             let flat = Flat {
+                num_nodes: cw.nodes.len() / crate::cwbvh::NODE_WORDS,
                 nodes: cw.nodes,
+                leaves: Vec::new(),
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
                 tris: records::<T>(mesh, cw.prims),
@@ -180,7 +211,23 @@ fn flat_for<T: TriangleTest>(
             let secs = start.elapsed().as_secs_f64();
             let f = accel.tree().flat();
             let flat = Flat {
+                num_nodes: f.nodes.len() / 2,
                 nodes: f.nodes,
+                leaves: Vec::new(),
+                indices: f.indices,
+                root: (f.root_min, f.root_max),
+                tris: f.tris,
+            };
+            (flat, secs)
+        }
+        GpuAccelKind::KdRopes => {
+            let accel = KdRopes::<T>::build(mesh, &opts.kd);
+            let secs = start.elapsed().as_secs_f64();
+            let f = accel.flat();
+            let flat = Flat {
+                num_nodes: f.nodes.len() / 2,
+                nodes: f.nodes,
+                leaves: rope_records(&f.leaves),
                 indices: f.indices,
                 root: (f.root_min, f.root_max),
                 tris: f.tris,
@@ -192,7 +239,9 @@ fn flat_for<T: TriangleTest>(
             let secs = start.elapsed().as_secs_f64();
             let f = accel.flat();
             let flat = Flat {
+                num_nodes: f.nodes.len() / 8,
                 nodes: f.nodes,
+                leaves: Vec::new(),
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
                 tris: f.tris,
@@ -202,6 +251,8 @@ fn flat_for<T: TriangleTest>(
         GpuAccelKind::Brute => {
             let flat = Flat {
                 nodes: Vec::new(),
+                num_nodes: 0,
+                leaves: Vec::new(),
                 indices: Vec::new(),
                 root: ([0.0; 3], [0.0; 3]),
                 tris: records::<T>(mesh, (0..mesh.num_triangles() as u32).collect()),
@@ -232,12 +283,7 @@ impl GpuScene {
             }
         };
         let start = Instant::now();
-        let num_nodes = match kind {
-            GpuAccelKind::KdStack => flat.nodes.len() / 2,
-            GpuAccelKind::BvhThreaded => flat.nodes.len() / 8,
-            GpuAccelKind::Cwbvh => flat.nodes.len() / crate::cwbvh::NODE_WORDS,
-            GpuAccelKind::Brute => 0,
-        };
+        let num_nodes = flat.num_nodes;
         let params = AccelParams {
             root_min: flat.root.0,
             num_indices: flat.indices.len() as u32,
@@ -265,8 +311,9 @@ impl GpuScene {
             storage(ctx, "scene triangle records, second binding", part(1))?,
             storage(ctx, "scene triangle records, third binding", part(2))?,
             storage(ctx, "scene triangle records, fourth binding", part(3))?,
+            storage(ctx, "scene leaf records with ropes", &flat.leaves)?,
         ];
-        let node_bytes = flat.nodes.len() * 4;
+        let node_bytes = (flat.nodes.len() + flat.leaves.len()) * 4;
         let bytes =
             node_bytes + (flat.indices.len() + flat.tris.words.len() + flat.tris.prims.len()) * 4;
         ctx.wait()?;

@@ -44,6 +44,7 @@ fn structures_count_a_few_nodes_per_ray() {
     let sets = standard_sets(&mesh, &reference, 48, 5);
     for kind in [
         GpuAccelKind::KdStack,
+        GpuAccelKind::KdRopes,
         GpuAccelKind::BvhThreaded,
         GpuAccelKind::Cwbvh,
     ] {
@@ -90,6 +91,7 @@ fn counts_on_a_large_mesh() {
     for test in [TestKind::Plucker, TestKind::Moller] {
         for kind in [
             GpuAccelKind::KdStack,
+            GpuAccelKind::KdRopes,
             GpuAccelKind::BvhThreaded,
             GpuAccelKind::Cwbvh,
         ] {

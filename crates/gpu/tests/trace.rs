@@ -4,7 +4,9 @@
 
 mod support;
 
-use raykit_core::accel::{Accel, BruteForce, BuildOptions, Bvh8, KdOptions, KdStack, ThreadedBvh};
+use raykit_core::accel::{
+    Accel, BruteForce, BuildOptions, Bvh8, KdOptions, KdRopes, KdStack, ThreadedBvh,
+};
 use raykit_core::raysets::standard_sets;
 use raykit_core::tri::{Moller, Plucker, TestKind, TriangleTest};
 use raykit_core::TriangleMesh;
@@ -15,6 +17,7 @@ use support::{compare, describe, gpu, shared_data};
 fn cpu_accel<T: TriangleTest>(mesh: &TriangleMesh, kind: GpuAccelKind) -> Box<dyn Accel> {
     match kind {
         GpuAccelKind::KdStack => Box::new(KdStack::<T>::build(mesh, &KdOptions::default())),
+        GpuAccelKind::KdRopes => Box::new(KdRopes::<T>::build(mesh, &KdOptions::default())),
         GpuAccelKind::BvhThreaded => {
             Box::new(ThreadedBvh::<T>::build(mesh, &BuildOptions::default()))
         }
@@ -117,6 +120,7 @@ fn shared_meshes_agree_with_cpu() {
             96,
             &[
                 GpuAccelKind::KdStack,
+                GpuAccelKind::KdRopes,
                 GpuAccelKind::BvhThreaded,
                 GpuAccelKind::Cwbvh,
             ],
@@ -129,6 +133,7 @@ fn shared_meshes_agree_with_cpu() {
         96,
         &[
             GpuAccelKind::KdStack,
+            GpuAccelKind::KdRopes,
             GpuAccelKind::BvhThreaded,
             GpuAccelKind::Cwbvh,
         ],
@@ -251,7 +256,11 @@ fn random_triangle_soup_agrees_with_cpu() {
         "soup",
         &mesh,
         64,
-        &[GpuAccelKind::Cwbvh, GpuAccelKind::BvhThreaded],
+        &[
+            GpuAccelKind::Cwbvh,
+            GpuAccelKind::BvhThreaded,
+            GpuAccelKind::KdRopes,
+        ],
     );
 }
 

@@ -3,8 +3,8 @@
 #
 #   docs/experiments/gpu-h100/run.sh [OUT_DIR]     (default: docs/experiments/gpu-h100/latest)
 #
-# Runs `raykit experiment gpu` (kd-stack, bvh-threaded and the compressed
-# wide BVH, each × Plücker and Möller, on shirley6, the bunny, dragon res2 and
+# Runs `raykit experiment gpu` (kd-stack, kd-ropes, bvh-threaded and the
+# compressed wide BVH, each × Plücker and Möller, on shirley6, the bunny, dragon res2 and
 # the full dragon) with the honest timing: GPU timestamp queries where the
 # adapter has them (the table says which clock was used), two warm-up runs,
 # the median of REPS timed runs with their spread, the launch share (a

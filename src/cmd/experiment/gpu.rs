@@ -45,7 +45,7 @@ pub struct GpuExperimentArgs {
     /// is reported; at least 5).
     #[arg(long, default_value_t = 5)]
     reps: usize,
-    /// Structures (`all` = kd-stack,bvh-threaded,cwbvh).
+    /// Structures (`all` = kd-stack,kd-ropes,bvh-threaded,cwbvh).
     #[arg(long, default_value = "all")]
     accel: String,
     /// Triangle tests (`all` = plucker,moller).
@@ -345,7 +345,9 @@ fn markdown(rows: &[Row], args: &GpuExperimentArgs, adapter: &str, threads: usiz
                 ][set]
             })
     };
-    let pairs: [(&str, &str, &str, &str); 7] = [
+    let pairs: [(&str, &str, &str, &str); 9] = [
+        ("kd-stack", "plucker", "kd-ropes", "plucker"),
+        ("kd-stack", "moller", "kd-ropes", "moller"),
         ("kd-stack", "plucker", "bvh-threaded", "plucker"),
         ("kd-stack", "moller", "bvh-threaded", "moller"),
         ("cwbvh", "plucker", "kd-stack", "plucker"),

@@ -40,6 +40,38 @@ pub struct FlatKdTree {
     pub tris: FlatTriangles,
 }
 
+/// The kd-tree with ropes and leaf boxes (Popov, Günther, Seidel &
+/// Slusallek 2007) as flat arrays: the 8-byte nodes of [`FlatKdTree`], except
+/// that a leaf's first word holds the leaf bit and the index of its leaf
+/// record (the second word still its entry count), and the leaf records of
+/// [`FlatKdRopes::LEAF_WORDS`] words each: the leaf's cell (min x, y, z, max
+/// x, y, z as `f32` bits), its six ropes (the node across face
+/// `2 · axis + (1 for the max face)`, `u32::MAX` on the scene boundary), its
+/// first entry in the triangle-index list and its entry count.
+#[derive(Clone, Debug)]
+pub struct FlatKdRopes {
+    /// Two words per node.
+    pub nodes: Vec<u32>,
+    /// [`FlatKdRopes::LEAF_WORDS`] words per leaf record.
+    pub leaves: Vec<u32>,
+    /// The leaves' entries: positions in `tris`.
+    pub indices: Vec<u32>,
+    /// Lower corner of the root cell.
+    pub root_min: [f32; 3],
+    /// Upper corner of the root cell.
+    pub root_max: [f32; 3],
+    /// The precomputed triangles.
+    pub tris: FlatTriangles,
+}
+
+impl FlatKdRopes {
+    /// Words per leaf record: six for the cell, six ropes, first and count.
+    pub const LEAF_WORDS: usize = 14;
+
+    /// Rope value of a face on the scene boundary.
+    pub const NO_ROPE: u32 = u32::MAX;
+}
+
 /// The threaded BVH (Smits 1998) as flat arrays: eight words per node in
 /// pre-order (padded box min and max as `f32` bits, escape index, leaf
 /// range with the count in the top 5 bits and the first triangle below,

@@ -31,7 +31,9 @@ pub use bvh::{
     BuildNode, BuildOptions, BuildQuality, Bvh2, Bvh4, Bvh8, PersistError, RefitError, RefitReport,
     ThreadedBvh,
 };
-pub use flat::{FlatBvh8, FlatChild, FlatKdTree, FlatNode8, FlatThreadedBvh, FlatTriangles};
+pub use flat::{
+    FlatBvh8, FlatChild, FlatKdRopes, FlatKdTree, FlatNode8, FlatThreadedBvh, FlatTriangles,
+};
 pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
 pub use linear_boxes::{LinearBoxes, LINEAR_BOX_SIZE};
 pub use registry::{build_accel, kd_accel_from_tree, load_accel, AccelKind};

@@ -4,6 +4,8 @@
 // beyond one storage binding's limit continue in up to three more bindings
 // of chunk_words words each (whole records); a scene that fits one binding
 // has chunk_words = 0xffffffff and never reads the others.
+// Binding 8 holds the kd-tree's leaf records with ropes (kd_ropes.wgsl
+// declares it; empty for the other structures).
 // Accel files (kd_stack.wgsl, bvh_threaded.wgsl, cwbvh.wgsl, brute.wgsl)
 // declare binding 0 (the nodes, as words or as 16-byte vectors) and define
 // scene_intersect(ray) -> Hit and scene_occluded(ray) -> bool over them.

@@ -5,14 +5,14 @@ use super::base::KdTree;
 use super::layout::KdNode;
 use super::KdOptions;
 use crate::aabb::Aabb;
-use crate::accel::{Accel, AccelStats};
+use crate::accel::{Accel, AccelStats, FlatKdRopes};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
 
 /// No neighbour: the face lies on the scene boundary.
-const NONE: u32 = u32::MAX;
+const NONE: u32 = FlatKdRopes::NO_ROPE;
 
 /// What the rope traversal keeps per leaf: its cell, its six ropes (the
 /// node on the other side of each face, indexed `2 · axis + (1 if max
@@ -56,6 +56,29 @@ impl<T: TriangleTest> KdRopes<T> {
             tree,
             nodes,
             leaves,
+        }
+    }
+
+    /// The nodes, leaf records, triangle-index list and triangles as flat
+    /// arrays for devices with kernels of their own (layout in
+    /// [`FlatKdRopes`]).
+    pub fn flat(&self) -> FlatKdRopes {
+        let leaves = self
+            .leaves
+            .iter()
+            .flat_map(|r| {
+                let c = r.cell.min.to_array().into_iter();
+                let c = c.chain(r.cell.max.to_array()).map(f32::to_bits);
+                c.chain(r.ropes).chain([r.first, r.count])
+            })
+            .collect();
+        FlatKdRopes {
+            nodes: self.nodes.iter().flat_map(|n| n.words()).collect(),
+            leaves,
+            indices: self.tree.indices.clone(),
+            root_min: self.tree.root_cell.min.to_array(),
+            root_max: self.tree.root_cell.max.to_array(),
+            tris: self.tree.tris.flat(),
         }
     }
 
