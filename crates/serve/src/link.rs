@@ -107,7 +107,7 @@ pub async fn measure_link(opts: &LinkOptions) -> Result<LinkReport> {
         quality: opts.quality,
         spp: Some(1),
         format: Some(opts.format),
-        preview: Some(false),
+        previews: Some(false),
     };
     let reports = run_load(&LoadOptions {
         url: opts.url.clone(),

@@ -144,7 +144,7 @@ pub struct SettingsJson {
     /// Whether frames rendered while the camera moves are half-size
     /// previews (`true`, the default) or full size.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub preview: Option<bool>,
+    pub previews: Option<bool>,
 }
 
 /// How a frame's pixels are sent.
@@ -323,8 +323,11 @@ mod tests {
         )
         .unwrap();
         assert_eq!(legacy.format, FrameFormat::Jpeg);
-        let s: SettingsJson = serde_json::from_str(r#"{"format":"raw","preview":false}"#).unwrap();
-        assert_eq!((s.format, s.preview), (Some(FrameFormat::Raw), Some(false)));
+        let s: SettingsJson = serde_json::from_str(r#"{"format":"raw","previews":false}"#).unwrap();
+        assert_eq!(
+            (s.format, s.previews),
+            (Some(FrameFormat::Raw), Some(false))
+        );
         assert!(serde_json::from_str::<SettingsJson>(r#"{"format":"png"}"#).is_err());
     }
 

@@ -47,7 +47,7 @@ pub struct View {
     pub format: FrameFormat,
     /// Whether frames rendered while the camera moves are half-size
     /// previews; otherwise every frame starts at full size.
-    pub preview: bool,
+    pub previews: bool,
     /// Incremented on every change of camera or settings.
     pub version: u64,
     /// Largest input `seq` applied.
@@ -93,7 +93,7 @@ impl ClientShared {
                 spp: config.spp,
                 quality: config.quality,
                 format: FrameFormat::Jpeg,
-                preview: true,
+                previews: true,
                 version: 1,
                 input_seq: 0,
                 last_input: now,
@@ -254,7 +254,7 @@ fn apply_settings(v: &mut View, s: &SettingsJson, config: &ServeConfig) -> Resul
     }
     (v.full, v.quality, v.spp) = (full, quality, spp);
     v.format = s.format.unwrap_or(v.format);
-    v.preview = s.preview.unwrap_or(v.preview);
+    v.previews = s.previews.unwrap_or(v.previews);
     Ok(())
 }
 
@@ -287,7 +287,7 @@ fn next_step(v: &View, world: &World, settle: std::time::Duration, now: Instant)
                 }
             }
         }
-        _ if v.preview => Next::Render(Stage::Preview),
+        _ if v.previews => Next::Render(Stage::Preview),
         _ => Next::Render(Stage::Full),
     }
 }
@@ -477,7 +477,7 @@ mod tests {
             next_step(&v, &w, settle, t0 + settle),
             Next::Render(Stage::Preview)
         ));
-        v.preview = false;
+        v.previews = false;
         assert!(matches!(
             next_step(&v, &w, settle, t0),
             Next::Render(Stage::Full)

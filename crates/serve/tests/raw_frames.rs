@@ -27,14 +27,14 @@ async fn raw_frames_equal_the_direct_render_and_jpeg_decodes_close_to_them() {
     let server = server(config()).await;
     let (mut ws, hello) = connect(&server, "").await;
     assert_eq!(hello["format"], "jpeg");
-    assert_eq!(hello["preview"], true);
+    assert_eq!(hello["previews"], true);
     // Drain the first (JPEG preview) frame, then ask for raw full-size
     // frames without previews and move the camera.
     let (h0, _) = next_raw(&mut ws).await;
     assert_eq!(h0.format, FrameFormat::Jpeg);
     send(
         &mut ws,
-        r#"{"type":"settings","width":96,"height":64,"spp":1,"format":"raw","preview":false}"#,
+        r#"{"type":"settings","width":96,"height":64,"spp":1,"format":"raw","previews":false}"#,
     )
     .await;
     send(&mut ws, r#"{"type":"orbit","yaw":0.3,"pitch":0.1,"seq":1}"#).await;
@@ -130,7 +130,7 @@ async fn raw_frames_over_the_reading_limit_of_the_server_still_arrive() {
     let server = server(config()).await;
     let (mut ws, _) = connect(&server, "").await;
     ws.send(Message::text(
-        r#"{"type":"settings","width":512,"height":512,"spp":1,"format":"raw","preview":false}"#,
+        r#"{"type":"settings","width":512,"height":512,"spp":1,"format":"raw","previews":false}"#,
     ))
     .await
     .unwrap();
