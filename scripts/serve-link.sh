@@ -101,12 +101,43 @@ throttle() {
   done
 }
 
+# Bulk TCP throughput from the server's namespace to the client's (the
+# frames' direction): 12 MB through one connection, timed by the receiver.
+cat >"$TMP/bulk.py" <<'PY'
+import socket, sys, time
+role, host = sys.argv[1], sys.argv[2]
+n = 12_000_000
+if role == "send":
+    s = socket.socket(); s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    s.bind((host, 5201)); s.listen(1); c, _ = s.accept()
+    c.sendall(bytes(n)); c.close()
+else:
+    for _ in range(50):
+        try:
+            c = socket.create_connection((host, 5201)); break
+        except OSError:
+            time.sleep(0.1)
+    t0, got = time.perf_counter(), 0
+    while True:
+        b = c.recv(1 << 20)
+        if not b: break
+        got += len(b)
+    print(f"{got * 8 / (time.perf_counter() - t0) / 1e6:.1f}")
+PY
+bulk() {
+  ip netns exec "$SNS" python3 "$TMP/bulk.py" send "$SADDR" & local sender=$!
+  ip netns exec "$CNS" python3 "$TMP/bulk.py" recv "$SADDR"
+  wait "$sender"
+}
+
 rm -rf "$OUT/runs"
 mkdir -p "$OUT/runs"
 LOAD_START="$(cut -d' ' -f1-3 /proc/loadavg)"
 failed=0
 for link in unthrottled "$RATE"; do
   [ "$link" = unthrottled ] || throttle
+  echo "$link $(bulk)" >>"$TMP/bulk.txt"
+  echo "== $link: bulk TCP $(tail -1 "$TMP/bulk.txt" | cut -d' ' -f2) Mbit/s"
   for size in 512 256; do
     for format in raw jpeg; do
       run="$link-$size-$format"
@@ -125,16 +156,17 @@ done
 LOAD_END="$(cut -d' ' -f1-3 /proc/loadavg)"
 QDISC="$(tc -n "$SNS" qdisc show dev "$SVETH" | head -1)"
 
-python3 - "$OUT" "$TMP/runs.txt" "$COMMAND" "$RATE" "$BURST" "$TBF_LATENCY" \
+python3 - "$OUT" "$TMP/runs.txt" "$TMP/bulk.txt" "$COMMAND" "$RATE" "$BURST" "$TBF_LATENCY" \
   "$LOAD_START" "$LOAD_END" "$QDISC" "$("$RAYKIT" --version 2>/dev/null || echo raykit)" \
   "$SECONDS_PER_RUN" "$WARMUP" "$INPUT_HZ" "$SCENE" <<'PY'
 import csv, json, os, platform, sys
-(out, runs_txt, command, rate, burst, tbf_latency, load_start, load_end, qdisc,
+(out, runs_txt, bulk_txt, command, rate, burst, tbf_latency, load_start, load_end, qdisc,
  version, seconds, warmup, input_hz, scene) = sys.argv[1:]
 paper = {512: 3.8, 256: 15.2}
 cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo")
             if l.startswith("model name")), "unknown CPU")
 cores = os.cpu_count()
+bulk = dict(l.split() for l in open(bulk_txt))
 rows = []
 for line in open(runs_txt):
     run, link, size, fmt, load = line.split()
@@ -165,7 +197,9 @@ md = [f"# raykit serve over a rate-limited link (paper 001's 802.11g remote rend
       "acknowledged before the next is sent (one frame in flight).", "",
       f"Link: veth pair between two network namespaces; throttled runs add `tc tbf rate {rate} "
       f"burst {burst} latency {tbf_latency}` on both ends (`{qdisc}`). No latency or loss is "
-      "emulated (the kernel has no sch_netem); unthrottled runs show what the renderer alone allows.", "",
+      "emulated (the kernel has no sch_netem); unthrottled runs show what the renderer alone allows. "
+      f"Bulk TCP throughput server → client (12 MB, one connection): unthrottled "
+      f"{bulk.get('unthrottled', '–')} Mbit/s, throttled {bulk.get(rate, '–')} Mbit/s.", "",
       "| size | format | link | fps | paper fps (802.11g) | KB/frame | Mbit/s | latency p50 / p95 ms | render ms (median) | load |",
       "|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
 for r in rows:
