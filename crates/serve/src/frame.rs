@@ -1,5 +1,6 @@
-//! Rendering one frame and encoding it as JPEG.
+//! Rendering one frame and encoding it as JPEG or sending its raw RGB.
 
+use crate::protocol::FrameFormat;
 use crate::world::World;
 use jpeg_encoder::{ColorType, Encoder};
 use raykit_core::Camera;
@@ -8,8 +9,8 @@ use std::time::Instant;
 
 /// A rendered, encoded frame.
 pub struct EncodedFrame {
-    /// Baseline JPEG bytes.
-    pub jpeg: Vec<u8>,
+    /// Baseline JPEG bytes, or raw RGB rows.
+    pub payload: Vec<u8>,
     /// Render time, ms.
     pub render_ms: f64,
     /// Encoding time, ms.
@@ -18,13 +19,14 @@ pub struct EncodedFrame {
 
 /// Render `world` through `camera` at `width` × `height` with `spp`
 /// samples (the renderer of `raykit render`: Blinn-Phong, shadow rays) on
-/// the rayon pool, then JPEG-encode at `quality`. Blocking: call it from a
-/// blocking task.
-pub fn render_jpeg(
+/// the rayon pool, then JPEG-encode at `quality` or keep the RGB as it is
+/// ([`FrameFormat`]). Blocking: call it from a blocking task.
+pub fn render_frame(
     world: &World,
     camera: &Camera,
     (width, height): (u32, u32),
     spp: u32,
+    format: FrameFormat,
     quality: u8,
 ) -> EncodedFrame {
     let start = Instant::now();
@@ -44,9 +46,12 @@ pub fn render_jpeg(
         &|_| {},
     );
     let rendered = Instant::now();
-    let jpeg = encode_jpeg(&image.rgb, width, height, quality);
+    let payload = match format {
+        FrameFormat::Jpeg => encode_jpeg(&image.rgb, width, height, quality),
+        FrameFormat::Raw => image.rgb,
+    };
     EncodedFrame {
-        jpeg,
+        payload,
         render_ms: (rendered - start).as_secs_f64() * 1e3,
         encode_ms: rendered.elapsed().as_secs_f64() * 1e3,
     }
@@ -86,7 +91,7 @@ impl RenderQueue {
         RenderQueue { jobs }
     }
 
-    /// [`render_jpeg`] in turn, awaited without blocking an async worker;
+    /// [`render_frame`] in turn, awaited without blocking an async worker;
     /// `None` if the render panicked (the thread survives it). Dropping the
     /// future before the turn comes cancels the render.
     pub async fn render(
@@ -95,6 +100,7 @@ impl RenderQueue {
         camera: Camera,
         size: (u32, u32),
         spp: u32,
+        format: FrameFormat,
         quality: u8,
     ) -> Option<EncodedFrame> {
         let (tx, rx) = tokio::sync::oneshot::channel();
@@ -104,7 +110,7 @@ impl RenderQueue {
                 return;
             }
             let frame = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                render_jpeg(&world, &camera, size, spp, quality)
+                render_frame(&world, &camera, size, spp, format, quality)
             }));
             if let Ok(frame) = frame {
                 let _ = tx.send(frame);

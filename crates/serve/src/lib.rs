@@ -4,14 +4,15 @@
 //! [`start`] binds an axum server that renders the loaded scene with
 //! [`raykit_render`] for every client through its own camera, sharing the
 //! scene and its BVH. Browsers get a small web client (orbit, pan, zoom, WASD
-//! fly, phone orientation); frames go over a WebSocket as JPEG, one
+//! fly, phone orientation); frames go over a WebSocket as JPEG (or raw RGB
+//! for a client that asks, as a display without a decoder would), one
 //! unacknowledged frame per client at most (so a slow client builds no
 //! backlog and costs the others nothing), from a half-size preview while the
 //! camera moves to full size and more samples once it stops. `GET /mjpeg`
 //! serves clients without JavaScript, `/api/*` loads scenes and sets
 //! cameras, lights and resolution, `/metrics` reports per-client fps,
-//! input-to-frame latency and bytes/s. See `PROTOCOL.md` for the wire
-//! format.
+//! input-to-frame latency and bytes/s; [`link`] measures one stream over a
+//! network link. See `PROTOCOL.md` for the wire format.
 //!
 //! ```no_run
 //! # async fn run() -> anyhow::Result<()> {
@@ -37,6 +38,7 @@ mod auth;
 pub mod camera_control;
 mod config;
 mod frame;
+pub mod link;
 pub mod load;
 mod mjpeg;
 pub mod protocol;
@@ -147,6 +149,11 @@ pub async fn start(config: ServeConfig, loader: SceneLoader, scene: &str) -> Res
     let addr = listener.local_addr()?;
     let app = router(state.clone());
     let mut stop = state.watch_shutdown();
+    // Frames and acknowledgements go out at once (no Nagle delay): one
+    // frame is in flight at a time, so a held-back tail stalls the stream.
+    let listener = axum::serve::ListenerExt::tap_io(listener, |tcp| {
+        let _ = tcp.set_nodelay(true);
+    });
     let task = tokio::spawn(async move {
         axum::serve(listener, app)
             .with_graceful_shutdown(async move {

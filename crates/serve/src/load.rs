@@ -2,14 +2,19 @@
 //! camera at a fixed input rate and acknowledging every frame, recording
 //! what arrived, when, and how long each input took to show.
 
-use crate::protocol::{decode_frame, Stage};
+use crate::protocol::{decode_frame, FrameFormat, SettingsJson, Stage};
 use crate::stats::median;
 use anyhow::{bail, Context, Result};
 use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
+use tokio_tungstenite::tungstenite::protocol::WebSocketConfig;
 use tokio_tungstenite::tungstenite::Message;
+
+/// Largest frame message a load client accepts: a raw 3840×2160 frame
+/// (about 25 MB) with room to spare.
+pub const MAX_FRAME_MESSAGE_BYTES: usize = 64 << 20;
 
 /// What each simulated client does.
 #[derive(Clone, Debug)]
@@ -24,6 +29,9 @@ pub struct LoadOptions {
     pub still: Duration,
     /// Inputs per second while moving (orbit steps of 0.02 rad).
     pub input_hz: f64,
+    /// Settings sent once after connecting (size, format, previews), if
+    /// any.
+    pub settings: Option<SettingsJson>,
 }
 
 /// One frame as a client saw it.
@@ -37,8 +45,12 @@ pub struct FrameRecord {
     pub width: u32,
     /// Size.
     pub height: u32,
-    /// JPEG bytes.
+    /// Payload format.
+    pub format: FrameFormat,
+    /// Payload bytes.
     pub bytes: usize,
+    /// Whole message bytes (header included).
+    pub message_bytes: usize,
     /// Server render time, ms.
     pub render_ms: f64,
 }
@@ -50,6 +62,9 @@ pub struct ClientReport {
     pub frames: Vec<FrameRecord>,
     /// Input-to-frame latencies measured by the client, ms.
     pub latencies_ms: Vec<f64>,
+    /// When the frame showing each input of `latencies_ms` arrived, seconds
+    /// since the client connected.
+    pub latencies_at_s: Vec<f64>,
     /// Inputs sent.
     pub inputs: u64,
     /// Error messages and failures.
@@ -116,9 +131,20 @@ async fn one_client(opts: &LoadOptions, index: usize) -> ClientReport {
 }
 
 async fn drive(opts: &LoadOptions, index: usize, report: &mut ClientReport) -> Result<()> {
-    let (mut ws, _) = tokio_tungstenite::connect_async(opts.url.as_str())
-        .await
-        .with_context(|| format!("connecting to {}", opts.url))?;
+    let config = WebSocketConfig::default()
+        .max_message_size(Some(MAX_FRAME_MESSAGE_BYTES))
+        .max_frame_size(Some(MAX_FRAME_MESSAGE_BYTES));
+    let (mut ws, _) =
+        tokio_tungstenite::connect_async_with_config(opts.url.as_str(), Some(config), true)
+            .await
+            .with_context(|| format!("connecting to {}", opts.url))?;
+    if let Some(s) = &opts.settings {
+        let mut msg = serde_json::to_value(s).context("settings to JSON")?;
+        msg["type"] = "settings".into();
+        ws.send(Message::text(msg.to_string()))
+            .await
+            .context("sending settings")?;
+    }
     let start = Instant::now();
     let stop_moving = start + opts.moving;
     let end = stop_moving + opts.still;
@@ -144,17 +170,20 @@ async fn drive(opts: &LoadOptions, index: usize, report: &mut ClientReport) -> R
                 match msg.context("receiving")? {
                     Message::Binary(b) => {
                         let now = Instant::now();
-                        let (h, jpeg) = decode_frame(&b).map_err(anyhow::Error::msg)?;
+                        let (h, payload) = decode_frame(&b).map_err(anyhow::Error::msg)?;
                         while sent.front().is_some_and(|&(s, _)| s <= h.input_seq) {
                             let (_, t) = sent.pop_front().expect("front exists");
                             report.latencies_ms.push((now - t).as_secs_f64() * 1e3);
+                            report.latencies_at_s.push((now - start).as_secs_f64());
                         }
                         report.frames.push(FrameRecord {
                             at_s: (now - start).as_secs_f64(),
                             stage: h.stage,
                             width: h.width,
                             height: h.height,
-                            bytes: jpeg.len(),
+                            format: h.format,
+                            bytes: payload.len(),
+                            message_bytes: b.len(),
                             render_ms: h.render_ms,
                         });
                         let ack = format!(r#"{{"type":"ack","frame":{}}}"#, h.frame);

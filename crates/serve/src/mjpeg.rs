@@ -4,6 +4,7 @@
 
 use crate::api::{error, query_u32};
 use crate::app::{lock, AppState, ClientGuard};
+use crate::protocol::FrameFormat;
 use axum::body::{Body, Bytes};
 use axum::extract::{Query, State};
 use axum::http::{header, StatusCode};
@@ -118,23 +119,30 @@ async fn next_part(mut s: Stream) -> Option<(Result<Bytes, std::io::Error>, Stre
     let encoded = s
         .state
         .renderer
-        .render(world.clone(), world.camera, size, spp, quality)
+        .render(
+            world.clone(),
+            world.camera,
+            size,
+            spp,
+            FrameFormat::Jpeg,
+            quality,
+        )
         .await?;
     let now = Instant::now();
     let client = &s.guard.client;
-    lock(&client.stats).frame_sent(now, encoded.jpeg.len(), &[]);
+    lock(&client.stats).frame_sent(now, encoded.payload.len(), &[]);
     s.state.count_frame(
-        encoded.jpeg.len(),
+        encoded.payload.len(),
         (encoded.render_ms + encoded.encode_ms) * 1e-3,
     );
     s.last_version = Some(world.version);
     s.last_sent = now;
     let mut part = format!(
         "--{BOUNDARY}\r\nContent-Type: image/jpeg\r\nContent-Length: {}\r\n\r\n",
-        encoded.jpeg.len()
+        encoded.payload.len()
     )
     .into_bytes();
-    part.extend_from_slice(&encoded.jpeg);
+    part.extend_from_slice(&encoded.payload);
     part.extend_from_slice(b"\r\n");
     let part = Bytes::from(part);
     s.last_part = Some(part.clone());

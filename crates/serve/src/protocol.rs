@@ -1,5 +1,6 @@
 //! The messages of the WebSocket protocol (see `PROTOCOL.md`): what clients
-//! send, the JSON header in front of each JPEG frame, and the frame layout.
+//! send, the JSON header in front of each frame (JPEG or raw RGB), and the
+//! frame layout.
 
 use raykit_core::glam::Vec3;
 use raykit_core::Camera;
@@ -126,17 +127,36 @@ pub enum ClientMessage {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SettingsJson {
     /// Full-resolution width.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub width: Option<u32>,
     /// Full-resolution height.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub height: Option<u32>,
     /// JPEG quality, 1..=100.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub quality: Option<u8>,
     /// Samples per pixel of the refined stage.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spp: Option<u32>,
+    /// Frame payload format.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub format: Option<FrameFormat>,
+    /// Whether frames rendered while the camera moves are half-size
+    /// previews (`true`, the default) or full size.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub previews: Option<bool>,
+}
+
+/// How a frame's pixels are sent.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FrameFormat {
+    /// Baseline JPEG at the client's quality.
+    #[default]
+    Jpeg,
+    /// Uncompressed 8-bit RGB, rows top to bottom, `3 × width × height`
+    /// bytes: what a remote display without a decoder takes.
+    Raw,
 }
 
 /// How far a frame has refined.
@@ -163,7 +183,7 @@ impl Stage {
     }
 }
 
-/// The JSON header in front of every JPEG frame.
+/// The JSON header in front of every frame.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrameHeader {
     /// Frame number on this connection, from 1.
@@ -182,7 +202,10 @@ pub struct FrameHeader {
     pub camera: CameraJson,
     /// Render time, ms.
     pub render_ms: f64,
-    /// JPEG encoding time, ms.
+    /// Payload format (absent in headers of servers that only send JPEG).
+    #[serde(default)]
+    pub format: FrameFormat,
+    /// Encoding time (JPEG; 0 for raw), ms.
     pub encode_ms: f64,
     /// This client's frames per second over the last 2 s.
     pub fps: f64,
@@ -193,17 +216,18 @@ pub struct FrameHeader {
 }
 
 /// A binary frame message: header length (u32, little-endian), the JSON
-/// header, the JPEG.
-pub fn encode_frame(header: &FrameHeader, jpeg: &[u8]) -> Vec<u8> {
+/// header, the payload (JPEG or raw RGB, as the header's `format` says).
+pub fn encode_frame(header: &FrameHeader, payload: &[u8]) -> Vec<u8> {
     let json = serde_json::to_vec(header).expect("frame header serializes");
-    let mut out = Vec::with_capacity(4 + json.len() + jpeg.len());
+    let mut out = Vec::with_capacity(4 + json.len() + payload.len());
     out.extend_from_slice(&(json.len() as u32).to_le_bytes());
     out.extend_from_slice(&json);
-    out.extend_from_slice(jpeg);
+    out.extend_from_slice(payload);
     out
 }
 
-/// Split a binary frame message into its header and JPEG bytes.
+/// Split a binary frame message into its header and payload bytes; a raw
+/// payload must hold exactly `3 × width × height` bytes.
 pub fn decode_frame(bytes: &[u8]) -> Result<(FrameHeader, &[u8]), String> {
     let len_bytes: [u8; 4] = bytes
         .get(..4)
@@ -215,7 +239,20 @@ pub fn decode_frame(bytes: &[u8]) -> Result<(FrameHeader, &[u8]), String> {
         .ok_or_else(|| format!("frame header of {len} bytes runs past the message end"))?;
     let header: FrameHeader =
         serde_json::from_slice(json).map_err(|e| format!("frame header at byte 4: {e}"))?;
-    Ok((header, &bytes[4 + len..]))
+    let payload = &bytes[4 + len..];
+    if header.format == FrameFormat::Raw {
+        let want = 3 * header.width as u64 * header.height as u64;
+        if payload.len() as u64 != want {
+            return Err(format!(
+                "raw {}x{} frame: payload at byte {} has {} bytes, expected {want}",
+                header.width,
+                header.height,
+                4 + len,
+                payload.len()
+            ));
+        }
+    }
+    Ok((header, payload))
 }
 
 #[cfg(test)]
@@ -258,6 +295,7 @@ mod tests {
             input_seq: 9,
             camera: CameraJson::default(),
             render_ms: 1.5,
+            format: FrameFormat::Jpeg,
             encode_ms: 0.25,
             fps: 20.0,
             latency_ms: None,
@@ -265,9 +303,32 @@ mod tests {
         };
         let bytes = encode_frame(&header, b"JPEG");
         let (h, jpeg) = decode_frame(&bytes).unwrap();
-        assert_eq!((h, jpeg), (header, &b"JPEG"[..]));
+        assert_eq!((h, jpeg), (header.clone(), &b"JPEG"[..]));
         assert!(decode_frame(&bytes[..3]).is_err());
         assert!(decode_frame(&bytes[..10]).is_err());
+        // A raw payload must match the size; headers without a format are
+        // JPEG.
+        let raw = FrameHeader {
+            format: FrameFormat::Raw,
+            ..header
+        };
+        let pixels: Vec<u8> = (0..24).collect();
+        let bytes = encode_frame(&raw, &pixels);
+        assert_eq!(decode_frame(&bytes).unwrap().1, &pixels[..]);
+        assert!(decode_frame(&bytes[..bytes.len() - 1]).is_err());
+        let legacy: FrameHeader = serde_json::from_str(
+            r#"{"frame":1,"width":4,"height":2,"spp":1,"stage":"full","input_seq":0,
+               "camera":{},"render_ms":1,"encode_ms":1,"fps":0,"latency_ms":null,
+               "bytes_per_second":0}"#,
+        )
+        .unwrap();
+        assert_eq!(legacy.format, FrameFormat::Jpeg);
+        let s: SettingsJson = serde_json::from_str(r#"{"format":"raw","previews":false}"#).unwrap();
+        assert_eq!(
+            (s.format, s.previews),
+            (Some(FrameFormat::Raw), Some(false))
+        );
+        assert!(serde_json::from_str::<SettingsJson>(r#"{"format":"png"}"#).is_err());
     }
 
     #[test]

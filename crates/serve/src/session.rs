@@ -7,7 +7,9 @@
 use crate::app::{lock, AppState};
 use crate::camera_control::{camera_problem, fly, orbit, orient, pan, zoom};
 use crate::config::ServeConfig;
-use crate::protocol::{encode_frame, CameraJson, ClientMessage, FrameHeader, SettingsJson, Stage};
+use crate::protocol::{
+    encode_frame, CameraJson, ClientMessage, FrameFormat, FrameHeader, SettingsJson, Stage,
+};
 use crate::stats::{ClientSample, ClientStats};
 use crate::world::World;
 use raykit_core::Camera;
@@ -24,7 +26,7 @@ const MAX_PENDING_INPUTS: usize = 1024;
 pub enum Outgoing {
     /// A JSON text message.
     Text(String),
-    /// A frame: header and JPEG (see [`encode_frame`]).
+    /// A frame: header and payload (see [`encode_frame`]).
     Frame(Vec<u8>),
     /// A WebSocket ping (liveness check).
     Ping,
@@ -41,6 +43,11 @@ pub struct View {
     pub spp: u32,
     /// JPEG quality.
     pub quality: u8,
+    /// Payload format of the frames.
+    pub format: FrameFormat,
+    /// Whether frames rendered while the camera moves are half-size
+    /// previews; otherwise every frame starts at full size.
+    pub previews: bool,
     /// Incremented on every change of camera or settings.
     pub version: u64,
     /// Largest input `seq` applied.
@@ -85,6 +92,8 @@ impl ClientShared {
                 full: world.full,
                 spp: config.spp,
                 quality: config.quality,
+                format: FrameFormat::Jpeg,
+                previews: true,
                 version: 1,
                 input_seq: 0,
                 last_input: now,
@@ -244,6 +253,8 @@ fn apply_settings(v: &mut View, s: &SettingsJson, config: &ServeConfig) -> Resul
         return Err(format!("spp {spp} outside 1..={}", config.max_spp));
     }
     (v.full, v.quality, v.spp) = (full, quality, spp);
+    v.format = s.format.unwrap_or(v.format);
+    v.previews = s.previews.unwrap_or(v.previews);
     Ok(())
 }
 
@@ -276,7 +287,8 @@ fn next_step(v: &View, world: &World, settle: std::time::Duration, now: Instant)
                 }
             }
         }
-        _ => Next::Render(Stage::Preview),
+        _ if v.previews => Next::Render(Stage::Preview),
+        _ => Next::Render(Stage::Full),
     }
 }
 
@@ -348,7 +360,14 @@ pub async fn render_loop(
                 let camera = snapshot.camera;
                 let Some(encoded) = state
                     .renderer
-                    .render(world.clone(), camera, size, spp, snapshot.quality)
+                    .render(
+                        world.clone(),
+                        camera,
+                        size,
+                        spp,
+                        snapshot.format,
+                        snapshot.quality,
+                    )
                     .await
                 else {
                     return;
@@ -363,11 +382,11 @@ pub async fn render_loop(
                 };
                 let (fps, latency_ms, bytes_per_second) = {
                     let mut s = lock(&client.stats);
-                    s.frame_sent(now, encoded.jpeg.len(), &inputs);
+                    s.frame_sent(now, encoded.payload.len(), &inputs);
                     (s.fps(now), s.median_latency_ms(), s.bytes_per_second(now))
                 };
                 state.count_frame(
-                    encoded.jpeg.len(),
+                    encoded.payload.len(),
                     (encoded.render_ms + encoded.encode_ms) * 1e-3,
                 );
                 let header = FrameHeader {
@@ -379,13 +398,14 @@ pub async fn render_loop(
                     input_seq: snapshot.input_seq,
                     camera: CameraJson::from_camera(&camera),
                     render_ms: encoded.render_ms,
+                    format: snapshot.format,
                     encode_ms: encoded.encode_ms,
                     fps,
                     latency_ms,
                     bytes_per_second,
                 };
                 if out
-                    .send(Outgoing::Frame(encode_frame(&header, &encoded.jpeg)))
+                    .send(Outgoing::Frame(encode_frame(&header, &encoded.payload)))
                     .await
                     .is_err()
                 {
@@ -450,11 +470,17 @@ mod tests {
             next_step(&v, &w, settle, t0 + settle),
             Next::Wait(None)
         ));
-        // Any change starts again from the preview.
+        // Any change starts again from the preview, or from full size for
+        // clients that turned previews off.
         v.version += 1;
         assert!(matches!(
             next_step(&v, &w, settle, t0 + settle),
             Next::Render(Stage::Preview)
+        ));
+        v.previews = false;
+        assert!(matches!(
+            next_step(&v, &w, settle, t0),
+            Next::Render(Stage::Full)
         ));
     }
 

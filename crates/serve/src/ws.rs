@@ -88,9 +88,9 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
     let mut shutdown = state.watch_shutdown();
 
     let world = state.world();
-    let (full, quality, spp) = {
+    let (full, quality, spp, format, previews) = {
         let v = lock(&client.view);
-        (v.full, v.quality, v.spp)
+        (v.full, v.quality, v.spp, v.format, v.previews)
     };
     let c = &state.config;
     let hello = json!({
@@ -100,7 +100,7 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
         "camera": CameraJson::from_camera(&world.camera),
         "full": [full.0, full.1],
         "preview": crate::config::ServeConfig::preview_size(full),
-        "quality": quality, "spp": spp,
+        "quality": quality, "spp": spp, "format": format, "previews": previews,
         "limits": {"max_width": c.max_size.0, "max_height": c.max_size.1, "max_spp": c.max_spp,
             "max_message_bytes": c.max_message_bytes,
             "max_inputs_per_second": c.max_inputs_per_second},

@@ -341,6 +341,7 @@ async fn a_short_load_test_delivers_frames_to_every_client() {
         moving: Duration::from_millis(1500),
         still: Duration::from_millis(800),
         input_hz: 30.0,
+        settings: None,
     };
     let reports = raykit_serve::load::run_load(&opts).await.unwrap();
     for (i, r) in reports.iter().enumerate() {

@@ -6,6 +6,7 @@ pub mod gpu;
 pub mod gpu_terrain;
 pub mod kdtree_traversal;
 pub mod serve;
+pub mod serve_link;
 pub mod split_heuristic;
 pub mod terrain;
 pub mod whitted;
@@ -39,7 +40,8 @@ enum Which {
     Cull(cull::CullExperimentArgs),
     /// Remote rendering: `raykit serve` on loopback — one
     /// client's fps and latency while moving and refinement when still, then
-    /// N clients for T seconds with frames, errors, latency and memory.
+    /// N clients for T seconds with frames, errors, latency and memory; with
+    /// --connect, one stream's fps, bytes and latency to a running server.
     Serve(serve::ServeExperimentArgs),
     /// DEMs: the box method against per-cell and
     /// max-mipmap ray casting for τ = 4..4096, shadow-mask times brute force

@@ -26,33 +26,59 @@ WebSocket clients that orbit the camera and acknowledge every frame, as the web 
 Phase 1: one client moves for --single-seconds at --input-hz, then stops for 3 s.\n\
 Phase 2: --clients clients move for --seconds; the server's resident memory is sampled each second.\n\
 Writes report.json, report.md, clients.csv and memory.svg into --out; exit status 1 when a client\n\
-saw an error or got no frame."
+saw an error or got no frame.\n\n\
+With --connect ws://HOST:PORT/ws it starts no server: one client drives that server for --seconds,\n\
+asking for full-size --width x --height frames of one sample in --format (raw RGB or JPEG, no\n\
+half-size previews), and reports fps, bytes per frame, Mbit/s and input-to-frame latency\n\
+percentiles after --warmup seconds (link.json, link.md); scripts/serve-link.sh runs it across a\n\
+rate-limited network link."
 )]
 pub struct ServeExperimentArgs {
     /// Scene to serve.
     #[arg(long, default_value = "builtin:cornell")]
-    scene: String,
+    pub(super) scene: String,
     /// Clients in phase 2.
     #[arg(long, default_value_t = 8)]
-    clients: usize,
+    pub(super) clients: usize,
     /// Length of phase 2, seconds.
     #[arg(long, default_value_t = 60.0)]
-    seconds: f64,
+    pub(super) seconds: f64,
     /// Length of phase 1's moving part, seconds.
     #[arg(long, default_value_t = 10.0)]
-    single_seconds: f64,
+    pub(super) single_seconds: f64,
     /// Inputs per second each client sends while moving.
     #[arg(long, default_value_t = 60.0)]
-    input_hz: f64,
+    pub(super) input_hz: f64,
     /// Full resolution (the preview while moving is half).
     #[arg(long, default_value_t = 1280)]
-    width: u32,
+    pub(super) width: u32,
     /// Full resolution height.
     #[arg(long, default_value_t = 720)]
-    height: u32,
+    pub(super) height: u32,
     /// Output folder.
     #[arg(long, default_value = "experiments/serve")]
-    out: PathBuf,
+    pub(super) out: PathBuf,
+    /// Drive the server at this WebSocket URL instead of starting one.
+    #[arg(long, value_name = "URL")]
+    pub(super) connect: Option<String>,
+    /// Frame payload with --connect.
+    #[arg(long, value_enum, default_value_t = LinkFormat::Jpeg)]
+    pub(super) format: LinkFormat,
+    /// JPEG quality to ask for with --connect (default: the server's).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=100))]
+    pub(super) quality: Option<u8>,
+    /// Seconds not counted at the start with --connect.
+    #[arg(long, default_value_t = 2.0)]
+    pub(super) warmup: f64,
+}
+
+/// Frame payload of `--format`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub(super) enum LinkFormat {
+    /// Uncompressed 8-bit RGB.
+    Raw,
+    /// Baseline JPEG.
+    Jpeg,
 }
 
 /// Phase 1's figures.
@@ -119,8 +145,12 @@ fn mean(xs: &[f64]) -> Option<f64> {
     (!xs.is_empty()).then(|| xs.iter().sum::<f64>() / xs.len() as f64)
 }
 
-/// Run both phases and write the report.
+/// Run both phases and write the report, or with `--connect` measure the
+/// link to a running server.
 pub fn run(args: ServeExperimentArgs) -> Result<ExitCode> {
+    if let Some(url) = args.connect.clone() {
+        return super::serve_link::run(&url, &args);
+    }
     if args.clients == 0 || args.clients > 64 {
         bail!("--clients must be between 1 and 64");
     }
@@ -169,6 +199,7 @@ pub fn run(args: ServeExperimentArgs) -> Result<ExitCode> {
             moving: Duration::from_secs_f64(args.single_seconds),
             still: Duration::from_secs(3),
             input_hz: args.input_hz,
+            settings: None,
         })
         .await?;
         bar.set_message(format!("phase 2: {} clients", args.clients));
@@ -190,6 +221,7 @@ pub fn run(args: ServeExperimentArgs) -> Result<ExitCode> {
             moving: Duration::from_secs_f64(args.seconds),
             still: Duration::ZERO,
             input_hz: 30.0,
+            settings: None,
         })
         .await?;
         let samples = sampling.await?;
