@@ -8,17 +8,14 @@ use raykit_core::rng::Pcg32;
 use raykit_core::tri::reference::{edge_distance_f64, intersect_f64, plane_t_f64};
 use raykit_core::{Ray, TriangleMesh, Vec3};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn raykit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raykit"))
-        .args(args)
-        .output()
-        .expect("the raykit binary runs")
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::{raykit, s, text};
 
 fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+    text(&o.stderr)
 }
 
 fn data(rel: &str) -> PathBuf {
@@ -32,10 +29,6 @@ fn data(rel: &str) -> PathBuf {
         p.display()
     );
     p
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
 }
 
 /// The JSON statistics line of a run.

@@ -5,8 +5,8 @@
 //! first `k` and counts; bad transforms and bad rays.
 
 mod instancing_support;
-mod shared_meshes;
 
+use instancing_support::shared_meshes::shared_obj;
 use instancing_support::{
     agree_with_flattened, close_on_plane, crossings, ids, near_edge, rays, Crossing, Placed,
 };
@@ -14,7 +14,6 @@ use raykit_core::accel::BuildOptions;
 use raykit_core::glam::{Affine3A, DVec3, Mat3, Vec3};
 use raykit_core::instancing::{SceneBuilder, SceneError, MASK_ALL};
 use raykit_core::{Ray, TriangleMesh};
-use shared_meshes::shared_obj;
 
 /// The bunny and the teapot (open meshes), each placed several times with
 /// rotations, non-uniform and mirroring scales.

@@ -3,6 +3,12 @@
 //! on the object-space corners mapped to world space in `f64`.
 #![allow(dead_code)]
 
+#[path = "../shared_meshes/mod.rs"]
+pub mod shared_meshes;
+
+/// Rays at the scene's box (the saved-BVH tests' ray sets).
+pub use shared_meshes::rays_in as rays;
+
 use raykit_core::accel::{Accel, BuildOptions, Bvh8};
 use raykit_core::glam::{Affine3A, DAffine3, DVec3, Quat, Vec3};
 use raykit_core::instancing::{InstancedScene, SceneBuilder, SceneHit};
@@ -158,34 +164,6 @@ pub fn crossings(world: &[WorldTri], ray: &Ray) -> Vec<Crossing> {
     }
     out.sort_by(|x, y| x.t.total_cmp(&y.t));
     out
-}
-
-/// Rays at the scene: from a sphere around it towards points of its box,
-/// a quarter from inside the box in random directions, a fifth of all as
-/// segments.
-pub fn rays(bounds: &Aabb, n: usize, seed: u64) -> Vec<Ray> {
-    let (c, r) = (bounds.center(), bounds.extent().length());
-    let mut rng = Pcg32::new(seed);
-    (0..n)
-        .map(|i| {
-            let target = rng.in_box(bounds.min, bounds.max);
-            let origin = if i % 4 == 0 {
-                rng.in_box(bounds.min, bounds.max)
-            } else {
-                c + rng.unit_vector() * r
-            };
-            let dir = if i % 4 == 0 {
-                rng.unit_vector()
-            } else {
-                target - origin
-            };
-            if i % 5 == 0 {
-                Ray::segment(origin, dir, 0.05 * rng.next_f32(), 0.3 + rng.next_f32())
-            } else {
-                Ray::new(origin, dir)
-            }
-        })
-        .collect()
 }
 
 /// Relative agreement of two distances.

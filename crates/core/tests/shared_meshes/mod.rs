@@ -72,11 +72,15 @@ pub fn deformed(mesh: &TriangleMesh, phase: f32, amp: f32) -> TriangleMesh {
     out
 }
 
-/// `n` rays at `mesh`: from a sphere around it towards points of its box,
-/// a quarter from inside the box in random directions, a fifth of all as
-/// segments.
+/// `n` rays at `mesh`: see [`rays_in`].
 pub fn rays(mesh: &TriangleMesh, n: usize, seed: u64) -> Vec<Ray> {
-    let b: Aabb = mesh.bounds();
+    rays_in(&mesh.bounds(), n, seed)
+}
+
+/// `n` rays at the box `b`: from a sphere around it towards points of the
+/// box, a quarter from inside the box in random directions, a fifth of all
+/// as segments.
+pub fn rays_in(b: &Aabb, n: usize, seed: u64) -> Vec<Ray> {
     let (c, r) = (b.center(), b.extent().length());
     let mut rng = Pcg32::new(seed);
     (0..n)
