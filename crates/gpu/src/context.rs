@@ -24,10 +24,14 @@ pub struct GpuContext {
     pub timestamps: bool,
     errors: Arc<std::sync::Mutex<Vec<String>>>,
     /// Compiled kernels by source, entry point and layout, so a kernel is
-    /// compiled once per device however many scenes use it.
-    pub(crate) kernels:
-        Arc<std::sync::Mutex<std::collections::HashMap<u64, crate::kernel::Kernel>>>,
+    /// compiled once per device however many scenes use it. The kernel
+    /// layer stores and downcasts its own type, so the device layer does not
+    /// depend on it.
+    pub(crate) kernels: Arc<std::sync::Mutex<std::collections::HashMap<u64, CachedKernel>>>,
 }
+
+/// A compiled kernel in [`GpuContext`]'s cache, type-erased.
+pub(crate) type CachedKernel = Arc<dyn std::any::Any + Send + Sync>;
 
 impl std::fmt::Debug for GpuContext {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

@@ -127,7 +127,8 @@ impl Kernel {
             (&source, entry, groups).hash(&mut h);
             h.finish()
         };
-        if let Some(k) = ctx.kernels.lock().unwrap().get(&key) {
+        let cached = ctx.kernels.lock().unwrap().get(&key).cloned();
+        if let Some(k) = cached.as_deref().and_then(|k| k.downcast_ref::<Kernel>()) {
             return Ok(k.clone());
         }
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -175,7 +176,10 @@ impl Kernel {
             return Err(GpuError::Shader(format!("{label}: {e}")));
         }
         let kernel = Kernel { pipeline, layouts };
-        ctx.kernels.lock().unwrap().insert(key, kernel.clone());
+        ctx.kernels
+            .lock()
+            .unwrap()
+            .insert(key, std::sync::Arc::new(kernel.clone()));
         Ok(kernel)
     }
 

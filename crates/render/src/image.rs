@@ -44,6 +44,35 @@ pub struct Image {
 }
 
 impl Image {
+    /// How far `other` (the same size) is from this image: the number of
+    /// pixels whose 8-bit colour differs by more than 2 levels in some
+    /// channel, and the RMSE of the linear radiance.
+    pub fn difference(&self, other: &Image) -> (usize, f64) {
+        let differing = self
+            .rgb
+            .chunks_exact(3)
+            .zip(other.rgb.chunks_exact(3))
+            .filter(|(p, q)| p.iter().zip(*q).any(|(x, y)| x.abs_diff(*y) > 2))
+            .count();
+        let se: f64 = self
+            .linear
+            .iter()
+            .zip(&other.linear)
+            .map(|(p, q)| (*p - *q).length_squared() as f64 / 3.0)
+            .sum();
+        (differing, (se / self.linear.len().max(1) as f64).sqrt())
+    }
+
+    /// 8-bit RGB of |self − other| × 4 per channel, for looking at where two
+    /// renders differ.
+    pub fn difference_rgb(&self, other: &Image) -> Vec<u8> {
+        self.rgb
+            .iter()
+            .zip(&other.rgb)
+            .map(|(x, y)| x.abs_diff(*y).saturating_mul(4))
+            .collect()
+    }
+
     /// An image from linear radiance, encoded with `encoding`.
     pub fn from_linear(width: u32, height: u32, linear: Vec<Vec3>, encoding: Encoding) -> Image {
         assert_eq!(linear.len(), width as usize * height as usize);

@@ -1,6 +1,6 @@
 //! Errors of [`crate::builtin`].
 
-use crate::spec::BUILTINS;
+use crate::builtins::BUILTINS;
 use std::fmt;
 
 /// What is wrong with a built-in scene specification such as

@@ -15,6 +15,7 @@
 #![warn(missing_docs)]
 
 mod builder;
+mod builtins;
 pub mod cornell;
 mod error;
 pub mod noise;
@@ -24,15 +25,14 @@ mod spec;
 pub mod terrain;
 
 pub use builder::{material, MeshBuilder};
+pub use builtins::{description, BuiltinInfo, BUILTINS, BUILTIN_NAMES};
 pub use cornell::{cornell, whitted};
 pub use error::SceneError;
 pub use raykit_core::Icosphere;
 pub use raykit_core::{Light, LightSample, PointLight};
 pub use scatter::scatter;
 pub use shirley6::shirley6;
-pub use spec::{
-    builtin, description, BuiltinInfo, BUILTINS, BUILTIN_NAMES, DEFAULT_SEED, MAX_TRIANGLES,
-};
+pub use spec::{builtin, DEFAULT_SEED, MAX_TRIANGLES};
 pub use terrain::terrain;
 
 use raykit_core::{Camera, TriangleMesh};

@@ -1,10 +1,11 @@
 //! The HTTP API: the web client's files, status, scene loading, camera,
 //! lights and resolution, and the Prometheus metrics.
 
-use crate::app::{lock, AppState};
+use crate::app::AppState;
+use crate::client::ClientShared;
 use crate::protocol::CameraJson;
-use crate::session::ClientShared;
 use crate::stats::prometheus;
+use crate::sync::lock;
 use axum::body::Bytes;
 use axum::extract::{Query, State};
 use axum::http::{header, StatusCode};

@@ -1,10 +1,11 @@
 //! The server's shared state: settings, the world every client renders, the
 //! client registry with its limit, totals and the shutdown signal.
 
+use crate::client::ClientShared;
 use crate::config::ServeConfig;
 use crate::frame::RenderQueue;
-use crate::session::ClientShared;
 use crate::stats::{ClientSample, Totals};
+use crate::sync::lock;
 use crate::world::{Geometry, World};
 use raykit_scene::Scene;
 use std::collections::BTreeMap;
@@ -17,12 +18,6 @@ use tokio::sync::watch;
 /// path); supplied by the caller so the server does not depend on the file
 /// formats.
 pub type SceneLoader = Arc<dyn Fn(&str) -> anyhow::Result<Scene> + Send + Sync>;
-
-/// Lock a mutex, recovering the data if a panicking thread poisoned it (the
-/// state stays consistent: every critical section only assigns fields).
-pub fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
-}
 
 /// Everything the handlers share.
 pub struct AppState {

@@ -2,7 +2,8 @@
 //! every request when the server has a token.
 
 use crate::api::error;
-use crate::app::{lock, AppState};
+use crate::app::AppState;
+use crate::sync::lock;
 use axum::extract::{Request, State};
 use axum::http::{header, StatusCode};
 use axum::middleware::Next;

@@ -36,6 +36,7 @@ mod api;
 mod app;
 mod auth;
 pub mod camera_control;
+mod client;
 mod config;
 mod frame;
 pub mod link;
@@ -44,6 +45,7 @@ mod mjpeg;
 pub mod protocol;
 mod session;
 pub mod stats;
+mod sync;
 mod world;
 mod ws;
 

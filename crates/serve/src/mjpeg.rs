@@ -3,8 +3,9 @@
 //! take it, so a slow reader gets the latest view and no backlog.
 
 use crate::api::{error, query_u32};
-use crate::app::{lock, AppState, ClientGuard};
+use crate::app::{AppState, ClientGuard};
 use crate::protocol::FrameFormat;
+use crate::sync::lock;
 use axum::body::{Body, Bytes};
 use axum::extract::{Query, State};
 use axum::http::{header, StatusCode};

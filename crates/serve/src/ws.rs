@@ -1,9 +1,10 @@
 //! The WebSocket endpoint: hello, then frames from the session's render loop
 //! one way and validated, rate-limited client messages the other.
 
-use crate::app::{lock, AppState, ClientGuard};
+use crate::app::{AppState, ClientGuard};
 use crate::protocol::{CameraJson, ClientMessage, Envelope};
 use crate::session::{render_loop, Outgoing};
+use crate::sync::lock;
 use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
 use axum::extract::State;
 use axum::response::{IntoResponse, Response};
@@ -165,7 +166,7 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
                 // Over-long messages end the connection (tungstenite cannot
                 // skip them); say why if the socket still works.
                 if e.to_string().contains("too long") || e.to_string().contains("too big") {
-                    client.count_error(&state);
+                    client.count_error(&state.totals);
                     close = Some((CLOSE_TOO_BIG, "message over the size limit"));
                 }
                 break;
@@ -196,7 +197,7 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
                 );
                 reply_error(&tx, &client, &state, &m);
             } else {
-                client.count_error(&state);
+                client.count_error(&state.totals);
             }
             continue;
         }
@@ -232,11 +233,11 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
 /// that does not read), the message is dropped but still counted.
 fn reply_error(
     tx: &mpsc::Sender<Outgoing>,
-    client: &crate::session::ClientShared,
+    client: &crate::client::ClientShared,
     state: &AppState,
     message: &str,
 ) {
-    client.count_error(state);
+    client.count_error(&state.totals);
     let msg = json!({"type": "error", "message": message}).to_string();
     let _ = tx.try_send(Outgoing::Text(msg));
 }

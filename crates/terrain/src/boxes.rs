@@ -9,9 +9,9 @@
 //! every surface point inside the frustum, so no ray meets the surface
 //! before the nearest box entry on it.
 
+use crate::camera::{dot, CameraFrame, TerrainCamera};
 use crate::heightfield::{slab, HeightField};
 use crate::pyramid::MaxMipmap;
-use crate::view::{dot, CameraFrame, TerrainCamera};
 use rayon::prelude::*;
 
 /// A surviving quadtree node as a box in grid units.

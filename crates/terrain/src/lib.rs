@@ -11,6 +11,7 @@
 //!   start, then a march from there.
 
 pub mod boxes;
+pub mod camera;
 pub mod curvature;
 pub mod dem;
 pub mod fractal;
@@ -23,7 +24,7 @@ pub mod shadow;
 pub mod sun;
 pub mod view;
 
+pub use camera::TerrainCamera;
 pub use dem::{Dem, GeoRef};
 pub use heightfield::{GridRay, HeightField, Steps, TerrainHit};
 pub use pyramid::MaxMipmap;
-pub use view::TerrainCamera;

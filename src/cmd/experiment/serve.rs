@@ -10,8 +10,9 @@ use crate::plot::{write_svg, LineChart, Series};
 use anyhow::{bail, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use raykit_serve::link::LinkOptions;
 use raykit_serve::load::{percentile, rss_kib, run_load, ClientReport, LoadOptions};
-use raykit_serve::protocol::Stage;
+use raykit_serve::protocol::{FrameFormat, Stage};
 use raykit_serve::{start, ServeConfig};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -149,7 +150,19 @@ fn mean(xs: &[f64]) -> Option<f64> {
 /// link to a running server.
 pub fn run(args: ServeExperimentArgs) -> Result<ExitCode> {
     if let Some(url) = args.connect.clone() {
-        return super::serve_link::run(&url, &args);
+        let opts = LinkOptions {
+            url,
+            size: (args.width, args.height),
+            format: match args.format {
+                LinkFormat::Raw => FrameFormat::Raw,
+                LinkFormat::Jpeg => FrameFormat::Jpeg,
+            },
+            quality: args.quality,
+            seconds: args.seconds,
+            warmup: args.warmup,
+            input_hz: args.input_hz,
+        };
+        return super::serve_link::run(&opts, &args.out);
     }
     if args.clients == 0 || args.clients > 64 {
         bail!("--clients must be between 1 and 64");

@@ -3,13 +3,12 @@
 //! handheld over 802.11g was in paper 001: frames per second at one size,
 //! bytes per frame, the bit rate, and input-to-frame latency percentiles.
 
-use super::serve::{LinkFormat, ServeExperimentArgs};
 use super::{provenance, write_text};
 use crate::cmd::serve::runtime;
 use anyhow::Result;
 use raykit_serve::link::{measure_link, LinkOptions, LinkReport};
-use raykit_serve::protocol::FrameFormat;
 use serde::Serialize;
+use std::path::Path;
 use std::process::ExitCode;
 
 #[derive(Serialize)]
@@ -24,35 +23,19 @@ fn opt(v: Option<f64>) -> String {
     v.map_or("–".into(), |v| format!("{v:.1}"))
 }
 
-/// Measure the stream from the server at `url` and write link.json and
-/// link.md into `--out`; exit status 1 when no frame of the asked size and
-/// format came or the client saw an error.
-pub fn run(url: &str, args: &ServeExperimentArgs) -> Result<ExitCode> {
-    let opts = LinkOptions {
-        url: url.to_string(),
-        size: (args.width, args.height),
-        format: match args.format {
-            LinkFormat::Raw => FrameFormat::Raw,
-            LinkFormat::Jpeg => FrameFormat::Jpeg,
-        },
-        quality: args.quality,
-        seconds: args.seconds,
-        warmup: args.warmup,
-        input_hz: args.input_hz,
-    };
+/// Measure the stream `opts` describes and write link.json and link.md into
+/// `out`; exit status 1 when no frame of the asked size and format came or
+/// the client saw an error.
+pub fn run(opts: &LinkOptions, out: &Path) -> Result<ExitCode> {
     let prov = provenance();
-    let link = runtime()?.block_on(measure_link(&opts))?;
+    let link = runtime()?.block_on(measure_link(opts))?;
     let report = Report {
         provenance: prov.clone(),
         input_hz: opts.input_hz,
         warmup_s: opts.warmup,
         link: &link,
     };
-    write_text(
-        &args.out,
-        "link.json",
-        &serde_json::to_string_pretty(&report)?,
-    )?;
+    write_text(out, "link.json", &serde_json::to_string_pretty(&report)?)?;
     let l = &link;
     let mut md = format!(
         "# raykit serve over a link: {}×{} {:?}\n\n{prov}\n\
@@ -66,7 +49,7 @@ pub fn run(url: &str, args: &ServeExperimentArgs) -> Result<ExitCode> {
     if !l.errors.is_empty() {
         md += &format!("\nErrors: {:?}\n", &l.errors[..l.errors.len().min(5)]);
     }
-    write_text(&args.out, "link.md", &md)?;
+    write_text(out, "link.md", &md)?;
     print!("{md}");
     Ok(if l.frames == 0 || !l.errors.is_empty() {
         ExitCode::FAILURE

@@ -128,33 +128,9 @@ fn scene_args(name: &str) -> Result<SceneArgs> {
     Ok(a)
 }
 
-/// Fraction of pixels whose 8-bit colour differs by more than 2 levels in
-/// some channel, and the RMSE of the linear radiance.
-pub fn image_difference(a: &Image, b: &Image) -> (usize, f64) {
-    let differing = a
-        .rgb
-        .chunks_exact(3)
-        .zip(b.rgb.chunks_exact(3))
-        .filter(|(p, q)| p.iter().zip(*q).any(|(x, y)| x.abs_diff(*y) > 2))
-        .count();
-    let se: f64 = a
-        .linear
-        .iter()
-        .zip(&b.linear)
-        .map(|(p, q)| (*p - *q).length_squared() as f64 / 3.0)
-        .sum();
-    (differing, (se / a.linear.len().max(1) as f64).sqrt())
-}
-
 /// An image of |a − b| × 4, for looking at where two renders differ.
-pub fn difference_png(path: &Path, a: &Image, b: &Image) -> Result<()> {
-    let rgb: Vec<u8> = a
-        .rgb
-        .iter()
-        .zip(&b.rgb)
-        .map(|(x, y)| x.abs_diff(*y).saturating_mul(4))
-        .collect();
-    raykit_io::write_png(path, a.width, a.height, &rgb)?;
+fn difference_png(path: &Path, a: &Image, b: &Image) -> Result<()> {
+    raykit_io::write_png(path, a.width, a.height, &a.difference_rgb(b))?;
     Ok(())
 }
 
@@ -259,7 +235,7 @@ fn run_scene(
     let get = |k: &str| &keep.iter().find(|(n, _)| n == k).expect("rendered").1;
     let rays = get("Rays-Traced-Recursive");
     let maps_img = get("Maps-Traced-Recursive");
-    let (diff, rmse) = image_difference(&rays.image, &maps_img.image);
+    let (diff, rmse) = rays.image.difference(&maps_img.image);
     let raster = get("Rays-Rasterized-Recursive");
     let wave = get("Rays-Traced-Wavefront");
     for (suffix, img) in [("rays", &rays.image), ("maps", &maps_img.image)] {
@@ -285,8 +261,8 @@ fn run_scene(
         shadow_map_mib: maps.memory_bytes() as f64 / (1 << 20) as f64,
         maps_vs_rays_pixels_differing_pct: 100.0 * diff as f64 / pixels,
         maps_vs_rays_rmse: rmse,
-        raster_vs_traced_pixels_differing: image_difference(&rays.image, &raster.image).0,
-        wavefront_vs_recursive_pixels_differing: image_difference(&rays.image, &wave.image).0,
+        raster_vs_traced_pixels_differing: rays.image.difference(&raster.image).0,
+        wavefront_vs_recursive_pixels_differing: rays.image.difference(&wave.image).0,
     })
 }
 

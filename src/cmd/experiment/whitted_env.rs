@@ -4,7 +4,6 @@
 //! mapping (a direction lookup), at 5 bounces — time per frame and how much
 //! the images differ.
 
-use super::whitted::image_difference;
 use super::{shared_data, shared_mesh};
 use crate::cmd::render::setup::{setup, RenderSetup, SceneArgs};
 use crate::measure::median_ms;
@@ -133,8 +132,13 @@ pub fn env_table(width: u32, height: u32, reps: usize, out: &Path) -> Result<Env
         )?;
         images.push(f.image);
     }
-    let (differing, rmse) = image_difference(&images[0], &images[1]);
-    super::whitted::difference_png(&out.join("env-box-vs-map-x4.png"), &images[0], &images[1])?;
+    let (differing, rmse) = images[0].difference(&images[1]);
+    raykit_io::write_png(
+        &out.join("env-box-vs-map-x4.png"),
+        width,
+        height,
+        &images[0].difference_rgb(&images[1]),
+    )?;
     Ok(EnvTable {
         rows,
         pixels_differing_pct: 100.0 * differing as f64 / (width * height) as f64,

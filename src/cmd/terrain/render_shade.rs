@@ -2,9 +2,9 @@
 //! triangle, the shadow mask, a hypsometric colour ramp or a draped image,
 //! the sky, and the steps-per-ray heat map.
 
+use raykit_terrain::camera::CameraFrame;
 use raykit_terrain::heightfield::{HeightField, Steps, TerrainHit};
 use raykit_terrain::shadow::Light;
-use raykit_terrain::view::CameraFrame;
 use rayon::prelude::*;
 
 /// Linear RGB.

@@ -2,8 +2,8 @@
 //! mesh order cut into runs of eight, one box per run, the boxes scanned in
 //! order.
 
-use super::bvh::node_box::NodeBox;
 use super::leaf::LeafTriangles;
+use super::node_box::NodeBox;
 use super::{Accel, AccelStats};
 use crate::aabb::Aabb;
 use crate::hit::Hit;

@@ -3,8 +3,8 @@
 //!
 //! - [`BruteForce`]: every ray against every triangle, the reference.
 //! - [`Bvh2`]: binary BVH, binned-SAH build, stack traversal nearest child first.
-//! - [`Bvh4`]: 4-wide BVH collapsed from the binary build, SSE box tests of
-//!   four children at once.
+//! - [`Bvh4`]: 4-wide BVH, binned-SAH build making wide nodes directly, SSE
+//!   box tests of four children at once.
 //! - [`ThreadedBvh`]: BVH in pre-order with escape indices (Smits 1998),
 //!   traversed without a stack; [`ThreadedBvh::complete`] builds it as the
 //!   complete tree over the triangles in mesh order.
@@ -22,8 +22,10 @@ mod brute;
 pub mod bvh;
 pub mod flat;
 pub mod kdtree;
+mod kind;
 mod leaf;
 mod linear_boxes;
+pub(crate) mod node_box;
 mod registry;
 
 pub use brute::BruteForce;
@@ -35,8 +37,9 @@ pub use flat::{
     FlatBvh8, FlatChild, FlatKdRopes, FlatKdTree, FlatNode8, FlatThreadedBvh, FlatTriangles,
 };
 pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
+pub use kind::AccelKind;
 pub use linear_boxes::{LinearBoxes, LINEAR_BOX_SIZE};
-pub use registry::{build_accel, kd_accel_from_tree, load_accel, AccelKind};
+pub use registry::{build_accel, kd_accel_from_tree, load_accel};
 
 /// Rays per rayon task in the batch queries: large enough to amortise task
 /// overhead, small enough to balance two cores on uneven work.

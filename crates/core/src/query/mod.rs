@@ -33,8 +33,10 @@ pub(crate) mod batch;
 pub mod closest;
 pub mod exact;
 pub mod frustum;
+mod moments;
 pub mod shapes;
 pub mod surface_bvh;
+mod surface_node;
 pub mod walk;
 pub mod winding;
 

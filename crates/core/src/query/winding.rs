@@ -32,32 +32,14 @@
 //! number, far from the ½ threshold.
 
 use super::batch::answer_coherent;
+use super::moments::{Moments, SlotMoments};
 use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
 /// Barill et al.'s default accuracy: a child is approximated when the
 /// query point is farther than twice its radius from its centre.
 pub const DEFAULT_BETA: f32 = 2.0;
-
-/// The far-field data of each node's eight children (structure of arrays,
-/// parallel to the nodes): area-weighted centroid, radius about it, and the
-/// summed area vector.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-pub(crate) struct SlotMoments {
-    center: [[f32; WIDTH]; 3],
-    radius: [f32; WIDTH],
-    normal: [[f32; WIDTH]; 3],
-    /// `T[i][j]`.
-    tensor: [[[f32; WIDTH]; 3]; 3],
-    /// `C[i][jk]` for `jk` in `xx, yy, zz, xy, xz, yz`.
-    hessian: [[[f32; WIDTH]; 6]; 3],
-}
-
-/// The moments of every node of a [`SurfaceBvh`].
-pub(crate) struct Moments(Vec<SlotMoments>);
 
 /// Solid angle of triangle `(a, b, c)` seen from the origin (Van Oosterom
 /// and Strackee 1983), in `f32`.
@@ -76,95 +58,6 @@ pub fn solid_angle64(q: DVec3, tri: &[DVec3; 3]) -> f64 {
     let num = a.dot(b.cross(c));
     let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
     2.0 * num.atan2(den)
-}
-
-/// The pairs `(j, k)` of the symmetric second moments, in storage order.
-const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
-
-impl Moments {
-    /// The moments of every child of every node, in `f64` from the
-    /// triangles below it (each triangle is summed once per level above
-    /// it), stored in `f32`.
-    #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
-    fn build(bvh: &SurfaceBvh) -> Moments {
-        let nodes = bvh
-            .nodes
-            .par_iter()
-            .map(|node| {
-                let mut m = SlotMoments {
-                    center: [[0.0; WIDTH]; 3],
-                    radius: [f32::INFINITY; WIDTH],
-                    normal: [[0.0; WIDTH]; 3],
-                    tensor: [[[0.0; WIDTH]; 3]; 3],
-                    hessian: [[[0.0; WIDTH]; 6]; 3],
-                };
-                for k in 0..WIDTH {
-                    if node.child[k] == EMPTY {
-                        continue;
-                    }
-                    let (lo, hi) = (
-                        node.first[k] as usize,
-                        (node.first[k] + node.total[k]) as usize,
-                    );
-                    let tris = &bvh.tris[lo..hi];
-                    let (mut nsum, mut csum, mut asum) = (DVec3::ZERO, DVec3::ZERO, 0.0f64);
-                    for t in tris {
-                        let [a, b, c] = t.map(|v| v.as_dvec3());
-                        let av = 0.5 * (b - a).cross(c - a);
-                        nsum += av;
-                        csum += av.length() * (a + b + c) / 3.0;
-                        asum += av.length();
-                    }
-                    let center = if asum > 0.0 {
-                        csum / asum
-                    } else {
-                        tris.iter().flatten().map(|v| v.as_dvec3()).sum::<DVec3>()
-                            / (3 * tris.len()) as f64
-                    };
-                    let mut r2 = 0.0f64;
-                    let mut tensor = [[0.0f64; 3]; 3];
-                    let mut hessian = [[0.0f64; 6]; 3];
-                    for t in tris {
-                        let [a, b, c] = t.map(|v| v.as_dvec3() - center);
-                        r2 = r2
-                            .max(a.length_squared())
-                            .max(b.length_squared())
-                            .max(c.length_squared());
-                        let av = 0.5 * (b - a).cross(c - a);
-                        let g = (a + b + c) / 3.0;
-                        // ∫ y dA / area = g; ∫ y yᵀ dA / area = (Σ v vᵀ + 9 g gᵀ) / 12.
-                        for i in 0..3 {
-                            for j in 0..3 {
-                                tensor[i][j] += av[i] * g[j];
-                            }
-                            for (jk, &(j, kk)) in PAIRS.iter().enumerate() {
-                                let second = (a[j] * a[kk]
-                                    + b[j] * b[kk]
-                                    + c[j] * c[kk]
-                                    + 9.0 * g[j] * g[kk])
-                                    / 12.0;
-                                hessian[i][jk] += av[i] * second;
-                            }
-                        }
-                    }
-                    for i in 0..3 {
-                        m.center[i][k] = center[i] as f32;
-                        m.normal[i][k] = nsum[i] as f32;
-                        for j in 0..3 {
-                            m.tensor[i][j][k] = tensor[i][j] as f32;
-                        }
-                        for jk in 0..6 {
-                            m.hessian[i][jk][k] = hessian[i][jk] as f32;
-                        }
-                    }
-                    // Rounded up so the f32 centre stays within the radius.
-                    m.radius[k] = (r2.sqrt() * (1.0 + 1e-6)) as f32;
-                }
-                m
-            })
-            .collect();
-        Moments(nodes)
-    }
 }
 
 /// The far-field solid angle of child `k` seen from `q`: the expansion of
@@ -209,7 +102,8 @@ fn far_field(m: &SlotMoments, k: usize, x: [f32; 3], d2: f32) -> f32 {
 
 impl SurfaceBvh {
     fn moments(&self) -> &Moments {
-        self.moments.get_or_init(|| Moments::build(self))
+        self.moments
+            .get_or_init(|| Moments::build(&self.nodes, &self.tris))
     }
 
     /// The generalized winding number of `q` with Barill et al.'s far-field

@@ -12,7 +12,8 @@ use crate::error::GpuResult;
 use crate::kernel::{dispatch, grid};
 use crate::trace::CHUNK;
 use raykit_terrain::boxes::select_boxes;
-use raykit_terrain::view::{CastImage, TerrainCamera};
+use raykit_terrain::view::CastImage;
+use raykit_terrain::TerrainCamera;
 use raykit_terrain::{HeightField, MaxMipmap, Steps, TerrainHit};
 use std::time::Instant;
 

@@ -1,10 +1,10 @@
 //! Per-pixel rays of a terrain view for the GPU casters: computed on the
 //! host in f64 exactly as the CPU casters compute them
-//! (`raykit_terrain::view::CameraFrame::ray`), clipped to the grid's
+//! (`raykit_terrain::camera::CameraFrame::ray`), clipped to the grid's
 //! bounding box, and rounded to f32 with the origin moved to the clip entry
 //! (grid coordinates stay small there, which keeps the rounding small).
 
-use raykit_terrain::view::TerrainCamera;
+use raykit_terrain::camera::TerrainCamera;
 use raykit_terrain::{GridRay, HeightField};
 use rayon::prelude::*;
 

@@ -6,7 +6,7 @@ use super::{GpuCaster, GpuTerrain};
 use crate::context::GpuContext;
 use crate::error::{GpuError, GpuResult};
 use crate::trace::CHUNK;
-use raykit_terrain::view::TerrainCamera;
+use raykit_terrain::TerrainCamera;
 use raykit_terrain::{HeightField, MaxMipmap};
 use std::time::Instant;
 

@@ -11,6 +11,7 @@
 
 use super::check;
 use super::gltf_scene::scene_extras;
+use super::json::json_string;
 use crate::uri::base64_encode;
 use raykit_core::{Camera, Light, TriangleMesh, Vec2, Vec3};
 use std::io::{self, Write};
@@ -144,22 +145,6 @@ fn part_triangles(mesh: &TriangleMesh) -> Vec<(usize, Vec<usize>)> {
         .enumerate()
         .filter(|(_, g)| !g.is_empty())
         .collect()
-}
-
-/// `s` as a JSON string literal.
-pub(super) fn json_string(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
 }
 
 /// Write `mesh` as GLB (`binary`) or as `.gltf` JSON with the buffer embedded

@@ -12,7 +12,7 @@
 //! material's `extras.raykit_phong`, which raykit's loader prefers, so a
 //! scene survives the round trip unchanged; other viewers ignore it.
 
-use super::gltf::json_string;
+use super::json::json_string;
 use raykit_core::glam::{Mat3, Quat};
 use raykit_core::{Camera, Light, Material, TriangleMesh, Vec3};
 

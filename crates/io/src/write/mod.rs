@@ -7,6 +7,7 @@
 mod exr;
 mod gltf;
 mod gltf_scene;
+mod json;
 mod obj;
 mod off;
 mod ply;

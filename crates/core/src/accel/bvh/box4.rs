@@ -20,8 +20,8 @@
 //! second operand when either is NaN), so both give identical hit masks and
 //! entry distances, which the unit tests check.
 
-use super::node_box::NodeBox;
 use crate::aabb::Aabb;
+use crate::accel::node_box::NodeBox;
 use crate::ray::Ray;
 use glam::Vec3;
 

@@ -24,8 +24,8 @@
 
 #[cfg_attr(target_arch = "x86_64", allow(unused_imports))]
 use super::box4::{max_sse, min_sse};
-use super::node_box::NodeBox;
 use crate::aabb::Aabb;
+use crate::accel::node_box::NodeBox;
 use crate::ray::Ray;
 use glam::Vec3;
 

@@ -1,10 +1,10 @@
 //! Binary BVH with a per-ray stack, nearest child first.
 
 use super::build::{build, BuildNode, BuildOptions};
-use super::node_box::NodeBox;
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
 use crate::accel::leaf::LeafTriangles;
+use crate::accel::node_box::NodeBox;
 use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;

@@ -23,7 +23,7 @@
 
 use super::build::BuildNode;
 use super::node4::Child4;
-use super::node_box::NodeBox;
+use crate::accel::node_box::NodeBox;
 use rayon::prelude::*;
 
 /// Levels of wide nodes whose subtrees are collapsed in parallel (up to

@@ -22,7 +22,7 @@
 //! is tested.
 
 use super::lanes::Lanes;
-use super::node_box::NodeBox;
+use crate::accel::node_box::NodeBox;
 
 /// The bounds of a packet's rays in play (see the module notes).
 #[derive(Clone, Copy, Debug)]

@@ -48,7 +48,6 @@ pub mod lbvh;
 mod mapped;
 mod node4;
 mod node8;
-pub(crate) mod node_box;
 mod packet;
 #[cfg(target_arch = "x86_64")]
 mod packet_gather;
@@ -62,7 +61,6 @@ mod sah_sweep;
 mod sort8;
 mod stack;
 mod sweep;
-pub(crate) use node_box::NodeBox;
 mod threaded;
 mod tri4;
 #[cfg(target_arch = "x86_64")]

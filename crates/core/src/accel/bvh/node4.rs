@@ -3,7 +3,7 @@
 //! by the wide trees.
 
 use super::box4::Box4;
-use super::node_box::NodeBox;
+use crate::accel::node_box::NodeBox;
 
 /// A reference to a child: an inner node (`count == 0`, `index` into the
 /// node array), a leaf (`count > 0` triangles from `index` in leaf order), or

@@ -4,7 +4,7 @@
 
 use super::box8::Box8;
 use super::node4::Child4;
-use super::node_box::NodeBox;
+use crate::accel::node_box::NodeBox;
 
 /// A 256-byte inner node (four cache lines): the padded boxes of up to
 /// eight children in structure-of-arrays layout, and the child references

@@ -34,10 +34,10 @@
 use super::frustum::Frustum;
 use super::lanes::{Lanes, L16, L8};
 use super::node4::Child4;
-use super::node_box::NodeBox;
 use super::packet::{PacketTree, View, WideNode};
 use super::prefetch::prefetch_child;
 use super::tri4::{Tri4, CAP};
+use crate::accel::node_box::NodeBox;
 use crate::hit::Hit;
 use crate::ray::Ray;
 use std::mem::MaybeUninit;

@@ -51,7 +51,6 @@
 //! renamed over it.
 
 use super::node4::Child4;
-use super::node_box::NodeBox;
 use super::refit::{check_mesh, stored_sah};
 use super::tri4::{Tri4, Tri4Leaves};
 use super::wide_leaf::Leaves;
@@ -60,6 +59,7 @@ use super::wide_parts::{
 };
 use super::{Bvh4, Bvh8};
 use crate::accel::leaf::LeafTriangles;
+use crate::accel::node_box::NodeBox;
 use crate::accel::{AccelKind, AccelStats};
 use crate::mesh::TriangleMesh;
 use crate::tri::{Moller, TestKind, TriangleTest};

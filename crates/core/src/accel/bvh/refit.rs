@@ -15,11 +15,11 @@
 //! ([`DEFAULT_MAX_DEGRADATION`]).
 
 use super::node4::Child4;
-use super::node_box::NodeBox;
 use super::wide_leaf::Leaves;
 use super::wide_parts::{PartsMut, PartsRef, WideBvh, WideNode};
 use super::{BuildOptions, Bvh4, Bvh8};
 use crate::aabb::Aabb;
+use crate::accel::node_box::NodeBox;
 use crate::mesh::TriangleMesh;
 use crate::tri::{Moller, TriangleTest};
 use rayon::prelude::*;

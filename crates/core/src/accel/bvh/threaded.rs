@@ -2,9 +2,9 @@
 //! escape index.
 
 use super::build::{build, BuildNode, BuildOptions, BuildTree};
-use super::node_box::NodeBox;
 use crate::aabb::Aabb;
 use crate::accel::leaf::LeafTriangles;
+use crate::accel::node_box::NodeBox;
 use crate::accel::{Accel, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;

@@ -7,11 +7,11 @@ use super::box4::Box4;
 use super::box8::Box8;
 use super::node4::{Child4, Node4};
 use super::node8::Node8;
-use super::node_box::NodeBox;
 use super::tri4::Tri4;
 use super::wide_leaf::Leaves;
 use super::{bvh4, bvh8, Bvh4, Bvh8};
 use crate::aabb::Aabb;
+use crate::accel::node_box::NodeBox;
 use crate::accel::{AccelKind, AccelStats};
 use crate::tri::TriangleTest;
 

@@ -9,11 +9,11 @@
 use super::build::{build, clamped, BuildNode, BuildOptions, BuildQuality, BuildTree};
 use super::collapse::{collapse, WideSlots};
 use super::node4::Child4;
-use super::node_box::NodeBox;
 use super::tri4::Tri4Leaves;
 use super::wide_build::build_direct;
 use super::wide_leaf::{wide_build_options, Leaves};
 use crate::accel::leaf::LeafTriangles;
+use crate::accel::node_box::NodeBox;
 use crate::accel::AccelStats;
 use crate::mesh::TriangleMesh;
 use crate::tri::{Moller, TriangleTest};
