@@ -309,7 +309,7 @@ pub(crate) struct Bins {
     /// the chain of dependent read-modify-writes through memory.
     pub(super) odd: Vec<Bin>,
     /// Sweep scratch (see [`super::sah_sweep`]).
-    pub(super) scratch: Vec<super::sah_sweep::SweepBin>,
+    pub(super) scratch: Vec<SweepBin>,
 }
 
 /// The best split found by the sweep.
@@ -330,7 +330,7 @@ impl Bins {
         Bins {
             bins: vec![Bin::EMPTY; n],
             odd: vec![Bin::EMPTY; n],
-            scratch: vec![super::sah_sweep::SweepBin::default(); n],
+            scratch: vec![SweepBin::default(); n],
         }
     }
 
@@ -529,6 +529,18 @@ fn scan<'a, const BLOCK: usize>(
         num += (classify(p) != left_side) as usize;
     }
     num
+}
+
+/// One bin of the vector sweep: its three boxes transposed (`lo[c]` holds
+/// coordinate `c` of the lower corners of the axes' boxes, one axis per
+/// lane), and the area and count of the bins at and above it.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(16))]
+pub(crate) struct SweepBin {
+    pub(super) lo: [[f32; 4]; 3],
+    pub(super) hi: [[f32; 4]; 3],
+    pub(super) right_area: [f32; 4],
+    pub(super) right_count: [u32; 4],
 }
 
 #[cfg(test)]

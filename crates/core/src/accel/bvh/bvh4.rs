@@ -3,10 +3,11 @@
 use super::box4::RayBox4;
 use super::build::BuildOptions;
 use super::enter::enter;
-use super::node4::{Child4, Node4};
+use super::node4::Node4;
 use super::stack::Stack;
 use super::tri4::Ray4;
 use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
+use super::wide_node::Child4;
 use super::wide_tree::build_wide;
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
@@ -320,14 +321,14 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh4<T> {
     unsafe fn traverse_packet<
         const ANY: bool,
         const L: usize,
-        W: super::packet_kernel::Width<L>,
+        W: super::packet::kernel::Width<L>,
     >(
         &self,
         view: &super::packet::View<'_, Node4>,
         rays: &[Ray],
-        p: &super::packet_kernel::Packet<L>,
+        p: &super::packet::kernel::Packet<L>,
         switch: u32,
-        out: &mut super::packet_kernel::PacketHits<L>,
+        out: &mut super::packet::kernel::PacketHits<L>,
     ) {
         // SAFETY: the caller guarantees the width's features. `build`
         // checked that the tree's deepest stack is below `STACK`, and

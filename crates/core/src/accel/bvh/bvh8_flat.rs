@@ -2,8 +2,8 @@
 //! node layout of their own.
 
 use super::bvh8::Bvh8;
-use super::node4::Child4;
 use super::wide_leaf::Leaves;
+use super::wide_node::Child4;
 use crate::accel::flat::{FlatBvh8, FlatChild, FlatNode8};
 use crate::tri::TriangleTest;
 

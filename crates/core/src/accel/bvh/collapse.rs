@@ -22,55 +22,12 @@
 //! 8% of a 2-thread build).
 
 use super::build::BuildNode;
-use super::node4::Child4;
-use crate::accel::node_box::NodeBox;
+use super::wide_node::{Child4, WideSlots};
 use rayon::prelude::*;
 
 /// Levels of wide nodes whose subtrees are collapsed in parallel (up to
 /// `WIDTH^PAR_DEPTH` tasks).
 pub(crate) const PAR_DEPTH: u32 = 2;
-
-/// A wide inner node the collapse fills: [`super::node4::Node4`] or
-/// [`super::node8::Node8`].
-pub(crate) trait WideSlots: Copy + Send + Sync {
-    /// Child slots per node.
-    const WIDTH: usize;
-    /// A node with every slot unused (inverted boxes, [`Child4::EMPTY`]).
-    const EMPTY: Self;
-    /// Put `child`, whose padded box is `b`, in slot `slot`.
-    fn set_slot(&mut self, slot: usize, b: &NodeBox, child: Child4);
-    /// The child references, every slot.
-    fn children_mut(&mut self) -> &mut [Child4];
-    /// The box and reference in slot `slot`.
-    #[cfg(test)]
-    fn slot(&self, slot: usize) -> (crate::aabb::Aabb, Child4);
-}
-
-/// [`WideSlots`] for a node type with fields `boxes` (a box row type with
-/// `EMPTY`, `set` and `get`) and `child` (`[Child4; WIDTH]`).
-macro_rules! wide_slots {
-    ($node:ty, $boxes:ident, $width:literal) => {
-        impl $crate::accel::bvh::collapse::WideSlots for $node {
-            const WIDTH: usize = $width;
-            const EMPTY: Self = Self {
-                boxes: $boxes::EMPTY,
-                child: [Child4::EMPTY; $width],
-            };
-            fn set_slot(&mut self, slot: usize, b: &NodeBox, child: Child4) {
-                self.boxes.set(slot, b);
-                self.child[slot] = child;
-            }
-            fn children_mut(&mut self) -> &mut [Child4] {
-                &mut self.child
-            }
-            #[cfg(test)]
-            fn slot(&self, slot: usize) -> ($crate::aabb::Aabb, Child4) {
-                (self.boxes.get(slot), self.child[slot])
-            }
-        }
-    };
-}
-pub(crate) use wide_slots;
 
 /// The inner nodes of a collapsed tree and its shape figures, defined as for
 /// the binary tree (see [`crate::accel::AccelStats`]).

@@ -2,10 +2,10 @@
 //! BVHs: written once for [`super::Bvh4`], [`super::Bvh8`] and
 //! [`super::Bvh8`]'s interleaved walks.
 
-use super::node4::Child4;
-use super::prefetch::prefetch_entered;
+use super::prefetch::prefetch_node;
 use super::stack::StackPtr;
 use super::wide_leaf::LeafTest;
+use super::wide_node::Child4;
 
 /// The child to visit next among `children` whose bit is set in `mask`
 /// (the boxes the ray entered, at entry distances `t`), the others pushed
@@ -104,4 +104,36 @@ pub(crate) unsafe fn enter<const ANY: bool, N>(
     }
     *sp = top - 1;
     Some(unsafe { st.read(*sp).0 })
+}
+
+/// Request every child of `children` whose bit is set in `mask` (a node's
+/// entered children), inner nodes from `nodes`, leaves through `leaf`
+/// (for an any-hit query, `ANY`, a leaf's first pack only; see
+/// [`prefetch_with`]).
+#[inline(always)]
+pub(crate) fn prefetch_entered<const ANY: bool, N>(
+    nodes: &[N],
+    children: &[Child4],
+    mut mask: u32,
+    leaf: &impl LeafTest,
+) {
+    while mask != 0 {
+        prefetch_with::<ANY, N>(nodes, children[mask.trailing_zeros() as usize], leaf);
+        mask &= mask - 1;
+    }
+}
+
+/// Request child `c`: an inner node from `nodes`, a leaf through `leaf`:
+/// all its packs for a nearest-hit query, the first for an any-hit query
+/// (`ANY`), which stops at the first pack with a hit.
+#[inline(always)]
+pub(crate) fn prefetch_with<const ANY: bool, N>(nodes: &[N], c: Child4, leaf: &impl LeafTest) {
+    if c.count == 0 {
+        prefetch_node(nodes, c.index as usize);
+    } else {
+        // Nearest-hit queries test every pack of a leaf: all are fetched.
+        // Any-hit queries stop at the first pack with a hit: only the first.
+        let count = if ANY { c.count.min(4) } else { c.count };
+        leaf.prefetch(c.index as usize, count as usize);
+    }
 }

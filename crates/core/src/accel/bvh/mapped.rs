@@ -2,7 +2,7 @@
 //! leaf packs of a wide BVH loaded with `load_mapped` (`super::persist`)
 //! are used where the file lies in the page cache, without a copy.
 
-use super::wide_parts::Words;
+use super::words::Words;
 use std::ops::{Deref, DerefMut};
 
 /// The values of an array: an owned vector, or values mapped read-only

@@ -44,38 +44,37 @@ mod frustum;
 mod huge_pages;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
-pub mod lbvh;
 mod mapped;
 mod node4;
 mod node8;
 mod packet;
-#[cfg(target_arch = "x86_64")]
-mod packet_gather;
-#[cfg(target_arch = "x86_64")]
-mod packet_kernel;
+#[cfg(test)]
+mod packet_agreement;
 mod persist;
+mod persist_error;
 mod prefetch;
 mod refit;
+mod refit_report;
 mod sah_sweep;
 #[cfg(target_arch = "x86_64")]
 mod sort8;
 mod stack;
-mod sweep;
 mod threaded;
 mod tri4;
-#[cfg(target_arch = "x86_64")]
-mod tri4_sse;
 mod wide_build;
 mod wide_leaf;
+mod wide_node;
 mod wide_parts;
 mod wide_tree;
+mod words;
 
 pub use build::{BuildNode, BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;
 pub use bvh4::Bvh4;
 pub use bvh8::Bvh8;
-pub use persist::{saved_kind, PersistError, FORMAT_VERSION, MAGIC};
-pub use refit::{RefitError, RefitReport, DEFAULT_MAX_DEGRADATION};
+pub use persist::{saved_kind, FORMAT_VERSION, MAGIC};
+pub use persist_error::PersistError;
+pub use refit_report::{RefitError, RefitReport, DEFAULT_MAX_DEGRADATION};
 pub use threaded::ThreadedBvh;
 
 /// Deepest tree the builders produce; traversal stacks are sized from it.

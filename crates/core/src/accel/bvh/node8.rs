@@ -3,7 +3,7 @@
 //! ([`super::collapse`]) as the 4-wide one is.
 
 use super::box8::Box8;
-use super::node4::Child4;
+use super::wide_node::Child4;
 use crate::accel::node_box::NodeBox;
 
 /// A 256-byte inner node (four cache lines): the padded boxes of up to
@@ -16,4 +16,4 @@ pub(crate) struct Node8 {
     pub child: [Child4; 8],
 }
 
-super::collapse::wide_slots!(Node8, Box8, 8);
+super::wide_node::wide_slots!(Node8, Box8, 8);

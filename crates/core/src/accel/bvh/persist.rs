@@ -50,13 +50,13 @@
 //! stack). Files are written to a temporary file beside the target and
 //! renamed over it.
 
-use super::node4::Child4;
+use super::persist_error::PersistError;
 use super::refit::{check_mesh, stored_sah};
 use super::tri4::{Tri4, Tri4Leaves};
 use super::wide_leaf::Leaves;
-use super::wide_parts::{
-    bytes_of, bytes_of_mut, words_of_mut, zeroed, PartsOwned, PartsRef, WideBvh, WideNode, Words,
-};
+use super::wide_node::Child4;
+use super::wide_parts::{words_of_mut, zeroed, PartsOwned, PartsRef, WideBvh, WideNode};
+use super::words::{bytes_of, bytes_of_mut, Words};
 use super::{Bvh4, Bvh8};
 use crate::accel::leaf::LeafTriangles;
 use crate::accel::node_box::NodeBox;
@@ -66,10 +66,9 @@ use crate::tri::{Moller, TestKind, TriangleTest};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::borrow::Cow;
-use std::fmt;
 use std::fs::File;
 use std::io::{BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The file's first eight bytes.
 pub const MAGIC: [u8; 8] = *b"RAYKITBV";
@@ -93,63 +92,6 @@ const FORM_PACKED: u32 = 1;
 
 /// Leaf form code: triangle indices in leaf order.
 const FORM_SINGLE: u32 = 2;
-
-/// Why a structure could not be saved or loaded.
-#[derive(Debug)]
-pub enum PersistError {
-    /// The file could not be opened, read, written or renamed.
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The system's error.
-        source: std::io::Error,
-    },
-    /// The file (or the mesh given with it) is not what it should be.
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// Byte offset in the file of the field at fault (the file's length
-        /// when it ends too early).
-        offset: u64,
-        /// The field at fault.
-        field: &'static str,
-        /// What is wrong.
-        reason: String,
-    },
-    /// The structure has no saved form (only the wide BVHs have).
-    Unsupported {
-        /// The file it was to be saved to or loaded from.
-        path: PathBuf,
-    },
-}
-
-impl fmt::Display for PersistError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            PersistError::Io { path, source } => write!(f, "{}: {source}", path.display()),
-            PersistError::Invalid {
-                path,
-                offset,
-                field,
-                reason,
-            } => write!(f, "{}: offset {offset} ({field}): {reason}", path.display()),
-            PersistError::Unsupported { path } => write!(
-                f,
-                "{}: this structure has no saved form (bvh4 and bvh8 have)",
-                path.display()
-            ),
-        }
-    }
-}
-
-impl std::error::Error for PersistError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            PersistError::Io { source, .. } => Some(source),
-            PersistError::Invalid { .. } | PersistError::Unsupported { .. } => None,
-        }
-    }
-}
 
 /// Builds [`PersistError::Invalid`] for one file.
 struct Fault<'a>(&'a Path);
@@ -767,7 +709,7 @@ fn check_tree<B: WideBvh>(
 ) -> Result<Shape, PersistError> {
     let n = nodes.len();
     let node_bytes = std::mem::size_of::<B::Node>();
-    let width = <B::Node as super::collapse::WideSlots>::WIDTH;
+    let width = <B::Node as super::wide_node::WideSlots>::WIDTH;
     let child_at = |i: usize, slot: usize| {
         (HEADER + META + i * node_bytes + node_bytes - 8 * width + 8 * slot) as u64
     };

@@ -8,9 +8,8 @@
 //! incoherent rays 1.06–1.6× faster (full dragon: 0.62× → 0.74× Embree),
 //! shadow rays 1.05–1.13× and primary rays 1.05–1.2× (BENCHMARKS.md).
 
-use super::node4::Child4;
 use super::tri4::Tri4;
-use super::wide_leaf::LeafTest;
+use super::wide_node::Child4;
 
 /// Request `lines` cache lines from `p` into all cache levels. A hint: it
 /// never faults, whatever the address.
@@ -43,7 +42,7 @@ pub(crate) fn prefetch_child<N>(nodes: &[N], packs: &[Tri4], c: Child4) {
 
 /// Request the whole node `nodes[index]`.
 #[inline(always)]
-fn prefetch_node<N>(nodes: &[N], index: usize) {
+pub(crate) fn prefetch_node<N>(nodes: &[N], index: usize) {
     let lines = std::mem::size_of::<N>().div_ceil(64);
     prefetch_lines(nodes.as_ptr().wrapping_add(index) as *const u8, lines);
 }
@@ -53,36 +52,4 @@ fn prefetch_node<N>(nodes: &[N], index: usize) {
 pub(crate) fn prefetch_pack(packs: &[Tri4], first: usize) {
     let lines = std::mem::size_of::<Tri4>().div_ceil(64);
     prefetch_lines(packs.as_ptr().wrapping_add(first) as *const u8, lines);
-}
-
-/// Request every child of `children` whose bit is set in `mask` (a node's
-/// entered children), inner nodes from `nodes`, leaves through `leaf`
-/// (for an any-hit query, `ANY`, a leaf's first pack only; see
-/// [`prefetch_with`]).
-#[inline(always)]
-pub(crate) fn prefetch_entered<const ANY: bool, N>(
-    nodes: &[N],
-    children: &[Child4],
-    mut mask: u32,
-    leaf: &impl LeafTest,
-) {
-    while mask != 0 {
-        prefetch_with::<ANY, N>(nodes, children[mask.trailing_zeros() as usize], leaf);
-        mask &= mask - 1;
-    }
-}
-
-/// Request child `c`: an inner node from `nodes`, a leaf through `leaf`:
-/// all its packs for a nearest-hit query, the first for an any-hit query
-/// (`ANY`), which stops at the first pack with a hit.
-#[inline(always)]
-pub(crate) fn prefetch_with<const ANY: bool, N>(nodes: &[N], c: Child4, leaf: &impl LeafTest) {
-    if c.count == 0 {
-        prefetch_node(nodes, c.index as usize);
-    } else {
-        // Nearest-hit queries test every pack of a leaf: all are fetched.
-        // Any-hit queries stop at the first pack with a hit: only the first.
-        let count = if ANY { c.count.min(4) } else { c.count };
-        leaf.prefetch(c.index as usize, count as usize);
-    }
 }

@@ -16,18 +16,6 @@
 
 use super::binning::{Bins, Box4f, Split};
 
-/// One bin of the vector sweep: its three boxes transposed (`lo[c]` holds
-/// coordinate `c` of the lower corners of the axes' boxes, one axis per
-/// lane), and the area and count of the bins at and above it.
-#[derive(Clone, Copy, Debug, Default)]
-#[repr(C, align(16))]
-pub(crate) struct SweepBin {
-    lo: [[f32; 4]; 3],
-    hi: [[f32; 4]; 3],
-    right_area: [f32; 4],
-    right_count: [u32; 4],
-}
-
 /// The SAH's intersection cost of `n` triangles in leaves tested `block`
 /// at a time: `ceil(n / block)` tests, by shift where `block` is a power of
 /// two (the sweep evaluates this twice per candidate split, and with the

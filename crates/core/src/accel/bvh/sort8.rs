@@ -14,8 +14,8 @@
 //! every answer is the scalar path's bit for bit (ties between triangles
 //! included). Children not entered get key 0 and sort last.
 
-use super::node4::Child4;
 use super::stack::StackPtr;
+use super::wide_node::Child4;
 
 /// The partner lane of each lane in the six layers of the 19-comparator
 /// sorting network for eight keys (Knuth, TAOCP vol. 3, 5.3.4), and which

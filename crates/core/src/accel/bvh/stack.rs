@@ -5,7 +5,7 @@
 //! Wald et al. 2014), with [`SLACK`] entries past the bound for those
 //! stores.
 
-use super::node4::Child4;
+use super::wide_node::Child4;
 use std::mem::MaybeUninit;
 
 /// Entries past a stack's bound that a vector push may write (a whole

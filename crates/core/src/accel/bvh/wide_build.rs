@@ -17,10 +17,11 @@
 //! parallel ([`Build::open_early`]), with the same result.
 
 use super::binning::{Bins, PrimRef, RangeInfo};
+use super::build::sweep::sweep_plan;
 use super::build::{order_of, plan, prim_refs, split_refs, BuildOptions, Plan};
-use super::collapse::{to_open, Collapsed, WideSlots, PAR_DEPTH};
-use super::node4::Child4;
-use super::sweep::sweep_plan;
+use super::collapse::{to_open, Collapsed, PAR_DEPTH};
+use super::wide_node::Child4;
+use super::wide_node::WideSlots;
 use rayon::prelude::*;
 
 /// A child-to-be of a wide node: a range of the references, its bounds,
@@ -114,7 +115,7 @@ impl Build<'_> {
     }
 
     /// The kid over `refs` (at `first`) below a `leaf_ok` node: swept (its
-    /// references sorted now, as [`super::sweep::sweep_node`] does on entry).
+    /// references sorted now, as [`super::build::sweep::sweep_node`] does on entry).
     fn swept_kid(&self, refs: &mut [PrimRef], first: usize, depth: usize) -> Kid {
         let info = RangeInfo::of(refs).clean();
         Kid {

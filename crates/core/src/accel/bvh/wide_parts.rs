@@ -5,10 +5,12 @@
 
 use super::box4::Box4;
 use super::box8::Box8;
-use super::node4::{Child4, Node4};
+use super::node4::Node4;
 use super::node8::Node8;
 use super::tri4::Tri4;
 use super::wide_leaf::Leaves;
+use super::wide_node::Child4;
+use super::words::Words;
 use super::{bvh4, bvh8, Bvh4, Bvh8};
 use crate::aabb::Aabb;
 use crate::accel::node_box::NodeBox;
@@ -16,7 +18,7 @@ use crate::accel::{AccelKind, AccelStats};
 use crate::tri::TriangleTest;
 
 /// A wide inner node seen slot by slot.
-pub(crate) trait WideNode: super::collapse::WideSlots + Words {
+pub(crate) trait WideNode: super::wide_node::WideSlots + Words {
     /// The child references, every slot.
     fn children(&self) -> &[Child4];
     /// The (padded) box stored in slot `slot`.
@@ -58,30 +60,6 @@ wide_node!(Node8, Box8, 8);
 // 64-byte alignment, so no padding.
 unsafe impl Words for Tri4 {}
 const _: () = assert!(std::mem::size_of::<Tri4>() == 192);
-
-/// A plain-data type made only of 32-bit words (`f32`, `u32`) with no
-/// padding, so that its bytes may be read and written as such and every
-/// bit pattern is a value.
-///
-/// # Safety
-/// The type must be `repr(C)` (or transparent), hold only `f32` and `u32`
-/// fields (directly or in arrays and such types), and have no padding.
-pub(crate) unsafe trait Words: Copy + Send + Sync + 'static {}
-
-// SAFETY: a `u32` is one word.
-unsafe impl Words for u32 {}
-
-/// The bytes of `v`, in the host's byte order.
-pub(crate) fn bytes_of<W: Words>(v: &[W]) -> &[u8] {
-    // SAFETY: `Words` types have no padding, so every byte is initialised.
-    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u8>(), std::mem::size_of_val(v)) }
-}
-
-/// The bytes of `v`, writable.
-pub(crate) fn bytes_of_mut<W: Words>(v: &mut [W]) -> &mut [u8] {
-    // SAFETY: as `bytes_of`; every bit pattern is a `Words` value.
-    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast::<u8>(), std::mem::size_of_val(v)) }
-}
 
 /// The 32-bit words of `v`, writable (to fix their byte order).
 pub(crate) fn words_of_mut<W: Words>(v: &mut [W]) -> &mut [u32] {

@@ -7,11 +7,12 @@
 //! the other tests; and the shape figures of the wide tree.
 
 use super::build::{build, clamped, BuildNode, BuildOptions, BuildQuality, BuildTree};
-use super::collapse::{collapse, WideSlots};
-use super::node4::Child4;
+use super::collapse::collapse;
 use super::tri4::Tri4Leaves;
 use super::wide_build::build_direct;
 use super::wide_leaf::{wide_build_options, Leaves};
+use super::wide_node::Child4;
+use super::wide_node::WideSlots;
 use crate::accel::leaf::LeafTriangles;
 use crate::accel::node_box::NodeBox;
 use crate::accel::AccelStats;

@@ -18,10 +18,10 @@
 use super::{Bvh8, Leaves, PackedLeaf, Ray4, SMALL_STACK, STACK};
 use crate::accel::bvh::box8::{BoxPath, RayBox8};
 use crate::accel::bvh::enter::enter;
-use crate::accel::bvh::node4::Child4;
-use crate::accel::bvh::prefetch::prefetch_with;
+use crate::accel::bvh::enter::prefetch_with;
 use crate::accel::bvh::stack::Stack;
 use crate::accel::bvh::wide_leaf::LeafTest;
+use crate::accel::bvh::wide_node::Child4;
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;

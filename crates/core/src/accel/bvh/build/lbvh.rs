@@ -18,8 +18,8 @@
 //! and the codes are computed in parallel; the tree does not depend on the
 //! number of threads.
 
-use super::binning::{Box4f, PrimRef};
-use super::build::{blocks, prim_refs, BuildNode, BuildOptions, BuildTree};
+use super::super::binning::{Box4f, PrimRef};
+use super::{blocks, prim_refs, BuildNode, BuildOptions, BuildTree};
 use crate::aabb::Aabb;
 use crate::mesh::TriangleMesh;
 use rayon::prelude::*;
@@ -81,7 +81,7 @@ fn radix_sort(pairs: &mut Vec<(u32, u32)>) {
 }
 
 /// Build a linear BVH over the triangles of `mesh` (see the module
-/// documentation; Karras 2012). Called by [`super::build::build`] for
+/// documentation; Karras 2012). Called by [`super::build`] for
 /// [`super::BuildQuality::Fast`], with clamped options.
 pub fn build(mesh: &TriangleMesh, opts: &BuildOptions) -> BuildTree {
     let (refs, info) = prim_refs(mesh);

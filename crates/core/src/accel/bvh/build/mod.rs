@@ -13,6 +13,9 @@
 //! flattens; it does not depend on the number of threads.
 //! [`BuildQuality::Fast`] selects the linear BVH of [`super::lbvh`] instead.
 
+pub mod lbvh;
+pub(crate) mod sweep;
+
 use super::binning::{partition, Bins, Mapping, PrimRef, RangeInfo, Split};
 use super::MAX_DEPTH;
 use crate::aabb::Aabb;
@@ -192,7 +195,7 @@ pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> BuildTree {
     let opts = clamped(options);
     match opts.quality {
         BuildQuality::Sah | BuildQuality::High => sah_build(mesh, &opts),
-        BuildQuality::Fast => super::lbvh::build(mesh, &opts),
+        BuildQuality::Fast => lbvh::build(mesh, &opts),
     }
 }
 
@@ -426,8 +429,8 @@ fn sah_node(
     let (l, r) = if leaf_ok {
         // Only seen when a wide node has slots to fill: swept, not binned.
         (
-            super::sweep::sweep_node(left, first, opts),
-            super::sweep::sweep_node(right, first + mid, opts),
+            sweep::sweep_node(left, first, opts),
+            sweep::sweep_node(right, first + mid, opts),
         )
     } else if n > opts.parallel_threshold {
         rayon::join(

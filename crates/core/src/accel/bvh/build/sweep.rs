@@ -10,8 +10,8 @@
 //! spread is that SAH restricted to one axis, evaluated at every position
 //! rather than at bin borders.
 
-use super::binning::{Box4f, PrimRef, RangeInfo};
-use super::build::{blocks, BuildNode, BuildOptions};
+use super::super::binning::{Box4f, PrimRef, RangeInfo};
+use super::{blocks, BuildNode, BuildOptions};
 
 /// Most references a swept subtree may hold (the leaf bound's maximum).
 const MAX_SWEEP: usize = 32;

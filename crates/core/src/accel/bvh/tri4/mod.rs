@@ -16,7 +16,10 @@
 //! pack hold a zero triangle, which the test never hits (its determinant is
 //! 0 or NaN for every ray) and which the lane mask excludes besides.
 
-use super::node4::Child4;
+#[cfg(target_arch = "x86_64")]
+mod sse;
+
+use super::wide_node::Child4;
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
@@ -90,7 +93,7 @@ impl Tri4 {
         #[cfg(target_arch = "x86_64")]
         {
             let _ = ray;
-            super::tri4_sse::hits::<EARLY>(self, r, tfar, lanes)
+            sse::hits::<EARLY>(self, r, tfar, lanes)
         }
         #[cfg(not(target_arch = "x86_64"))]
         {

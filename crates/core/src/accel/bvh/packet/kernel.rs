@@ -2,17 +2,17 @@
 //! [`super::Bvh8`]: a packet of rays in structure-of-arrays
 //! lanes traverses the 4- or 8-wide tree together (one kernel, generic over
 //! the node width and over the packet width: eight rays with AVX2, sixteen
-//! with AVX-512, [`super::lanes`]), as in Wald, Slusallek, Benthin, Wagner,
+//! with AVX-512, [`super::super::lanes`]), as in Wald, Slusallek, Benthin, Wagner,
 //! "Interactive rendering with coherent ray tracing" (2001) and Embree's
 //! packet kernels (Wald et al. 2014).
 //!
 //! At an 8-wide node the children that no ray of the packet can enter are
 //! found first, all eight in one AVX pass over interval bounds of the
-//! packet's rays ([`super::frustum`], formed once per packet:
+//! packet's rays ([`super::super::frustum`], formed once per packet:
 //! shadow rays 1.03–1.15× and primaries 1.12–1.23× faster; 4-wide nodes
 //! test every slot). Each other child box is tested against all active rays at
 //! once (the box broadcast, one ray per lane) with exactly the arithmetic
-//! of [`super::box4`] (and [`super::box8`], the same) per lane: near plane by the sign of the reciprocal
+//! of [`super::super::box4`] (and [`super::super::box8`], the same) per lane: near plane by the sign of the reciprocal
 //! direction (shared by the packet, see [`super::packet`]), `z`, `y`, `x`
 //! in that order, `maxps`/`minps` with the same operand order, the exit
 //! widened by [`NodeBox::ROBUST_EXIT`]. So a ray enters a child here
@@ -31,12 +31,12 @@
 //! play (tail of a batch, an occluded shadow ray) has `tfar = NaN`, which
 //! fails every compare of both tests.
 
-use super::frustum::Frustum;
-use super::lanes::{Lanes, L16, L8};
-use super::node4::Child4;
-use super::packet::{PacketTree, View, WideNode};
-use super::prefetch::prefetch_child;
-use super::tri4::{Tri4, CAP};
+use super::super::frustum::Frustum;
+use super::super::lanes::{Lanes, L16, L8};
+use super::super::prefetch::prefetch_child;
+use super::super::tri4::{Tri4, CAP};
+use super::super::wide_node::Child4;
+use super::{PacketTree, View, WideNode};
 use crate::accel::node_box::NodeBox;
 use crate::hit::Hit;
 use crate::ray::Ray;
@@ -45,8 +45,8 @@ use std::mem::MaybeUninit;
 /// Unit roundoff of `f32`, as in the scalar test.
 const U: f32 = f32::EPSILON * 0.5;
 
-/// `L` rays in structure-of-arrays layout, prepared as [`super::tri4`]'s
-/// `Ray4` and [`super::box4`]'s `RayBox4` prepare one ray each (same
+/// `L` rays in structure-of-arrays layout, prepared as [`super::super::tri4`]'s
+/// `Ray4` and [`super::super::box4`]'s `RayBox4` prepare one ray each (same
 /// values per lane; `|d|` and `0.75 · scale` are formed in registers), plus
 /// the plane rows met first, common to the packet.
 #[derive(Clone, Copy, Debug)]
@@ -59,7 +59,7 @@ pub(crate) struct Packet<const L: usize> {
     /// `tfar` per lane; NaN for a lane out of play.
     pub tfar: [f32; L],
     pub scale: [f32; L],
-    /// Per axis, the row of [`super::box4::Box4::planes`] met first.
+    /// Per axis, the row of [`super::super::box4::Box4::planes`] met first.
     pub near: [usize; 3],
 }
 
@@ -419,7 +419,7 @@ impl<const L: usize, V: Lanes<L>> RayLanes<L, V> {
 
 /// Box `s` of a node against the lanes: entry distances and the mask of
 /// lanes that enter within `[tnear, tfar]`, per lane exactly
-/// [`super::box4::Box4::entries`] (none where `tfar` is NaN).
+/// [`super::super::box4::Box4::entries`] (none where `tfar` is NaN).
 #[inline(always)]
 fn box_hits<const L: usize, V: Lanes<L>>(
     node: &impl WideNode,

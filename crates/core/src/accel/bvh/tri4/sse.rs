@@ -26,7 +26,7 @@
 //! The unit tests of [`super::tri4`] check all of this on random, degenerate,
 //! parallel, shared-edge and non-finite inputs.
 
-use super::tri4::{Ray4, Tri4, TriHits4, CAP};
+use super::{Ray4, Tri4, TriHits4, CAP};
 use std::arch::x86_64::*;
 
 /// Unit roundoff of `f32`, as in the scalar test.
