@@ -1,5 +1,5 @@
-//! `--bvh-build fast` (issue 8, step 3: the linear BVH after Karras 2012)
-//! and `--bvh-build high` (step 3v: wide nodes filled) on a command that
+//! `--bvh-build fast` (the linear BVH after Karras 2012) and
+//! `--bvh-build high` (wide nodes filled as Embree's builders do) on a command that
 //! builds: `raykit trace` over bvh2, bvh4 and bvh8 gives the hits of brute
 //! force computed in this process, and an unknown builder is refused
 //! cleanly.

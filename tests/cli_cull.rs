@@ -240,7 +240,7 @@ fn evaluate_reports_the_ground_truth_and_exits_2_on_false_removals() {
     assert_eq!(e["false_removals"], 0, "{e}");
     assert_eq!(e["missed_removals"], 0, "{e}");
 
-    // Take the lid off: the balls are in plain view, and paper 003's rule
+    // Take the lid off: the balls are in plain view, and Min (2008)'s rule
     // on a coarse grid misses some of their small triangles.
     let open = raykit_cull::synthetic::box_surface(
         &Aabb::new(Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0)),

@@ -1,6 +1,6 @@
 //! `raykit render --backend gpu` as a user runs it: the PNG equals the CPU
-//! renderer's within a small tolerance for both organisations (paper 000's
-//! single kernel, paper 001's stream), and options the GPU renderer does
+//! renderer's within a small tolerance for both organisations (the CUDA kd-tree
+//! tracer's single kernel, Purcell et al. (2002)'s stream), and options the GPU renderer does
 //! not implement are refused with an error naming them. Needs a wgpu
 //! adapter (Mesa's lavapipe in CI); without one the render fails and so
 //! does the test, with the adapter error in the message.

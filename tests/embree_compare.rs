@@ -1,4 +1,4 @@
-//! `raykit bench --compare embree` (issue 8, part 1): with the `embree`
+//! `raykit bench --compare embree`: with the `embree`
 //! feature, Embree 3 and our BVH trace the same rays in one process and
 //! every answer must agree (up to shared-edge ties); without the feature the
 //! command must say how to get it.
@@ -10,7 +10,7 @@ use cli::{raykit, text};
 #[cfg(feature = "embree")]
 #[test]
 fn embree_and_ours_agree_on_every_ray_and_the_table_has_every_cell() {
-    // Two meshes and two structures in one run, as issue 8's "done when"
+    // Two meshes and two structures in one run, as the comparison is meant to be run
     // asks: every mesh gets its tables, then one summary.
     let meshes = ["builtin:cornell", "builtin:scatter:triangles=20000"];
     let o = raykit(&[

@@ -1,4 +1,4 @@
-//! T-junction elimination (paper 002) on the real meshes of the test data
+//! T-junction elimination (Kim 2013) on the real meshes of the test data
 //! folder, as loaded by raykit-io: the naive and fast forms give the same
 //! answer and the same mesh on every mesh the naive form accepts, the result
 //! passes the independent brute-force checker, and the plane-cut real meshes

@@ -11,7 +11,7 @@ use glam::Vec3;
 ///
 /// The layout is C's, fields in this order (44 bytes), so that the packet
 /// path can move eight rays into its lanes with vector loads
-/// (`accel/bvh/packet_gather.rs`).
+/// (`accel/bvh/packet/gather.rs`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub struct Ray {

@@ -11,23 +11,13 @@ use raykit_core::accel::{BuildOptions, BuildQuality};
 use raykit_core::rng::Pcg32;
 use raykit_core::{TriangleMesh, Vec3};
 
+mod soup;
+
 const QUALITIES: [BuildQuality; 2] = [BuildQuality::Sah, BuildQuality::Fast];
 
 /// `n` random triangles of varied size in the unit cube.
 fn soup(n: usize, seed: u64) -> TriangleMesh {
-    let mut rng = Pcg32::new(seed);
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for i in 0..n {
-        let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
-        let size = 0.001 + 0.05 * rng.next_f32().powi(3);
-        for _ in 0..3 {
-            positions.push(c + rng.unit_vector() * size);
-        }
-        let b = 3 * i as u32;
-        indices.push([b, b + 1, b + 2]);
-    }
-    TriangleMesh::new(positions, indices)
+    soup::soup(n, seed, 0.001, 0.05, 3)
 }
 
 /// `n` copies of one triangle (every centroid equal), plus a clustered

@@ -8,20 +8,10 @@ use raykit_core::accel::kdtree::{
 use raykit_core::rng::Pcg32;
 use raykit_core::{TriangleMesh, Vec3};
 
+mod soup;
+
 fn soup(n: usize, seed: u64) -> TriangleMesh {
-    let mut rng = Pcg32::new(seed);
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for i in 0..n {
-        let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
-        let size = 0.01 + 0.2 * rng.next_f32().powi(2);
-        for _ in 0..3 {
-            positions.push(c + rng.unit_vector() * size);
-        }
-        let b = 3 * i as u32;
-        indices.push([b, b + 1, b + 2]);
-    }
-    TriangleMesh::new(positions, indices)
+    soup::soup(n, seed, 0.01, 0.2, 2)
 }
 
 #[path = "tjunction_support/mod.rs"]

@@ -1,4 +1,4 @@
-//! The exact triangle tests of the game queries (paper 002) against
+//! The exact triangle tests of the game queries (Kim 2013) against
 //! independent references: dense point sampling of the triangle (a sample
 //! inside the shape ⇒ the test must report overlap), the separating axis
 //! theorem as a second algorithm for boxes and frustums (on cases clearly

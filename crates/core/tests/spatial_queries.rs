@@ -13,21 +13,11 @@ use raykit_core::rng::Pcg32;
 use raykit_core::tri::TestKind;
 use raykit_core::{Aabb, Camera, Part, TriangleMesh, Vec3};
 
+mod soup;
+
 /// A soup of `n` random triangles of varied size inside the unit cube.
 fn random_soup(n: usize, seed: u64) -> TriangleMesh {
-    let mut rng = Pcg32::new(seed);
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for i in 0..n {
-        let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
-        let size = 0.002 + 0.1 * rng.next_f32().powi(3);
-        for _ in 0..3 {
-            positions.push(c + rng.unit_vector() * size);
-        }
-        let b = 3 * i as u32;
-        indices.push([b, b + 1, b + 2]);
-    }
-    TriangleMesh::new(positions, indices)
+    soup::soup(n, seed, 0.002, 0.1, 3)
 }
 
 /// An `n` × `n` grid over [0, 1]² at height `y = h(x, z)`; with `flat` all

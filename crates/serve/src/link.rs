@@ -3,7 +3,7 @@
 //! orbits the camera, acknowledges each frame, and reports frames per
 //! second, bytes per frame, the bit rate and input-to-frame latency
 //! percentiles — the figures by which remote rendering to a handheld over
-//! 802.11g was judged (paper 001, after Purcell et al. 2002).
+//! 802.11g was judged (the remote-rendering paper after Purcell et al. 2002).
 
 use crate::load::{percentile, run_load, LoadOptions};
 use crate::protocol::{FrameFormat, SettingsJson, Stage};

@@ -373,7 +373,8 @@ fn measure(
 fn markdown(rows: &[Row], skipped: &[String], head: &str) -> String {
     let opt = |v: Option<usize>| v.map_or("–".to_string(), |v| v.to_string());
     let optf = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.1}"));
-    let mut md = format!("# Culling experiment: paper 003's global visibility culling\n\n{head}\n");
+    let mut md =
+        format!("# Culling experiment: Min (2008)'s global visibility culling\n\n{head}\n");
     md.push_str(
         "| model | triangles | parts | resolution | grid | mode | distance field s | propagation s | \
          visible set s | total s (median) | triangles removed | removed % (triangles / area) | \

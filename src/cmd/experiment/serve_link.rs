@@ -1,6 +1,6 @@
 //! `raykit experiment serve --connect URL`: one stream from a server running
 //! elsewhere (across a network link), measured as remote rendering to a
-//! handheld over 802.11g was in paper 001: frames per second at one size,
+//! handheld over 802.11g was in the remote-rendering paper after Purcell et al. (2002): frames per second at one size,
 //! bytes per frame, the bit rate, and input-to-frame latency percentiles.
 
 use super::{provenance, write_text};

@@ -353,7 +353,7 @@ fn fmt_opt<T: std::fmt::Display>(v: Option<T>) -> String {
 
 fn markdown(rows: &[Row], name: &str, tris: usize, args: &SplitHeuristicArgs) -> String {
     let mut s = format!(
-        "# Split-heuristic experiment (Kim 2013)\n\n`raykit experiment split-heuristic --size {} --frustums {} --reps {} --threads {} --game-leaf {}` on {name} ({tris} triangles).\n\n{}\nCulled frames/s: per view, the parts in the frustum are found through the tree and the pieces of those parts (the cut mesh's, for the game trees) are rasterized at {FRAME_WIDTH}×{FRAME_HEIGHT} by the CPU rasterizer (paper 002's Fig. 7 measured rendering frames of the culled level).\n\n",
+        "# Split-heuristic experiment (Kim 2013)\n\n`raykit experiment split-heuristic --size {} --frustums {} --reps {} --threads {} --game-leaf {}` on {name} ({tris} triangles).\n\n{}\nCulled frames/s: per view, the parts in the frustum are found through the tree and the pieces of those parts (the cut mesh's, for the game trees) are rasterized at {FRAME_WIDTH}×{FRAME_HEIGHT} by the CPU rasterizer (Kim 2013's Fig. 7 measured rendering frames of the culled level).\n\n",
         args.size, args.frustums, args.reps, args.threads, args.game_leaf, super::provenance()
     );
     s += "| split | split polygons | split triangles | depth | leaves | build ms | T-junctions | fast ms | naive ms | naive = fast | Mrays/s | frustum queries/s | culled frames/s |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n";

@@ -62,7 +62,7 @@ pub struct TerrainExperimentArgs {
     /// DEM sides of part (b).
     #[arg(long, value_delimiter = ',', default_value = "256,512,1024,2048,4096")]
     shadow_sizes: Vec<usize>,
-    /// Views of part (a): 1 is the single view of paper 004's Table 1; more
+    /// Views of part (a): 1 is the single view of Table 1 of the quadtree terrain ray-casting paper; more
     /// fly along the DEM's diagonal (each view moved by an equal step to the
     /// north-east, same direction), and part (a) reports the average frame.
     #[arg(long, default_value_t = 1)]

@@ -17,7 +17,7 @@ pub struct Geometry {
     mesh: TriangleMesh,
     bvh: Bvh8<Moller>,
     /// Bounds padded by the triangle tests' tolerance band, as the BVHs'
-    /// own node boxes are (`accel/bvh/node_box.rs`).
+    /// own node boxes are (`accel/node_box.rs`).
     bounds: Aabb,
     mask: u32,
     surface: OnceLock<SurfaceBvh>,

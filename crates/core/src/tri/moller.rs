@@ -101,7 +101,7 @@ const K_BARY: f32 = 64.0;
 
 /// What [`Moller`]'s per-ray constant multiplies the largest direction
 /// component's magnitude by (`K_BARY · u`; exact, a power of two), for
-/// the packet path that forms eight of them at once (`accel/bvh/packet.rs`).
+/// the packet path that forms eight of them at once (`accel/bvh/packet/`).
 pub(crate) const PREPARE_FACTOR: f32 = K_BARY * U;
 
 /// Möller–Trumbore (Möller & Trumbore 1997) with a conservative

@@ -10,7 +10,7 @@
 //!
 //! Both run the same WGSL shading (`shaders/render/`: surface, lights,
 //! base-colour textures, Blinn-Phong, Fresnel, refraction, the sky, equirectangular maps and
-//! The environment box) as the CPU's
+//! the environment box) as the CPU's
 //! `Tracer::scatter`, with camera samples placed by the CPU's
 //! `sample_position`, and hand back linear radiance that the caller encodes
 //! as the CPU renderer does.

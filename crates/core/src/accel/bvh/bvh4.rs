@@ -277,7 +277,7 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
     }
 
     /// Coherent packets over Möller, sixteen rays with AVX-512, else eight
-    /// (see `bvh/packet.rs`), single rays otherwise.
+    /// (see `bvh/packet/`), single rays otherwise.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         super::packet::intersect_batch(self, rays, hits);
     }
@@ -289,7 +289,7 @@ impl<T: TriangleTest> Accel for Bvh4<T> {
 }
 
 /// The coherent packet path (Wald et al. 2001, Benthin et al. 2012):
-/// `bvh/packet.rs`, handing over to its 4-wide single-ray subtree traversal.
+/// `bvh/packet/`, handing over to its 4-wide single-ray subtree traversal.
 impl<T: TriangleTest> super::packet::PacketTree for Bvh4<T> {
     type Node = Node4;
 

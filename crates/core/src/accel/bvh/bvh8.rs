@@ -362,7 +362,7 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
 
     /// Coherent packets over Möller, sixteen rays with AVX-512, else eight
     /// (Wald et al. 2001, with Benthin et al. 2012's hand-over to single rays; see
-    /// `bvh/packet.rs`), single rays otherwise.
+    /// `bvh/packet/`), single rays otherwise.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         super::packet::intersect_batch(self, rays, hits);
     }
@@ -374,7 +374,7 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
 }
 
 /// The coherent packet path over 8-wide nodes (Wald et al. 2001, Benthin et al.
-/// 2012): `bvh/packet.rs`, the same kernel as [`super::Bvh4`]'s, handing over
+/// 2012): `bvh/packet/`, the same kernel as [`super::Bvh4`]'s, handing over
 /// to this tree's own single-ray traversal.
 impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
     type Node = Node8;

@@ -1,7 +1,7 @@
 //! The collapse of a binary build tree into the wide nodes of
 //! [`super::Bvh4`] and [`super::Bvh8`]: the usual way to get an
 //! Embree-style wide BVH out of a binary build (Wald et al. 2014), written
-//! once for both widths. The linear BVH ([`super::lbvh`]) goes through it;
+//! once for both widths. The linear BVH ([`super::build::lbvh`]) goes through it;
 //! the SAH builds make the same wide nodes directly
 //! ([`super::wide_build`], which follows these rules step for step and is
 //! tested against this walk).

@@ -3,7 +3,7 @@
 //! AVX-512 register ([`L16`]), as Embree's packet and stream kernels use
 //! packets of the machine's vector width (Wald et al. 2014).
 //!
-//! The kernel (`packet_kernel.rs`) is written once against [`Lanes`]. The
+//! The kernel (`packet/kernel.rs`) is written once against [`Lanes`]. The
 //! methods are thin `#[inline(always)]` wrappers of single instructions;
 //! they inline into the kernel's entry points, which are compiled for the
 //! features each width needs, so every operation is the one instruction

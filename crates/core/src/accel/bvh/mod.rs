@@ -9,7 +9,7 @@
 //!   box tests at once with SSE, ordered stack traversal; over Möller its
 //!   leaves are packs of four triangles tested at once (`tri4`, Embree's
 //!   `triangle4`).
-//! - `packet` (with `packet_kernel` and `lanes`): the coherent-ray path
+//! - `packet` (with its `kernel` and `gather`, over `lanes` and `frustum`): the coherent-ray path
 //!   behind [`Bvh4`]'s and [`Bvh8`]'s `intersect_batch` / `occluded_batch`
 //!   over Möller: packets of rays of one octant traced
 //!   together (Wald et al. 2001), sixteen with AVX-512 or eight with AVX2,

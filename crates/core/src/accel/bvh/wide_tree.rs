@@ -1,7 +1,7 @@
 //! The build shared by the wide BVHs ([`super::Bvh4`],
 //! [`super::Bvh8`]): the binned SAH making wide nodes directly
 //! ([`super::wide_build`]), or the linear BVH's binary tree
-//! ([`super::lbvh`]) collapsed into wide nodes ([`super::collapse`]); the
+//! ([`super::build::lbvh`]) collapsed into wide nodes ([`super::collapse`]); the
 //! leaves packed four triangles at a time over Möller (Embree's
 //! `triangle4`, Wald et al. 2014) or kept one triangle after the other for
 //! the other tests; and the shape figures of the wide tree.

@@ -11,7 +11,7 @@
 //! bounds the children's centroids) are in [`super::binning`]. The result is a
 //! pointer tree of [`BuildNode`]s plus the triangle order, which each layout
 //! flattens; it does not depend on the number of threads.
-//! [`BuildQuality::Fast`] selects the linear BVH of [`super::lbvh`] instead.
+//! [`BuildQuality::Fast`] selects the linear BVH of [`lbvh`] instead.
 
 pub mod lbvh;
 pub(crate) mod sweep;
@@ -82,7 +82,7 @@ pub enum BuildQuality {
     /// Linear BVH (Karras 2012, "Maximizing parallelism in the construction
     /// of BVHs, octrees, and k-d trees"): Morton codes of the centroids,
     /// radix sort, the hierarchy from the codes' highest differing bits,
-    /// leaves merged where the SAH prefers (see [`super::lbvh`]). Several
+    /// leaves merged where the SAH prefers (see [`lbvh`]). Several
     /// times faster to build, a worse tree: for dynamic scenes.
     Fast,
 }
@@ -186,7 +186,7 @@ pub struct BuildTree {
 
 /// Build a tree over the triangles of `mesh` with the builder that
 /// `options.quality` names: the binned SAH ([`BuildQuality::Sah`]) or the
-/// linear BVH ([`BuildQuality::Fast`], see [`super::lbvh`]).
+/// linear BVH ([`BuildQuality::Fast`], see [`lbvh`]).
 ///
 /// An empty mesh gives a single empty leaf. Degenerate inputs (all centroids
 /// equal) are split at the object median so the depth stays logarithmic.
@@ -297,7 +297,7 @@ pub(crate) enum Plan {
     Leaf,
     /// Split at the binned SAH's cheapest boundary; `leaf_ok` when one leaf
     /// would be cheaper (only with [`BuildOptions::fill_wide_nodes`]: the
-    /// halves are then split by [`super::sweep`]).
+    /// halves are then split by [`sweep`]).
     Binned {
         split: Split,
         map: Mapping,

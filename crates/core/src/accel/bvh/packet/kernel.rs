@@ -25,7 +25,7 @@
 //! `tfar` (which shrinks as hits are found).
 //!
 //! At a leaf each triangle of the `tri4` packs is broadcast and tested
-//! against the packet's rays with the operations of [`super::tri4_sse`] (which
+//! against the packet's rays with the operations of `tri4::sse` (which
 //! are [`crate::tri::Moller`]'s, in the same order, no FMA), so every lane
 //! gets bit for bit the scalar test's hit, `t`, `u` and `v`. A lane out of
 //! play (tail of a batch, an occluded shadow ray) has `tfar = NaN`, which
@@ -445,7 +445,7 @@ fn box_hits<const L: usize, V: Lanes<L>>(
 
 /// Triangle `k` of `tri` against the lanes in `act` over `[tnear, tfar]`:
 /// `None` when no lane hits, else the hit mask and `t`, `u`, `v` (per lane
-/// exactly [`crate::tri::Moller`]'s test, see [`super::tri4_sse`]).
+/// exactly [`crate::tri::Moller`]'s test, see `tri4::sse`).
 #[inline(always)]
 fn tri_hits<const L: usize, V: Lanes<L>>(
     tri: &Tri4,

@@ -3,7 +3,7 @@
 //! into packets of
 //! consecutive rays and trace each coherent packet together through the
 //! tree (Wald et al. 2001 coherent ray packets; Embree's packet kernels,
-//! Wald et al. 2014) with the kernel of [`super::packet_kernel`]: sixteen
+//! Wald et al. 2014) with the kernel of [`kernel`]: sixteen
 //! rays with AVX-512 where the CPU has it, as Embree's packets on such
 //! machines, else eight with AVX2. The traversal is generic over the node width
 //! ([`WideNode`]: 4 or 8 children, boxes in structure-of-arrays layout) and
@@ -442,7 +442,7 @@ unsafe fn coherent_packet<const L: usize>(rays: &[Ray]) -> Option<Packet<L>> {
 }
 
 /// [`packet`] of `L` rays (a multiple of eight), moved into the rows eight
-/// at a time with vector shuffles ([`super::packet_gather`]), the octants
+/// at a time with vector shuffles (`gather`), the octants
 /// compared by the rows' sign bits and the Möller scale formed eight at a
 /// time: the same packet, bit for bit (`max` of magnitudes is exact in any
 /// order; a NaN direction fails every triangle test whatever its scale).

@@ -9,7 +9,7 @@
 //! operation and in the same order (no fused multiply-adds), so every lane
 //! gives bit for bit the hit, `t`, `u` and `v` of the scalar test, with its
 //! conservative tolerance capped at [`crate::tri::MAX_EDGE_TOLERANCE`]; the
-//! SSE kernel is in [`super::tri4_sse`], the scalar fallback here.
+//! SSE kernel is in [`sse`], the scalar fallback here.
 //!
 //! A leaf of `n` triangles takes `ceil(n / 4)` consecutive packs, the
 //! triangles in the binary build's leaf order; the unused lanes of the last
@@ -87,7 +87,7 @@ impl Tri4 {
     /// Test the lanes in `lanes` (bit `i` for lane `i`) against the ray over
     /// `[ray.tnear, tfar]`: with SSE on x86_64 (part of its baseline), one
     /// lane after the other elsewhere. `EARLY` rejects certain misses
-    /// before the division (same answers; see `tri4_sse::hits`).
+    /// before the division (same answers; see `sse::hits`).
     #[inline(always)]
     pub fn hits<const EARLY: bool>(&self, ray: &Ray, r: &Ray4, tfar: f32, lanes: u32) -> TriHits4 {
         #[cfg(target_arch = "x86_64")]
@@ -326,7 +326,7 @@ mod tests {
     /// with a non-finite corner.
     fn corners(rng: &mut Pcg32) -> [Vec3; 3] {
         // Now and then tiny or huge, so that det nears the ends of the f32
-        // range (the early rejection's thresholds, `tri4_sse::early_miss`).
+        // range (the early rejection's thresholds, `sse::early_miss`).
         let scale = if rng.below(16) == 0 {
             10f32.powf(rng.range_f32(-19.0, 19.0))
         } else {
@@ -490,7 +490,7 @@ mod tests {
     /// away, where the edge tolerances reach their cap: `u` or `v` within
     /// 1% of `-CAP`, or `u + v` within 1% of `1 + 2·CAP`. The SSE pack,
     /// which rejects lanes early from the undivided barycentrics
-    /// (`tri4_sse::early_miss`), agrees with the scalar test on every lane,
+    /// (`sse::early_miss`), agrees with the scalar test on every lane,
     /// including the hits that a margin of `2^-8` too small would reject
     /// (counted, so the test fails if it stops reaching them).
     #[test]
