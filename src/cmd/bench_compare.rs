@@ -1,13 +1,21 @@
-//! `raykit bench --compare embree`: our structures and Embree 3 built on
-//! the same meshes, tracing the same rays in the same process; every cell is
-//! printed as ours, Embree's and the ratio, and the answers are checked to
-//! agree (hit/miss and distance; different triangles at the same distance,
-//! and rays grazing a shared edge that one engine catches and the other
-//! slips through, are ties). With several meshes or structures a summary
-//! gives, per cell and mesh, our best ratio.
+//! `raykit bench --compare embree`: our structures and Embree (version 4
+//! loaded at run time, version 3 linked, or both) built on the same meshes,
+//! tracing the same rays in the same process; every cell is printed as
+//! ours, each Embree's and the ratios, and the answers are checked to agree
+//! (hit/miss and distance; different triangles at the same distance, and
+//! rays grazing a shared edge that one engine catches and the other slips
+//! through, are ties). Embree 4 is timed through each of its query APIs
+//! (single rays, packets of 4, 8 and 16) and its fastest counts; Embree 3
+//! through its single-ray API, and its stream API on primaries. The one-ray
+//! cells time our per-ray API (`Accel::intersect` / `occluded`, one call
+//! per ray) against `rtcIntersect1` / `rtcOccluded1`. With several meshes
+//! or structures a summary gives, per cell and mesh, our best ratio.
 
+use crate::cmd::bench_compare_print::{print_report, print_summary, summarise};
+use crate::embree::embree4::{self, Embree4, Embree4Device, Embree4Scene};
 use crate::embree::{EmbreeDevice, EmbreeScene, Quality};
 use crate::measure::{median_min_max, pool, timed};
+use crate::one_ray;
 use crate::verify::{compare_hits, compare_occlusion, edge_grazes, occlusion_grazes, Verdict};
 use anyhow::Result;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions, BuildQuality};
@@ -18,9 +26,18 @@ use rayon::prelude::*;
 use rayon::ThreadPool;
 use serde::Serialize;
 use std::process::ExitCode;
+use std::sync::Arc;
 
-/// Rays per `rtcIntersect1M` call of the stream cell.
+/// Rays per `rtcIntersect1M` call of the Embree 3 stream cell.
 const STREAM_PACKET: usize = 256;
+
+/// The Embree versions compared.
+pub struct Yardsticks {
+    /// Embree 3 (linked).
+    pub embree3: bool,
+    /// Embree 4, loaded.
+    pub embree4: Option<Arc<Embree4>>,
+}
 
 /// What to compare.
 pub struct CompareSetup<'a> {
@@ -39,36 +56,48 @@ pub struct CompareSetup<'a> {
     pub threads: usize,
     /// Print JSON instead of tables.
     pub json: bool,
+    /// The Embree versions to compare with.
+    pub yardsticks: Yardsticks,
 }
 
+/// One cell: our figure beside each Embree's. Builds in ms (a ratio above
+/// 1 means our build is faster), traces in Mrays/s (ours ÷ Embree).
 #[derive(Serialize)]
-struct Cell {
-    what: String,
+pub(crate) struct Cell {
+    pub what: String,
     /// Our structure × test of this cell.
-    structure: String,
-    threads: usize,
-    ours: f64,
-    embree: f64,
-    ratio: f64,
-    spread: f64,
+    pub structure: String,
+    pub threads: usize,
+    pub ours: f64,
+    /// Embree 4's figure: its fastest API on trace cells.
+    pub embree4: Option<f64>,
+    /// The Embree 4 API that gave it (`rtcIntersect16`, …).
+    pub embree4_api: Option<String>,
+    pub ratio4: Option<f64>,
+    pub embree3: Option<f64>,
+    pub ratio3: Option<f64>,
+    /// Largest (max−min)/median of the samples behind the figures.
+    pub spread: f64,
 }
 
 #[derive(Serialize)]
-struct Agreement {
-    set: &'static str,
-    /// Our structure × test compared.
-    structure: String,
+pub(crate) struct Agreement {
+    pub set: &'static str,
+    /// Our structure × test compared, and its API (batch or one-ray).
+    pub structure: String,
+    /// The Embree and API whose answers ours are compared with.
+    pub engine: String,
     /// Every ray of the set; `edge_grazes` counts the disagreements where
     /// the nearer answer's triangle is met within the edge band (f64): the
     /// ray grazes an edge, one engine catches it where the other slips past.
-    verdict: Verdict,
+    pub verdict: Verdict,
 }
 
 /// The build Embree traces: HIGH (with spatial splits), or MEDIUM where
 /// RAYKIT_EMBREE_TRACE_MEDIUM is set (an experiment: on the scatter both
 /// trace at the same speed, so the splits are not what Embree's lead on
 /// shadow and incoherent rays comes from).
-fn trace_quality() -> Quality {
+pub(crate) fn trace_quality() -> Quality {
     match std::env::var_os("RAYKIT_EMBREE_TRACE_MEDIUM") {
         Some(_) => Quality::Medium,
         None => Quality::High,
@@ -93,39 +122,26 @@ fn traced_options(options: &BuildOptions) -> BuildOptions {
 
 /// Our build's size and quality, shown beside its build time.
 #[derive(Serialize)]
-struct BuiltFigures {
-    structure: String,
-    sah_cost: f64,
-    bytes: usize,
-    nodes: usize,
+pub(crate) struct BuiltFigures {
+    pub structure: String,
+    pub sah_cost: f64,
+    pub bytes: usize,
+    pub nodes: usize,
 }
 
 #[derive(Serialize)]
-struct Comparison {
-    mesh: String,
-    triangles: usize,
+pub(crate) struct Comparison {
+    pub mesh: String,
+    pub triangles: usize,
     /// The builder of the structures traced (`--bvh-build`).
-    traced_build: String,
-    ours: Vec<BuiltFigures>,
-    builds_ms: Vec<Cell>,
-    mrays: Vec<Cell>,
-    agreement: Vec<Agreement>,
-}
-
-/// Our best ratio for one cell on one mesh.
-#[derive(Serialize)]
-struct Best {
-    mesh: String,
-    ratio: f64,
-    structure: String,
-}
-
-/// One row of the summary: a cell across the meshes.
-#[derive(Serialize)]
-struct SummaryRow {
-    what: String,
-    threads: usize,
-    best: Vec<Best>,
+    pub traced_build: String,
+    /// The Embree versions compared (`4.4.0 (path)`, `3`).
+    pub embree4: Option<String>,
+    pub embree3: bool,
+    pub ours: Vec<BuiltFigures>,
+    pub builds_ms: Vec<Cell>,
+    pub mrays: Vec<Cell>,
+    pub agreement: Vec<Agreement>,
 }
 
 /// One timed thing of a cell: an engine's build or trace.
@@ -171,6 +187,40 @@ fn trace(accel: &dyn Accel, rays: &[Ray], shadow: bool) {
     }
 }
 
+/// Our one-ray API over the set.
+fn trace_one_ray(accel: &dyn Accel, rays: &[Ray], shadow: bool) {
+    if shadow {
+        let mut o = vec![false; rays.len()];
+        one_ray::occluded_each(accel, rays, &mut o);
+    } else {
+        let mut h = vec![None; rays.len()];
+        one_ray::intersect_each(accel, rays, &mut h);
+    }
+}
+
+/// Embree 4 through `api`; primaries and shadow rays (which leave from
+/// the primaries' hit points in pixel order) carry the coherent hint.
+fn trace4(em: &Embree4Scene, api: embree4::Api, rays: &[Ray], set: RayKind) {
+    let coherent = set != RayKind::Incoherent;
+    if set == RayKind::Shadow {
+        let mut o = vec![false; rays.len()];
+        em.occluded_with(api, rays, &mut o, coherent);
+    } else {
+        let mut h = vec![None; rays.len()];
+        em.intersect_with(api, rays, &mut h, coherent);
+    }
+}
+
+/// The Embree 4 call of `api` for a set.
+fn api_name(api: embree4::Api, shadow: bool) -> String {
+    let call = if shadow {
+        "rtcOccluded"
+    } else {
+        "rtcIntersect"
+    };
+    format!("{call}{}", api.width())
+}
+
 /// Run the comparison on every mesh and print it.
 pub fn run(s: CompareSetup) -> Result<ExitCode> {
     let one = pool(1)?;
@@ -204,6 +254,72 @@ fn label(kind: AccelKind, test: TestKind) -> String {
     format!("{} × {}", kind.name(), test.name())
 }
 
+/// Medians and spreads of one cell's runs, in the order pushed: ours
+/// first (one per structure), then Embree 4's APIs, then Embree 3.
+struct CellTimes {
+    ours: Vec<(f64, f64)>,
+    embree4: Vec<(embree4::Api, f64, f64)>,
+    embree3: Option<(f64, f64)>,
+}
+
+impl CellTimes {
+    /// Split `times` (from `time_in_turn`) as the runs were pushed.
+    fn split(mut times: Vec<(f64, f64)>, apis: &[embree4::Api], embree3: bool) -> CellTimes {
+        let embree3 = if embree3 { times.pop() } else { None };
+        let e4 = times.split_off(times.len() - apis.len());
+        CellTimes {
+            ours: times,
+            embree4: apis
+                .iter()
+                .zip(e4)
+                .map(|(&a, (t, sp))| (a, t, sp))
+                .collect(),
+            embree3,
+        }
+    }
+
+    /// Cells of `what`: each of ours against Embree 4's fastest API and
+    /// Embree 3. `rate` turns seconds into the figure shown (ms or
+    /// Mrays/s), `ratio` two times into ours' advantage.
+    #[allow(clippy::too_many_arguments)]
+    fn cells(
+        &self,
+        what: &str,
+        threads: usize,
+        ours: &[(AccelKind, TestKind)],
+        shadow: bool,
+        rate: impl Fn(f64) -> f64,
+        out: &mut Vec<Cell>,
+    ) {
+        let best4 = self
+            .embree4
+            .iter()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .copied();
+        for (&(kind, test), &(t, sp)) in ours.iter().zip(&self.ours) {
+            let t = t.max(1e-12);
+            out.push(Cell {
+                what: what.to_string(),
+                structure: label(kind, test),
+                threads,
+                ours: rate(t),
+                embree4: best4.map(|b| rate(b.1)),
+                embree4_api: best4
+                    .filter(|_| self.embree4.len() > 1 || !what.starts_with("build"))
+                    .map(|b| api_name(b.0, shadow)),
+                ratio4: best4.map(|b| b.1 / t),
+                embree3: self.embree3.map(|e| rate(e.0)),
+                ratio3: self.embree3.map(|e| e.0 / t),
+                spread: best4
+                    .map(|b| b.2)
+                    .into_iter()
+                    .chain(self.embree3.map(|e| e.1))
+                    .fold(sp, f64::max),
+            });
+        }
+    }
+}
+
 /// Every cell of one mesh: builds, Mrays/s and agreement.
 fn compare_mesh(
     s: &CompareSetup,
@@ -213,6 +329,7 @@ fn compare_mesh(
     all: &ThreadPool,
 ) -> Result<Comparison> {
     let n = all.current_num_threads();
+    let (e3, e4lib) = (s.yardsticks.embree3, s.yardsticks.embree4.as_ref());
     eprintln!(
         "{name}: {} triangles; ray sets {}²…",
         mesh.num_triangles(),
@@ -225,9 +342,21 @@ fn compare_mesh(
     let mut builds = Vec::new();
     let mut ours: Vec<Box<dyn Accel>> = Vec::new();
     let high = traced_options(&s.options);
+    let build_apis: &[embree4::Api] = if e4lib.is_some() {
+        &[embree4::Api::Single]
+    } else {
+        &[]
+    };
     for (threads, p) in [(1, one), (n, all)] {
-        // The device (Embree's thread pool) is made outside the timing.
-        let device = EmbreeDevice::new(threads)?;
+        // The devices (Embree's thread pools) are made outside the timing.
+        let device3 = if e3 {
+            Some(EmbreeDevice::new(threads)?)
+        } else {
+            None
+        };
+        let device4 = e4lib
+            .map(|lib| Embree4Device::new(lib, threads))
+            .transpose()?;
         for quality in [Quality::High, Quality::Medium] {
             // Our build at the same rung of the ladder: the traced (high)
             // options against Embree HIGH, the given ones against MEDIUM.
@@ -239,8 +368,8 @@ fn compare_mesh(
             // replaces (frees) the previous one inside the timing, as
             // Embree's scene is released inside its own.
             let mut built: Vec<Option<Box<dyn Accel>>> = s.ours.iter().map(|_| None).collect();
-            let mut err = None;
-            let mut timings = {
+            let (mut err4, mut err3) = (None, None);
+            let times = {
                 let mut runs: Vec<Run> = built
                     .iter_mut()
                     .zip(&s.ours)
@@ -250,105 +379,169 @@ fn compare_mesh(
                         })
                     })
                     .collect();
-                runs.push(Box::new(|| {
-                    if let Err(e) = EmbreeScene::build(&device, mesh, quality) {
-                        err = Some(e);
-                    }
-                }));
+                if let Some(d) = &device4 {
+                    let err = &mut err4;
+                    runs.push(Box::new(move || {
+                        if let Err(e) = Embree4Scene::build(d, mesh, quality) {
+                            *err = Some(e);
+                        }
+                    }));
+                }
+                if let Some(d) = &device3 {
+                    let err = &mut err3;
+                    runs.push(Box::new(move || {
+                        if let Err(e) = EmbreeScene::build(d, mesh, quality) {
+                            *err = Some(e);
+                        }
+                    }));
+                }
                 time_in_turn(s.reps, false, &mut runs)
             };
-            if let Some(e) = err {
+            if let Some(e) = err4.or(err3) {
                 return Err(e);
             }
-            let (t_em, sp2) = timings.pop().expect("Embree's build was timed");
             if quality == Quality::High {
                 ours = built
                     .into_iter()
                     .map(|b| b.expect("built at least once"))
                     .collect();
             }
-            for (&(kind, test), &(t_ours, sp)) in s.ours.iter().zip(&timings) {
-                builds.push(Cell {
-                    what: format!("build vs Embree {quality:?}"),
-                    structure: label(kind, test),
-                    threads,
-                    ours: t_ours * 1e3,
-                    embree: t_em * 1e3,
-                    // Build: a ratio above 1 means ours is faster.
-                    ratio: t_em / t_ours.max(1e-12),
-                    spread: sp.max(sp2),
-                });
-            }
-        }
-    }
-    let embree = EmbreeScene::build(&EmbreeDevice::new(0)?, mesh, trace_quality())?;
-    let mut cells = Vec::new();
-    let mut push = |what: &str, threads, i: usize, a: f64, sa: f64, b: f64, sb: f64, m: f64| {
-        let (kind, test) = s.ours[i];
-        cells.push(Cell {
-            what: what.to_string(),
-            structure: label(kind, test),
-            threads,
-            ours: m / a,
-            embree: m / b,
-            ratio: b / a.max(1e-12),
-            spread: sa.max(sb),
-        });
-    };
-    for (si, set) in RayKind::ALL.into_iter().enumerate() {
-        let rays = &sets[si];
-        let shadow = set == RayKind::Shadow;
-        let m = rays.len() as f64 / 1e6;
-        for (threads, p) in [(1, one), (n, all)] {
-            let mut runs: Vec<Run> = ours
-                .iter()
-                .map(|o| -> Run { Box::new(move || p.install(|| trace(o.as_ref(), rays, shadow))) })
-                .collect();
-            runs.push(Box::new(|| p.install(|| trace(&embree, rays, shadow))));
-            let mut times = time_in_turn(s.reps, true, &mut runs);
-            let (b, sb) = times.pop().expect("Embree's cell was timed");
-            for (i, &(a, sa)) in times.iter().enumerate() {
-                push(set.name(), threads, i, a, sa, b, sb, m);
-            }
-        }
-    }
-    // Coherent primaries: Embree's stream API against our batch path.
-    let primary = &sets[0];
-    let m = primary.len() as f64 / 1e6;
-    for (threads, p) in [(1, one), (n, all)] {
-        let mut runs: Vec<Run> = ours
-            .iter()
-            .map(|o| -> Run { Box::new(move || p.install(|| trace(o.as_ref(), primary, false))) })
-            .collect();
-        runs.push(Box::new(|| {
-            p.install(|| {
-                let mut hits: Vec<Option<Hit>> = vec![None; primary.len()];
-                primary
-                    .par_chunks(STREAM_PACKET * 16)
-                    .zip(hits.par_chunks_mut(STREAM_PACKET * 16))
-                    .for_each(|(r, h)| embree.intersect_stream(r, h, STREAM_PACKET));
-            })
-        }));
-        let mut times = time_in_turn(s.reps, true, &mut runs);
-        let (b, sb) = times.pop().expect("Embree's cell was timed");
-        for (i, &(a, sa)) in times.iter().enumerate() {
-            push(
-                "primary, Embree stream (rtcIntersect1M)",
+            CellTimes::split(times, build_apis, e3).cells(
+                &format!("build vs Embree {quality:?}"),
                 threads,
-                i,
-                a,
-                sa,
-                b,
-                sb,
-                m,
+                &s.ours,
+                false,
+                |t| t * 1e3,
+                &mut builds,
             );
         }
     }
-    let agreement = all.install(|| agreement(mesh, &sets, &embree, &ours, &s.ours));
+    let embree3 = if e3 {
+        Some(EmbreeScene::build(
+            &EmbreeDevice::new(0)?,
+            mesh,
+            trace_quality(),
+        )?)
+    } else {
+        None
+    };
+    let embree4 = e4lib
+        .map(|lib| Embree4Scene::build(&Embree4Device::new(lib, 0)?, mesh, trace_quality()))
+        .transpose()?;
+    let all_apis: &[embree4::Api] = if embree4.is_some() {
+        &embree4::Api::ALL
+    } else {
+        &[]
+    };
+    let single: &[embree4::Api] = if embree4.is_some() {
+        &[embree4::Api::Single]
+    } else {
+        &[]
+    };
+    let mut cells = Vec::new();
+    // Batch cells: our batch path against Embree 4's fastest API and
+    // Embree 3's single rays; one-ray cells: our per-ray API against
+    // Embree's single-ray calls, on one thread (a library user's loop).
+    for one_ray_api in [false, true] {
+        for (si, set) in RayKind::ALL.into_iter().enumerate() {
+            let rays = &sets[si];
+            let shadow = set == RayKind::Shadow;
+            let m = rays.len() as f64 / 1e6;
+            let pools: &[(usize, &ThreadPool)] = if one_ray_api {
+                &[(1, one)]
+            } else {
+                &[(1, one), (n, all)]
+            };
+            let apis = if one_ray_api { single } else { all_apis };
+            for &(threads, p) in pools {
+                let mut runs: Vec<Run> = ours
+                    .iter()
+                    .map(|o| -> Run {
+                        Box::new(move || {
+                            p.install(|| {
+                                if one_ray_api {
+                                    trace_one_ray(o.as_ref(), rays, shadow)
+                                } else {
+                                    trace(o.as_ref(), rays, shadow)
+                                }
+                            })
+                        })
+                    })
+                    .collect();
+                if let Some(em) = &embree4 {
+                    for &api in apis {
+                        runs.push(Box::new(move || p.install(|| trace4(em, api, rays, set))));
+                    }
+                }
+                if let Some(em) = &embree3 {
+                    runs.push(Box::new(move || {
+                        p.install(|| trace_one_ray(em, rays, shadow))
+                    }));
+                }
+                let times = time_in_turn(s.reps, true, &mut runs);
+                let what = if one_ray_api {
+                    format!("{}, one ray", set.name())
+                } else {
+                    set.name().to_string()
+                };
+                CellTimes::split(times, apis, embree3.is_some()).cells(
+                    &what,
+                    threads,
+                    &s.ours,
+                    shadow,
+                    |t| m / t,
+                    &mut cells,
+                );
+            }
+        }
+    }
+    // Coherent primaries: Embree 3's stream API against our batch path.
+    if let Some(em) = &embree3 {
+        let primary = &sets[0];
+        let m = primary.len() as f64 / 1e6;
+        for (threads, p) in [(1, one), (n, all)] {
+            let mut runs: Vec<Run> = ours
+                .iter()
+                .map(|o| -> Run {
+                    Box::new(move || p.install(|| trace(o.as_ref(), primary, false)))
+                })
+                .collect();
+            runs.push(Box::new(|| {
+                p.install(|| {
+                    let mut hits: Vec<Option<Hit>> = vec![None; primary.len()];
+                    primary
+                        .par_chunks(STREAM_PACKET * 16)
+                        .zip(hits.par_chunks_mut(STREAM_PACKET * 16))
+                        .for_each(|(r, h)| em.intersect_stream(r, h, STREAM_PACKET));
+                })
+            }));
+            let times = time_in_turn(s.reps, true, &mut runs);
+            CellTimes::split(times, &[], true).cells(
+                "primary, Embree 3 stream (rtcIntersect1M)",
+                threads,
+                &s.ours,
+                false,
+                |t| m / t,
+                &mut cells,
+            );
+        }
+    }
+    let agreement = all.install(|| {
+        agreement(
+            mesh,
+            &sets,
+            embree3.as_ref(),
+            embree4.as_ref(),
+            &ours,
+            &s.ours,
+        )
+    });
     Ok(Comparison {
         mesh: name.to_string(),
         triangles: mesh.num_triangles(),
         traced_build: format!("{:?}", high.quality).to_lowercase(),
+        embree4: e4lib.map(|l| format!("{} ({})", l.version, l.path.display())),
+        embree3: e3,
         ours: s
             .ours
             .iter()
@@ -369,216 +562,143 @@ fn compare_mesh(
     })
 }
 
-/// Every ray of every set, Embree's answers against each of ours.
+/// Answers of one engine and API on a set.
+enum Answers {
+    Hits(Vec<Option<Hit>>),
+    Occluded(Vec<bool>),
+}
+
+/// Every ray of every set: ours (batch and one-ray) against Embree 3's
+/// single rays and stream, and against each Embree 4 API.
 fn agreement(
     mesh: &TriangleMesh,
     sets: &[Vec<Ray>; 3],
-    embree: &EmbreeScene,
+    embree3: Option<&EmbreeScene>,
+    embree4: Option<&Embree4Scene>,
     ours: &[Box<dyn Accel>],
     names: &[(AccelKind, TestKind)],
 ) -> Vec<Agreement> {
     let mut out = Vec::new();
     for (si, set) in RayKind::ALL.into_iter().enumerate() {
         let rays = &sets[si];
-        if set == RayKind::Shadow {
-            // Occlusion answers, and the nearest hits along the segments
-            // whose occlusion differs to tell edge grazes apart: is the
-            // blocker the one engine found met at an edge?
-            let mut x = vec![false; rays.len()];
-            embree.occluded_batch(rays, &mut x);
-            for (o, &(kind, test)) in ours.iter().zip(names) {
-                let mut y = vec![false; rays.len()];
-                o.occluded_batch(rays, &mut y);
-                let mut verdict = compare_occlusion(&x, &y);
-                (verdict.edge_grazes, _) = occlusion_grazes(mesh, rays, &x, &y, |r| {
-                    let (mut ha, mut hb) = (vec![None; r.len()], vec![None; r.len()]);
-                    embree.intersect_batch(r, &mut ha);
-                    o.intersect_batch(r, &mut hb);
-                    (ha, hb)
-                });
-                out.push(Agreement {
-                    set: set.name(),
-                    structure: label(kind, test),
-                    verdict,
-                });
+        let shadow = set == RayKind::Shadow;
+        let coherent = set != RayKind::Incoherent;
+        // (engine label, its answers, and a nearest-hit oracle of the same
+        // engine for telling edge grazes apart on shadow rays)
+        let mut theirs: Vec<(
+            String,
+            Answers,
+            Box<dyn Fn(&[Ray]) -> Vec<Option<Hit>> + '_>,
+        )> = Vec::new();
+        let answers = |f: &dyn Fn(&[Ray], &mut [Option<Hit>]), g: &dyn Fn(&[Ray], &mut [bool])| {
+            if shadow {
+                let mut o = vec![false; rays.len()];
+                g(rays, &mut o);
+                Answers::Occluded(o)
+            } else {
+                let mut h = vec![None; rays.len()];
+                f(rays, &mut h);
+                Answers::Hits(h)
             }
-        } else {
-            let mut a = vec![None; rays.len()];
-            embree.intersect_batch(rays, &mut a);
-            for (o, &(kind, test)) in ours.iter().zip(names) {
-                let mut b = vec![None; rays.len()];
-                o.intersect_batch(rays, &mut b);
-                let mut verdict = compare_hits(&a, &b);
-                verdict.edge_grazes = edge_grazes(mesh, rays, &a, &b);
-                out.push(Agreement {
-                    set: set.name(),
-                    structure: label(kind, test),
-                    verdict,
-                });
+        };
+        if let Some(em) = embree3 {
+            theirs.push((
+                format!(
+                    "Embree 3 {}",
+                    if shadow {
+                        "rtcOccluded1"
+                    } else {
+                        "rtcIntersect1"
+                    }
+                ),
+                answers(&|r, h| em.intersect_batch(r, h), &|r, o| {
+                    em.occluded_batch(r, o)
+                }),
+                Box::new(move |r: &[Ray]| {
+                    let mut h = vec![None; r.len()];
+                    em.intersect_batch(r, &mut h);
+                    h
+                }),
+            ));
+            if set == RayKind::Primary {
+                let mut h = vec![None; rays.len()];
+                em.intersect_stream(rays, &mut h, STREAM_PACKET);
+                theirs.push((
+                    "Embree 3 rtcIntersect1M".to_string(),
+                    Answers::Hits(h),
+                    Box::new(|_: &[Ray]| Vec::new()),
+                ));
             }
         }
-    }
-    let primary = &sets[0];
-    let mut a = vec![None; primary.len()];
-    embree.intersect_stream(primary, &mut a, STREAM_PACKET);
-    for (o, &(kind, test)) in ours.iter().zip(names) {
-        let mut b = vec![None; primary.len()];
-        o.intersect_batch(primary, &mut b);
-        let mut verdict = compare_hits(&a, &b);
-        verdict.edge_grazes = edge_grazes(mesh, primary, &a, &b);
-        out.push(Agreement {
-            set: "primary (stream)",
-            structure: label(kind, test),
-            verdict,
-        });
+        if let Some(em) = embree4 {
+            for api in embree4::Api::ALL {
+                theirs.push((
+                    format!("Embree 4 {}", api_name(api, shadow)),
+                    answers(&|r, h| em.intersect_with(api, r, h, coherent), &|r, o| {
+                        em.occluded_with(api, r, o, coherent)
+                    }),
+                    Box::new(move |r: &[Ray]| {
+                        let mut h = vec![None; r.len()];
+                        em.intersect_with(api, r, &mut h, coherent);
+                        h
+                    }),
+                ));
+            }
+        }
+        for (o, &(kind, test)) in ours.iter().zip(names) {
+            for one_ray_api in [false, true] {
+                let mine = answers(
+                    &|r, h| {
+                        if one_ray_api {
+                            one_ray::intersect_each(o.as_ref(), r, h)
+                        } else {
+                            o.intersect_batch(r, h)
+                        }
+                    },
+                    &|r, v| {
+                        if one_ray_api {
+                            one_ray::occluded_each(o.as_ref(), r, v)
+                        } else {
+                            o.occluded_batch(r, v)
+                        }
+                    },
+                );
+                let structure = format!(
+                    "{}{}",
+                    label(kind, test),
+                    if one_ray_api { ", one ray" } else { "" }
+                );
+                for (engine, theirs, nearest) in &theirs {
+                    // The one-ray answers against the single-ray calls only.
+                    if one_ray_api && !engine.ends_with('1') {
+                        continue;
+                    }
+                    let verdict = match (theirs, &mine) {
+                        (Answers::Hits(a), Answers::Hits(b)) => {
+                            let mut v = compare_hits(a, b);
+                            v.edge_grazes = edge_grazes(mesh, rays, a, b);
+                            v
+                        }
+                        (Answers::Occluded(a), Answers::Occluded(b)) => {
+                            let mut v = compare_occlusion(a, b);
+                            (v.edge_grazes, _) = occlusion_grazes(mesh, rays, a, b, |r| {
+                                let mut hb = vec![None; r.len()];
+                                o.intersect_batch(r, &mut hb);
+                                (nearest(r), hb)
+                            });
+                            v
+                        }
+                        _ => unreachable!("both answer the same kind of query"),
+                    };
+                    out.push(Agreement {
+                        set: set.name(),
+                        structure: structure.clone(),
+                        engine: engine.clone(),
+                        verdict,
+                    });
+                }
+            }
+        }
     }
     out
-}
-
-/// Per cell (builds against Embree MEDIUM, every Mrays/s cell) and mesh,
-/// our best ratio and the structure that reached it.
-fn summarise(reports: &[Comparison]) -> Vec<SummaryRow> {
-    let mut rows: Vec<SummaryRow> = Vec::new();
-    for r in reports {
-        let cells = r
-            .builds_ms
-            .iter()
-            .filter(|c| c.what.ends_with("Medium"))
-            .chain(&r.mrays);
-        for c in cells {
-            let i = match rows
-                .iter()
-                .position(|x| x.what == c.what && x.threads == c.threads)
-            {
-                Some(i) => i,
-                None => {
-                    rows.push(SummaryRow {
-                        what: c.what.clone(),
-                        threads: c.threads,
-                        best: Vec::new(),
-                    });
-                    rows.len() - 1
-                }
-            };
-            let best = &mut rows[i].best;
-            match best.iter_mut().find(|b| b.mesh == r.mesh) {
-                Some(b) if b.ratio >= c.ratio => {}
-                Some(b) => {
-                    b.ratio = c.ratio;
-                    b.structure = c.structure.clone();
-                }
-                None => best.push(Best {
-                    mesh: r.mesh.clone(),
-                    ratio: c.ratio,
-                    structure: c.structure.clone(),
-                }),
-            }
-        }
-    }
-    rows
-}
-
-fn print_summary(rows: &[SummaryRow]) {
-    let Some(first) = rows.first() else {
-        return;
-    };
-    println!(
-        "
-summary: our best ratio per cell (build: Embree MEDIUM ÷ ours; rays: ours ÷ Embree); * below 1.0×"
-    );
-    let short = |m: &str| m.rsplit('/').next().unwrap_or(m).to_string();
-    let widths: Vec<usize> = first
-        .best
-        .iter()
-        .map(|b| short(&b.mesh).chars().count().max(16))
-        .collect();
-    print!("{:<48} {:>7}", "cell", "threads");
-    for (b, w) in first.best.iter().zip(&widths) {
-        print!("  {:>w$}", short(&b.mesh));
-    }
-    println!();
-    for r in rows {
-        print!("{:<48} {:>7}", r.what, r.threads);
-        for (b, w) in r.best.iter().zip(&widths) {
-            let mark = if b.ratio < 1.0 { "*" } else { " " };
-            let s = b.structure.split(' ').next().unwrap_or("");
-            let cell = format!("{s} {:.2}×{mark}", b.ratio);
-            print!("  {cell:>w$}");
-        }
-        println!();
-    }
-}
-
-fn print_report(r: &Comparison, reps: usize) {
-    let ours: Vec<String> = r
-        .ours
-        .iter()
-        .map(|q| {
-            format!(
-                "{} (SAH cost {:.1}, {} nodes, {:.1} MB)",
-                q.structure,
-                q.sah_cost,
-                q.nodes,
-                q.bytes as f64 / 1e6
-            )
-        })
-        .collect();
-    println!(
-        "{}: {} triangles; ours = {} traced as built with --bvh-build {}; Embree 3 single-ray API ({} build) unless noted; median of {reps} runs, the engines timed in turn (traces after one untimed round)",
-        r.mesh,
-        r.triangles,
-        ours.join(", "),
-        r.traced_build,
-        match trace_quality() {
-            Quality::High => "HIGH",
-            Quality::Medium => "MEDIUM",
-        },
-    );
-    let several = r.ours.len() > 1;
-    print_cells("build (ms)", "Embree÷ours", 1, &r.builds_ms, several);
-    print_cells("Mrays/s", "ours÷Embree", 2, &r.mrays, several);
-    println!("\nanswers against Embree (every ray):");
-    for a in &r.agreement {
-        let v = &a.verdict;
-        println!(
-            "  {:<18} {} rays: {} hit/miss and {} distance differences, of which {} graze an edge (f64) or hit the same triangle; {} same-distance ties{}{}",
-            a.set,
-            v.checked,
-            v.hit_miss,
-            v.distance,
-            v.edge_grazes,
-            v.ties,
-            if several { format!(" [{}]", a.structure) } else { String::new() },
-            if v.ok() { "" } else { "  <-- DISAGREE" }
-        );
-    }
-}
-
-/// One table of cells, values with `digits` decimals; with `several`
-/// structures each row names its own.
-fn print_cells(title: &str, ratio: &str, digits: usize, cells: &[Cell], several: bool) {
-    println!(
-        "\n{title:<48} {:>7} {:>10} {:>10} {ratio:>8} {:>7}",
-        "threads", "ours", "Embree", "spread"
-    );
-    for c in cells {
-        let what = if several {
-            format!(
-                "{} [{}]",
-                c.what,
-                c.structure.split(' ').next().unwrap_or("")
-            )
-        } else {
-            c.what.clone()
-        };
-        println!(
-            "{:<48} {:>7} {:>10.digits$} {:>10.digits$} {:>10.2}× {:>6.0}%",
-            what,
-            c.threads,
-            c.ours,
-            c.embree,
-            c.ratio,
-            100.0 * c.spread
-        );
-    }
 }

@@ -3,6 +3,8 @@
 pub mod bench;
 #[cfg(feature = "embree")]
 pub mod bench_compare;
+#[cfg(feature = "embree")]
+pub mod bench_compare_print;
 pub mod bench_gpu;
 pub mod cull;
 pub mod experiment;
