@@ -568,6 +568,9 @@ enum Answers {
     Occluded(Vec<bool>),
 }
 
+/// An engine's nearest hits of some rays.
+type NearestHits<'a> = Box<dyn Fn(&[Ray]) -> Vec<Option<Hit>> + 'a>;
+
 /// Every ray of every set: ours (batch and one-ray) against Embree 3's
 /// single rays and stream, and against each Embree 4 API.
 fn agreement(
@@ -585,11 +588,7 @@ fn agreement(
         let coherent = set != RayKind::Incoherent;
         // (engine label, its answers, and a nearest-hit oracle of the same
         // engine for telling edge grazes apart on shadow rays)
-        let mut theirs: Vec<(
-            String,
-            Answers,
-            Box<dyn Fn(&[Ray]) -> Vec<Option<Hit>> + '_>,
-        )> = Vec::new();
+        let mut theirs: Vec<(String, Answers, NearestHits)> = Vec::new();
         let answers = |f: &dyn Fn(&[Ray], &mut [Option<Hit>]), g: &dyn Fn(&[Ray], &mut [bool])| {
             if shadow {
                 let mut o = vec![false; rays.len()];

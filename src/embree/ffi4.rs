@@ -12,7 +12,7 @@
 //! primitive ids, and the minimum-width factor): Embree reads and writes
 //! the fields before the tail at the offsets declared, whatever its build.
 
-#![allow(non_camel_case_types)]
+#![allow(non_camel_case_types, dead_code)]
 
 use std::ffi::{c_char, c_int, c_uint, c_void};
 
