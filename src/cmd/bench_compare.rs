@@ -568,6 +568,11 @@ enum Answers {
     Occluded(Vec<bool>),
 }
 
+/// An engine's nearest hits of some rays, into a slice.
+type HitsInto<'a> = dyn Fn(&[Ray], &mut [Option<Hit>]) + 'a;
+/// An engine's occlusion answers of some rays, into a slice.
+type OcclusionInto<'a> = dyn Fn(&[Ray], &mut [bool]) + 'a;
+
 /// An engine's nearest hits of some rays.
 type NearestHits<'a> = Box<dyn Fn(&[Ray]) -> Vec<Option<Hit>> + 'a>;
 
@@ -589,7 +594,7 @@ fn agreement(
         // (engine label, its answers, and a nearest-hit oracle of the same
         // engine for telling edge grazes apart on shadow rays)
         let mut theirs: Vec<(String, Answers, NearestHits)> = Vec::new();
-        let answers = |f: &dyn Fn(&[Ray], &mut [Option<Hit>]), g: &dyn Fn(&[Ray], &mut [bool])| {
+        let answers = |f: &HitsInto, g: &OcclusionInto| {
             if shadow {
                 let mut o = vec![false; rays.len()];
                 g(rays, &mut o);
