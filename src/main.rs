@@ -9,6 +9,7 @@ mod embree;
 mod gpu_measure;
 mod instanced_arg;
 mod measure;
+mod one_ray;
 mod paths;
 mod plot;
 mod scene_arg;

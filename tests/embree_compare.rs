@@ -1,6 +1,8 @@
-//! `raykit bench --compare embree`: with the `embree`
-//! feature, Embree 3 and our BVH trace the same rays in one process and
-//! every answer must agree (up to shared-edge ties); without the feature the
+//! `raykit bench --compare embree`: with the `embree` feature, Embree 4
+//! (loaded at run time: scripts/test installs the `embreex` wheel and sets
+//! RAYKIT_EMBREE4), Embree 3 and our BVH trace the same rays in one process
+//! and every answer must agree (up to shared-edge ties), through each
+//! Embree 4 API and through our one-ray API too; without the feature the
 //! command must say how to get it.
 
 #[path = "support/cli.rs"]
@@ -29,30 +31,58 @@ fn embree_and_ours_agree_on_every_ray_and_the_table_has_every_cell() {
         "1",
     ]);
     let out = text(&o.stdout);
+    let err = text(&o.stderr);
     assert!(
         o.status.success(),
-        "answers disagree or the run failed:\n{out}\n{}",
-        text(&o.stderr)
+        "answers disagree or the run failed:\n{out}\n{err}"
+    );
+    // Both versions compared: Embree 4 must have been found (the note
+    // names every place looked in).
+    assert!(
+        !err.contains("comparing with Embree 3 only"),
+        "Embree 4 is missing: install it with `pip install embreex` or set RAYKIT_EMBREE4 (scripts/test does):\n{err}"
+    );
+    assert!(
+        out.contains("against Embree 4.") && out.contains("and Embree 3"),
+        "{out}"
     );
     assert!(!out.contains("DISAGREE"), "{out}");
     let (tables, summary) = out
         .split_once("summary:")
         .expect("a summary after the tables");
-    for cell in [
-        "primary",
-        "shadow",
-        "incoherent",
-        "primary, Embree stream (rtcIntersect1M)",
-        "build vs Embree High",
-        "build vs Embree Medium",
+    for (cell, threads) in [
+        ("primary", 2),
+        ("shadow", 2),
+        ("incoherent", 2),
+        ("primary, Embree 3 stream (rtcIntersect1M)", 2),
+        ("build vs Embree High", 2),
+        ("build vs Embree Medium", 2),
+        ("primary, one ray", 1),
+        ("shadow, one ray", 1),
+        ("incoherent, one ray", 1),
     ] {
         for accel in ["bvh8", "bvh2"] {
             let row = format!("{cell} [{accel}] ");
+            let rows: Vec<&str> = tables.lines().filter(|l| l.starts_with(&row)).collect();
             assert_eq!(
-                tables.lines().filter(|l| l.starts_with(&row)).count(),
-                2 * meshes.len(),
+                rows.len(),
+                threads * meshes.len(),
                 "'{cell}' [{accel}]: one row per thread count and mesh:\n{tables}"
             );
+            // Trace cells name the Embree 4 API that gave its figure; the
+            // one-ray cells name the single-ray calls.
+            for r in rows
+                .iter()
+                .filter(|_| !cell.starts_with("build") && !cell.contains("stream"))
+            {
+                let api = if cell.contains("one ray") { "1 " } else { "" };
+                let call = if cell.starts_with("shadow") {
+                    "rtcOccluded"
+                } else {
+                    "rtcIntersect"
+                };
+                assert!(r.contains(&format!("{call}{api}")), "{r}");
+            }
         }
     }
     for mesh in meshes {
@@ -67,14 +97,24 @@ fn embree_and_ours_agree_on_every_ray_and_the_table_has_every_cell() {
         // SAH cost shown beside the build times.
         assert!(tables.contains("SAH cost"), "{tables}");
     }
-    // Every set was compared on all of its rays, for each structure.
+    // Every set was compared on all of its rays, for each structure: the
+    // batch answers against Embree 3's single rays and stream and each of
+    // Embree 4's four APIs, the one-ray answers against each single-ray
+    // API.
     assert_eq!(
         tables
             .matches(&format!("primary            {} rays", 96 * 96))
             .count(),
-        2 * meshes.len(),
+        8 * 2 * meshes.len(),
         "{tables}"
     );
+    for engine in [
+        "Embree 4 rtcIntersect16]",
+        "Embree 4 rtcOccluded8]",
+        "one ray vs Embree 4 rtcOccluded1]",
+    ] {
+        assert!(tables.contains(engine), "{engine}: {tables}");
+    }
 }
 
 #[cfg(not(feature = "embree"))]

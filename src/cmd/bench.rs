@@ -21,7 +21,7 @@ use std::process::ExitCode;
 #[command(
     after_help = "Each figure is the median of --reps runs; the spread (max-min)/median is\n\
 reported so noisy machines show. With --compare, the engines of a cell are\n\
-timed in turn (each repetition times ours, then Embree's), so that a burst of\n\
+timed in turn (each repetition times ours, then each Embree's), so that a burst of\n\
 host noise falls on both, and every trace cell runs one untimed round before\n\
 its timed ones. Brute force is\n\
 timed on a sample of each ray set sized to take about a second. The ray sets\n\
@@ -56,16 +56,22 @@ pub struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
-    /// Compare with another engine in the same process: `embree` (needs a
-    /// build with `--features embree` and Debian's libembree-dev). Ours are
-    /// the structures × tests that --accel/--test list (`all` means bvh8 and
-    /// moller, our fastest); prints ours, Embree's and the ratio per cell,
-    /// our SAH cost beside the build times, and checks that every answer
-    /// agrees. Builds are timed rung for rung: ours as --bvh-build says
-    /// (default `sah`) against Embree MEDIUM, and the trees we trace (`high`
-    /// where --bvh-build is `sah`, else the builder given) against Embree
-    /// HIGH, whose tree Embree traces. The environment variable
-    /// RAYKIT_EMBREE_CONFIG adds to
+    /// Compare with Embree in the same process (a build with `--features
+    /// embree`): `embree` compares with Embree 4 and Embree 3 (Embree 4
+    /// where it is found, see below), `embree4` or `embree3` with one
+    /// version. Embree 3 is Debian's libembree-dev, linked; Embree 4 is
+    /// loaded at run time from the file RAYKIT_EMBREE4 names, else from the
+    /// `embreex` wheel that `python3` (or RAYKIT_PYTHON) imports (`pip
+    /// install embreex`). Ours are the structures × tests that --accel/--test
+    /// list (`all` means bvh8 and moller, our fastest); prints per cell
+    /// ours, Embree 4 at its fastest query API (rtcIntersect1/4/8/16,
+    /// named), Embree 3 and the ratios, the one-ray cells (our per-ray
+    /// `Accel::intersect`/`occluded` against rtcIntersect1/rtcOccluded1, one
+    /// thread), our SAH cost beside the build times, and checks that every
+    /// answer agrees. Builds are timed rung for rung: ours as --bvh-build
+    /// says (default `sah`) against Embree MEDIUM, and the trees we trace
+    /// (`high` where --bvh-build is `sah`, else the builder given) against
+    /// Embree HIGH, whose tree Embree traces. RAYKIT_EMBREE_CONFIG adds to
     /// Embree's device configuration (e.g. `isa=avx2`, `verbose=1`);
     /// RAYKIT_EMBREE_TRACE_MEDIUM (any value) makes Embree trace its MEDIUM
     /// build instead of its HIGH one.
@@ -445,11 +451,33 @@ fn rate(mrays: f64) -> String {
 
 /// `--compare ENGINE`.
 fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
-    if engine != "embree" {
-        anyhow::bail!("unknown --compare engine '{engine}': expected embree");
-    }
+    let (want3, want4) = match engine {
+        "embree" => (true, true),
+        "embree3" => (true, false),
+        "embree4" => (false, true),
+        _ => anyhow::bail!(
+            "unknown --compare engine '{engine}': expected embree (both versions), embree4 or embree3"
+        ),
+    };
     #[cfg(feature = "embree")]
     {
+        use crate::embree::embree4::Embree4;
+        let embree4 = if !want4 {
+            None
+        } else {
+            match Embree4::load() {
+                Ok(lib) => {
+                    eprintln!("Embree {} from {}", lib.version, lib.path.display());
+                    Some(lib)
+                }
+                // `embree` compares with whichever versions there are.
+                Err(e) if want3 => {
+                    eprintln!("note: comparing with Embree 3 only: {e:#}");
+                    None
+                }
+                Err(e) => return Err(e),
+            }
+        };
         let one = |s: &str, default: &str| {
             if s == "all" {
                 default.to_string()
@@ -486,11 +514,15 @@ fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
             reps: args.reps.max(1),
             threads: args.threads,
             json: args.json,
+            yardsticks: crate::cmd::bench_compare::Yardsticks {
+                embree3: want3,
+                embree4,
+            },
         })
     }
     #[cfg(not(feature = "embree"))]
     {
-        let _ = args;
+        let _ = (args, want3, want4);
         anyhow::bail!(
         "this raykit was built without Embree: install libembree-dev (apt-get install libembree-dev) \
          and build with `cargo build --release --features embree`"

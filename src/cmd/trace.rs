@@ -17,8 +17,8 @@ use std::process::ExitCode;
 /// Arguments of `raykit trace`.
 #[derive(Args)]
 #[command(after_help = "Prints one JSON line of statistics on stderr:\n\
-{\"accel\", \"bvh_build\", \"test\", \"load_ms\", \"build_ms\", \"trace_ms\", \"rays\", \"mrays\", \"threads\"}\n\
-(trace_ms excludes loading and building). Hit file: per ray f32 t, u32 prim (8 bytes; a miss is\n\
+{\"accel\", \"bvh_build\", \"test\", \"api\", \"load_ms\", \"build_ms\", \"trace_ms\", \"rays\", \"mrays\", \"threads\"}\n\
+(trace_ms excludes loading and building; api: batch, or one-ray with --one-ray). Hit file: per ray f32 t, u32 prim (8 bytes; a miss is\n\
 t = +inf, prim = 4294967295). Occlusion file: one byte per ray (1 = occluded).\n\n\
 Several --mesh (or --instanced): an instanced scene under a two-level BVH, each file a geometry\n\
 placed once, a glTF file one geometry per mesh and one instance per node. Its hit file: per ray\n\
@@ -56,6 +56,12 @@ pub struct TraceArgs {
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Trace each ray through the one-ray API (`Accel::intersect` /
+    /// `Accel::occluded`, one call per ray, as a library user looping over
+    /// rays does) instead of the batch path with its ray packets; the
+    /// answers are the same. CPU only.
+    #[arg(long)]
+    one_ray: bool,
     /// Also trace this many rays (spread over the file) with brute force and
     /// the same triangle test, report disagreements and fail if any.
     #[arg(long, value_name = "N")]
@@ -93,6 +99,9 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
         return run_instanced(args);
     }
     if args.backend == Backend::Gpu {
+        if args.one_ray {
+            bail!("--one-ray traces on the CPU; drop it or --backend gpu");
+        }
         return run_gpu(args);
     }
     let (kind, test) = parse_names(
@@ -119,13 +128,31 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
     let trace_s;
     if args.occlusion {
         let mut out = vec![false; rays.len()];
-        trace_s = pool.install(|| timed(|| accel.occluded_batch(&rays, &mut out)).1);
+        trace_s = pool.install(|| {
+            timed(|| {
+                if args.one_ray {
+                    crate::one_ray::occluded_each(accel.as_ref(), &rays, &mut out)
+                } else {
+                    accel.occluded_batch(&rays, &mut out)
+                }
+            })
+            .1
+        });
         raykit_io::write_occlusion(&args.out, &out)?;
         occluded = Some(out);
         hits = None;
     } else {
         let mut out = vec![None; rays.len()];
-        trace_s = pool.install(|| timed(|| accel.intersect_batch(&rays, &mut out)).1);
+        trace_s = pool.install(|| {
+            timed(|| {
+                if args.one_ray {
+                    crate::one_ray::intersect_each(accel.as_ref(), &rays, &mut out)
+                } else {
+                    accel.intersect_batch(&rays, &mut out)
+                }
+            })
+            .1
+        });
         raykit_io::write_hits(&args.out, &out)?;
         hits = Some(out);
         occluded = None;
@@ -136,6 +163,7 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
             "accel": kind.name(),
             "bvh_build": crate::build_args::quality_name(opts.quality),
             "test": test.name(),
+            "api": if args.one_ray { "one-ray" } else { "batch" },
             "load_ms": load_s * 1e3,
             "build_ms": build_s * 1e3,
             "trace_ms": trace_s * 1e3,
@@ -301,6 +329,9 @@ fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
 fn run_instanced(args: TraceArgs) -> Result<ExitCode> {
     if args.backend == Backend::Gpu {
         bail!("an instanced scene (several --mesh or --instanced) traces on the CPU only");
+    }
+    if args.one_ray {
+        bail!("--one-ray takes one mesh; an instanced scene traces through its batch API");
     }
     if args.verify.is_some() {
         bail!("--verify takes one mesh; an instanced scene is checked by its tests against the flattened scene");

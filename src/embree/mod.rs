@@ -1,9 +1,12 @@
-//! Embree 3 as a comparison backend for `raykit bench --compare embree`
-//! (cargo feature `embree`, Debian's `libembree-dev`). Never the engine
-//! itself: it answers the same rays as our structures so the benchmark can
-//! check the answers agree and print the speed ratio.
+//! Embree as a comparison backend for `raykit bench --compare embree`
+//! (cargo feature `embree`): Embree 3 linked from Debian's
+//! `libembree-dev`, and Embree 4 loaded at run time ([`embree4`]). Never the
+//! engine itself: it answers the same rays as our structures so the
+//! benchmark can check the answers agree and print the speed ratio.
 
+pub mod embree4;
 mod ffi;
+mod ffi4;
 
 use anyhow::{bail, Result};
 use raykit_core::accel::AccelStats;
@@ -20,6 +23,26 @@ pub enum Quality {
     High,
 }
 
+/// Embree's device configuration string for `threads` threads (0: all
+/// cores), with RAYKIT_EMBREE_CONFIG's extra settings for experiments, e.g.
+/// `isa=avx2` or `verbose=1`. The same for Embree 3 and 4.
+fn device_config(threads: usize) -> String {
+    let mut config = if threads == 0 {
+        String::new()
+    } else {
+        format!("threads={threads}")
+    };
+    if let Ok(extra) = std::env::var("RAYKIT_EMBREE_CONFIG") {
+        if !extra.trim().is_empty() {
+            if !config.is_empty() {
+                config.push(',');
+            }
+            config.push_str(extra.trim());
+        }
+    }
+    config
+}
+
 /// An Embree device: its thread pool and allocator, created once so that
 /// build timings measure the build alone.
 pub struct EmbreeDevice {
@@ -34,22 +57,7 @@ unsafe impl Sync for EmbreeDevice {}
 impl EmbreeDevice {
     /// A device with `threads` build threads (0: Embree's default, all cores).
     pub fn new(threads: usize) -> Result<Arc<EmbreeDevice>> {
-        let mut config = if threads == 0 {
-            String::new()
-        } else {
-            format!("threads={threads}")
-        };
-        // Extra settings for experiments, e.g. `isa=avx2` or `verbose=1`
-        // (Embree's device configuration string).
-        if let Ok(extra) = std::env::var("RAYKIT_EMBREE_CONFIG") {
-            if !extra.trim().is_empty() {
-                if !config.is_empty() {
-                    config.push(',');
-                }
-                config.push_str(extra.trim());
-            }
-        }
-        let config = CString::new(config)?;
+        let config = CString::new(device_config(threads))?;
         // SAFETY: a valid NUL-terminated configuration string.
         let raw = unsafe { ffi::rtcNewDevice(config.as_ptr()) };
         if raw.is_null() {
