@@ -5,8 +5,7 @@
 use raykit_core::accel::kdtree::{
     build_game, build_tree, cut_mesh, KdBuildNode, KdOptions, KdSplit,
 };
-use raykit_core::rng::Pcg32;
-use raykit_core::{TriangleMesh, Vec3};
+use raykit_core::TriangleMesh;
 
 mod soup;
 
