@@ -24,8 +24,10 @@
 //! evidence, not proof: a triangle seen only through a very small solid
 //! angle may be missed.
 
+use crate::escape::{
+    beam_escapes, escape_direction, fibonacci, is_degenerate, off_surface, RayConfirm,
+};
 use crate::shared_escapes::{SharedEscapes, SHARING_CELLS};
-use crate::visible::{beam_escapes, escape_direction, off_surface, RayConfirm};
 use raykit_core::{Accel, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -51,7 +53,7 @@ pub struct EvalOptions {
     pub seed: u64,
     /// Narrowest opening that counts, as a fraction of the model's bounding
     /// box diagonal: an escape needs a beam this wide (see
-    /// [`crate::visible::beam_escapes`]), so cracks between independently
+    /// [`crate::escape::beam_escapes`]), so cracks between independently
     /// tessellated faces do not make hidden triangles visible. 0 (the
     /// default definition): any single ray.
     pub min_opening: f32,
@@ -318,20 +320,6 @@ pub fn evaluate_beyond(
     }
     truth.seconds = clock.elapsed().as_secs_f64();
     truth
-}
-
-/// True when triangle `t` of `mesh` has no area (no face to sample or see).
-pub fn is_degenerate(mesh: &TriangleMesh, t: usize) -> bool {
-    mesh.face_normal(t).normalize_or_zero() == Vec3::ZERO
-}
-
-/// Point `i` of the `n`-point Fibonacci sphere (unit vectors, evenly spread).
-pub fn fibonacci(i: usize, n: usize) -> Vec3 {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    let z = 1.0 - (2.0 * i as f64 + 1.0) / n.max(1) as f64;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = golden * i as f64;
-    Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32)
 }
 
 /// The pinhole camera of one render: from `centre + 2 radius · dir`, an

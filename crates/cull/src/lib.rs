@@ -38,6 +38,7 @@
 //! the ray-traced ground truth.
 
 pub mod distance_field;
+pub mod escape;
 pub mod evaluate;
 pub mod grid;
 pub mod propagate;
@@ -46,16 +47,14 @@ pub mod synthetic;
 pub mod visible;
 
 pub use distance_field::{DirectedDistanceField, DirectedHit, Direction};
+pub use escape::{beam_escapes, escape_direction, is_degenerate, RayConfirm};
 pub use evaluate::{
     compare, evaluate, evaluate_beyond, evaluate_with_progress, EvalOptions, EvalProgress,
     EvalReport, GroundTruth, RoundLog,
 };
 pub use grid::Grid;
 pub use propagate::{propagate, Classification, Tag};
-pub use visible::{
-    beam_escapes, confirm_frontier, escape_direction, touches_outside, visible_from_outside,
-    RayConfirm,
-};
+pub use visible::{confirm_frontier, touches_outside, visible_from_outside};
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
@@ -227,7 +226,7 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
         if let Some(c) = &options.confirm {
             // Triangles without area have no face to judge: kept.
             for (t, v) in visible.iter_mut().enumerate() {
-                *v |= evaluate::is_degenerate(mesh, t);
+                *v |= is_degenerate(mesh, t);
             }
             let before = visible.iter().filter(|&&v| v).count();
             let truth = evaluate_beyond(mesh, accel.as_ref(), c, visible, &|_| {});

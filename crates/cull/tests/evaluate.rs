@@ -5,7 +5,7 @@
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::{Aabb, TriangleMesh, Vec3};
-use raykit_cull::evaluate::fibonacci;
+use raykit_cull::escape::fibonacci;
 use raykit_cull::synthetic::{assembly, box_surface, closed_box, icosphere};
 use raykit_cull::{compare, evaluate, evaluate_beyond, EvalOptions, GroundTruth};
 
