@@ -18,8 +18,10 @@
 //!
 //! Sample counts are doubled each round with fresh random samples — the rays
 //! per triangle (points and viewpoints on odd rounds, directions per point
-//! on even ones) — and the labels of all rounds are united, until a
-//! round finds no new visible triangle (or the rounds run out). Every
+//! on even ones) — for [`EvalOptions::growth_rounds`] rounds, then repeated
+//! with fresh samples; the labels of all rounds are united, until
+//! [`QUIET_ROUNDS`] rounds in a row find no new visible triangle (converged)
+//! or the rounds run out. Every
 //! visible label rests on a ray that met nothing; a hidden label is
 //! evidence, not proof: a triangle seen only through a very small solid
 //! angle may be missed.
@@ -49,6 +51,9 @@ pub struct EvalOptions {
     pub image: usize,
     /// Most rounds (2 to [`MAX_ROUNDS`], so that two rounds can be compared).
     pub max_rounds: usize,
+    /// Rounds whose sample counts double; later rounds repeat the last
+    /// counts with fresh samples (so that a long search grows linearly).
+    pub growth_rounds: usize,
     /// Seed of the random samples.
     pub seed: u64,
     /// Narrowest opening that counts, as a fraction of the model's bounding
@@ -66,7 +71,8 @@ impl Default for EvalOptions {
             directions: 16,
             viewpoints: 10_000,
             image: 32,
-            max_rounds: 6,
+            max_rounds: 16,
+            growth_rounds: 6,
             seed: 0x0006_e7a1,
             min_opening: 0.0,
         }
@@ -98,7 +104,7 @@ pub struct GroundTruth {
     pub rounds: usize,
     /// Triangles newly found visible by the last round (0 when converged).
     pub last_change: usize,
-    /// True when the last round changed nothing.
+    /// True when the last [`QUIET_ROUNDS`] rounds changed nothing.
     pub converged: bool,
     /// Sample points per triangle of the last round.
     pub points: u32,
@@ -143,9 +149,12 @@ pub struct RoundLog {
     pub seconds: f64,
 }
 
-/// Most rounds of [`evaluate`] (more would overflow the sample counts
-/// long before they finish).
-pub const MAX_ROUNDS: usize = 12;
+/// Most rounds of [`evaluate`].
+pub const MAX_ROUNDS: usize = 32;
+
+/// Rounds in a row that must find nothing new for [`evaluate`] to call its
+/// labels converged.
+pub const QUIET_ROUNDS: usize = 2;
 
 /// Where [`evaluate_with_progress`] stands: work items (candidate triangles,
 /// then viewpoints) of the current round.
@@ -211,16 +220,18 @@ pub fn evaluate_beyond(
     let beam = options.min_opening.max(0.0) * (bounds.max - bounds.min).length();
     truth.beam = beam;
     let mut shared = SharedEscapes::new(&bounds, SHARING_CELLS);
+    let mut quiet = 0;
     for round in 0..max_rounds {
-        // Rays per triangle double each round: points on odd rounds,
+        // Rays per triangle double each growth round: points on odd rounds,
         // directions on even ones; viewpoints double with the points.
+        let grow = round.min(options.growth_rounds.clamp(1, 20) - 1);
         let samples = RayConfirm {
-            points: options.points.max(1).saturating_mul(1 << round.div_ceil(2)),
-            directions: options.directions.max(1).saturating_mul(1 << (round / 2)),
+            points: options.points.max(1).saturating_mul(1 << grow.div_ceil(2)),
+            directions: options.directions.max(1).saturating_mul(1 << (grow / 2)),
             seed: options.seed.wrapping_add(round as u64 * 0x9e37_79b9),
             beam,
         };
-        let viewpoints = options.viewpoints.saturating_mul(1 << round.div_ceil(2));
+        let viewpoints = options.viewpoints.saturating_mul(1 << grow.div_ceil(2));
         let candidates: Vec<usize> = (0..n)
             .filter(|&t| !truth.visible[t] && !degenerate[t])
             .collect();
@@ -313,7 +324,8 @@ pub fn evaluate_beyond(
         truth.points = samples.points;
         truth.directions = samples.directions;
         truth.viewpoints = viewpoints;
-        if round > 0 && change == 0 {
+        quiet = if change == 0 { quiet + 1 } else { 0 };
+        if quiet >= QUIET_ROUNDS {
             truth.converged = true;
             break;
         }

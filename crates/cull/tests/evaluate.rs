@@ -143,7 +143,7 @@ fn doubling_terminates_and_doubles() {
         },
     );
     assert!(capped.rounds <= 2);
-    assert_eq!(capped.converged, capped.last_change == 0);
+    assert!(!capped.converged || capped.last_change == 0);
     // No triangles: nothing to do.
     let empty = truth_of(&TriangleMesh::default(), &options);
     assert!(empty.visible.is_empty() && empty.converged);
