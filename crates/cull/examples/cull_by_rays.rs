@@ -1,5 +1,8 @@
 //! Cull a mesh file by rays and print what each step found:
-//! `cargo run --release -p raykit-cull --example cull_by_rays -- MODEL [ROUNDS]`.
+//! `cargo run --release -p raykit-cull --example cull_by_rays -- MODEL
+//! [ROUNDS [MIN_OPENING [FRONTIER_FACTOR]]]`. MODEL `shell:ENGINE.glb` or
+//! `hole:ENGINE.glb` culls eight copies of ENGINE in a closed box shell of
+//! 100 × 100 squares per face (with a 20 × 20-square hole).
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
@@ -10,7 +13,15 @@ use std::time::Instant;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let path = args.next().ok_or("usage: cull_by_rays MODEL [ROUNDS]")?;
-    let mesh = raykit_io::load_mesh(std::path::Path::new(&path))?;
+    let mesh = match path.split_once(':') {
+        Some((kind @ ("shell" | "hole"), file)) => {
+            let engine = raykit_io::load_mesh(std::path::Path::new(file))?;
+            let eight = raykit_cull::synthetic::copies(&engine, [2, 2, 2], 0.1);
+            let hole = (kind == "hole").then_some(20);
+            raykit_cull::synthetic::shell_around(&eight, 0.05, 100, hole)
+        }
+        _ => raykit_io::load_mesh(std::path::Path::new(&path))?,
+    };
     let mut options = RayOptions::default();
     if let Some(r) = args.next() {
         options.max_rounds = r.parse()?;
@@ -46,6 +57,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     });
     let kept = visible.iter().filter(|&&v| v).count();
+    let parts = mesh.parts.len().max(1);
+    let mut part_kept = vec![false; parts];
+    for (t, &v) in visible.iter().enumerate() {
+        part_kept[mesh.part_of(t) as usize] |= v;
+    }
+    println!(
+        "parts kept {} of {parts}",
+        part_kept.iter().filter(|&&k| k).count()
+    );
     println!(
         "kept {kept} of {} in {:.2} s; rounds {}, converged {}, rays/removed {}",
         visible.len(),

@@ -9,11 +9,11 @@
 //! through an 8-wide BVH ([`raykit_core::accel::Bvh8`], Wald et al. 2014)
 //! over Möller–Trumbore packs:
 //!
-//! 1. **views**: orthographic images from [`RayOptions::viewpoints`]
-//!    directions spread on a sphere (Fibonacci), each ray starting outside
-//!    the bounding sphere; the first triangle each ray meets is visible. The
-//!    rays of a view are parallel, so they go through the packet path
-//!    (coherent packets, Wald et al. 2001) in parallel.
+//! 1. **views**: pinhole images from [`RayOptions::viewpoints`] eyes
+//!    spread on a sphere (Fibonacci) outside the bounding sphere; the first
+//!    triangle each ray meets is visible. Neighbouring pixels' rays are
+//!    coherent, so they go through the packet path (coherent packets, Wald
+//!    et al. 2001) in parallel.
 //! 2. **escape rays** from every triangle not yet seen: stratified points on
 //!    it (the centroid first) and, per point, a stratified set of directions
 //!    over the whole sphere (a spherical Fibonacci set under a random
@@ -24,13 +24,14 @@
 //!    and the 26 around it ([`SharedEscapes`]), which finds surfaces seen
 //!    through narrow openings (a slit, the clearance round a bolt) that
 //!    random sampling rarely meets.
-//! 4. **rounds**: steps 2–3 repeat with fresh samples. Candidates near a
-//!    visible triangle (within one sharing cell), where what is still
-//!    unseen is most likely to be seen (on the 2CylinderEngine over 99% of
-//!    the later rounds' finds), get [`RayOptions::frontier_factor`] times
-//!    the rays, doubling for [`RayOptions::growth_rounds`] rounds and then
-//!    held; the others get the first round's counts each round. The search
-//!    stops when
+//! 4. **rounds**: steps 2–3 repeat with fresh samples, the rays per
+//!    candidate doubling for [`RayOptions::growth_rounds`] rounds and then
+//!    held. Candidates near a visible triangle (within one sharing cell),
+//!    where what is still unseen is most likely to be seen (on the
+//!    2CylinderEngine over 99% of the later rounds' finds), get
+//!    [`RayOptions::frontier_factor`] times more; the others are not spared,
+//!    since what is seen through a slit may lie far from every visible
+//!    surface. The search stops when
 //!    [`QUIET_ROUNDS`] rounds in a row find nothing new (converged) or after
 //!    [`RayOptions::max_rounds`].
 //!
@@ -63,9 +64,9 @@ pub const QUIET_ROUNDS: usize = 2;
 /// Settings of the ray-traced visibility ([`visible_by_rays`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayOptions {
-    /// Orthographic views from directions spread on the sphere (0: none).
+    /// Views from eyes spread on a sphere around the model (0: none).
     pub viewpoints: usize,
-    /// Pixels per side of each view (the view covers the bounding sphere).
+    /// Pixels per side of each view (its cone holds the bounding sphere).
     pub image: usize,
     /// Sample points per candidate triangle in the first round.
     pub points: u32,
@@ -90,8 +91,8 @@ pub struct RayOptions {
 impl Default for RayOptions {
     fn default() -> Self {
         RayOptions {
-            viewpoints: 256,
-            image: 256,
+            viewpoints: 4096,
+            image: 64,
             points: 4,
             directions: 16,
             growth_rounds: 5,
@@ -111,7 +112,7 @@ pub struct RayRound {
     /// Of them, near a visible triangle (more rays).
     pub frontier: usize,
     /// Sample points × directions per point, per candidate near a visible
-    /// triangle (the others get the first round's counts).
+    /// triangle (the others get the factor fewer directions).
     pub rays_per_candidate: u64,
     /// Triangles found by their own escape rays.
     pub by_own_rays: usize,
@@ -256,12 +257,10 @@ pub fn visible_by_rays_with_progress(
             .map(|&t| shared.near_any(mesh, t, &visible_cells))
             .collect();
         let round_seed = options.seed ^ (round as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        // Candidates far from every visible triangle keep the first
-        // round's counts (fresh samples each round): what they find is
-        // rare; those near one get the growing counts times the factor.
-        let base_points = options.points.max(1);
+        // Every candidate gets the round's counts; those near a visible
+        // triangle get the factor more directions.
         let base: Vec<Vec3> = {
-            let k = options.directions.max(1) as usize;
+            let k = directions as usize;
             (0..k).map(|i| fibonacci(i, k)).collect()
         };
         let dense: Vec<Vec3> = {
@@ -273,12 +272,8 @@ pub fn visible_by_rays_with_progress(
             .zip(near.par_iter())
             .with_min_len(16)
             .map(|(&t, &near)| {
-                let (p, dirs) = if near {
-                    (points, &dense)
-                } else {
-                    (base_points, &base)
-                };
-                escape_search(mesh, accel, t, p, dirs, round_seed, beam)
+                let dirs = if near { &dense } else { &base };
+                escape_search(mesh, accel, t, points, dirs, round_seed, beam)
             })
             .collect();
         let mut log = RayRound {
@@ -402,12 +397,15 @@ fn random_rotation(rng: &mut Pcg32) -> Quat {
     .normalize()
 }
 
-/// The orthographic views: per view direction `v` (Fibonacci), an
-/// `image × image` grid of parallel rays along `-v` (one jittered sample
-/// per pixel) over the square that holds the bounding sphere's disc,
-/// starting outside the sphere. Returns each triangle seen (through an
-/// opening at least `beam` wide) with its escape direction `v`, in view
-/// order, and the rays cast.
+/// The views: per viewpoint `v` (Fibonacci directions, at three bounding
+/// radii from the centre), a pinhole image of `image × image` pixels (one
+/// jittered sample each) whose view cone just holds the bounding sphere.
+/// Rays of one eye fan out, so that the eyes together thread openings in
+/// many directions; neighbouring pixels' rays stay coherent for the packet
+/// path. Returns each triangle seen (through an opening at least `beam`
+/// wide) with the direction back to the eye (an escape: nothing lies
+/// between, and the eye is outside the bounding sphere), in view order,
+/// and the rays cast.
 fn views(
     mesh: &TriangleMesh,
     accel: &dyn Accel,
@@ -419,28 +417,26 @@ fn views(
     let radius = ((bounds.max - bounds.min).length() * 0.5).max(1e-20);
     let side = options.image.max(1);
     let count = options.viewpoints;
-    let per_view: Vec<Vec<u32>> = (0..count)
+    // Half-angle asin(1/3): the cone tangent to the bounding sphere.
+    let half = (1.0f32 / 3.0).asin().tan();
+    let per_view: Vec<Vec<(u32, Vec3)>> = (0..count)
         .into_par_iter()
         .map(|i| {
             let v = fibonacci(i, count);
+            let eye = centre + v * (3.0 * radius);
             let right = v.any_orthonormal_vector();
             let up = v.cross(right);
             let mut rng = Pcg32::with_stream(options.seed ^ 0x5649_4557, i as u64);
-            let pixel = 2.0 * radius / side as f32;
             let rays: Vec<Ray> = (0..side * side)
                 .map(|p| {
-                    let x = (p % side) as f32 + rng.next_f32();
-                    let y = (p / side) as f32 + rng.next_f32();
-                    let o = centre
-                        + v * (2.0 * radius)
-                        + right * (x * pixel - radius)
-                        + up * (y * pixel - radius);
-                    Ray::new(o, -v)
+                    let x = ((p % side) as f32 + rng.next_f32()) / side as f32 * 2.0 - 1.0;
+                    let y = ((p / side) as f32 + rng.next_f32()) / side as f32 * 2.0 - 1.0;
+                    Ray::new(eye, (-v + (x * right + y * up) * half).normalize())
                 })
                 .collect();
             let mut hits = vec![None; rays.len()];
             accel.intersect_batch(&rays, &mut hits);
-            let mut seen: Vec<u32> = rays
+            let mut seen: Vec<(u32, Vec3)> = rays
                 .iter()
                 .zip(&hits)
                 .filter_map(|(r, h)| {
@@ -449,30 +445,27 @@ fn views(
                     if t >= mesh.num_triangles() {
                         return None;
                     }
+                    let back = -r.dir;
                     if beam > 0.0 {
                         let n = mesh.face_normal(t).normalize_or_zero();
-                        let face = if n.dot(v) > 0.0 { n } else { -n };
+                        let face = if n.dot(back) > 0.0 { n } else { -n };
                         let origin = off_surface(mesh, t, r.at(h.t), face);
-                        if !beam_escapes(accel, origin, v, beam) {
+                        if !beam_escapes(accel, origin, back, beam) {
                             return None;
                         }
                     }
-                    Some(h.prim)
+                    Some((h.prim, back))
                 })
                 .collect();
-            seen.sort_unstable();
-            seen.dedup();
+            seen.sort_unstable_by_key(|&(t, _)| t);
+            seen.dedup_by_key(|&mut (t, _)| t);
             seen
         })
         .collect();
     let rays = (count * side * side) as u64;
     let out = per_view
         .into_iter()
-        .enumerate()
-        .flat_map(|(i, seen)| {
-            let v = fibonacci(i, count);
-            seen.into_iter().map(move |t| (t as usize, v))
-        })
+        .flat_map(|seen| seen.into_iter().map(|(t, d)| (t as usize, d)))
         .collect();
     (out, rays)
 }
