@@ -82,11 +82,12 @@ impl Default for EvalOptions {
 impl EvalOptions {
     /// The settings of [`crate::CullOptions::confirm`]: the ground truth's
     /// search with its own seed (any single ray counts, as in the ground
-    /// truth's default).
+    /// truth's default), at most 6 rounds.
     pub fn confirmation() -> Self {
         EvalOptions {
             seed: 0x0003_c011,
             min_opening: 0.0,
+            max_rounds: 6,
             ..Default::default()
         }
     }
