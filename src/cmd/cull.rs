@@ -48,12 +48,13 @@ pub enum ModeArg {
 #[command(after_help = "Modes (--mode):\n\
 - rays (the default): a triangle is visible when some ray leaving it (from either face) meets\n\
   nothing, so an eye far away along that ray sees it; all others are removed. Visibility is found\n\
-  by ray tracing through an 8-wide BVH: orthographic views from 256 directions around the model\n\
+  by ray tracing through an 8-wide BVH: pinhole views of 64x64 from 4,096 eyes around the model\n\
   (every triangle a view ray meets first is visible), then escape rays from every triangle not yet\n\
   seen (stratified points on it, stratified directions over the sphere, each from the face it\n\
   leaves), escape directions shared between neighbouring triangles (what is seen through a slit\n\
   is found by its neighbours' escapes), in rounds whose rays per triangle double and then hold,\n\
-  triangles near visible ones getting 4 times more, until two rounds in a row find nothing new.\n\
+  triangles near visible ones getting 4 times more, until two rounds in a row find nothing new\n\
+  (converged) or --rounds run out (the report says which).\n\
   Every kept triangle rests on a ray that escaped; a removed one survived the rays the report\n\
   states (rays_per_removed: each removed triangle's own escape rays, the least over them).\n\
   --min-opening W demands that an escape pass as a beam W x the bounding-box diagonal wide, so that\n\
@@ -79,8 +80,8 @@ resolution, min_opening, triangles_in/out/removed, parts_in/out/removed, load_s,
 and stats (the library's CullStats: the grid modes' grid, field and step times; the rays mode's\n\
 `rays`: views, rounds, rays, rays_per_triangle, rays_per_removed, converged, each round's log).\n\n\
 --evaluate also runs the ray-traced ground truth on the input, independent of the rays mode (its\n\
-own seeds, perspective renders from 10,000+ viewpoints instead of orthographic views, random\n\
-directions per face, a Pluecker triangle test instead of Moeller-Trumbore), sample counts doubled\n\
+own seeds, renders from 10,000+ viewpoints at two bounding radii (the rays mode's eyes are at\n\
+three), random directions per face, a Pluecker triangle test instead of Moeller-Trumbore), sample counts doubled\n\
 for 6 rounds and then held, until two rounds in a row find nothing (--eval-rounds at most), and\n\
 reports the removal fractions (by triangles, area, parts), false removals (truly visible but\n\
 removed) and missed removals (truly hidden but kept); the JSON report gains `ground_truth` and\n\
