@@ -67,6 +67,8 @@ fn a_box_full_of_parts_comes_out_as_the_box_with_a_matching_report() {
             "cull",
             s(&input),
             s(&output),
+            "--mode",
+            "conservative",
             "--resolution",
             "64",
             "--by",
@@ -121,6 +123,28 @@ fn a_box_full_of_parts_comes_out_as_the_box_with_a_matching_report() {
 }
 
 #[test]
+fn the_default_rays_mode_keeps_the_box_and_reports_its_search() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, shell) = boxed_balls();
+    let input = dir.path().join("assembly.glb");
+    raykit_io::save_mesh(&input, &model).unwrap();
+    let output = dir.path().join("out.glb");
+    let o = raykit(&["cull", s(&input), s(&output), "--by", "part", "--json"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["mode"], "rays", "{r}");
+    assert_eq!(r["triangles_out"], BOX_TRIS, "{r}");
+    assert_eq!(r["parts_removed"], SPHERES, "{r}");
+    let x = &r["stats"]["rays"];
+    assert_eq!(x["converged"], true, "{r}");
+    assert!(x["rays_per_removed"].as_u64().unwrap() > 0, "{r}");
+    let culled = raykit_io::load_mesh(&output).unwrap();
+    assert_eq!(triangle_set(&culled), triangle_set(&shell));
+    let names: Vec<&str> = culled.parts.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, ["shell"]);
+}
+
+#[test]
 fn json_on_stdout_and_paper_mode_on_an_obj() {
     let dir = tempfile::tempdir().unwrap();
     let (model, shell) = boxed_balls();
@@ -171,7 +195,7 @@ fn bad_arguments_fail_with_a_clear_message() {
         ),
         (vec![s(&input), s(&out), "--eval-rounds", "3"], "--evaluate"),
         (
-            vec![s(&input), s(&out), "--evaluate", "--eval-rounds", "13"],
+            vec![s(&input), s(&out), "--evaluate", "--eval-rounds", "33"],
             "--eval-rounds",
         ),
         (
@@ -199,7 +223,9 @@ fn bad_arguments_fail_with_a_clear_message() {
     );
     let o = raykit(&["cull", "--help"]);
     let help = text(&o.stdout);
-    assert!(help.contains("--resolution") && help.contains("What --resolution trades"));
+    assert!(
+        help.contains("--resolution") && help.contains("--mode") && help.contains("Grid modes")
+    );
 }
 
 #[test]

@@ -1,5 +1,6 @@
-//! `raykit cull`: visibility culling of a model (Min 2008) — removes the
-//! triangles (or parts) that no viewpoint outside the model can see.
+//! `raykit cull`: visibility culling of a model — removes the triangles (or
+//! parts) that no viewpoint outside the model can see: by ray tracing (the
+//! default), or by Min's (2008) grid method.
 
 use crate::measure::timed;
 use anyhow::{bail, Context, Result};
@@ -9,8 +10,8 @@ use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::{Part, TriangleMesh};
 use raykit_cull::{
-    compare, cull, evaluate_with_progress, CullOptions, CullStats, EvalOptions, EvalReport, Grid,
-    GroundTruth,
+    compare, cull, cull_by_rays, evaluate_with_progress, CullOptions, CullStats, EvalOptions,
+    EvalReport, Grid, GroundTruth, RayOptions,
 };
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -28,57 +29,96 @@ pub enum ByArg {
     Part,
 }
 
+/// How visibility is found, as `--mode` spells it.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModeArg {
+    /// Ray tracing: views from around the model, escape rays from every
+    /// unseen triangle, escape directions shared between neighbours, rounds
+    /// until two find nothing. Every kept triangle has a ray that escapes.
+    Rays,
+    /// Min's (2008) grid with the conservative additions.
+    Conservative,
+    /// Min's (2008) rule alone (paper 003's reproduction).
+    Paper,
+}
+
 /// Arguments of `raykit cull`.
 #[derive(Args)]
-#[command(
-    after_help = "Global visibility culling (Min 2008): a grid of RESOLUTION points along the model's\n\
-longest axis is laid around it, the directed distance field (distance to the nearest surface along\n\
-+-x, +-y, +-z from every grid point, by axis rays through a BVH) is computed, and a front propagated\n\
-from the grid's outer boundary marks the points reachable from outside. Triangles the outside points'\n\
-axis rays meet are visible; the rest are hidden and removed.\n\n\
-What --resolution trades: the grid sees the outside only through steps between its points, so an\n\
-opening narrower than about one grid spacing (longest side / RESOLUTION), or a gap thinner than one,\n\
-is closed to the front, and what is seen only through it looks hidden. Higher resolutions resolve\n\
-smaller openings and remove more hidden triangles, at a time and memory cost growing with the cube\n\
-of the resolution (about two bytes per point plus the field's surface crossings). The default\n\
-conservative mode keeps what the evidence does not clearly hide: triangles within one spacing behind\n\
-a visible surface, triangles in grid cells with an outside corner, and candidates next to kept\n\
-triangles that random rays (or escape directions shared by their neighbours) show to escape the\n\
-model; --confirm also tests every remaining candidate by rays (slow on models with many hidden\n\
-triangles). --paper applies Min's rule alone (removes more, may remove\n\
-visible triangles near small openings).\n\n\
+#[command(after_help = "Modes (--mode):\n\
+- rays (the default): a triangle is visible when some ray leaving it (from either face) meets\n\
+  nothing, so an eye far away along that ray sees it; all others are removed. Visibility is found\n\
+  by ray tracing through an 8-wide BVH: pinhole views of 64x64 from 4,096 eyes around the model\n\
+  (every triangle a view ray meets first is visible), then escape rays from every triangle not yet\n\
+  seen (stratified points on it, stratified directions over the sphere, each from the face it\n\
+  leaves), escape directions shared between neighbouring triangles (what is seen through a slit\n\
+  is found by its neighbours' escapes), in rounds whose rays per triangle double and then hold,\n\
+  triangles near visible ones getting 4 times more, until two rounds in a row find nothing new\n\
+  (converged) or --rounds run out (the report says which).\n\
+  Every kept triangle rests on a ray that escaped; a removed one survived the rays the report\n\
+  states (rays_per_removed: each removed triangle's own escape rays, the least over them).\n\
+  --min-opening W demands that an escape pass as a beam W x the bounding-box diagonal wide, so that\n\
+  hairline cracks between CAD faces do not count (the output says which definition was used).\n\
+- conservative: Min's (2008) grid method (below) keeping what its evidence does not clearly hide.\n\
+- paper: Min's (2008) rule alone, for the reproduction of paper 003.\n\n\
+Grid modes: a grid of RESOLUTION points along the model's longest axis is laid around it, the\n\
+directed distance field (distance to the nearest surface along +-x, +-y, +-z from every grid\n\
+point, by axis rays through a BVH) is computed, and a front propagated from the grid's outer\n\
+boundary marks the points reachable from outside; triangles the outside points' axis rays meet are\n\
+visible. An opening narrower than about one grid spacing (longest side / RESOLUTION) is closed to\n\
+the front, so what is seen only through it looks hidden. The conservative mode also keeps\n\
+triangles within one spacing behind a visible surface, triangles in grid cells with an outside\n\
+corner, and candidates next to kept triangles that random rays show to escape; --confirm also\n\
+tests every remaining candidate by rays. --paper is --mode paper.\n\n\
 Examples:\n  raykit cull engine.glb engine_outside.glb\n  \
-raykit cull assembly.obj shell.obj --resolution 256 --by part --report cull.json\n  \
-raykit cull bearing.stl out.stl --confirm --json\n\n\
+raykit cull assembly.obj shell.obj --by part --report cull.json\n  \
+raykit cull engine.glb out.glb --min-opening 0.0001\n  \
+raykit cull engine.glb out.glb --mode paper --resolution 128\n\n\
 Prints triangles and parts before, after and removed, and the times; --report FILE.json (or --json,\n\
 on stdout instead of the summary) writes a JSON report: input, output, by, mode, confirm,\n\
-resolution, triangles_in/out/removed, parts_in/out/removed, load_s, cull_s, save_s, and stats\n\
-(the library's CullStats: grid, spacing, points, outside_points, field_hits, the step times,\n\
-triangles_removed, parts_removed and what each conservative rule kept).\n\n\
---evaluate also runs the ray-traced ground truth on the input (rays from sample points on every\n\
-triangle in random directions, and renders of triangle ids from 10,000+ viewpoints around the\n\
-model, sample counts doubled until the labels stop changing) and reports the removal fractions (by\n\
-triangles, area, parts), false removals (truly visible but removed) and missed removals (truly\n\
-hidden but kept); the JSON report gains `ground_truth` and `evaluation`. Exit status 2 when any\n\
-triangle the ground truth sees was removed."
-)]
+resolution, min_opening, triangles_in/out/removed, parts_in/out/removed, load_s, cull_s, save_s,\n\
+and stats (the library's CullStats: the grid modes' grid, field and step times; the rays mode's\n\
+`rays`: views, rounds, rays, rays_per_triangle, rays_per_removed, converged, each round's log).\n\n\
+--evaluate also runs the ray-traced ground truth on the input, independent of the rays mode (its\n\
+own seeds, renders from 10,000+ viewpoints at two bounding radii (the rays mode's eyes are at\n\
+three), random directions per face, a Pluecker triangle test instead of Moeller-Trumbore), sample counts doubled\n\
+for 6 rounds and then held, until two rounds in a row find nothing (--eval-rounds at most), and\n\
+reports the removal fractions (by triangles, area, parts), false removals (truly visible but\n\
+removed) and missed removals (truly hidden but kept); the JSON report gains `ground_truth` and\n\
+`evaluation`. --save-truth FILE.json keeps its labels; --truth FILE.json compares with saved\n\
+labels instead of evaluating again. Exit status 2 when any triangle the ground truth sees was\n\
+removed.")]
 pub struct CullArgs {
     /// Input mesh (OBJ, PLY, PLY.GZ, STL, glTF/GLB, OFF).
     input: PathBuf,
     /// Output mesh, format from its extension (obj, ply, stl, off, gltf, glb; .gz
     /// compresses); never the input file. glTF/GLB keep one node per remaining part.
     output: PathBuf,
-    /// Grid points along the model's longest axis (5..=1024): finer grids
-    /// see through smaller openings and remove more, at cubic cost.
+    /// How visibility is found: ray tracing, or Min's (2008) grid.
+    #[arg(long, value_enum, default_value = "rays")]
+    mode: ModeArg,
+    /// Rays mode: narrowest opening that counts, as a fraction of the
+    /// bounding-box diagonal (0, the default: any single escaping ray shows
+    /// its triangle; 0.0001 closes hairline cracks between CAD faces).
+    #[arg(long, default_value_t = 0.0, value_parser = parse_opening)]
+    min_opening: f32,
+    /// Rays mode: most rounds of escape rays (it stops earlier when two
+    /// rounds in a row find nothing new).
+    #[arg(long, default_value_t = RayOptions::default().max_rounds as u32,
+          value_parser = clap::value_parser!(u32).range(1..=64))]
+    rounds: u32,
+    /// Grid modes: grid points along the model's longest axis (5..=1024):
+    /// finer grids see through smaller openings and remove more, at cubic
+    /// cost.
     #[arg(long, default_value_t = CullOptions::default().resolution as u32,
           value_parser = clap::value_parser!(u32).range(Grid::MIN_RESOLUTION as i64..=Grid::MAX_RESOLUTION as i64))]
     resolution: u32,
     /// Remove hidden triangles, or whole parts with no visible triangle.
     #[arg(long, value_enum, default_value = "triangle")]
     by: ByArg,
-    /// Min's (2008) rule alone, without the conservative additions (may
-    /// remove visible triangles seen through openings finer than the grid).
-    #[arg(long, conflicts_with = "confirm")]
+    /// Min's (2008) rule alone (`--mode paper`; may remove visible
+    /// triangles seen through openings finer than the grid).
+    #[arg(long, conflicts_with_all = ["confirm", "mode"])]
     paper: bool,
     /// Conservative mode: also keep each candidate hidden triangle that
     /// random rays from its surface show to escape the model (slow).
@@ -109,6 +149,32 @@ pub struct CullArgs {
     #[arg(long, default_value_t = EvalOptions::default().min_opening, requires = "evaluate",
           value_parser = parse_opening)]
     eval_min_opening: f32,
+    /// Write the ground truth's labels (visible triangle ids) to this file.
+    #[arg(
+        long,
+        value_name = "FILE.json",
+        requires = "evaluate",
+        conflicts_with = "truth"
+    )]
+    save_truth: Option<PathBuf>,
+    /// Compare with the labels saved by --save-truth on this input instead
+    /// of evaluating again.
+    #[arg(long, value_name = "FILE.json", requires = "evaluate")]
+    truth: Option<PathBuf>,
+}
+
+/// The ground truth's labels as --save-truth writes them.
+#[derive(Serialize, serde::Deserialize)]
+struct SavedTruth {
+    input: String,
+    triangles: usize,
+    rounds: usize,
+    converged: bool,
+    last_change: usize,
+    rays: u64,
+    seconds: f64,
+    min_opening: f32,
+    visible_ids: Vec<usize>,
 }
 
 /// The JSON report: the run's figures and the library's statistics.
@@ -117,9 +183,10 @@ struct Report<'a> {
     input: String,
     output: String,
     by: ByArg,
-    mode: &'static str,
+    mode: ModeArg,
     confirm: bool,
     resolution: u32,
+    min_opening: f32,
     triangles_in: usize,
     triangles_out: usize,
     triangles_removed: usize,
@@ -148,13 +215,25 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
     if let Some(r) = &args.report {
         crate::paths::ensure_not_input(r, &[args.input.as_path(), args.output.as_path()])?;
     }
-    let options = if args.paper {
-        CullOptions::paper(args.resolution as usize)
+    let mode = if args.paper {
+        ModeArg::Paper
     } else {
-        CullOptions {
+        args.mode
+    };
+    if args.confirm && mode != ModeArg::Conservative {
+        bail!("--confirm belongs to --mode conservative");
+    }
+    let options = match mode {
+        ModeArg::Paper => CullOptions::paper(args.resolution as usize),
+        _ => CullOptions {
             confirm: args.confirm.then(EvalOptions::confirmation),
             ..CullOptions::conservative(args.resolution as usize)
-        }
+        },
+    };
+    let ray_options = RayOptions {
+        min_opening: args.min_opening,
+        max_rounds: args.rounds as usize,
+        ..Default::default()
     };
     let bar = ProgressBar::new_spinner().with_style(
         ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").expect("valid template"),
@@ -169,12 +248,18 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
             return Err(e.into());
         }
     };
-    bar.set_message(format!(
-        "culling {} triangles at resolution {}",
-        mesh.num_triangles(),
-        args.resolution
-    ));
-    let (result, cull_s) = timed(|| cull(&mesh, &options));
+    bar.set_message(match mode {
+        ModeArg::Rays => format!("culling {} triangles by rays", mesh.num_triangles()),
+        _ => format!(
+            "culling {} triangles at resolution {}",
+            mesh.num_triangles(),
+            args.resolution
+        ),
+    });
+    let (result, cull_s) = timed(|| match mode {
+        ModeArg::Rays => cull_by_rays(&mesh, &ray_options),
+        _ => cull(&mesh, &options),
+    });
     bar.finish_and_clear();
     let result = result.with_context(|| format!("{}", args.input.display()))?;
     let keep: Vec<bool> = match args.by {
@@ -192,37 +277,16 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
     }
     let (saved, save_s) = timed(|| raykit_io::save_mesh(&args.output, &kept));
     let (ground_truth, evaluation) = if args.evaluate {
-        let accel = build_accel(
-            AccelKind::Bvh2,
-            TestKind::Plucker,
-            &mesh,
-            &BuildOptions::default(),
-        );
-        let eval_options = EvalOptions {
-            max_rounds: args.eval_rounds as usize,
-            min_opening: args.eval_min_opening,
-            ..Default::default()
-        };
-        let bar = ProgressBar::new(1).with_style(
-            ProgressStyle::with_template(
-                "ground truth, round {msg} {bar:30} {pos}/{len} [{elapsed}, eta {eta}]",
-            )
-            .expect("valid template"),
-        );
-        let truth = evaluate_with_progress(&mesh, accel.as_ref(), &eval_options, &|p| {
-            if p.done == 1 {
-                bar.set_length(p.total);
-                bar.reset_eta();
-                bar.set_message(format!(
-                    "{} of {} ({} triangles visible so far; triangles, then viewpoints)",
-                    p.round + 1,
-                    eval_options.max_rounds,
-                    p.visible
-                ));
+        let truth = match &args.truth {
+            Some(path) => load_truth(path, &args.input, mesh.num_triangles())?,
+            None => {
+                let truth = evaluate_input(&mesh, &args);
+                if let Some(path) = &args.save_truth {
+                    save_truth(path, &args, &truth)?;
+                }
+                truth
             }
-            bar.set_position(p.done);
-        });
-        bar.finish_and_clear();
+        };
         let eval = compare(&truth, &keep, &mesh);
         (Some(truth), Some(eval))
     } else {
@@ -235,9 +299,10 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
         input: args.input.display().to_string(),
         output: args.output.display().to_string(),
         by: args.by,
-        mode: if args.paper { "paper" } else { "conservative" },
+        mode,
         confirm: options.confirm.is_some(),
         resolution: args.resolution,
+        min_opening: args.min_opening,
         triangles_in: mesh.num_triangles(),
         triangles_out: kept.num_triangles(),
         triangles_removed: mesh.num_triangles() - kept.num_triangles(),
@@ -268,6 +333,106 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
         Some(e) if e.false_removals > 0 => Ok(ExitCode::from(2)),
         _ => Ok(ExitCode::SUCCESS),
     }
+}
+
+/// The ground truth of `mesh` with the arguments' settings, through an
+/// 8-wide BVH over the Plücker test (Jones 2000): another triangle test
+/// than the rays mode's Möller–Trumbore.
+fn evaluate_input(mesh: &TriangleMesh, args: &CullArgs) -> GroundTruth {
+    let accel = build_accel(
+        AccelKind::Bvh8,
+        TestKind::Plucker,
+        mesh,
+        &BuildOptions::default(),
+    );
+    let eval_options = EvalOptions {
+        max_rounds: args.eval_rounds as usize,
+        min_opening: args.eval_min_opening,
+        ..Default::default()
+    };
+    let bar = ProgressBar::new(1).with_style(
+        ProgressStyle::with_template(
+            "ground truth, round {msg} {bar:30} {pos}/{len} [{elapsed}, eta {eta}]",
+        )
+        .expect("valid template"),
+    );
+    let truth = evaluate_with_progress(mesh, accel.as_ref(), &eval_options, &|p| {
+        if p.done == 1 {
+            bar.set_length(p.total);
+            bar.reset_eta();
+            bar.set_message(format!(
+                "{} of at most {} ({} triangles visible so far; triangles, then viewpoints)",
+                p.round + 1,
+                eval_options.max_rounds,
+                p.visible
+            ));
+        }
+        bar.set_position(p.done);
+    });
+    bar.finish_and_clear();
+    truth
+}
+
+fn save_truth(path: &Path, args: &CullArgs, truth: &GroundTruth) -> Result<()> {
+    let saved = SavedTruth {
+        input: args.input.display().to_string(),
+        triangles: truth.visible.len(),
+        rounds: truth.rounds,
+        converged: truth.converged,
+        last_change: truth.last_change,
+        rays: truth.rays,
+        seconds: truth.seconds,
+        min_opening: args.eval_min_opening,
+        visible_ids: (0..truth.visible.len())
+            .filter(|&t| truth.visible[t])
+            .collect(),
+    };
+    let json = serde_json::to_string(&saved)?;
+    raykit_io::write_atomic(path, |w| {
+        w.write_all(json.as_bytes())?;
+        w.write_all(b"\n")
+    })
+    .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Labels saved by --save-truth, checked against the input's triangles.
+fn load_truth(path: &Path, input: &Path, triangles: usize) -> Result<GroundTruth> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let saved: SavedTruth = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: not a ground truth saved by --save-truth",
+            path.display()
+        )
+    })?;
+    if saved.triangles != triangles {
+        bail!(
+            "{}: field triangles is {}, but {} has {triangles} triangles",
+            path.display(),
+            saved.triangles,
+            input.display()
+        );
+    }
+    let mut visible = vec![false; triangles];
+    for (i, &t) in saved.visible_ids.iter().enumerate() {
+        match visible.get_mut(t) {
+            Some(v) => *v = true,
+            None => bail!(
+                "{}: visible_ids[{i}] is {t}, beyond the {triangles} triangles",
+                path.display()
+            ),
+        }
+    }
+    Ok(GroundTruth {
+        visible_count: saved.visible_ids.len(),
+        visible,
+        rounds: saved.rounds,
+        last_change: saved.last_change,
+        converged: saved.converged,
+        rays: saved.rays,
+        seconds: saved.seconds,
+        ..Default::default()
+    })
 }
 
 /// The triangles of `mesh` where `keep` is true, with only the vertices they
@@ -338,18 +503,34 @@ fn keep_triangles(mesh: &TriangleMesh, keep: &[bool]) -> TriangleMesh {
 
 fn print_summary(r: &Report<'_>, output: &Path, report: Option<&Path>) {
     let s = r.stats;
-    println!(
-        "{}: {} triangles, {} parts; grid {}x{}x{} (spacing {:.4}), {} of {} points outside",
-        r.input,
-        r.triangles_in,
-        r.parts_in,
-        s.grid[0],
-        s.grid[1],
-        s.grid[2],
-        s.spacing,
-        s.outside_points,
-        s.points
-    );
+    match &s.rays {
+        Some(x) => println!(
+            "{}: {} triangles, {} parts; visible = {}",
+            r.input,
+            r.triangles_in,
+            r.parts_in,
+            if x.beam > 0.0 {
+                format!(
+                    "an escaping beam {:.4e} wide ({} of the diagonal) from either face",
+                    x.beam, r.min_opening
+                )
+            } else {
+                "any escaping ray from either face".to_string()
+            }
+        ),
+        None => println!(
+            "{}: {} triangles, {} parts; grid {}x{}x{} (spacing {:.4}), {} of {} points outside",
+            r.input,
+            r.triangles_in,
+            r.parts_in,
+            s.grid[0],
+            s.grid[1],
+            s.grid[2],
+            s.spacing,
+            s.outside_points,
+            s.points
+        ),
+    }
     let pct = |a: usize, b: usize| 100.0 * a as f64 / b.max(1) as f64;
     println!(
         "triangles: {} -> {} ({} removed, {:.1}%)",
@@ -365,7 +546,30 @@ fn print_summary(r: &Report<'_>, output: &Path, report: Option<&Path>) {
         r.parts_removed,
         pct(r.parts_removed, r.parts_in)
     );
-    if r.mode == "conservative" {
+    if let Some(x) = &s.rays {
+        println!(
+            "rays: {} seen by {} views of {}x{}, {} by escape rays and shared directions in {} rounds \
+             ({}; last round added {}); {} rays, {:.0} per triangle; every removed triangle survived \
+             at least {} escape rays of its own; {} zero-area triangles removed",
+            x.by_views,
+            x.viewpoints,
+            x.image,
+            x.image,
+            x.by_escape_rays,
+            x.rounds,
+            if x.converged {
+                "converged: the last two found nothing"
+            } else {
+                "not converged"
+            },
+            x.last_round_added,
+            x.rays,
+            x.rays_per_triangle,
+            x.rays_per_removed,
+            x.degenerate
+        );
+    }
+    if r.mode == ModeArg::Conservative {
         println!(
             "conservative mode kept {} triangles by dilation, {} by contact with outside cells, {} by \
              escaping rays at the frontier{}{}",
@@ -384,16 +588,26 @@ fn print_summary(r: &Report<'_>, output: &Path, report: Option<&Path>) {
             }
         );
     }
-    println!(
-        "time: load {:.1} ms, BVH {:.1} ms, distance field {:.1} ms, propagation {:.1} ms, \
-         visible set {:.1} ms, save {:.1} ms",
-        r.load_s * 1e3,
-        s.accel_seconds * 1e3,
-        s.distance_field_seconds * 1e3,
-        s.propagation_seconds * 1e3,
-        s.visible_seconds * 1e3,
-        r.save_s * 1e3
-    );
+    if s.rays.is_some() {
+        println!(
+            "time: load {:.1} ms, BVH {:.1} ms, rays {:.1} ms, save {:.1} ms",
+            r.load_s * 1e3,
+            s.accel_seconds * 1e3,
+            s.visible_seconds * 1e3,
+            r.save_s * 1e3
+        );
+    } else {
+        println!(
+            "time: load {:.1} ms, BVH {:.1} ms, distance field {:.1} ms, propagation {:.1} ms, \
+             visible set {:.1} ms, save {:.1} ms",
+            r.load_s * 1e3,
+            s.accel_seconds * 1e3,
+            s.distance_field_seconds * 1e3,
+            s.propagation_seconds * 1e3,
+            s.visible_seconds * 1e3,
+            r.save_s * 1e3
+        );
+    }
     if let (Some(g), Some(e)) = (&r.ground_truth, &r.evaluation) {
         println!(
             "ground truth: {} of {} triangles visible ({} rounds, last added {}{}; {} points x {} \

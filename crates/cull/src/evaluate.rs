@@ -18,14 +18,18 @@
 //!
 //! Sample counts are doubled each round with fresh random samples — the rays
 //! per triangle (points and viewpoints on odd rounds, directions per point
-//! on even ones) — and the labels of all rounds are united, until a
-//! round finds no new visible triangle (or the rounds run out). Every
+//! on even ones) — for [`EvalOptions::growth_rounds`] rounds, then repeated
+//! with fresh samples; the labels of all rounds are united, until
+//! [`QUIET_ROUNDS`] rounds in a row find no new visible triangle (converged)
+//! or the rounds run out. Every
 //! visible label rests on a ray that met nothing; a hidden label is
 //! evidence, not proof: a triangle seen only through a very small solid
 //! angle may be missed.
 
+use crate::escape::{
+    beam_escapes, escape_direction, fibonacci, is_degenerate, off_surface, RayConfirm,
+};
 use crate::shared_escapes::{SharedEscapes, SHARING_CELLS};
-use crate::visible::{beam_escapes, escape_direction, off_surface, RayConfirm};
 use raykit_core::{Accel, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -47,11 +51,14 @@ pub struct EvalOptions {
     pub image: usize,
     /// Most rounds (2 to [`MAX_ROUNDS`], so that two rounds can be compared).
     pub max_rounds: usize,
+    /// Rounds whose sample counts double; later rounds repeat the last
+    /// counts with fresh samples (so that a long search grows linearly).
+    pub growth_rounds: usize,
     /// Seed of the random samples.
     pub seed: u64,
     /// Narrowest opening that counts, as a fraction of the model's bounding
     /// box diagonal: an escape needs a beam this wide (see
-    /// [`crate::visible::beam_escapes`]), so cracks between independently
+    /// [`crate::escape::beam_escapes`]), so cracks between independently
     /// tessellated faces do not make hidden triangles visible. 0 (the
     /// default definition): any single ray.
     pub min_opening: f32,
@@ -64,7 +71,8 @@ impl Default for EvalOptions {
             directions: 16,
             viewpoints: 10_000,
             image: 32,
-            max_rounds: 6,
+            max_rounds: 16,
+            growth_rounds: 6,
             seed: 0x0006_e7a1,
             min_opening: 0.0,
         }
@@ -74,11 +82,12 @@ impl Default for EvalOptions {
 impl EvalOptions {
     /// The settings of [`crate::CullOptions::confirm`]: the ground truth's
     /// search with its own seed (any single ray counts, as in the ground
-    /// truth's default).
+    /// truth's default), at most 6 rounds.
     pub fn confirmation() -> Self {
         EvalOptions {
             seed: 0x0003_c011,
             min_opening: 0.0,
+            max_rounds: 6,
             ..Default::default()
         }
     }
@@ -96,7 +105,7 @@ pub struct GroundTruth {
     pub rounds: usize,
     /// Triangles newly found visible by the last round (0 when converged).
     pub last_change: usize,
-    /// True when the last round changed nothing.
+    /// True when the last [`QUIET_ROUNDS`] rounds changed nothing.
     pub converged: bool,
     /// Sample points per triangle of the last round.
     pub points: u32,
@@ -141,9 +150,12 @@ pub struct RoundLog {
     pub seconds: f64,
 }
 
-/// Most rounds of [`evaluate`] (more would overflow the sample counts
-/// long before they finish).
-pub const MAX_ROUNDS: usize = 12;
+/// Most rounds of [`evaluate`].
+pub const MAX_ROUNDS: usize = 32;
+
+/// Rounds in a row that must find nothing new for [`evaluate`] to call its
+/// labels converged.
+pub const QUIET_ROUNDS: usize = 2;
 
 /// Where [`evaluate_with_progress`] stands: work items (candidate triangles,
 /// then viewpoints) of the current round.
@@ -209,16 +221,18 @@ pub fn evaluate_beyond(
     let beam = options.min_opening.max(0.0) * (bounds.max - bounds.min).length();
     truth.beam = beam;
     let mut shared = SharedEscapes::new(&bounds, SHARING_CELLS);
+    let mut quiet = 0;
     for round in 0..max_rounds {
-        // Rays per triangle double each round: points on odd rounds,
+        // Rays per triangle double each growth round: points on odd rounds,
         // directions on even ones; viewpoints double with the points.
+        let grow = round.min(options.growth_rounds.clamp(1, 20) - 1);
         let samples = RayConfirm {
-            points: options.points.max(1).saturating_mul(1 << round.div_ceil(2)),
-            directions: options.directions.max(1).saturating_mul(1 << (round / 2)),
+            points: options.points.max(1).saturating_mul(1 << grow.div_ceil(2)),
+            directions: options.directions.max(1).saturating_mul(1 << (grow / 2)),
             seed: options.seed.wrapping_add(round as u64 * 0x9e37_79b9),
             beam,
         };
-        let viewpoints = options.viewpoints.saturating_mul(1 << round.div_ceil(2));
+        let viewpoints = options.viewpoints.saturating_mul(1 << grow.div_ceil(2));
         let candidates: Vec<usize> = (0..n)
             .filter(|&t| !truth.visible[t] && !degenerate[t])
             .collect();
@@ -311,27 +325,14 @@ pub fn evaluate_beyond(
         truth.points = samples.points;
         truth.directions = samples.directions;
         truth.viewpoints = viewpoints;
-        if round > 0 && change == 0 {
+        quiet = if change == 0 { quiet + 1 } else { 0 };
+        if quiet >= QUIET_ROUNDS {
             truth.converged = true;
             break;
         }
     }
     truth.seconds = clock.elapsed().as_secs_f64();
     truth
-}
-
-/// True when triangle `t` of `mesh` has no area (no face to sample or see).
-pub fn is_degenerate(mesh: &TriangleMesh, t: usize) -> bool {
-    mesh.face_normal(t).normalize_or_zero() == Vec3::ZERO
-}
-
-/// Point `i` of the `n`-point Fibonacci sphere (unit vectors, evenly spread).
-pub fn fibonacci(i: usize, n: usize) -> Vec3 {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    let z = 1.0 - (2.0 * i as f64 + 1.0) / n.max(1) as f64;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = golden * i as f64;
-    Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32)
 }
 
 /// The pinhole camera of one render: from `centre + 2 radius · dir`, an

@@ -38,24 +38,25 @@
 //! the ray-traced ground truth.
 
 pub mod distance_field;
+pub mod escape;
 pub mod evaluate;
 pub mod grid;
 pub mod propagate;
+pub mod rays;
 pub mod shared_escapes;
 pub mod synthetic;
 pub mod visible;
 
 pub use distance_field::{DirectedDistanceField, DirectedHit, Direction};
+pub use escape::{beam_escapes, escape_direction, is_degenerate, RayConfirm};
 pub use evaluate::{
     compare, evaluate, evaluate_beyond, evaluate_with_progress, EvalOptions, EvalProgress,
     EvalReport, GroundTruth, RoundLog,
 };
 pub use grid::Grid;
 pub use propagate::{propagate, Classification, Tag};
-pub use visible::{
-    beam_escapes, confirm_frontier, escape_direction, touches_outside, visible_from_outside,
-    RayConfirm,
-};
+pub use rays::{visible_by_rays, RayOptions, RayRound, RayStats};
+pub use visible::{confirm_frontier, touches_outside, visible_from_outside};
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
@@ -164,6 +165,10 @@ pub struct CullStats {
     pub parts: usize,
     /// Parts all of whose triangles are removed.
     pub parts_removed: usize,
+    /// The ray-traced visibility's figures ([`cull_by_rays`]; `None` for
+    /// the grid modes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rays: Option<RayStats>,
 }
 
 /// What [`cull`] found.
@@ -227,7 +232,7 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
         if let Some(c) = &options.confirm {
             // Triangles without area have no face to judge: kept.
             for (t, v) in visible.iter_mut().enumerate() {
-                *v |= evaluate::is_degenerate(mesh, t);
+                *v |= is_degenerate(mesh, t);
             }
             let before = visible.iter().filter(|&&v| v).count();
             let truth = evaluate_beyond(mesh, accel.as_ref(), c, visible, &|_| {});
@@ -242,6 +247,34 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
     stats.points = grid.len();
     stats.outside_points = class.outside;
     stats.field_hits = field.hit_count();
+    Ok(result_for(mesh, visible, stats))
+}
+
+/// Classify every triangle of `mesh` as kept (visible from outside) or
+/// removed by ray tracing alone ([`rays`]: views from around the model,
+/// escape rays from every unseen triangle, escape directions shared
+/// between neighbours, rounds until two find nothing), through an 8-wide
+/// BVH over Möller–Trumbore packs. An empty mesh gives an empty result; a
+/// mesh failing [`TriangleMesh::validate`] otherwise gives its error.
+pub fn cull_by_rays(mesh: &TriangleMesh, options: &RayOptions) -> Result<CullResult, MeshError> {
+    match mesh.validate() {
+        Ok(()) => {}
+        Err(MeshError::Empty) => return Ok(result_for(mesh, Vec::new(), CullStats::default())),
+        Err(e) => return Err(e),
+    }
+    let mut stats = CullStats::default();
+    let clock = Instant::now();
+    let accel = build_accel(
+        AccelKind::Bvh8,
+        TestKind::Moller,
+        mesh,
+        &BuildOptions::default(),
+    );
+    stats.accel_seconds = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let (visible, ray_stats) = visible_by_rays(mesh, accel.as_ref(), options);
+    stats.visible_seconds = clock.elapsed().as_secs_f64();
+    stats.rays = Some(ray_stats);
     Ok(result_for(mesh, visible, stats))
 }
 

@@ -12,7 +12,7 @@
 //! until nothing new is found. Each label still rests on one ray that met
 //! nothing, so this only finds visible triangles faster, never invents one.
 
-use crate::visible::{beam_escapes, off_surface, on_surface, MIN_FACE_COSINE};
+use crate::escape::{beam_escapes, off_surface, on_surface, MIN_FACE_COSINE};
 use raykit_core::rng::Pcg32;
 use raykit_core::{Aabb, Accel, TriangleMesh, Vec3};
 use rayon::prelude::*;

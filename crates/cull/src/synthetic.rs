@@ -99,3 +99,85 @@ pub fn box_of_spheres(n: usize, k: usize, subdivisions: u32) -> TriangleMesh {
     }
     assembly(pieces)
 }
+
+/// `k[0] × k[1] × k[2]` copies of `mesh` side by side, `gap` times its
+/// extent apart (0.1: a tenth of its size), each copy's parts its own —
+/// an instanced assembly flattened.
+pub fn copies(mesh: &TriangleMesh, k: [usize; 3], gap: f32) -> TriangleMesh {
+    let step = mesh.bounds().extent() * (1.0 + gap);
+    let mut out = TriangleMesh::default();
+    for z in 0..k[2] {
+        for y in 0..k[1] {
+            for x in 0..k[0] {
+                let mut copy = mesh.clone();
+                let shift = step * Vec3::new(x as f32, y as f32, z as f32);
+                for p in &mut copy.positions {
+                    *p += shift;
+                }
+                out.append(&copy);
+            }
+        }
+    }
+    out
+}
+
+/// A closed box shell around `inner` (its bounds widened by `margin` times
+/// their largest extent on every side), each face cut into `n × n` squares;
+/// with `hole = Some(h)`, the `h × h` squares at the centre of the `+z` face
+/// are left out. The shell is part 0, `inner`'s parts follow. Closed, every
+/// triangle of `inner` is hidden and every shell triangle visible (its outer
+/// face lies on the bounding box).
+pub fn shell_around(
+    inner: &TriangleMesh,
+    margin: f32,
+    n: usize,
+    hole: Option<usize>,
+) -> TriangleMesh {
+    let b = inner.bounds();
+    let pad = Vec3::splat(b.extent().max_element() * margin);
+    let outer = Aabb::new(b.min - pad, b.max + pad);
+    let n = n.max(1);
+    let shell = box_surface(&outer, n, |axis, max_side, i, j| match hole {
+        Some(h) if axis == 2 && max_side => {
+            let lo = n.saturating_sub(h) / 2;
+            (lo..lo + h).contains(&i) && (lo..lo + h).contains(&j)
+        }
+        _ => false,
+    });
+    let mut out = shell;
+    out.append(inner);
+    out
+}
+
+/// The unit box (`n × n` squares per face) with a slit `width` wide across
+/// its whole `+x` face (parallel to y, at z = 0.5), and inside: a sphere
+/// behind the slit (part 1, partly seen through it) and a sealed small box
+/// (part 2) holding a sphere (part 3, hidden). The `+x` face is two plates
+/// of `n × n/2` squares either side of the slit. A `width` below a grid
+/// spacing closes the slit to a grid's outside air.
+pub fn slit_box(n: usize, width: f32, subdivisions: u32) -> TriangleMesh {
+    let unit = Aabb::new(Vec3::ZERO, Vec3::ONE);
+    let n = n.max(2);
+    let mut shell = box_surface(&unit, n, |axis, max_side, _, _| axis == 0 && max_side);
+    let half = (0.5 - width * 0.5).max(0.0);
+    for (z0, z1) in [(0.0, half), (1.0 - half, 1.0)] {
+        // A plate on x = 1 facing +x: box_surface's +x face of a flat box.
+        let plate = box_surface(
+            &Aabb::new(Vec3::new(1.0, 0.0, z0), Vec3::new(1.0, 1.0, z1)),
+            n,
+            |axis, max_side, _, _| !(axis == 0 && max_side),
+        );
+        shell.append(&plate);
+    }
+    shell.tri_part.clear();
+    shell.parts.clear();
+    assembly([
+        shell,
+        icosphere(Vec3::new(0.75, 0.5, 0.5), 0.12, subdivisions),
+        closed_box(
+            &Aabb::new(Vec3::new(0.1, 0.1, 0.1), Vec3::new(0.35, 0.35, 0.35)),
+            2,
+        ),
+        icosphere(Vec3::splat(0.225), 0.08, subdivisions),
+    ])
+}

@@ -2,10 +2,10 @@
 //! keep triangles the grid cannot clearly hide.
 
 use crate::distance_field::DirectedDistanceField;
+use crate::escape::{escape_direction, is_degenerate, RayConfirm};
 use crate::propagate::Classification;
 use crate::shared_escapes::SharedEscapes;
-use raykit_core::rng::Pcg32;
-use raykit_core::{Accel, Ray, TriangleMesh, Vec3};
+use raykit_core::{Accel, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -84,131 +84,6 @@ pub fn visible_from_outside(
             });
     }
     visible.into_iter().map(AtomicBool::into_inner).collect()
-}
-
-/// Settings of the confirmation by rays (conservative mode).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct RayConfirm {
-    /// Sample points per candidate triangle (each used on both faces).
-    pub points: u32,
-    /// Random directions per point and face.
-    pub directions: u32,
-    /// Seed of the sample sequence (per triangle streams: results do not
-    /// depend on the thread count).
-    pub seed: u64,
-    /// Width of the beam that must escape, in model units (0: a single
-    /// ray). See [`beam_escapes`].
-    pub beam: f32,
-}
-
-impl Default for RayConfirm {
-    fn default() -> Self {
-        RayConfirm {
-            points: 4,
-            directions: 8,
-            seed: 0x0003_c011,
-            beam: 0.0,
-        }
-    }
-}
-
-/// True when the ray from `origin` (a hair off triangle `tri`'s surface)
-/// along `d` meets no triangle, and, for `beam > 0`, so do the four parallel
-/// rays from `origin + 2 beam · d ± beam · e` for two directions `e`
-/// perpendicular to `d` and to each other: openings narrower than about
-/// `beam` (the cracks between independently tessellated CAD faces, hairline
-/// seams) count as closed. The side rays start two beam widths out along
-/// the central ray, so that near an inside corner they do not start behind
-/// the neighbouring face.
-pub fn beam_escapes(accel: &dyn Accel, origin: Vec3, d: Vec3, beam: f32) -> bool {
-    if accel.occluded(&Ray::new(origin, d)) {
-        return false;
-    }
-    if beam <= 0.0 {
-        return true;
-    }
-    let e1 = d.any_orthonormal_vector();
-    let e2 = d.cross(e1);
-    let start = origin + d * (2.0 * beam);
-    [e1, -e1, e2, -e2]
-        .iter()
-        .all(|&e| !accel.occluded(&Ray::new(start + e * beam, d)))
-}
-
-/// Smallest cosine between a sample direction and the face normal: steeper
-/// directions are drawn again. A ray leaving a face at least this steeply
-/// moves away from the triangle's own plane (and from coplanar duplicates),
-/// so it cannot meet them and an any-hit query answers the question.
-pub const MIN_FACE_COSINE: f32 = 1e-3;
-
-/// Sample points on triangle `tri`: the centroid, then uniform points; each
-/// calls `f(point, unit normal)` until it returns `Some`. `None` for a
-/// triangle of zero area.
-pub fn on_surface<T>(
-    mesh: &TriangleMesh,
-    tri: usize,
-    points: u32,
-    rng: &mut Pcg32,
-    mut f: impl FnMut(Vec3, Vec3, &mut Pcg32) -> Option<T>,
-) -> Option<T> {
-    let [a, b, c] = mesh.triangle(tri);
-    let n = (b - a).cross(c - a).normalize_or_zero();
-    if n == Vec3::ZERO {
-        return None;
-    }
-    for k in 0..points {
-        let (mut u, mut v) = if k == 0 {
-            (1.0 / 3.0, 1.0 / 3.0)
-        } else {
-            (rng.next_f32(), rng.next_f32())
-        };
-        if u + v > 1.0 {
-            (u, v) = (1.0 - u, 1.0 - v);
-        }
-        if let Some(x) = f(a + u * (b - a) + v * (c - a), n, rng) {
-            return Some(x);
-        }
-    }
-    None
-}
-
-/// The origin of escape rays from surface point `p` of triangle `tri` on
-/// the side of `face`: a hair off the surface, so the triangle does not hit
-/// itself.
-pub fn off_surface(mesh: &TriangleMesh, tri: usize, p: Vec3, face: Vec3) -> Vec3 {
-    let [a, b, c] = mesh.triangle(tri);
-    let scale = a.abs().max(b.abs()).max(c.abs()).max_element().max(1e-30);
-    p + face * (scale * 1e-5)
-}
-
-/// A direction in which a ray from triangle `tri` escapes the model, found by
-/// `c.points` sample points (the centroid first) × both faces ×
-/// `c.directions` uniform directions of that face's hemisphere, or `None`.
-pub fn escape_direction(
-    mesh: &TriangleMesh,
-    accel: &dyn Accel,
-    tri: usize,
-    c: &RayConfirm,
-) -> Option<Vec3> {
-    let mut rng = Pcg32::with_stream(c.seed, tri as u64);
-    on_surface(mesh, tri, c.points, &mut rng, |p, n, rng| {
-        for face in [n, -n] {
-            let origin = off_surface(mesh, tri, p, face);
-            for _ in 0..c.directions {
-                let d = loop {
-                    let d = rng.unit_vector();
-                    let cos = d.dot(face);
-                    if cos.abs() >= MIN_FACE_COSINE {
-                        break if cos < 0.0 { -d } else { d };
-                    }
-                };
-                if beam_escapes(accel, origin, d, c.beam) {
-                    return Some(d);
-                }
-            }
-        }
-        None
-    })
 }
 
 /// Ray budget of [`confirm_frontier`]'s candidates (about 3 s on 2 cores
@@ -300,7 +175,7 @@ pub fn confirm_frontier(
             .with_min_len(16)
             .filter_map(|&t| escape_direction(mesh, accel, t, &own).map(|d| (t, d))),
     );
-    let degenerate = |t: usize| crate::evaluate::is_degenerate(mesh, t);
+    let degenerate = |t: usize| is_degenerate(mesh, t);
     let s = shared.spread(
         mesh,
         accel,

@@ -5,7 +5,7 @@
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::{Aabb, TriangleMesh, Vec3};
-use raykit_cull::evaluate::fibonacci;
+use raykit_cull::escape::fibonacci;
 use raykit_cull::synthetic::{assembly, box_surface, closed_box, icosphere};
 use raykit_cull::{compare, evaluate, evaluate_beyond, EvalOptions, GroundTruth};
 
@@ -143,7 +143,7 @@ fn doubling_terminates_and_doubles() {
         },
     );
     assert!(capped.rounds <= 2);
-    assert_eq!(capped.converged, capped.last_change == 0);
+    assert!(!capped.converged || capped.last_change == 0);
     // No triangles: nothing to do.
     let empty = truth_of(&TriangleMesh::default(), &options);
     assert!(empty.visible.is_empty() && empty.converged);

@@ -1,7 +1,8 @@
-//! `raykit experiment cull`: Min's (2008) culling measured on this machine
-//! (grid resolution, parts and triangles hidden, removal rate, distance-field
-//! and propagation times), for Min's rule and our conservative mode,
-//! with false and missed removals against the ray-traced ground truth.
+//! `raykit experiment cull`: culling measured on this machine — the
+//! ray-traced default (`cull_by_rays`) and Min's (2008) grid method (grid
+//! resolution, parts and triangles hidden, removal rate, distance-field and
+//! propagation times) for Min's rule and our conservative mode — with false
+//! and missed removals against the ray-traced ground truth.
 
 use super::{shared_mesh, write_csv, write_text};
 use crate::measure::{median_min_max, timed};
@@ -12,8 +13,13 @@ use indicatif::{ProgressBar, ProgressStyle};
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::{Aabb, TriangleMesh, Vec3};
-use raykit_cull::synthetic::{assembly, box_of_spheres, closed_box};
-use raykit_cull::{compare, cull, evaluate_with_progress, CullOptions, CullResult, EvalOptions};
+use raykit_cull::synthetic::{
+    assembly, box_of_spheres, closed_box, copies, shell_around, slit_box,
+};
+use raykit_cull::{
+    compare, cull, cull_by_rays, evaluate_with_progress, CullOptions, CullResult, EvalOptions,
+    RayOptions,
+};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -32,10 +38,12 @@ const ASSIMP_MODELS: [&str; 3] = ["OBJ/spider.obj", "OBJ/regr01.obj", "STL/spher
     after_help = "Models: the shared 2CylinderEngine.glb and bearing.stl, three assemblies of\n\
 Debian's assimp-testmodels (run scripts/fetch-assimp-testmodels.sh first, else they are\n\
 reported as skipped), synthetic assemblies with known answers (a box of 64 spheres, nested\n\
-shells, a box of 1,000 spheres with 1,280,192 triangles) and the engine instanced 3 x 3\n\
+shells, a box with a slit 1/500 of its size wide, a box of 1,000 spheres with 1,280,192\n\
+triangles, eight engines in a closed shell of 100 x 100 squares per face: 1,091,968 triangles),\n\
+the same shell with a 20 x 20-square hole (ground truth by rays) and the engine instanced 3 x 3\n\
 (1,093,464 triangles, no ground truth: too slow to evaluate).\n\
-Each model is culled at every resolution by Min's (2008) rule and by the conservative\n\
-default; times are medians of --reps runs. The ground truth is `raykit cull --evaluate`'s\n\
+Each model is culled by rays (the default of `raykit cull`), and at every resolution by Min's\n\
+(2008) rule and by the conservative grid mode; times are medians of --reps runs. The ground truth is `raykit cull --evaluate`'s\n\
 (rays from the surface and renders from 10,000+ viewpoints, doubled until stable) or the\n\
 known answer. Writes results.csv, results.md and SVG plots into --out; exit status 1 when\n\
 the conservative mode removed a truly visible triangle."
@@ -124,6 +132,7 @@ pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
             m.mesh.parts.len().max(1)
         );
         let truth = truth_of(&m, args.eval_rounds as usize);
+        rows.push(measure_rays(&m, &truth, args.reps)?);
         for &res in &args.resolutions {
             let mut modes = vec![
                 ("paper", CullOptions::paper(res)),
@@ -154,7 +163,7 @@ pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
     );
     let false_removals: usize = rows
         .iter()
-        .filter(|r| r.mode.starts_with("conservative"))
+        .filter(|r| r.mode != "paper")
         .filter_map(|r| r.false_removals)
         .sum();
     Ok(if false_removals == 0 {
@@ -204,6 +213,12 @@ fn models(args: &CullExperimentArgs) -> Result<Vec<Result<Model, String>>> {
         mesh: shells,
         evaluate: false,
     }));
+    out.push(Ok(Model {
+        name: "box with a 1/500 slit".into(),
+        known: None,
+        mesh: slit_box(8, 0.002, 3),
+        evaluate: true,
+    }));
     if !args.small {
         let big = box_of_spheres(4, 10, 3);
         out.push(Ok(Model {
@@ -213,7 +228,21 @@ fn models(args: &CullExperimentArgs) -> Result<Vec<Result<Model, String>>> {
             evaluate: false,
         }));
         if let Ok(engine) = raykit_io::load_mesh(Path::new(&shared_mesh("2CylinderEngine.glb"))) {
-            let mesh = instanced(&engine, 3);
+            let eight = copies(&engine, [2, 2, 2], 0.1);
+            let closed = shell_around(&eight, 0.05, 100, None);
+            out.push(Ok(Model {
+                name: "8 engines in a closed shell".into(),
+                known: Some(only_first(&closed)),
+                mesh: closed,
+                evaluate: false,
+            }));
+            out.push(Ok(Model {
+                name: "8 engines in a shell with a hole".into(),
+                mesh: shell_around(&eight, 0.05, 100, Some(20)),
+                known: None,
+                evaluate: false,
+            }));
+            let mesh = copies(&engine, [3, 3, 1], 0.1);
             // Saved, so that `raykit cull` can be timed on it as a user runs it.
             std::fs::create_dir_all(&args.out)?;
             let path = args.out.join("engine-x9.glb");
@@ -239,25 +268,6 @@ fn file_model(path: &Path, name: &str) -> Result<Model, String> {
             evaluate: true,
         })
         .map_err(|e| format!("{name}: {e}"))
-}
-
-/// `k × k` copies of `mesh` side by side in x and y, a tenth of its size
-/// apart, each copy's parts its own.
-fn instanced(mesh: &TriangleMesh, k: usize) -> TriangleMesh {
-    let b = mesh.bounds();
-    let step = b.extent() * 1.1;
-    let mut out = TriangleMesh::default();
-    for j in 0..k {
-        for i in 0..k {
-            let mut copy = mesh.clone();
-            let shift = Vec3::new(step.x * i as f32, step.y * j as f32, 0.0);
-            for p in &mut copy.positions {
-                *p += shift;
-            }
-            out.append(&copy);
-        }
-    }
-    out
 }
 
 fn truth_of(m: &Model, rounds: usize) -> Truth {
@@ -307,6 +317,28 @@ fn truth_of(m: &Model, rounds: usize) -> Truth {
     Truth::Labels(g.visible, note)
 }
 
+/// One row for the ray-traced default (no grid: resolution 0).
+fn measure_rays(m: &Model, truth: &Truth, reps: usize) -> Result<Row> {
+    let mut totals = Vec::new();
+    let mut result: Option<CullResult> = None;
+    for _ in 0..reps.max(1) {
+        let (r, s) = timed(|| cull_by_rays(&m.mesh, &RayOptions::default()));
+        totals.push(s);
+        result = Some(r.with_context(|| m.name.clone())?);
+    }
+    let r = result.expect("at least one repetition");
+    let x = r.stats.rays.clone().unwrap_or_default();
+    let mut row = row_of(m, truth, 0, "rays", &r, &totals);
+    row.grid = format!(
+        "{} rounds{}, {:.0} rays/triangle, removed survived {}",
+        x.rounds,
+        if x.converged { ", converged" } else { "" },
+        x.rays_per_triangle,
+        x.rays_per_removed
+    );
+    Ok(row)
+}
+
 fn measure(
     m: &Model,
     truth: &Truth,
@@ -323,8 +355,20 @@ fn measure(
         result = Some(r.with_context(|| m.name.clone())?);
     }
     let r = result.expect("at least one repetition");
+    Ok(row_of(m, truth, resolution, mode, &r, &totals))
+}
+
+/// The row of result `r` of `m` in `mode`, timed by `totals`.
+fn row_of(
+    m: &Model,
+    truth: &Truth,
+    resolution: usize,
+    mode: &'static str,
+    r: &CullResult,
+    totals: &[f64],
+) -> Row {
     let s = &r.stats;
-    let (total_s, total_min_s, total_max_s) = median_min_max(&totals);
+    let (total_s, total_min_s, total_max_s) = median_min_max(totals);
     // The removal fractions need no truth: without one, compare against
     // "nothing visible" and keep only them.
     let (labels, note, known) = match truth {
@@ -346,7 +390,7 @@ fn measure(
     } else {
         (None, None, None)
     };
-    Ok(Row {
+    Row {
         model: m.name.clone(),
         triangles: s.triangles,
         parts: s.parts,
@@ -367,16 +411,17 @@ fn measure(
         false_removals,
         missed_removals_pct: missed,
         truth: note,
-    })
+    }
 }
 
 fn markdown(rows: &[Row], skipped: &[String], head: &str) -> String {
     let opt = |v: Option<usize>| v.map_or("–".to_string(), |v| v.to_string());
     let optf = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.1}"));
-    let mut md =
-        format!("# Culling experiment: Min (2008)'s global visibility culling\n\n{head}\n");
+    let mut md = format!(
+        "# Culling experiment: ray-traced visibility and Min (2008)'s global visibility culling\n\n{head}\n"
+    );
     md.push_str(
-        "| model | triangles | parts | resolution | grid | mode | distance field s | propagation s | \
+        "| model | triangles | parts | resolution | grid / rays | mode | distance field s | propagation s | \
          visible set s | total s (median) | triangles removed | removed % (triangles / area) | \
          parts removed | truly hidden | false removals | missed % of hidden | ground truth |\n\
          |---|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
@@ -387,7 +432,11 @@ fn markdown(rows: &[Row], skipped: &[String], head: &str) -> String {
             r.model,
             r.triangles,
             r.parts,
-            r.resolution,
+            if r.resolution == 0 {
+                "–".to_string()
+            } else {
+                r.resolution.to_string()
+            },
             r.grid,
             r.mode,
             r.distance_field_s,
