@@ -39,7 +39,7 @@ pub enum ModeArg {
     Rays,
     /// Min's (2008) grid with the conservative additions.
     Conservative,
-    /// Min's (2008) rule alone (paper 003's reproduction).
+    /// Min's (2008) rule alone (the reproduction of the thesis).
     Paper,
 }
 
@@ -60,7 +60,7 @@ pub enum ModeArg {
   --min-opening W demands that an escape pass as a beam W x the bounding-box diagonal wide, so that\n\
   hairline cracks between CAD faces do not count (the output says which definition was used).\n\
 - conservative: Min's (2008) grid method (below) keeping what its evidence does not clearly hide.\n\
-- paper: Min's (2008) rule alone, for the reproduction of paper 003.\n\n\
+- paper: Min's (2008) rule alone, for the reproduction of the thesis.\n\n\
 Grid modes: a grid of RESOLUTION points along the model's longest axis is laid around it, the\n\
 directed distance field (distance to the nearest surface along +-x, +-y, +-z from every grid\n\
 point, by axis rays through a BVH) is computed, and a front propagated from the grid's outer\n\
