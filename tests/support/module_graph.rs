@@ -89,7 +89,7 @@ impl Crate {
         let mut path = named.clone();
         for _ in 0..4 {
             let mut depth = 0;
-            while depth < path.len() && self.files.contains_key(&path[..=depth].to_vec()) {
+            while depth < path.len() && self.files.contains_key(&path[..=depth]) {
                 depth += 1;
             }
             let module: ModPath = path[..depth].to_vec();
