@@ -123,13 +123,22 @@ fn a_box_full_of_parts_comes_out_as_the_box_with_a_matching_report() {
 }
 
 #[test]
-fn the_default_rays_mode_keeps_the_box_and_reports_its_search() {
+fn the_rays_mode_keeps_the_box_and_reports_its_search() {
     let dir = tempfile::tempdir().unwrap();
     let (model, shell) = boxed_balls();
     let input = dir.path().join("assembly.glb");
     raykit_io::save_mesh(&input, &model).unwrap();
     let output = dir.path().join("out.glb");
-    let o = raykit(&["cull", s(&input), s(&output), "--by", "part", "--json"]);
+    let o = raykit(&[
+        "cull",
+        s(&input),
+        s(&output),
+        "--mode",
+        "rays",
+        "--by",
+        "part",
+        "--json",
+    ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(r["mode"], "rays", "{r}");

@@ -46,7 +46,7 @@ pub enum ModeArg {
 /// Arguments of `raykit cull`.
 #[derive(Args)]
 #[command(after_help = "Modes (--mode):\n\
-- rays (the default): a triangle is visible when some ray leaving it (from either face) meets\n\
+- rays: a triangle is visible when some ray leaving it (from either face) meets\n\
   nothing, so an eye far away along that ray sees it; all others are removed. Visibility is found\n\
   by ray tracing through an 8-wide BVH: pinhole views of 64x64 from 4,096 eyes around the model\n\
   (every triangle a view ray meets first is visible), then escape rays from every triangle not yet\n\
@@ -59,7 +59,10 @@ pub enum ModeArg {
   states (rays_per_removed: each removed triangle's own escape rays, the least over them).\n\
   --min-opening W demands that an escape pass as a beam W x the bounding-box diagonal wide, so that\n\
   hairline cracks between CAD faces do not count (the output says which definition was used).\n\
-- conservative: Min's (2008) grid method (below) keeping what its evidence does not clearly hide.\n\
+  Not yet the default: its search does not converge on large assemblies within minutes, so it can\n\
+  remove triangles that more rays would show visible (see BENCHMARKS.md, ray-traced culling).\n\
+- conservative (the default): Min's (2008) grid method (below) keeping what its evidence does not\n\
+  clearly hide: few false removals, but it removes far less than is hidden.\n\
 - paper: Min's (2008) rule alone, for the reproduction of the thesis.\n\n\
 Grid modes: a grid of RESOLUTION points along the model's longest axis is laid around it, the\n\
 directed distance field (distance to the nearest surface along +-x, +-y, +-z from every grid\n\
@@ -71,8 +74,9 @@ triangles within one spacing behind a visible surface, triangles in grid cells w
 corner, and candidates next to kept triangles that random rays show to escape; --confirm also\n\
 tests every remaining candidate by rays. --paper is --mode paper.\n\n\
 Examples:\n  raykit cull engine.glb engine_outside.glb\n  \
+raykit cull engine.glb engine_outside.glb --mode rays --rounds 6\n  \
 raykit cull assembly.obj shell.obj --by part --report cull.json\n  \
-raykit cull engine.glb out.glb --min-opening 0.0001\n  \
+raykit cull engine.glb out.glb --mode rays --min-opening 0.0001\n  \
 raykit cull engine.glb out.glb --mode paper --resolution 128\n\n\
 Prints triangles and parts before, after and removed, and the times; --report FILE.json (or --json,\n\
 on stdout instead of the summary) writes a JSON report: input, output, by, mode, confirm,\n\
@@ -95,7 +99,7 @@ pub struct CullArgs {
     /// compresses); never the input file. glTF/GLB keep one node per remaining part.
     output: PathBuf,
     /// How visibility is found: ray tracing, or Min's (2008) grid.
-    #[arg(long, value_enum, default_value = "rays")]
+    #[arg(long, value_enum, default_value = "conservative")]
     mode: ModeArg,
     /// Rays mode: narrowest opening that counts, as a fraction of the
     /// bounding-box diagonal (0, the default: any single escaping ray shows
