@@ -3,9 +3,8 @@
 //! and against the stack kd-tree's leaves of the same build.
 
 use raykit_core::accel::{FlatKdRopes, KdOptions, KdRopes, KdStack};
-use raykit_core::rng::Pcg32;
 use raykit_core::tri::Moller;
-use raykit_core::{TriangleMesh, Vec3};
+use raykit_core::TriangleMesh;
 
 mod soup;
 

@@ -3,7 +3,6 @@
 //! or overlapping.
 #![allow(dead_code)]
 
-use raykit_core::rng::Pcg32;
 use raykit_core::{TriangleMesh, Vec3};
 use std::collections::HashMap;
 
