@@ -8,7 +8,7 @@ use glam::Vec3;
 /// Box corners stored as plain arrays so that a node packs into 32 bytes.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C)]
-pub(crate) struct NodeBox {
+pub struct NodeBox {
     pub min: [f32; 3],
     pub max: [f32; 3],
 }

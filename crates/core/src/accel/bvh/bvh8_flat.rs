@@ -1,7 +1,7 @@
 //! [`Bvh8`] handed over as plain nodes ([`FlatBvh8`]) for devices with a
 //! node layout of their own.
 
-use super::bvh8::Bvh8;
+use super::wide_bvh::Bvh8;
 use super::wide_leaf::Leaves;
 use super::wide_node::Child4;
 use crate::accel::flat::{FlatBvh8, FlatChild, FlatNode8};

@@ -26,22 +26,22 @@ use crate::accel::node_box::NodeBox;
 
 /// The bounds of a packet's rays in play (see the module notes).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Frustum {
+pub struct Frustum {
     /// Per axis, the origin extreme that gives the smallest entry through
     /// the near plane: the largest origin where the direction is positive,
     /// the smallest where it is negative.
-    pub o_near: [f32; 3],
+    pub(crate) o_near: [f32; 3],
     /// Per axis, the origin extreme that gives the largest exit through
     /// the far plane.
-    pub o_far: [f32; 3],
+    pub(crate) o_far: [f32; 3],
     /// Per axis, the smallest and largest reciprocal direction.
-    pub inv_min: [f32; 3],
-    pub inv_max: [f32; 3],
+    pub(crate) inv_min: [f32; 3],
+    pub(crate) inv_max: [f32; 3],
     /// The smallest `tnear` and the largest `tfar` of the lanes in play.
-    pub tnear: f32,
-    pub tfar: f32,
+    pub(crate) tnear: f32,
+    pub(crate) tfar: f32,
     /// False when the bounds could not be formed (every slot is tested).
-    pub usable: bool,
+    pub(crate) usable: bool,
 }
 
 impl Frustum {
@@ -50,7 +50,7 @@ impl Frustum {
     /// axis are `near` (rows of [`super::box4::Box4::planes`]: even for a
     /// positive direction).
     #[inline(always)]
-    pub fn of<const L: usize, V: Lanes<L>>(
+    pub(crate) fn of<const L: usize, V: Lanes<L>>(
         o: &[V; 3],
         inv: &[V; 3],
         tnear: V,
@@ -96,7 +96,7 @@ impl Frustum {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     #[inline]
-    pub unsafe fn slots8(&self, planes: &[[f32; 8]; 6], near: [usize; 3]) -> u32 {
+    pub(crate) unsafe fn slots8(&self, planes: &[[f32; 8]; 6], near: [usize; 3]) -> u32 {
         use std::arch::x86_64::*;
         if !self.usable {
             return 0xff;
@@ -123,8 +123,9 @@ impl Frustum {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh::box8::{Box8, RayBox8};
+    use crate::accel::bvh::box8::Box8;
     use crate::accel::bvh::lanes::L8;
+    use crate::accel::bvh::ray_box::RayBox;
     use crate::ray::Ray;
     use crate::rng::Pcg32;
     use glam::Vec3;
@@ -231,9 +232,7 @@ mod tests {
             let mut want = 0u32;
             for (l, ray) in rays.iter().enumerate() {
                 if act & (1 << l) != 0 {
-                    want |= b
-                        .entries_scalar(&RayBox8::new(ray), ray.tnear, tfar[l])
-                        .mask;
+                    want |= b.entries_scalar(&RayBox::new(ray), ray.tnear, tfar[l]).mask;
                 }
             }
             assert_eq!(

@@ -346,7 +346,7 @@ impl Lanes<16> for L16 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh::box4::{max_sse, min_sse};
+    use crate::accel::bvh::boxes::{max_sse, min_sse};
     use crate::rng::Pcg32;
 
     /// Awkward and ordinary values: NaN, infinities, signed zeros,
@@ -459,7 +459,7 @@ mod tests {
     /// Both widths where this CPU has their features (a note otherwise).
     #[test]
     fn every_operation_matches_its_scalar_semantics() {
-        use super::super::box8::BoxPath;
+        use super::super::box_path::BoxPath;
         let paths = BoxPath::available();
         if paths.contains(&BoxPath::Avx2) {
             check::<8, L8>();

@@ -4,20 +4,18 @@
 //!   layouts, parallel over subtrees with rayon.
 //! - [`Bvh2`]: binary BVH in depth-first order with sibling pairs side by side,
 //!   traversed with a per-ray stack, nearest child first.
-//! - [`Bvh4`]: 4-wide BVH made directly by the SAH build (`wide_build`) or
-//!   collapsed from the linear BVH's binary tree, four
-//!   box tests at once with SSE, ordered stack traversal; over Möller its
-//!   leaves are packs of four triangles tested at once (`tri4`, Embree's
-//!   `triangle4`).
+//! - [`WideBvh`], with its instances [`Bvh4`] and [`Bvh8`]: the wide BVH
+//!   written once for both node widths (`node_width`), made directly by the
+//!   SAH build (`wide_build`) or collapsed from the linear BVH's binary tree,
+//!   four or eight box tests at once (SSE; AVX detected at run time),
+//!   ordered stack traversal; over Möller its leaves are packs of four
+//!   triangles tested at once (`tri4`, Embree's `triangle4`).
 //! - `packet` (with its `kernel` and `gather`, over `lanes` and `frustum`): the coherent-ray path
 //!   behind [`Bvh4`]'s and [`Bvh8`]'s `intersect_batch` / `occluded_batch`
 //!   over Möller: packets of rays of one octant traced
 //!   together (Wald et al. 2001), sixteen with AVX-512 or eight with AVX2,
 //!   one kernel generic over the node width and the packet width, handing their last rays to the tree's own single-ray traversal
 //!   (Benthin et al. 2012), with the single-ray answers.
-//! - [`Bvh8`]: 8-wide BVH built the same way, eight box tests
-//!   at once with AVX (run-time detected; SSE and scalar fallbacks), the
-//!   same ordered traversal and leaves as [`Bvh4`], and the same packet path.
 //! - [`ThreadedBvh`]: the threaded layout (Smits 1998), nodes in pre-order
 //!   with escape indices, traversed without a stack.
 //! - `refit`: [`Bvh4`] and [`Bvh8`] refit to moved vertices in O(n),
@@ -32,10 +30,10 @@ mod bin_pass;
 mod binning;
 mod box4;
 mod box8;
+mod box_path;
+mod boxes;
 pub mod build;
 mod bvh2;
-mod bvh4;
-mod bvh8;
 mod bvh8_flat;
 mod collapse;
 mod enter;
@@ -47,12 +45,14 @@ mod lanes;
 mod mapped;
 mod node4;
 mod node8;
+mod node_width;
 mod packet;
 #[cfg(test)]
 mod packet_agreement;
 mod persist;
 mod persist_error;
 mod prefetch;
+mod ray_box;
 mod refit;
 mod refit_report;
 mod sah_sweep;
@@ -62,6 +62,7 @@ mod stack;
 mod threaded;
 mod tri4;
 mod wide_build;
+mod wide_bvh;
 mod wide_leaf;
 mod wide_node;
 mod wide_parts;
@@ -70,12 +71,13 @@ mod words;
 
 pub use build::{BuildNode, BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;
-pub use bvh4::Bvh4;
-pub use bvh8::Bvh8;
+pub use node4::Node4;
+pub use node8::Node8;
 pub use persist::{saved_kind, FORMAT_VERSION, MAGIC};
 pub use persist_error::PersistError;
 pub use refit_report::{RefitError, RefitReport, DEFAULT_MAX_DEGRADATION};
 pub use threaded::ThreadedBvh;
+pub use wide_bvh::{Bvh4, Bvh8, WideBvh};
 
 /// Deepest tree the builders produce; traversal stacks are sized from it.
 pub const MAX_DEPTH: usize = 128;

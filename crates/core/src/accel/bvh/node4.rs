@@ -8,9 +8,9 @@ use crate::accel::node_box::NodeBox;
 /// children in structure-of-arrays layout, and the child references.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
-pub(crate) struct Node4 {
-    pub boxes: Box4,
-    pub child: [Child4; 4],
+pub struct Node4 {
+    pub(crate) boxes: Box4,
+    pub(crate) child: [Child4; 4],
 }
 
 super::wide_node::wide_slots!(Node4, Box4, 4);

@@ -11,9 +11,9 @@ use crate::accel::node_box::NodeBox;
 /// (as in [`super::Bvh4`]: an inner node, a leaf or an unused slot).
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
-pub(crate) struct Node8 {
-    pub boxes: Box8,
-    pub child: [Child4; 8],
+pub struct Node8 {
+    pub(crate) boxes: Box8,
+    pub(crate) child: [Child4; 8],
 }
 
 super::wide_node::wide_slots!(Node8, Box8, 8);

@@ -165,7 +165,7 @@ fn bits(h: Option<Hit>) -> Option<(u32, u32, u32, u32)> {
 /// that packets hand their last rays to (AVX2, and AVX-512 besides).
 #[test]
 fn packets_equal_single_rays_and_brute_force() {
-    use super::box8::BoxPath;
+    use super::box_path::BoxPath;
     check_packets(|mesh| Bvh4::<Moller>::build(mesh, &BuildOptions::default()));
     for path in BoxPath::available() {
         if matches!(path, BoxPath::Avx2 | BoxPath::Avx512) {

@@ -6,8 +6,8 @@
 //! load is one read per array, a checksum pass and an O(n) check of the
 //! topology; over the other triangle tests the leaves hold triangle
 //! indices and their precomputed triangles are remade from the mesh.
-//! [`Bvh8::load`] reads the file into the tree's arrays (huge pages where
-//! the system offers them, as a built tree's); [`Bvh8::load_mapped`] maps
+//! [`WideBvh::load`] reads the file into the tree's arrays (huge pages where
+//! the system offers them, as a built tree's); [`WideBvh::load_mapped`] maps
 //! the leaf packs from the file instead, which saves the copy (see
 //! BENCHMARKS.md for both) on the condition that the file is left alone
 //! while the tree lives. Every array starts at a multiple of 64 bytes in
@@ -50,14 +50,15 @@
 //! stack). Files are written to a temporary file beside the target and
 //! renamed over it.
 
+use super::node_width::NodeWidth;
 use super::persist_error::PersistError;
 use super::refit::{check_mesh, stored_sah};
 use super::tri4::{Tri4, Tri4Leaves};
+use super::wide_bvh::WideBvh;
 use super::wide_leaf::Leaves;
 use super::wide_node::Child4;
-use super::wide_parts::{words_of_mut, zeroed, PartsOwned, PartsRef, WideBvh, WideNode};
+use super::wide_parts::{words_of_mut, zeroed, PartsOwned, PartsRef, WideNode, WideParts};
 use super::words::{bytes_of, bytes_of_mut, Words};
-use super::{Bvh4, Bvh8};
 use crate::accel::leaf::LeafTriangles;
 use crate::accel::node_box::NodeBox;
 use crate::accel::{AccelKind, AccelStats};
@@ -84,7 +85,7 @@ const HEADER: usize = 96;
 
 /// Bytes of the payload's first record (root, root box, SAH costs, then
 /// zeros), so that the arrays after it start at byte 192, a multiple of
-/// their 64-byte alignment (for [`Bvh8::load_mapped`]).
+/// their 64-byte alignment (for [`WideBvh::load_mapped`]).
 const META: usize = 96;
 
 /// Leaf form code: packs of four Möller triangles.
@@ -314,7 +315,7 @@ fn check_tree_matches_mesh<T: TriangleTest>(
 }
 
 /// Save `bvh`, built over (or last refit to) `mesh`, to `path`.
-pub(crate) fn save<B: WideBvh>(
+pub(crate) fn save<B: WideParts>(
     bvh: &B,
     path: &Path,
     mesh: &TriangleMesh,
@@ -367,8 +368,8 @@ pub(crate) fn save<B: WideBvh>(
 ///
 /// # Safety
 /// With `mapped`, the file must not be truncated or written while the
-/// tree lives (see [`Bvh8::load_mapped`]).
-pub(crate) unsafe fn load<B: WideBvh>(
+/// tree lives (see [`WideBvh::load_mapped`]).
+pub(crate) unsafe fn load<B: WideParts>(
     path: &Path,
     mesh: &TriangleMesh,
     mapped: bool,
@@ -577,7 +578,7 @@ fn check_preamble(head: &[u8; HEADER], fault: &Fault<'_>) -> Result<(), PersistE
 
 /// Check the header against the file length, the tree type and the mesh;
 /// returns the payload's length.
-fn check_header<B: WideBvh>(
+fn check_header<B: WideParts>(
     head: &[u8; HEADER],
     len: u64,
     mesh: &TriangleMesh,
@@ -699,7 +700,7 @@ struct Shape {
 /// root has exactly one parent, every leaf's units are in range, and the
 /// deepest stack fits; the boxes of unused slots are reset to the inverted
 /// box (no ray enters them).
-fn check_tree<B: WideBvh>(
+fn check_tree<B: WideParts>(
     nodes: &mut [B::Node],
     root: Child4,
     form: u32,
@@ -896,57 +897,47 @@ fn read_blocks<W: Words>(
     Ok(())
 }
 
-macro_rules! persist_methods {
-    ($bvh:ident) => {
-        impl<T: TriangleTest> $bvh<T> {
-            /// Save the tree to `path` (see `bvh/persist.rs` for the
-            /// format): `mesh` must be the mesh it was built over or last
-            /// refit to (checked triangle for triangle), and its checksum is
-            /// stored so that a load with another mesh is refused. Written
-            /// to a temporary file beside `path`, then renamed over it.
-            pub fn save(
-                &self,
-                path: impl AsRef<Path>,
-                mesh: &TriangleMesh,
-            ) -> Result<(), PersistError> {
-                save(self, path.as_ref(), mesh)
-            }
+impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
+    /// Save the tree to `path` (see `bvh/persist.rs` for the
+    /// format): `mesh` must be the mesh it was built over or last
+    /// refit to (checked triangle for triangle), and its checksum is
+    /// stored so that a load with another mesh is refused. Written
+    /// to a temporary file beside `path`, then renamed over it.
+    pub fn save(&self, path: impl AsRef<Path>, mesh: &TriangleMesh) -> Result<(), PersistError> {
+        save(self, path.as_ref(), mesh)
+    }
 
-            /// Load a tree saved by [`Self::save`] over `mesh`, without a
-            /// build: the file's structure, triangle test, sizes, mesh
-            /// checksum, payload checksum and topology are checked, and
-            /// anything wrong is an error naming the offset and field.
-            pub fn load(path: impl AsRef<Path>, mesh: &TriangleMesh) -> Result<Self, PersistError> {
-                // SAFETY: not mapped.
-                unsafe { load(path.as_ref(), mesh, false) }
-            }
+    /// Load a tree saved by [`Self::save`] over `mesh`, without a
+    /// build: the file's structure, triangle test, sizes, mesh
+    /// checksum, payload checksum and topology are checked, and
+    /// anything wrong is an error naming the offset and field.
+    pub fn load(path: impl AsRef<Path>, mesh: &TriangleMesh) -> Result<Self, PersistError> {
+        // SAFETY: not mapped.
+        unsafe { load(path.as_ref(), mesh, false) }
+    }
 
-            /// [`Self::load`], with the leaf packs (over
-            /// [`crate::tri::Moller`], most of the file) mapped from the
-            /// file privately instead of read: no copy where the file is in
-            /// the page cache (Linux; elsewhere, and for the other tests,
-            /// the same as [`Self::load`]). The inner nodes are read and
-            /// checked as by [`Self::load`], and a refit writes to private
-            /// copies of the pages, never to the file.
-            ///
-            /// # Safety
-            /// The file must not be truncated or written in place while the
-            /// tree lives: a shrunk file makes the process fault when the
-            /// tree is traced, and values written after the load are used
-            /// unchecked. [`Self::save`] replaces a file by renaming a new
-            /// one over it, which leaves a mapped tree intact.
-            pub unsafe fn load_mapped(
-                path: impl AsRef<Path>,
-                mesh: &TriangleMesh,
-            ) -> Result<Self, PersistError> {
-                // SAFETY: the caller's promise.
-                unsafe { load(path.as_ref(), mesh, true) }
-            }
-        }
-    };
+    /// [`Self::load`], with the leaf packs (over
+    /// [`crate::tri::Moller`], most of the file) mapped from the
+    /// file privately instead of read: no copy where the file is in
+    /// the page cache (Linux; elsewhere, and for the other tests,
+    /// the same as [`Self::load`]). The inner nodes are read and
+    /// checked as by [`Self::load`], and a refit writes to private
+    /// copies of the pages, never to the file.
+    ///
+    /// # Safety
+    /// The file must not be truncated or written in place while the
+    /// tree lives: a shrunk file makes the process fault when the
+    /// tree is traced, and values written after the load are used
+    /// unchecked. [`Self::save`] replaces a file by renaming a new
+    /// one over it, which leaves a mapped tree intact.
+    pub unsafe fn load_mapped(
+        path: impl AsRef<Path>,
+        mesh: &TriangleMesh,
+    ) -> Result<Self, PersistError> {
+        // SAFETY: the caller's promise.
+        unsafe { load(path.as_ref(), mesh, true) }
+    }
 }
-persist_methods!(Bvh4);
-persist_methods!(Bvh8);
 
 /// The structure and triangle test a saved file holds, from its header
 /// (checked as far as the header goes: magic, version, byte order, header

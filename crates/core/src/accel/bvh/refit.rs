@@ -11,14 +11,16 @@
 //! surface area heuristic cost of the stored (padded) boxes, relative to
 //! the root box, with traversal and triangle costs 1 ([`stored_sah`]);
 //! [`RefitReport::degradation`] is its ratio to the cost of the tree as
-//! built, and [`Bvh8::refit_or_rebuild`] rebuilds once it passes a limit
+//! built, and [`WideBvh::refit_or_rebuild`] rebuilds once it passes a limit
 //! ([`super::DEFAULT_MAX_DEGRADATION`]).
 
+use super::node_width::NodeWidth;
 use super::refit_report::{RefitError, RefitReport};
+use super::wide_bvh::WideBvh;
 use super::wide_leaf::Leaves;
 use super::wide_node::Child4;
-use super::wide_parts::{PartsMut, PartsRef, WideBvh, WideNode};
-use super::{BuildOptions, Bvh4, Bvh8};
+use super::wide_parts::{PartsMut, PartsRef, WideNode, WideParts};
+use super::BuildOptions;
 use crate::aabb::Aabb;
 use crate::accel::node_box::NodeBox;
 use crate::mesh::TriangleMesh;
@@ -49,7 +51,7 @@ pub(crate) fn stored_sah<N: WideNode, T: TriangleTest>(p: &PartsRef<'_, N, T>) -
 }
 
 /// Refit `bvh` to `mesh` (see the module docs).
-pub(crate) fn refit<B: WideBvh>(
+pub(crate) fn refit<B: WideParts>(
     bvh: &mut B,
     mesh: &TriangleMesh,
 ) -> Result<RefitReport, RefitError> {
@@ -192,49 +194,43 @@ fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &Trian
     p.stats.sah_cost = sah / area(&root).max(f64::MIN_POSITIVE);
 }
 
-macro_rules! refit_methods {
-    ($bvh:ident) => {
-        impl<T: TriangleTest> $bvh<T> {
-            /// Refit the tree to `mesh`: the mesh it was built over (same
-            /// triangles, same vertex indices) with moved vertices. Every
-            /// box is recomputed bottom-up in O(n) and the topology kept
-            /// (Embree's refit); the answers are exact as after a build,
-            /// the speed may degrade ([`RefitReport::degradation`]).
-            pub fn refit(&mut self, mesh: &TriangleMesh) -> Result<RefitReport, RefitError> {
-                refit(self, mesh)
-            }
+impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
+    /// Refit the tree to `mesh`: the mesh it was built over (same
+    /// triangles, same vertex indices) with moved vertices. Every
+    /// box is recomputed bottom-up in O(n) and the topology kept
+    /// (Embree's refit); the answers are exact as after a build,
+    /// the speed may degrade ([`RefitReport::degradation`]).
+    pub fn refit(&mut self, mesh: &TriangleMesh) -> Result<RefitReport, RefitError> {
+        refit(self, mesh)
+    }
 
-            /// Refit the tree to `mesh` as [`Self::refit`], and rebuild it
-            /// with `options` when the refit tree's SAH cost is more than
-            /// `max_degradation` times the built tree's (see
-            /// [`DEFAULT_MAX_DEGRADATION`]); the rebuilt tree is the new
-            /// reference for later refits.
-            pub fn refit_or_rebuild(
-                &mut self,
-                mesh: &TriangleMesh,
-                options: &BuildOptions,
-                max_degradation: f64,
-            ) -> Result<RefitReport, RefitError> {
-                let mut report = refit(self, mesh)?;
-                if report.degradation() > max_degradation {
-                    *self = Self::build(mesh, options);
-                    let sah = stored_sah(&self.parts());
-                    self.built_sah = Some(sah);
-                    report.sah = sah;
-                    report.rebuilt = true;
-                }
-                Ok(report)
-            }
-
-            /// The SAH cost ([`stored_sah`]) of the tree as it is now, and of
-            /// the tree as built (or loaded), whose ratio is the refit's
-            /// degradation.
-            pub fn sah_costs(&self) -> (f64, f64) {
-                let now = stored_sah(&self.parts());
-                (now, self.built_sah.unwrap_or(now))
-            }
+    /// Refit the tree to `mesh` as [`Self::refit`], and rebuild it
+    /// with `options` when the refit tree's SAH cost is more than
+    /// `max_degradation` times the built tree's (see
+    /// [`DEFAULT_MAX_DEGRADATION`]); the rebuilt tree is the new
+    /// reference for later refits.
+    pub fn refit_or_rebuild(
+        &mut self,
+        mesh: &TriangleMesh,
+        options: &BuildOptions,
+        max_degradation: f64,
+    ) -> Result<RefitReport, RefitError> {
+        let mut report = refit(self, mesh)?;
+        if report.degradation() > max_degradation {
+            *self = Self::build(mesh, options);
+            let sah = stored_sah(&self.parts());
+            self.built_sah = Some(sah);
+            report.sah = sah;
+            report.rebuilt = true;
         }
-    };
+        Ok(report)
+    }
+
+    /// The SAH cost ([`stored_sah`]) of the tree as it is now, and of
+    /// the tree as built (or loaded), whose ratio is the refit's
+    /// degradation.
+    pub fn sah_costs(&self) -> (f64, f64) {
+        let now = stored_sah(&self.parts());
+        (now, self.built_sah.unwrap_or(now))
+    }
 }
-refit_methods!(Bvh4);
-refit_methods!(Bvh8);

@@ -9,7 +9,7 @@ use crate::accel::node_box::NodeBox;
 /// an unused slot ([`Child4::EMPTY`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
-pub(crate) struct Child4 {
+pub struct Child4 {
     pub index: u32,
     pub count: u32,
 }
@@ -24,7 +24,7 @@ impl Child4 {
 
 /// A wide inner node the collapse fills: [`super::node4::Node4`] or
 /// [`super::node8::Node8`].
-pub(crate) trait WideSlots: Copy + Send + Sync {
+pub trait WideSlots: Copy + Send + Sync {
     /// Child slots per node.
     const WIDTH: usize;
     /// A node with every slot unused (inverted boxes, [`Child4::EMPTY`]).

@@ -1,7 +1,7 @@
 //! The parts of a wide BVH ([`super::Bvh4`], [`super::Bvh8`]) as one view,
 //! so that the operations on a built tree that do not traverse it — the
 //! refit of [`super::refit`] and the saved files of [`super::persist`] —
-//! are written once for both widths.
+//! see its arrays without its traversal state.
 
 use super::box4::Box4;
 use super::box8::Box8;
@@ -11,14 +11,13 @@ use super::tri4::Tri4;
 use super::wide_leaf::Leaves;
 use super::wide_node::Child4;
 use super::words::Words;
-use super::{bvh4, bvh8, Bvh4, Bvh8};
 use crate::aabb::Aabb;
 use crate::accel::node_box::NodeBox;
 use crate::accel::{AccelKind, AccelStats};
 use crate::tri::TriangleTest;
 
 /// A wide inner node seen slot by slot.
-pub(crate) trait WideNode: super::wide_node::WideSlots + Words {
+pub trait WideNode: super::wide_node::WideSlots + Words {
     /// The child references, every slot.
     fn children(&self) -> &[Child4];
     /// The (padded) box stored in slot `slot`.
@@ -127,8 +126,8 @@ pub(crate) struct PartsOwned<N, T: TriangleTest> {
     pub built_sah: Option<f64>,
 }
 
-/// [`super::Bvh4`] and [`super::Bvh8`] through their parts.
-pub(crate) trait WideBvh: Sized {
+/// A wide BVH ([`super::WideBvh`] of either width) through its parts.
+pub(crate) trait WideParts: Sized {
     /// The inner node.
     type Node: WideNode;
     /// The triangle test.
@@ -144,49 +143,3 @@ pub(crate) trait WideBvh: Sized {
     /// The tree of checked parts (`parts.stack < Self::STACK`).
     fn from_parts(parts: PartsOwned<Self::Node, Self::Test>) -> Self;
 }
-
-macro_rules! wide_bvh {
-    ($bvh:ident, $node:ty, $module:ident, $kind:expr, { $($extra:tt)* }) => {
-        impl<T: TriangleTest> WideBvh for $bvh<T> {
-            type Node = $node;
-            type Test = T;
-            const KIND: AccelKind = $kind;
-            const STACK: usize = $module::STACK;
-            fn parts(&self) -> PartsRef<'_, $node, T> {
-                PartsRef {
-                    nodes: &self.nodes,
-                    root_box: &self.root_box,
-                    root: self.root,
-                    leaves: &self.leaves,
-                    stats: &self.stats,
-                    built_sah: self.built_sah,
-                }
-            }
-            fn parts_mut(&mut self) -> PartsMut<'_, $node, T> {
-                PartsMut {
-                    nodes: &mut self.nodes,
-                    root_box: &mut self.root_box,
-                    root: self.root,
-                    leaves: &mut self.leaves,
-                    stats: &mut self.stats,
-                    built_sah: &mut self.built_sah,
-                }
-            }
-            fn from_parts(p: PartsOwned<$node, T>) -> Self {
-                assert!(p.stack < $module::STACK, "tree too deep for the traversal stack");
-                $bvh {
-                    nodes: p.nodes,
-                    root_box: p.root_box,
-                    root: p.root,
-                    leaves: p.leaves,
-                    stats: p.stats,
-                    small_stack: p.stack <= $module::SMALL_STACK,
-                    built_sah: p.built_sah,
-                    $($extra)*
-                }
-            }
-        }
-    };
-}
-wide_bvh!(Bvh4, Node4, bvh4, AccelKind::Bvh4, {});
-wide_bvh!(Bvh8, Node8, bvh8, AccelKind::Bvh8, { path: super::box8::BoxPath::detect(), });

@@ -8,7 +8,7 @@
 /// # Safety
 /// The type must be `repr(C)` (or transparent), hold only `f32` and `u32`
 /// fields (directly or in arrays and such types), and have no padding.
-pub(crate) unsafe trait Words: Copy + Send + Sync + 'static {}
+pub unsafe trait Words: Copy + Send + Sync + 'static {}
 
 // SAFETY: a `u32` is one word.
 unsafe impl Words for u32 {}

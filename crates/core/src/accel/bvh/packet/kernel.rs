@@ -46,7 +46,7 @@ use std::mem::MaybeUninit;
 const U: f32 = f32::EPSILON * 0.5;
 
 /// `L` rays in structure-of-arrays layout, prepared as [`super::super::tri4`]'s
-/// `Ray4` and [`super::super::box4`]'s `RayBox4` prepare one ray each (same
+/// `Ray4` and [`super::super::ray_box`]'s `RayBox` prepare one ray each (same
 /// values per lane; `|d|` and `0.75 · scale` are formed in registers), plus
 /// the plane rows met first, common to the packet.
 #[derive(Clone, Copy, Debug)]

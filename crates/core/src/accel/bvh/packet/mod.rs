@@ -51,7 +51,7 @@ pub(super) use kernel::{Packet, PacketHits, Width};
 /// (4 for [`Node4`], 8 for [`Node8`]), their boxes in structure-of-arrays plane
 /// rows (`2·axis` minima, `2·axis + 1` maxima) and their references, unused
 /// slots last.
-pub(crate) trait WideNode: Copy + Sync {
+pub trait WideNode: Copy + Sync {
     /// Child slots per node (at most 8).
     const WIDTH: usize;
     /// Whether the packet kernel bounds its packets and tests only the
@@ -284,7 +284,7 @@ const fn lines<T>(n: usize) -> usize {
 /// [`PacketTree::singles`], their answers given to `set`.
 ///
 /// Together, because [`super::Bvh8`]'s singles step several rays in turn
-/// (`bvh8/walk.rs`): handed a chunk of sixteen, its walks ran dry at the
+/// (`wide_bvh/walk.rs`): handed a chunk of sixteen, its walks ran dry at the
 /// end of every chunk and started over (with six walks, about a third of
 /// the rays traced with fewer in flight, and the walks' set-up each time;
 /// BENCHMARKS.md). Over a whole task of incoherent rays, the walks
@@ -365,7 +365,7 @@ static PACKETS: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new()
 pub(super) fn widths() -> Vec<usize> {
     #[cfg(target_arch = "x86_64")]
     {
-        use super::box8::BoxPath;
+        use super::box_path::BoxPath;
         match BoxPath::detect() {
             BoxPath::Avx512 => vec![16, 8],
             BoxPath::Avx2 => vec![8],

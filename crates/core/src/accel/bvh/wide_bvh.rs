@@ -1,50 +1,55 @@
-//! 8-wide BVH with AVX box tests and ordered stack traversal.
+//! The wide BVH, written once for every node width: [`Bvh4`] and [`Bvh8`]
+//! are its instances over [`Node4`] and [`Node8`], as Embree writes its
+//! BVHN once and instantiates it per width (Wald et al. 2014).
 
-use super::box8::{BoxPath, RayBox8};
+use super::box_path::BoxPath;
 use super::build::BuildOptions;
 use super::enter::enter;
+use super::node4::Node4;
 use super::node8::Node8;
+use super::node_width::{NodeWidth, SlotEntries, LARGE_STACK, SMALL_STACK};
+use super::packet::{PacketTree, View};
+use super::ray_box::RayBox;
 use super::stack::Stack;
 use super::tri4::Ray4;
 use super::wide_leaf::{LeafTest, Leaves, PackedLeaf, SingleLeaf};
-use super::wide_node::Child4;
+use super::wide_node::{Child4, WideSlots};
+use super::wide_parts::{PartsMut, PartsOwned, PartsRef, WideParts};
 use super::wide_tree::build_wide;
-use super::MAX_DEPTH;
 use crate::aabb::Aabb;
 use crate::accel::node_box::NodeBox;
-use crate::accel::{Accel, AccelStats};
+use crate::accel::{Accel, AccelKind, AccelStats};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
 
-/// Traversal stack entries for any tree: each 8-wide node visited pushes at
-/// most seven.
-pub(super) const STACK: usize = 7 * MAX_DEPTH + 1;
-
+#[cfg(test)]
+mod tests;
 mod walk;
 
-/// The stack of trees that need no more (most do).
-pub(super) const SMALL_STACK: usize = 64;
-
-/// 8-wide BVH as Embree uses on AVX machines for single rays (Wald et al. 2014,
-/// "Embree: a kernel framework for efficient CPU ray tracing"), made by
-/// collapsing the binned-SAH binary tree of [`super::build`] into nodes of up
-/// to eight children (the largest-area inner child's children pulled up first),
-/// the leaves being the binary tree's.
+/// A wide BVH in the style of Embree's (Wald et al. 2014): inner nodes of
+/// `N::WIDTH` children whose boxes lie in structure-of-arrays layout and
+/// are tested against one ray all at once, built by the binned SAH making
+/// wide nodes directly or by collapsing the linear BVH's binary tree
+/// (`wide_tree.rs`).
 ///
-/// A node holds its children's boxes in structure-of-arrays layout, padded
-/// exactly as [`super::Bvh2`]'s, and one ray is tested against all eight at
-/// once: with AVX where the CPU has AVX2 and FMA (detected once, at build;
-/// the whole traversal is then compiled for them), else with two SSE halves
-/// or a scalar loop ([`super::box8`]). Traversal is [`super::Bvh4`]'s:
-/// entered children near to far, the nearest next, the others pushed with
-/// their entry distances and skipped on pop when a nearer hit has been
-/// found; occlusion queries stop at the first hit without sorting. Over
-/// [`Moller`] the leaves are packs of four triangles tested with SSE
-/// ([`super::tri4`], Embree's `triangle4`).
-pub struct Bvh8<T: TriangleTest> {
-    pub(super) nodes: Vec<Node8>,
+/// The boxes are padded exactly as [`super::Bvh2`]'s, so that box culling
+/// never disagrees with the triangle test. The box kernel is chosen once, at
+/// build, from the CPU's features (AVX-512, AVX2, SSE, scalar; `box_path.rs`),
+/// and the whole traversal is compiled for it. Traversal visits the entered
+/// children near to far: the nearest next, the others pushed with their
+/// entry distances on a fixed-size stack (farthest deepest) and skipped on
+/// pop when a nearer hit has been found since. Occlusion queries do not
+/// sort and stop at the first hit.
+///
+/// Over [`crate::tri::Moller`] the leaves are packs of four triangles
+/// tested at once with SSE (Embree's `triangle4`, `tri4/`), with the scalar
+/// test's answers bit for bit, and batches of coherent rays take the packet
+/// path (Wald et al. 2001; Benthin et al. 2012); the other tests keep one
+/// triangle at a time.
+pub struct WideBvh<N, T: TriangleTest> {
+    pub(super) nodes: Vec<N>,
     pub(super) root_box: NodeBox,
     pub(super) root: Child4,
     pub(super) leaves: Leaves<T>,
@@ -58,21 +63,32 @@ pub struct Bvh8<T: TriangleTest> {
     pub(super) built_sah: Option<f64>,
 }
 
-impl<T: TriangleTest> Bvh8<T> {
+/// The 4-wide BVH: four box tests at once with SSE.
+pub type Bvh4<T> = WideBvh<Node4, T>;
+
+/// The 8-wide BVH, as Embree uses on AVX machines for single rays: eight
+/// box tests at once with AVX where the CPU has AVX2 and FMA, else two SSE
+/// halves or a scalar loop.
+pub type Bvh8<T> = WideBvh<Node8, T>;
+
+impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     /// Build over all triangles of `mesh`.
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
-        let wide = build_wide::<Node8, T>(mesh, options);
+        let wide = build_wide::<N, T>(mesh, options);
         // The traversal writes its stack unchecked (see `traverse_with`).
-        assert!(wide.stack < STACK, "tree too deep for the traversal stack");
-        Bvh8 {
+        assert!(
+            wide.stack < N::STACK,
+            "tree too deep for the traversal stack"
+        );
+        WideBvh {
             nodes: wide.nodes,
             root_box: wide.root_box,
             root: wide.root,
             leaves: wide.leaves,
             stats: wide.stats,
             small_stack: wide.stack <= SMALL_STACK,
-            built_sah: None,
             path: BoxPath::detect(),
+            built_sah: None,
         }
     }
 
@@ -137,7 +153,7 @@ impl<T: TriangleTest> Bvh8<T> {
     }
 
     /// The traversal compiled for AVX-512 (F, VL, BW, DQ) besides AVX2 and
-    /// FMA: the code and arithmetic of [`Bvh8::traverse_avx2`], with 32
+    /// FMA: the code and arithmetic of [`WideBvh::traverse_avx2`], with 32
     /// vector registers and mask compares.
     ///
     /// # Safety
@@ -213,16 +229,16 @@ impl<T: TriangleTest> Bvh8<T> {
         if self.small_stack {
             self.traverse_with::<ANY, SMALL_STACK>(start, ray, path, leaf, tfar, best)
         } else {
-            self.traverse_with::<ANY, STACK>(start, ray, path, leaf, tfar, best)
+            self.traverse_with::<ANY, LARGE_STACK>(start, ray, path, leaf, tfar, best)
         }
     }
 
-    /// Traversal of the subtree `start` with an `N`-entry stack, enough for
+    /// Traversal of the subtree `start` with an `S`-entry stack, enough for
     /// this tree (a subtree needs no more than the whole tree). `tfar` and
     /// `best` are read at the start and written back at the end; the loop
     /// works on local copies.
     #[inline(always)]
-    fn traverse_with<const ANY: bool, const N: usize>(
+    fn traverse_with<const ANY: bool, const S: usize>(
         &self,
         start: Child4,
         ray: &Ray,
@@ -237,8 +253,8 @@ impl<T: TriangleTest> Bvh8<T> {
         // children's boxes culls the same rays (they lie inside it), and a
         // root leaf's triangle test is exact. It cost 4% of a ray's
         // instructions (callgrind).
-        let rb = RayBox8::new(ray);
-        let mut stack = Stack::<N>::new();
+        let rb = RayBox::new(ray);
+        let mut stack = Stack::<S>::new();
         let st = stack.ptr();
         let mut sp = 0usize;
         let mut cur = start;
@@ -251,19 +267,19 @@ impl<T: TriangleTest> Bvh8<T> {
                 }
             } else {
                 debug_assert!((cur.index as usize) < self.nodes.len());
-                // SAFETY: inner references are made by `collapse` from the
-                // index of a node it pushed, so they are in bounds.
+                // SAFETY: inner references are made by the builds from the
+                // index of a node they pushed, so they are in bounds.
                 let node = unsafe { self.nodes.get_unchecked(cur.index as usize) };
-                // SAFETY: `path` is a kernel this CPU runs (see `traverse`).
-                let h = unsafe { node.boxes.entries(path, &rb, ray.tnear, tfar) };
+                // SAFETY: `path` is a kernel this CPU runs (see `subtree`).
+                let h = unsafe { node.entries(path, &rb, ray.tnear, tfar) };
                 // SAFETY: the stack bound of `build` (the stack has its slack
-                // beyond); AVX-512 where `path` says so (see `traverse`).
+                // beyond); AVX-512 where `path` says so (see `subtree`).
                 let next = unsafe {
                     enter::<ANY, _>(
                         &self.nodes,
-                        &node.child,
-                        &h.t,
-                        h.mask,
+                        node.children(),
+                        h.t(),
+                        h.mask(),
                         st,
                         &mut sp,
                         &leaf,
@@ -296,7 +312,7 @@ impl<T: TriangleTest> Bvh8<T> {
     }
 }
 
-impl<T: TriangleTest> Accel for Bvh8<T> {
+impl<N: NodeWidth, T: TriangleTest> Accel for WideBvh<N, T> {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         self.traverse::<false>(ray).0
     }
@@ -313,7 +329,7 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
             return;
         }
         let mut stack = vec![self.root];
-        let mut accepted = Vec::with_capacity(8);
+        let mut accepted = Vec::with_capacity(<N as WideSlots>::WIDTH);
         let mut prims = Vec::new();
         while let Some(cur) = stack.pop() {
             if cur.count > 0 {
@@ -330,11 +346,12 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
             }
             let node = &self.nodes[cur.index as usize];
             accepted.clear();
-            for (slot, &child) in node.child.iter().enumerate() {
-                if child != Child4::EMPTY && enter(&node.boxes.get(slot)) {
+            for (slot, &child) in node.children().iter().enumerate() {
+                if child != Child4::EMPTY && enter(&node.slot_box(slot)) {
                     accepted.push(child);
                 }
             }
+            // Push in reverse so that slot 0 is visited first.
             stack.extend(accepted.iter().rev());
         }
     }
@@ -343,26 +360,26 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
         self.stats.clone()
     }
 
-    /// [`Bvh8::save`].
+    /// [`WideBvh::save`].
     fn save(
         &self,
         path: &std::path::Path,
         mesh: &TriangleMesh,
     ) -> Result<(), crate::accel::PersistError> {
-        Bvh8::save(self, path, mesh)
+        WideBvh::save(self, path, mesh)
     }
 
-    /// [`Bvh8::refit`].
+    /// [`WideBvh::refit`].
     fn refit(
         &mut self,
         mesh: &TriangleMesh,
     ) -> Result<crate::accel::RefitReport, crate::accel::RefitError> {
-        Bvh8::refit(self, mesh)
+        WideBvh::refit(self, mesh)
     }
 
     /// Coherent packets over Möller, sixteen rays with AVX-512, else eight
-    /// (Wald et al. 2001, with Benthin et al. 2012's hand-over to single rays; see
-    /// `bvh/packet/`), single rays otherwise.
+    /// (Wald et al. 2001, with Benthin et al. 2012's hand-over to single
+    /// rays; see `bvh/packet/`), single rays otherwise.
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         super::packet::intersect_batch(self, rays, hits);
     }
@@ -373,15 +390,15 @@ impl<T: TriangleTest> Accel for Bvh8<T> {
     }
 }
 
-/// The coherent packet path over 8-wide nodes (Wald et al. 2001, Benthin et al.
-/// 2012): `bvh/packet/`, the same kernel as [`super::Bvh4`]'s, handing over
-/// to this tree's own single-ray traversal.
-impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
-    type Node = Node8;
+/// The coherent packet path (Wald et al. 2001, Benthin et al. 2012):
+/// `bvh/packet/`, one kernel for both widths, handing over to this tree's
+/// own single-ray traversal.
+impl<N: NodeWidth, T: TriangleTest> PacketTree for WideBvh<N, T> {
+    type Node = N;
 
-    fn packet_view(&self) -> Option<super::packet::View<'_, Node8>> {
+    fn packet_view(&self) -> Option<View<'_, N>> {
         match &self.leaves {
-            Leaves::Packed(packs) if self.stats.triangle_refs > 0 => Some(super::packet::View {
+            Leaves::Packed(packs) if self.stats.triangle_refs > 0 => Some(View {
                 nodes: &self.nodes,
                 root: self.root,
                 leaves: packs,
@@ -393,7 +410,7 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
     #[inline(always)]
     fn single_subtree<const ANY: bool>(
         &self,
-        _view: &super::packet::View<'_, Node8>,
+        _view: &View<'_, N>,
         start: Child4,
         ray: &Ray,
         tfar: &mut f32,
@@ -402,10 +419,11 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
         self.subtree::<ANY>(start, ray, tfar, best)
     }
 
-    /// Nearest hits: twelve rays stepped in turn (`WALKS` in `bvh8/walk.rs`).
-    /// Occlusion: one ray after the other, the plain loop, which was 1.25–1.6× faster
-    /// than two walks on shadow rays (full dragon and scatter, 1 thread),
-    /// where interleaving made incoherent nearest-hit rays 1.2× faster.
+    /// Nearest hits on wide nodes that interleave ([`NodeWidth::INTERLEAVE`]):
+    /// twelve rays stepped in turn (`WALKS` in `wide_bvh/walk.rs`).
+    /// Otherwise, and for occlusion, one ray after the other: the plain loop
+    /// was 1.25–1.6× faster than two walks on shadow rays (full dragon and
+    /// scatter, 1 thread).
     #[inline(always)]
     fn singles<const ANY: bool>(
         &self,
@@ -416,8 +434,12 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
             for (i, ray) in rays.iter().enumerate() {
                 done(i, self.occluded(ray), None);
             }
-        } else {
+        } else if N::INTERLEAVE {
             self.interleaved::<ANY>(rays, done);
+        } else {
+            for (i, ray) in rays.iter().enumerate() {
+                done(i, false, self.intersect(ray));
+            }
         }
     }
 
@@ -429,162 +451,66 @@ impl<T: TriangleTest> super::packet::PacketTree for Bvh8<T> {
         W: super::packet::kernel::Width<L>,
     >(
         &self,
-        view: &super::packet::View<'_, Node8>,
+        view: &View<'_, N>,
         rays: &[Ray],
         p: &super::packet::kernel::Packet<L>,
         switch: u32,
         out: &mut super::packet::kernel::PacketHits<L>,
     ) {
         // SAFETY: the caller guarantees the width's features. `build`
-        // checked that the tree's deepest stack is below `STACK`, and
-        // `small_stack` says whether it fits `SMALL_STACK`. The small stack
-        // where it fits: the kernel's frame with the large one is 48 KB,
-        // whose pages were probed on every packet (44 instructions per
-        // packet; BENCHMARKS.md).
+        // checked that the tree's deepest stack is below `N::STACK`
+        // (at most `LARGE_STACK`), and `small_stack` says whether it fits
+        // `SMALL_STACK`. The small stack where it fits: the kernel's frame
+        // with the large one is 48 KB, whose pages were probed on every
+        // packet (44 instructions per packet; BENCHMARKS.md).
         unsafe {
             if self.small_stack {
                 W::traverse::<ANY, Self, SMALL_STACK>(self, view, rays, p, switch, out)
             } else {
-                W::traverse::<ANY, Self, STACK>(self, view, rays, p, switch, out)
+                W::traverse::<ANY, Self, LARGE_STACK>(self, view, rays, p, switch, out)
             }
         }
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::accel::BruteForce;
-    use crate::rng::Pcg32;
-    use crate::tri::{Moller, Plucker};
-    use glam::Vec3;
-
-    fn agree(a: Option<Hit>, b: Option<Hit>) -> bool {
-        match (a, b) {
-            (Some(x), Some(y)) => (x.t - y.t).abs() <= 1e-5 * x.t.abs().max(y.t.abs()).max(1e-6),
-            (x, y) => x.is_some() == y.is_some(),
+/// Both widths through their parts, for the refit (`refit.rs`) and the
+/// saved files (`persist.rs`).
+impl<N: NodeWidth, T: TriangleTest> WideParts for WideBvh<N, T> {
+    type Node = N;
+    type Test = T;
+    const KIND: AccelKind = N::KIND;
+    const STACK: usize = N::STACK;
+    fn parts(&self) -> PartsRef<'_, N, T> {
+        PartsRef {
+            nodes: &self.nodes,
+            root_box: &self.root_box,
+            root: self.root,
+            leaves: &self.leaves,
+            stats: &self.stats,
+            built_sah: self.built_sah,
         }
     }
-
-    /// Triangles shrinking geometrically towards the origin: a deep chain
-    /// whose traversal needs the large stack; every box kernel gives the
-    /// same answers, equal to brute force up to ties.
-    #[test]
-    fn deep_chain_every_kernel_agrees_with_brute_force() {
-        let mut positions = Vec::new();
-        let mut indices = Vec::new();
-        for i in 0..200u32 {
-            let s = 0.8f32.powi(i as i32);
-            positions.extend([
-                Vec3::new(s, 0.0, 0.0),
-                Vec3::new(s * 1.1, s, 0.0),
-                Vec3::new(s, 0.0, s),
-            ]);
-            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+    fn parts_mut(&mut self) -> PartsMut<'_, N, T> {
+        PartsMut {
+            nodes: &mut self.nodes,
+            root_box: &mut self.root_box,
+            root: self.root,
+            leaves: &mut self.leaves,
+            stats: &mut self.stats,
+            built_sah: &mut self.built_sah,
         }
-        let mesh = TriangleMesh::new(positions, indices);
-        let opts = BuildOptions {
-            max_leaf_size: 1,
-            packed_leaf_size: 1,
-            ..Default::default()
-        };
-        let brute = BruteForce::<Moller>::new(&mesh);
-        let paths = BoxPath::available();
-        let trees: Vec<Bvh8<Moller>> = paths
-            .iter()
-            .map(|&p| Bvh8::<Moller>::build(&mesh, &opts).with_path(p))
-            .collect();
-        assert!(
-            !trees[0].small_stack,
-            "the chain should need the large stack"
-        );
-        let mut rng = Pcg32::new(8);
-        let mut hits = 0;
-        for _ in 0..5000 {
-            let target =
-                rng.in_box(Vec3::ZERO, Vec3::splat(0.3)) * 0.8f32.powi(rng.below(60) as i32);
-            let origin = target + rng.unit_vector() * 2.0;
-            let ray = Ray::new(origin, target - origin);
-            let want = brute.intersect(&ray);
-            let first = trees[0].intersect(&ray);
-            assert!(agree(first, want), "{ray:?} {first:?} {want:?}");
-            for t in &trees {
-                let got = t.intersect(&ray);
-                assert_eq!(
-                    got.map(|h| (h.t.to_bits(), h.prim)),
-                    first.map(|h| (h.t.to_bits(), h.prim)),
-                    "{:?} {ray:?}",
-                    t.path
-                );
-                assert_eq!(t.occluded(&ray), want.is_some(), "{ray:?}");
-            }
-            hits += want.is_some() as usize;
-        }
-        assert!(hits > 100, "{hits}");
     }
-
-    /// A random soup, packed (Möller) and single-triangle (Plücker) leaves,
-    /// every kernel: the same answers as brute force up to ties, and the
-    /// kernels bit-identical to each other.
-    #[test]
-    fn random_soup_every_kernel_and_leaf_kind_agrees_with_brute_force() {
-        let mut rng = Pcg32::new(81);
-        let mut positions = Vec::new();
-        let mut indices = Vec::new();
-        for i in 0..3000u32 {
-            let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
-            let size = 0.002 + 0.08 * rng.next_f32().powi(3);
-            for _ in 0..3 {
-                positions.push(c + rng.unit_vector() * size);
-            }
-            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+    fn from_parts(p: PartsOwned<N, T>) -> Self {
+        assert!(p.stack < N::STACK, "tree too deep for the traversal stack");
+        WideBvh {
+            nodes: p.nodes,
+            root_box: p.root_box,
+            root: p.root,
+            leaves: p.leaves,
+            stats: p.stats,
+            small_stack: p.stack <= SMALL_STACK,
+            path: BoxPath::detect(),
+            built_sah: p.built_sah,
         }
-        let mesh = TriangleMesh::new(positions, indices);
-        let opts = BuildOptions::default();
-        let brute = BruteForce::<Moller>::new(&mesh);
-        let brute_p = BruteForce::<Plucker>::new(&mesh);
-        let paths = BoxPath::available();
-        let moller: Vec<Bvh8<Moller>> = paths
-            .iter()
-            .map(|&p| Bvh8::<Moller>::build(&mesh, &opts).with_path(p))
-            .collect();
-        let plucker: Vec<Bvh8<Plucker>> = paths
-            .iter()
-            .map(|&p| Bvh8::<Plucker>::build(&mesh, &opts).with_path(p))
-            .collect();
-        let mut hits = 0;
-        for i in 0..20_000 {
-            let target = rng.in_box(Vec3::ZERO, Vec3::ONE);
-            let origin = if i % 3 == 0 {
-                rng.in_box(Vec3::ZERO, Vec3::ONE)
-            } else {
-                Vec3::splat(0.5) + rng.unit_vector() * 2.0
-            };
-            let ray = if i % 5 == 0 {
-                Ray::segment(origin, target - origin, 0.1 * rng.next_f32(), 0.5)
-            } else {
-                Ray::new(origin, target - origin)
-            };
-            let want = brute.intersect(&ray);
-            let want_p = brute_p.intersect(&ray);
-            hits += want.is_some() as usize;
-            let m0 = moller[0].intersect(&ray);
-            let p0 = plucker[0].intersect(&ray);
-            assert!(agree(m0, want), "{ray:?} {m0:?} {want:?}");
-            assert!(agree(p0, want_p), "{ray:?} {p0:?} {want_p:?}");
-            for (m, p) in moller.iter().zip(&plucker) {
-                assert_eq!(
-                    m.intersect(&ray).map(|h| h.t.to_bits()),
-                    m0.map(|h| h.t.to_bits())
-                );
-                assert_eq!(
-                    p.intersect(&ray).map(|h| h.t.to_bits()),
-                    p0.map(|h| h.t.to_bits())
-                );
-                assert_eq!(m.occluded(&ray), want.is_some(), "{ray:?}");
-                assert_eq!(p.occluded(&ray), want_p.is_some(), "{ray:?}");
-            }
-        }
-        assert!(hits > 2000, "{hits}");
     }
 }

@@ -1,5 +1,6 @@
-//! [`Bvh8`]'s single-ray traversal as a state advanced one node or leaf at
-//! a time, and batches that interleave [`WALKS`] rays.
+//! The wide BVH's single-ray traversal as a state advanced one node or
+//! leaf at a time, and batches that interleave [`WALKS`] rays (used by the
+//! widths that [`NodeWidth::INTERLEAVE`]).
 //!
 //! An incoherent ray's traversal is one long chain of dependent loads: the
 //! next node's address comes out of the current node's box test. A core
@@ -11,14 +12,16 @@
 //! order between the rays changes.
 //!
 //! Single rays (and the packet path's hand-over) keep the plain loop of
-//! `bvh8.rs`, whose state stays in registers: run through a `Walk`, shadow
+//! `wide_bvh.rs`, whose state stays in registers: run through a `Walk`, shadow
 //! rays on the full dragon lost 6% (0.96× → 0.90× Embree). Both share
 //! `bvh/enter.rs`, the choice of the next child.
 
-use super::{Bvh8, Leaves, PackedLeaf, Ray4, SMALL_STACK, STACK};
-use crate::accel::bvh::box8::{BoxPath, RayBox8};
+use super::{Leaves, PackedLeaf, Ray4, WideBvh, LARGE_STACK, SMALL_STACK};
+use crate::accel::bvh::box_path::BoxPath;
 use crate::accel::bvh::enter::enter;
 use crate::accel::bvh::enter::prefetch_with;
+use crate::accel::bvh::node_width::{NodeWidth, SlotEntries};
+use crate::accel::bvh::ray_box::RayBox;
 use crate::accel::bvh::stack::Stack;
 use crate::accel::bvh::wide_leaf::LeafTest;
 use crate::accel::bvh::wide_node::Child4;
@@ -27,26 +30,26 @@ use crate::ray::Ray;
 use crate::tri::TriangleTest;
 
 /// One ray's traversal state: its box-test data, leaf test, nearest hit so
-/// far, the node or leaf to visit next and an `N`-entry stack.
-pub(super) struct Walk<'a, L: LeafTest, const N: usize> {
+/// far, the node or leaf to visit next and an `S`-entry stack.
+pub(super) struct Walk<'a, L: LeafTest, const S: usize> {
     ray: &'a Ray,
-    rb: RayBox8,
+    rb: RayBox,
     leaf: L,
     pub tfar: f32,
     pub best: Option<Hit>,
     cur: Child4,
     sp: usize,
-    stack: Stack<N>,
+    stack: Stack<S>,
 }
 
-impl<'a, L: LeafTest, const N: usize> Walk<'a, L, N> {
+impl<'a, L: LeafTest, const S: usize> Walk<'a, L, S> {
     /// The traversal of `ray` from `start` (the root, or a packet's node),
     /// from its current `tfar` and nearest hit.
     #[inline(always)]
     pub fn new(ray: &'a Ray, start: Child4, tfar: f32, best: Option<Hit>, leaf: L) -> Self {
         Walk {
             ray,
-            rb: RayBox8::new(ray),
+            rb: RayBox::new(ray),
             leaf,
             tfar,
             best,
@@ -61,7 +64,7 @@ impl<'a, L: LeafTest, const N: usize> Walk<'a, L, N> {
     #[inline(always)]
     fn restart(&mut self, ray: &'a Ray, root: Child4, leaf: L) {
         self.ray = ray;
-        self.rb = RayBox8::new(ray);
+        self.rb = RayBox::new(ray);
         self.leaf = leaf;
         self.tfar = ray.traversal_tfar();
         self.best = None;
@@ -70,7 +73,7 @@ impl<'a, L: LeafTest, const N: usize> Walk<'a, L, N> {
     }
 }
 
-impl<T: TriangleTest> Bvh8<T> {
+impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     /// Visit the walk's current node or leaf, then pick the next one.
     /// Returns `None` while the traversal goes on, `Some(true)` at an
     /// any-hit query's hit (`ANY`), `Some(false)` when the stack is empty
@@ -83,14 +86,14 @@ impl<T: TriangleTest> Bvh8<T> {
     /// root's own box is not tested: its node's test of its children's boxes
     /// culls the same rays (it cost 4% of a ray's instructions, callgrind).
     #[inline(always)]
-    pub(super) fn step<const ANY: bool, const N: usize>(
+    pub(super) fn step<const ANY: bool, const S: usize>(
         &self,
-        w: &mut Walk<'_, impl LeafTest, N>,
+        w: &mut Walk<'_, impl LeafTest, S>,
         path: BoxPath,
     ) -> Option<bool> {
         // SAFETY (every access through `st`): the stack never holds more
         // than the unvisited siblings of the current node's ancestors, at
-        // most `wide.stack` entries, which `build` checked to be below `N`
+        // most `wide.stack` entries, which `build` checked to be below `S`
         // (vector pushes use the stack's slack beyond); reads are of
         // entries below `sp`, all written by a push.
         let st = w.stack.ptr();
@@ -106,14 +109,14 @@ impl<T: TriangleTest> Bvh8<T> {
             // index of a node it pushed, so they are in bounds.
             let node = unsafe { self.nodes.get_unchecked(cur.index as usize) };
             // SAFETY: `path` is a kernel this CPU runs (see `traverse`).
-            let h = unsafe { node.boxes.entries(path, &w.rb, w.ray.tnear, w.tfar) };
+            let h = unsafe { node.entries(path, &w.rb, w.ray.tnear, w.tfar) };
             // SAFETY: as for `st` above.
             let next = unsafe {
                 enter::<ANY, _>(
                     &self.nodes,
-                    &node.child,
-                    &h.t,
-                    h.mask,
+                    node.children(),
+                    h.t(),
+                    h.mask(),
                     st,
                     &mut w.sp,
                     &w.leaf,
@@ -127,7 +130,7 @@ impl<T: TriangleTest> Bvh8<T> {
                 // the other walk's step instead of waiting behind its
                 // mispredicted branches (incoherent rays, full dragon:
                 // about +5%, three interleaved runs).
-                if h.mask.count_ones() == 1 {
+                if h.mask().count_ones() == 1 {
                     prefetch_with::<ANY, _>(&self.nodes, next, &w.leaf);
                 }
                 return None;
@@ -170,7 +173,7 @@ impl<T: TriangleTest> Bvh8<T> {
         }
     }
 
-    /// [`Bvh8::interleaved`] compiled for AVX-512 (see `BoxPath::Avx512`).
+    /// [`WideBvh::interleaved`] compiled for AVX-512 (see `BoxPath::Avx512`).
     ///
     /// # Safety
     /// The CPU must support every feature named.
@@ -184,7 +187,7 @@ impl<T: TriangleTest> Bvh8<T> {
         self.interleaved_on::<ANY>(rays, BoxPath::Avx512, done)
     }
 
-    /// [`Bvh8::interleaved`] compiled for AVX2 and FMA.
+    /// [`WideBvh::interleaved`] compiled for AVX2 and FMA.
     ///
     /// # Safety
     /// The CPU must support AVX2 and FMA.
@@ -223,22 +226,22 @@ impl<T: TriangleTest> Bvh8<T> {
         if self.small_stack {
             self.group::<ANY, SMALL_STACK, _>(rays, path, leaf, done)
         } else {
-            self.group::<ANY, STACK, _>(rays, path, leaf, done)
+            self.group::<ANY, LARGE_STACK, _>(rays, path, leaf, done)
         }
     }
 
     /// [`WALKS`] walks over `rays` (at least [`WALKS`]), each taking the
     /// next ray when its own is done.
     #[inline(always)]
-    fn group<'a, const ANY: bool, const N: usize, L: LeafTest>(
+    fn group<'a, const ANY: bool, const S: usize, L: LeafTest>(
         &self,
         rays: &'a [Ray],
         path: BoxPath,
         leaf: impl Fn(&'a Ray) -> L,
         mut done: impl FnMut(usize, bool, Option<Hit>),
     ) {
-        let start = |r: &'a Ray| Walk::<L, N>::new(r, self.root, r.traversal_tfar(), None, leaf(r));
-        let mut walks: [Walk<L, N>; WALKS] = std::array::from_fn(|k| start(&rays[k]));
+        let start = |r: &'a Ray| Walk::<L, S>::new(r, self.root, r.traversal_tfar(), None, leaf(r));
+        let mut walks: [Walk<L, S>; WALKS] = std::array::from_fn(|k| start(&rays[k]));
         let mut index: [usize; WALKS] = std::array::from_fn(|k| k);
         let mut live = [true; WALKS];
         let mut next = WALKS;
@@ -248,7 +251,7 @@ impl<T: TriangleTest> Bvh8<T> {
                 if !live[k] {
                     continue;
                 }
-                if let Some(any) = self.step::<ANY, N>(&mut walks[k], path) {
+                if let Some(any) = self.step::<ANY, S>(&mut walks[k], path) {
                     done(index[k], any, walks[k].best);
                     if let Some(ray) = rays.get(next) {
                         walks[k].restart(ray, self.root, leaf(ray));
@@ -291,10 +294,16 @@ mod tests {
     /// Rays stepped in turn give every ray exactly its single-ray
     /// answer (the same `t`, `u`, `v` bits and triangle; the same
     /// occlusion), each ray answered once, for batches of 0 to 9 and 1500
-    /// rays (full and bounded), with every box kernel this CPU runs and both
-    /// stack sizes.
+    /// rays (full and bounded), with every box kernel this CPU runs, both
+    /// stack sizes and both widths.
     #[test]
     fn interleaved_rays_equal_single_rays() {
+        let hits = interleaved_rays_equal_single_rays_on::<crate::accel::bvh::node8::Node8>()
+            + interleaved_rays_equal_single_rays_on::<crate::accel::bvh::node4::Node4>();
+        assert!(hits > 2000, "too few hits to test: {hits}");
+    }
+
+    fn interleaved_rays_equal_single_rays_on<N: NodeWidth>() -> usize {
         let mut rng = Pcg32::new(77);
         let mut positions = Vec::new();
         let mut indices = Vec::new();
@@ -326,7 +335,7 @@ mod tests {
                 ..Default::default()
             };
             for path in BoxPath::available() {
-                let bvh = Bvh8::<Moller>::build(&mesh, &opts).with_path(path);
+                let bvh = WideBvh::<N, Moller>::build(&mesh, &opts).with_path(path);
                 for n in [
                     0,
                     1,
@@ -361,6 +370,6 @@ mod tests {
                 }
             }
         }
-        assert!(hits > 1000, "too few hits to test: {hits}");
+        hits
     }
 }
