@@ -10,19 +10,10 @@ use std::path::PathBuf;
 
 #[path = "support/cli.rs"]
 mod cli;
-use cli::{raykit, s, text};
+use cli::{data, raykit, s, text};
 
 fn teapot() -> PathBuf {
-    let dir = std::env::var_os("RAYKIT_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
-    let p = dir.join("meshes/teapot_992.obj");
-    assert!(
-        p.is_file(),
-        "test data not found at {} (set RAYKIT_SHARED_DATA)",
-        p.display()
-    );
-    p
+    data("meshes/teapot_992.obj")
 }
 
 #[test]

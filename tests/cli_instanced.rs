@@ -12,23 +12,10 @@ use std::process::Output;
 
 #[path = "support/cli.rs"]
 mod cli;
-use cli::{raykit, s, text};
+use cli::{data, raykit, s, text};
 
 fn stderr(o: &Output) -> String {
     text(&o.stderr)
-}
-
-fn data(rel: &str) -> PathBuf {
-    let dir = std::env::var_os("RAYKIT_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
-    let p = dir.join(rel);
-    assert!(
-        p.is_file(),
-        "test data not found at {} (set RAYKIT_SHARED_DATA)",
-        p.display()
-    );
-    p
 }
 
 /// The JSON statistics line of a run.

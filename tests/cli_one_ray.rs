@@ -9,19 +9,10 @@ use std::path::{Path, PathBuf};
 
 #[path = "support/cli.rs"]
 mod cli;
-use cli::{raykit, s, text};
+use cli::{data, raykit, s, text};
 
 fn dragon() -> PathBuf {
-    let dir = std::env::var_os("RAYKIT_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
-    let p = dir.join("meshes/dragon_vrip_res4.ply.gz");
-    assert!(
-        p.is_file(),
-        "test data not found at {} (set RAYKIT_SHARED_DATA)",
-        p.display()
-    );
-    p
+    data("meshes/dragon_vrip_res4.ply.gz")
 }
 
 /// `raykit trace` over `rays` into `out`, with `extra` arguments; returns

@@ -8,6 +8,10 @@ use raykit_core::TriangleMesh;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "support/cli.rs"]
+mod cli;
+use cli::{data, s};
+
 type V = [f64; 3];
 
 fn sub(a: V, b: V) -> V {
@@ -45,20 +49,7 @@ fn stderr(o: &Output) -> String {
 }
 
 fn bunny() -> PathBuf {
-    let dir = std::env::var_os("RAYKIT_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
-    let p = dir.join("meshes/bunny_3674.obj");
-    assert!(
-        p.is_file(),
-        "test data not found at {} (set RAYKIT_SHARED_DATA)",
-        p.display()
-    );
-    p
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 temp path")
+    data("meshes/bunny_3674.obj")
 }
 
 /// The mesh's triangles in f64, loaded as the binary loads them.

@@ -9,22 +9,13 @@ use std::process::Output;
 
 #[path = "support/cli.rs"]
 mod cli;
-use cli::{raykit, s, text};
+use cli::{data, raykit, s, text};
 
 const W: u32 = 160;
 const H: u32 = 90;
 
 fn ter() -> PathBuf {
-    let dir = std::env::var_os("RAYKIT_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data"));
-    let p = dir.join("terrain/RealisticTerrain_Large.ter");
-    assert!(
-        p.is_file(),
-        "test data not found at {} (set RAYKIT_SHARED_DATA)",
-        p.display()
-    );
-    p
+    data("terrain/RealisticTerrain_Large.ter")
 }
 
 /// `raykit terrain render TER --width 160 --height 90 EXTRA...`.

@@ -139,6 +139,24 @@ impl TriangleMesh {
         }
     }
 
+    /// A mesh copied from vertex and index arrays as Embree's buffers,
+    /// numpy and trimesh hold them: `positions` one `[x, y, z]` per vertex,
+    /// `indices` three vertex indices per triangle. Checked as
+    /// [`TriangleMesh::validate`] checks (indices in range, coordinates
+    /// finite), so that a structure built over it never reads out of bounds;
+    /// no triangles at all give an empty mesh, which every structure
+    /// accepts.
+    pub fn from_arrays(positions: &[[f32; 3]], indices: &[[u32; 3]]) -> Result<Self, MeshError> {
+        let mesh = TriangleMesh::new(
+            positions.iter().map(|&p| Vec3::from(p)).collect(),
+            indices.to_vec(),
+        );
+        match mesh.validate() {
+            Ok(()) | Err(MeshError::Empty) => Ok(mesh),
+            Err(e) => Err(e),
+        }
+    }
+
     /// Number of triangles.
     pub fn num_triangles(&self) -> usize {
         self.indices.len()

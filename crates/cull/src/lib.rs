@@ -58,7 +58,7 @@ pub use propagate::{propagate, Classification, Tag};
 pub use rays::{visible_by_rays, RayOptions, RayRound, RayStats};
 pub use visible::{confirm_frontier, touches_outside, visible_from_outside};
 
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
+use raykit_core::accel::{build_accel, Accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::{MeshError, TriangleMesh};
 use serde::Serialize;
@@ -187,20 +187,9 @@ pub struct CullResult {
 /// visibility culling). An empty mesh gives an empty result; a mesh failing
 /// [`TriangleMesh::validate`] otherwise gives its error.
 pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, MeshError> {
-    match mesh.validate() {
-        Ok(()) => {}
-        Err(MeshError::Empty) => return Ok(result_for(mesh, Vec::new(), CullStats::default())),
-        Err(e) => return Err(e),
-    }
-    let mut stats = CullStats::default();
-    let clock = Instant::now();
-    let accel = build_accel(
-        AccelKind::Bvh2,
-        TestKind::Moller,
-        mesh,
-        &BuildOptions::default(),
-    );
-    stats.accel_seconds = clock.elapsed().as_secs_f64();
+    let Some((accel, mut stats)) = prepare(mesh, AccelKind::Bvh2)? else {
+        return Ok(result_for(mesh, Vec::new(), CullStats::default()));
+    };
 
     let grid = Grid::around(&mesh.bounds(), options.resolution);
     let clock = Instant::now();
@@ -257,25 +246,33 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
 /// BVH over Möller–Trumbore packs. An empty mesh gives an empty result; a
 /// mesh failing [`TriangleMesh::validate`] otherwise gives its error.
 pub fn cull_by_rays(mesh: &TriangleMesh, options: &RayOptions) -> Result<CullResult, MeshError> {
-    match mesh.validate() {
-        Ok(()) => {}
-        Err(MeshError::Empty) => return Ok(result_for(mesh, Vec::new(), CullStats::default())),
-        Err(e) => return Err(e),
-    }
-    let mut stats = CullStats::default();
-    let clock = Instant::now();
-    let accel = build_accel(
-        AccelKind::Bvh8,
-        TestKind::Moller,
-        mesh,
-        &BuildOptions::default(),
-    );
-    stats.accel_seconds = clock.elapsed().as_secs_f64();
+    let Some((accel, mut stats)) = prepare(mesh, AccelKind::Bvh8)? else {
+        return Ok(result_for(mesh, Vec::new(), CullStats::default()));
+    };
     let clock = Instant::now();
     let (visible, ray_stats) = visible_by_rays(mesh, accel.as_ref(), options);
     stats.visible_seconds = clock.elapsed().as_secs_f64();
     stats.rays = Some(ray_stats);
     Ok(result_for(mesh, visible, stats))
+}
+
+/// A built structure and the figures of its build.
+type Prepared = (Box<dyn Accel>, CullStats);
+
+/// The checked mesh's structure `kind` over Möller–Trumbore, timed into
+/// fresh figures; `None` for an empty mesh, the error of
+/// [`TriangleMesh::validate`] for a bad one.
+fn prepare(mesh: &TriangleMesh, kind: AccelKind) -> Result<Option<Prepared>, MeshError> {
+    match mesh.validate() {
+        Ok(()) => {}
+        Err(MeshError::Empty) => return Ok(None),
+        Err(e) => return Err(e),
+    }
+    let mut stats = CullStats::default();
+    let clock = Instant::now();
+    let accel = build_accel(kind, TestKind::Moller, mesh, &BuildOptions::default());
+    stats.accel_seconds = clock.elapsed().as_secs_f64();
+    Ok(Some((accel, stats)))
 }
 
 /// Fill in per-part visibility and the removal counts.
