@@ -8,9 +8,9 @@
 //! Two versions, each behind a cargo feature of its own, both off by
 //! default:
 //! - `embree3`: Embree 3 from Debian's `libembree-dev`, declared by hand
-//!   and linked as `-lembree3` ([`Embree3Device`], [`Embree3Scene`]).
+//!   and linked as `-lembree3` (`Embree3Device`, `Embree3Scene`).
 //! - `embree4`: Embree 4, found and loaded at run time with libloading
-//!   ([`Embree4`], [`Embree4Device`], [`Embree4Scene`]), e.g. the
+//!   (`Embree4`, `Embree4Device`, `Embree4Scene`), e.g. the
 //!   `libembree4` of the PyPI wheel `embreex`; building needs neither its
 //!   headers nor its library.
 //!

@@ -15,9 +15,7 @@ pub const LIBRARY_ENV: &str = "RAYKIT_EMBREE4";
 /// the library (else `python3` on the PATH).
 pub const PYTHON_ENV: &str = "RAYKIT_PYTHON";
 
-/// The library the process loaded first. It is never unloaded: the TBB
-/// worker threads Embree 4 starts outlive its devices, and would run
-/// unmapped code after the last handle closed it.
+/// The library the process loaded first, returned by every later load.
 static LOADED: OnceLock<Arc<Embree4>> = OnceLock::new();
 
 /// A loaded Embree 4 library and its function table.
@@ -27,8 +25,6 @@ pub struct Embree4 {
     pub path: PathBuf,
     /// The library's version, e.g. `4.4.0`.
     pub version: String,
-    /// Kept loaded as long as `api` is used.
-    _lib: libloading::Library,
 }
 
 impl Embree4 {
@@ -37,14 +33,16 @@ impl Embree4 {
     /// `python3` (the one `$RAYKIT_PYTHON`, [`PYTHON_ENV`], names, else
     /// `python3` on the PATH) imports. The error names every place tried.
     /// Loaded once per process: after a success, every call returns that
-    /// library, which stays loaded until the process ends.
+    /// library. A library opened here is never closed: the TBB worker
+    /// threads Embree 4 starts outlive its devices, and would run unmapped
+    /// code once the library was unloaded.
     pub fn load() -> Result<Arc<Embree4>> {
         if let Some(lib) = LOADED.get() {
             return Ok(Arc::clone(lib));
         }
         let lib = Self::open(find_library()?)?;
-        // Where two threads opened it at once, the second handle is closed
-        // and the library stays loaded through the first.
+        // Where two threads opened it at once, the second one's handle is
+        // left open and unused.
         Ok(Arc::clone(LOADED.get_or_init(|| lib)))
     }
 
@@ -54,9 +52,11 @@ impl Embree4 {
         // TBB's have no preconditions.
         let lib = unsafe { libloading::Library::new(&path) }
             .with_context(|| format!("loading Embree 4 from {}", path.display()))?;
+        // Never closed (see `load`), so the table below stays valid.
+        let lib: &'static libloading::Library = Box::leak(Box::new(lib));
         // SAFETY: the file is an Embree 4 library (its name, and the
-        // version check below); `lib` lives as long as the table.
-        let api = unsafe { ffi::Api::load(&lib) }
+        // version check below); `lib` is never closed.
+        let api = unsafe { ffi::Api::load(lib) }
             .with_context(|| format!("{}: not an Embree 4 library", path.display()))?;
         // SAFETY: an empty configuration string; the device is released
         // right after reading its version.
@@ -84,7 +84,6 @@ impl Embree4 {
                 version / 100 % 100,
                 version % 100
             ),
-            _lib: lib,
         }))
     }
 }
