@@ -4,8 +4,6 @@
 mod backend;
 mod build_args;
 mod cmd;
-#[cfg(feature = "embree")]
-mod embree;
 mod gpu_measure;
 mod instanced_arg;
 mod measure;

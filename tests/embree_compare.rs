@@ -1,9 +1,10 @@
-//! `raykit bench --compare embree`: with the `embree` feature, Embree 4
-//! (loaded at run time: scripts/test installs the `embreex` wheel and sets
-//! RAYKIT_EMBREE4), Embree 3 and our BVH trace the same rays in one process
-//! and every answer must agree (up to shared-edge ties), through each
-//! Embree 4 API and through our one-ray API too; without the feature the
-//! command must say how to get it.
+//! The command `raykit bench --compare embree`: with the `embree` feature,
+//! Embree 4 (loaded at run time: scripts/test installs the `embreex` wheel
+//! and sets RAYKIT_PYTHON), Embree 3 and our BVH trace the same rays in one
+//! process, the run succeeds only where every answer agrees (up to
+//! shared-edge ties), and its tables and summary have every cell; without
+//! the feature the command must say how to get it. Each Embree version's
+//! own answers are checked against ours in `crates/embree/tests`.
 
 #[path = "support/cli.rs"]
 mod cli;

@@ -461,7 +461,7 @@ fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
     };
     #[cfg(feature = "embree")]
     {
-        use crate::embree::embree4::Embree4;
+        use raykit_embree::Embree4;
         let embree4 = if !want4 {
             None
         } else {

@@ -13,8 +13,6 @@
 
 mod print;
 
-use crate::embree::embree4::{self, Embree4, Embree4Device, Embree4Scene};
-use crate::embree::{EmbreeDevice, EmbreeScene, Quality};
 use crate::measure::{median_min_max, pool, timed};
 use crate::one_ray;
 use crate::verify::{compare_hits, compare_occlusion, edge_grazes, occlusion_grazes, Verdict};
@@ -24,6 +22,9 @@ use raykit_core::accel::{build_accel, AccelKind, BuildOptions, BuildQuality};
 use raykit_core::raysets::{self, RayKind};
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, Hit, Ray, TriangleMesh};
+use raykit_embree::{
+    Embree3Device, Embree3Scene, Embree4, Embree4Device, Embree4Scene, Quality, QueryApi,
+};
 use rayon::prelude::*;
 use rayon::ThreadPool;
 use serde::Serialize;
@@ -202,7 +203,7 @@ fn trace_one_ray(accel: &dyn Accel, rays: &[Ray], shadow: bool) {
 
 /// Embree 4 through `api`; primaries and shadow rays (which leave from
 /// the primaries' hit points in pixel order) carry the coherent hint.
-fn trace4(em: &Embree4Scene, api: embree4::Api, rays: &[Ray], set: RayKind) {
+fn trace4(em: &Embree4Scene, api: QueryApi, rays: &[Ray], set: RayKind) {
     let coherent = set != RayKind::Incoherent;
     if set == RayKind::Shadow {
         let mut o = vec![false; rays.len()];
@@ -214,7 +215,7 @@ fn trace4(em: &Embree4Scene, api: embree4::Api, rays: &[Ray], set: RayKind) {
 }
 
 /// The Embree 4 call of `api` for a set.
-fn api_name(api: embree4::Api, shadow: bool) -> String {
+fn api_name(api: QueryApi, shadow: bool) -> String {
     let call = if shadow {
         "rtcOccluded"
     } else {
@@ -260,13 +261,13 @@ fn label(kind: AccelKind, test: TestKind) -> String {
 /// first (one per structure), then Embree 4's APIs, then Embree 3.
 struct CellTimes {
     ours: Vec<(f64, f64)>,
-    embree4: Vec<(embree4::Api, f64, f64)>,
+    embree4: Vec<(QueryApi, f64, f64)>,
     embree3: Option<(f64, f64)>,
 }
 
 impl CellTimes {
     /// Split `times` (from `time_in_turn`) as the runs were pushed.
-    fn split(mut times: Vec<(f64, f64)>, apis: &[embree4::Api], embree3: bool) -> CellTimes {
+    fn split(mut times: Vec<(f64, f64)>, apis: &[QueryApi], embree3: bool) -> CellTimes {
         let embree3 = if embree3 { times.pop() } else { None };
         let e4 = times.split_off(times.len() - apis.len());
         CellTimes {
@@ -344,15 +345,15 @@ fn compare_mesh(
     let mut builds = Vec::new();
     let mut ours: Vec<Box<dyn Accel>> = Vec::new();
     let high = traced_options(&s.options);
-    let build_apis: &[embree4::Api] = if e4lib.is_some() {
-        &[embree4::Api::Single]
+    let build_apis: &[QueryApi] = if e4lib.is_some() {
+        &[QueryApi::Single]
     } else {
         &[]
     };
     for (threads, p) in [(1, one), (n, all)] {
         // The devices (Embree's thread pools) are made outside the timing.
         let device3 = if e3 {
-            Some(EmbreeDevice::new(threads)?)
+            Some(Embree3Device::new(threads)?)
         } else {
             None
         };
@@ -392,7 +393,7 @@ fn compare_mesh(
                 if let Some(d) = &device3 {
                     let err = &mut err3;
                     runs.push(Box::new(move || {
-                        if let Err(e) = EmbreeScene::build(d, mesh, quality) {
+                        if let Err(e) = Embree3Scene::build(d, mesh, quality) {
                             *err = Some(e);
                         }
                     }));
@@ -419,8 +420,8 @@ fn compare_mesh(
         }
     }
     let embree3 = if e3 {
-        Some(EmbreeScene::build(
-            &EmbreeDevice::new(0)?,
+        Some(Embree3Scene::build(
+            &Embree3Device::new(0)?,
             mesh,
             trace_quality(),
         )?)
@@ -430,13 +431,13 @@ fn compare_mesh(
     let embree4 = e4lib
         .map(|lib| Embree4Scene::build(&Embree4Device::new(lib, 0)?, mesh, trace_quality()))
         .transpose()?;
-    let all_apis: &[embree4::Api] = if embree4.is_some() {
-        &embree4::Api::ALL
+    let all_apis: &[QueryApi] = if embree4.is_some() {
+        &QueryApi::ALL
     } else {
         &[]
     };
-    let single: &[embree4::Api] = if embree4.is_some() {
-        &[embree4::Api::Single]
+    let single: &[QueryApi] = if embree4.is_some() {
+        &[QueryApi::Single]
     } else {
         &[]
     };
@@ -583,7 +584,7 @@ type NearestHits<'a> = Box<dyn Fn(&[Ray]) -> Vec<Option<Hit>> + 'a>;
 fn agreement(
     mesh: &TriangleMesh,
     sets: &[Vec<Ray>; 3],
-    embree3: Option<&EmbreeScene>,
+    embree3: Option<&Embree3Scene>,
     embree4: Option<&Embree4Scene>,
     ours: &[Box<dyn Accel>],
     names: &[(AccelKind, TestKind)],
@@ -637,7 +638,7 @@ fn agreement(
             }
         }
         if let Some(em) = embree4 {
-            for api in embree4::Api::ALL {
+            for api in QueryApi::ALL {
                 theirs.push((
                     format!("Embree 4 {}", api_name(api, shadow)),
                     answers(&|r, h| em.intersect_with(api, r, h, coherent), &|r, o| {

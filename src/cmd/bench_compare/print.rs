@@ -2,7 +2,7 @@
 //! and agreement, then a summary of our best ratio per cell across meshes.
 
 use super::{trace_quality, Cell, Comparison};
-use crate::embree::Quality;
+use raykit_embree::Quality;
 use serde::Serialize;
 
 /// Our best ratio for one cell on one mesh.

@@ -1,61 +1,22 @@
-//! The few Embree 3 calls `raykit bench --compare embree` needs, declared by
-//! hand from `embree3/rtcore*.h` (Embree 3.13, `RTC_MAX_INSTANCE_LEVEL_COUNT`
-//! 1, `RTC_MIN_WIDTH` 0, as Debian's `libembree-dev` builds it). Linked as
-//! `-lembree3`.
+//! The few Embree 3 calls the Embree 3 backend needs beyond those shared
+//! with Embree 4 ([`crate::rtcore`]), declared by hand from
+//! `embree3/rtcore*.h` (Embree 3.13, `RTC_MAX_INSTANCE_LEVEL_COUNT` 1,
+//! `RTC_MIN_WIDTH` 0, as Debian's `libembree-dev` builds it). Linked as
+//! `-lembree3`, so compiled only with the `embree3` feature.
 
-#![allow(non_camel_case_types, dead_code)]
+#![allow(non_camel_case_types)]
 
+use crate::rtcore::{
+    self, Calls, RTCDevice, RTCGeometry, RTCRay, RTCScene, RTC_INVALID_GEOMETRY_ID,
+};
 use std::ffi::{c_char, c_uint, c_void};
 
-pub type RTCDevice = *mut c_void;
-pub type RTCScene = *mut c_void;
-pub type RTCGeometry = *mut c_void;
-
-pub const RTC_GEOMETRY_TYPE_TRIANGLE: c_uint = 0;
-pub const RTC_BUFFER_TYPE_INDEX: c_uint = 0;
-pub const RTC_BUFFER_TYPE_VERTEX: c_uint = 1;
-pub const RTC_FORMAT_UINT3: c_uint = 0x5003;
-pub const RTC_FORMAT_FLOAT3: c_uint = 0x9003;
-pub const RTC_BUILD_QUALITY_MEDIUM: c_uint = 1;
-pub const RTC_BUILD_QUALITY_HIGH: c_uint = 2;
 pub const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: c_uint = 0;
 pub const RTC_INTERSECT_CONTEXT_FLAG_COHERENT: c_uint = 1;
-pub const RTC_INVALID_GEOMETRY_ID: c_uint = u32::MAX;
-pub const RTC_ERROR_NONE: c_uint = 0;
 
-/// `struct RTCRay` (16-byte aligned).
-#[repr(C, align(16))]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RTCRay {
-    pub org: [f32; 3],
-    pub tnear: f32,
-    pub dir: [f32; 3],
-    pub time: f32,
-    pub tfar: f32,
-    pub mask: c_uint,
-    pub id: c_uint,
-    pub flags: c_uint,
-}
-
-/// `struct RTCHit` (16-byte aligned).
-#[repr(C, align(16))]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RTCHit {
-    pub ng: [f32; 3],
-    pub u: f32,
-    pub v: f32,
-    pub prim_id: c_uint,
-    pub geom_id: c_uint,
-    pub inst_id: [c_uint; 1],
-}
-
-/// `struct RTCRayHit`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RTCRayHit {
-    pub ray: RTCRay,
-    pub hit: RTCHit,
-}
+/// `struct RTCRayHit` of Debian's build: one instance level, no instance
+/// arrays.
+pub type RTCRayHit = rtcore::RTCRayHit<1>;
 
 /// `struct RTCIntersectContext` as `rtcInitIntersectContext` fills it.
 #[repr(C)]
@@ -113,7 +74,31 @@ extern "C" {
         m: c_uint,
         byte_stride: usize,
     );
+    pub fn rtcOccluded1M(
+        scene: RTCScene,
+        context: *mut RTCIntersectContext,
+        ray: *mut RTCRay,
+        m: c_uint,
+        byte_stride: usize,
+    );
 }
+
+/// The device and scene-building calls, linked.
+pub const CALLS: Calls = Calls {
+    rtcNewDevice,
+    rtcGetDeviceError,
+    rtcReleaseDevice,
+    rtcNewScene,
+    rtcSetSceneBuildQuality,
+    rtcCommitScene,
+    rtcReleaseScene,
+    rtcNewGeometry,
+    rtcSetNewGeometryBuffer,
+    rtcSetGeometryBuildQuality,
+    rtcCommitGeometry,
+    rtcAttachGeometry,
+    rtcReleaseGeometry,
+};
 
 #[cfg(test)]
 mod tests {
@@ -122,11 +107,10 @@ mod tests {
     #[test]
     fn struct_layouts_match_the_embree_3_headers() {
         // Sizes and offsets from rtcore_ray.h / rtcore_common.h on x86-64.
-        assert_eq!(std::mem::size_of::<RTCRay>(), 48);
-        assert_eq!(std::mem::size_of::<RTCHit>(), 32);
+        assert_eq!(std::mem::size_of::<rtcore::RTCHit<1>>(), 32);
         assert_eq!(std::mem::size_of::<RTCRayHit>(), 80);
         assert_eq!(std::mem::offset_of!(RTCRayHit, hit), 48);
-        assert_eq!(std::mem::offset_of!(RTCHit, prim_id), 20);
+        assert_eq!(std::mem::offset_of!(rtcore::RTCHit<1>, prim_id), 20);
         assert_eq!(std::mem::size_of::<RTCIntersectContext>(), 24);
         assert_eq!(std::mem::offset_of!(RTCIntersectContext, inst_id), 16);
     }

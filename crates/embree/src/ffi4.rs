@@ -1,7 +1,8 @@
-//! The few Embree 4 calls `raykit bench --compare embree4` needs, declared
-//! by hand from `embree4/rtcore*.h` (Embree 4.4.0) and looked up at run time
-//! in a `libembree4.so.4` (the one the PyPI wheel `embreex` ships has no
-//! headers, and a build machine need not have it at all).
+//! The few Embree 4 calls the Embree 4 backend needs, declared by hand
+//! from `embree4/rtcore*.h` (Embree 4.4.0) and looked up at run time in a
+//! `libembree4.so.4` (the one the PyPI wheel `embreex` ships has no
+//! headers, and a build machine need not have it at all); those shared
+//! with Embree 3 are in [`crate::rtcore`].
 //!
 //! Two settings of Embree's own build change these layouts:
 //! `RTC_MAX_INSTANCE_LEVEL_COUNT` (default 1) and
@@ -12,26 +13,14 @@
 //! primitive ids, and the minimum-width factor): Embree reads and writes
 //! the fields before the tail at the offsets declared, whatever its build.
 
-#![allow(non_camel_case_types, dead_code)]
+#![allow(non_camel_case_types)]
 
-use std::ffi::{c_char, c_int, c_uint, c_void};
+use crate::rtcore::{self, Calls, RTCDevice, RTCRay, RTCScene, RTC_INVALID_GEOMETRY_ID};
+use std::ffi::{c_int, c_uint, c_void};
 
-pub type RTCDevice = *mut c_void;
-pub type RTCScene = *mut c_void;
-pub type RTCGeometry = *mut c_void;
-
-pub const RTC_GEOMETRY_TYPE_TRIANGLE: c_uint = 0;
-pub const RTC_BUFFER_TYPE_INDEX: c_uint = 0;
-pub const RTC_BUFFER_TYPE_VERTEX: c_uint = 1;
-pub const RTC_FORMAT_UINT3: c_uint = 0x5003;
-pub const RTC_FORMAT_FLOAT3: c_uint = 0x9003;
-pub const RTC_BUILD_QUALITY_MEDIUM: c_uint = 1;
-pub const RTC_BUILD_QUALITY_HIGH: c_uint = 2;
 pub const RTC_RAY_QUERY_FLAG_INCOHERENT: c_uint = 0;
 pub const RTC_RAY_QUERY_FLAG_COHERENT: c_uint = 1 << 16;
 pub const RTC_FEATURE_FLAG_ALL: c_uint = 0xffff_ffff;
-pub const RTC_INVALID_GEOMETRY_ID: c_uint = u32::MAX;
-pub const RTC_ERROR_NONE: c_uint = 0;
 /// `RTC_DEVICE_PROPERTY_VERSION`: the version as MAJOR·10000 + MINOR·100 +
 /// PATCH.
 pub const RTC_DEVICE_PROPERTY_VERSION: c_uint = 0;
@@ -40,41 +29,8 @@ pub const RTC_DEVICE_PROPERTY_VERSION: c_uint = 0;
 /// has 1).
 pub const INSTANCE_LEVELS: usize = 4;
 
-/// `struct RTCRay` (16-byte aligned), as in Embree 3.
-#[repr(C, align(16))]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RTCRay {
-    pub org: [f32; 3],
-    pub tnear: f32,
-    pub dir: [f32; 3],
-    pub time: f32,
-    pub tfar: f32,
-    pub mask: c_uint,
-    pub id: c_uint,
-    pub flags: c_uint,
-}
-
-/// `struct RTCHit` (16-byte aligned), with room for the instance tail.
-#[repr(C, align(16))]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RTCHit {
-    pub ng: [f32; 3],
-    pub u: f32,
-    pub v: f32,
-    pub prim_id: c_uint,
-    pub geom_id: c_uint,
-    /// `instID[RTC_MAX_INSTANCE_LEVEL_COUNT]` and, where the library has
-    /// instance arrays, `instPrimID[…]` after it.
-    pub instance_tail: [c_uint; 2 * INSTANCE_LEVELS],
-}
-
-/// `struct RTCRayHit`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RTCRayHit {
-    pub ray: RTCRay,
-    pub hit: RTCHit,
-}
+/// `struct RTCRayHit` with room for the largest instance tail.
+pub type RTCRayHit = rtcore::RTCRayHit<{ 2 * INSTANCE_LEVELS }>;
 
 /// `struct RTCRayHitN` for N = 4, 8, 16: `RTCRayN` then `RTCHitN`, each
 /// field an array of N (structure of arrays). Aligned to 64 bytes, the
@@ -181,27 +137,9 @@ pub type RtcIntersectN<const N: usize> = unsafe extern "C" fn(
 /// The functions looked up in the library (names as in the headers).
 #[allow(non_snake_case)]
 pub struct Api {
-    pub rtcNewDevice: unsafe extern "C" fn(config: *const c_char) -> RTCDevice,
-    pub rtcGetDeviceError: unsafe extern "C" fn(device: RTCDevice) -> c_uint,
+    /// The device and scene-building calls.
+    pub calls: Calls,
     pub rtcGetDeviceProperty: unsafe extern "C" fn(device: RTCDevice, prop: c_uint) -> isize,
-    pub rtcReleaseDevice: unsafe extern "C" fn(device: RTCDevice),
-    pub rtcNewScene: unsafe extern "C" fn(device: RTCDevice) -> RTCScene,
-    pub rtcSetSceneBuildQuality: unsafe extern "C" fn(scene: RTCScene, quality: c_uint),
-    pub rtcCommitScene: unsafe extern "C" fn(scene: RTCScene),
-    pub rtcReleaseScene: unsafe extern "C" fn(scene: RTCScene),
-    pub rtcNewGeometry: unsafe extern "C" fn(device: RTCDevice, kind: c_uint) -> RTCGeometry,
-    pub rtcSetNewGeometryBuffer: unsafe extern "C" fn(
-        geometry: RTCGeometry,
-        kind: c_uint,
-        slot: c_uint,
-        format: c_uint,
-        byte_stride: usize,
-        item_count: usize,
-    ) -> *mut c_void,
-    pub rtcSetGeometryBuildQuality: unsafe extern "C" fn(geometry: RTCGeometry, quality: c_uint),
-    pub rtcCommitGeometry: unsafe extern "C" fn(geometry: RTCGeometry),
-    pub rtcAttachGeometry: unsafe extern "C" fn(scene: RTCScene, geometry: RTCGeometry) -> c_uint,
-    pub rtcReleaseGeometry: unsafe extern "C" fn(geometry: RTCGeometry),
     pub rtcIntersect1:
         unsafe extern "C" fn(scene: RTCScene, rayhit: *mut RTCRayHit, args: *mut RTCQueryArguments),
     pub rtcOccluded1:
@@ -228,20 +166,22 @@ impl Api {
             };
         }
         Ok(Api {
-            rtcNewDevice: sym!(rtcNewDevice),
-            rtcGetDeviceError: sym!(rtcGetDeviceError),
+            calls: Calls {
+                rtcNewDevice: sym!(rtcNewDevice),
+                rtcGetDeviceError: sym!(rtcGetDeviceError),
+                rtcReleaseDevice: sym!(rtcReleaseDevice),
+                rtcNewScene: sym!(rtcNewScene),
+                rtcSetSceneBuildQuality: sym!(rtcSetSceneBuildQuality),
+                rtcCommitScene: sym!(rtcCommitScene),
+                rtcReleaseScene: sym!(rtcReleaseScene),
+                rtcNewGeometry: sym!(rtcNewGeometry),
+                rtcSetNewGeometryBuffer: sym!(rtcSetNewGeometryBuffer),
+                rtcSetGeometryBuildQuality: sym!(rtcSetGeometryBuildQuality),
+                rtcCommitGeometry: sym!(rtcCommitGeometry),
+                rtcAttachGeometry: sym!(rtcAttachGeometry),
+                rtcReleaseGeometry: sym!(rtcReleaseGeometry),
+            },
             rtcGetDeviceProperty: sym!(rtcGetDeviceProperty),
-            rtcReleaseDevice: sym!(rtcReleaseDevice),
-            rtcNewScene: sym!(rtcNewScene),
-            rtcSetSceneBuildQuality: sym!(rtcSetSceneBuildQuality),
-            rtcCommitScene: sym!(rtcCommitScene),
-            rtcReleaseScene: sym!(rtcReleaseScene),
-            rtcNewGeometry: sym!(rtcNewGeometry),
-            rtcSetNewGeometryBuffer: sym!(rtcSetNewGeometryBuffer),
-            rtcSetGeometryBuildQuality: sym!(rtcSetGeometryBuildQuality),
-            rtcCommitGeometry: sym!(rtcCommitGeometry),
-            rtcAttachGeometry: sym!(rtcAttachGeometry),
-            rtcReleaseGeometry: sym!(rtcReleaseGeometry),
             rtcIntersect1: sym!(rtcIntersect1),
             rtcOccluded1: sym!(rtcOccluded1),
             rtcIntersect4: sym!(rtcIntersect4),
@@ -257,14 +197,14 @@ impl Api {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::mem::{align_of, offset_of, size_of};
+    use std::mem::{align_of, offset_of};
 
     #[test]
     fn struct_layouts_match_the_embree_4_headers() {
         // Offsets from embree4/rtcore_ray.h and rtcore_scene.h (4.4.0) on
         // x86-64; the tails only add room after the declared fields.
-        assert_eq!(size_of::<RTCRay>(), 48);
         assert_eq!(offset_of!(RTCRayHit, hit), 48);
+        type RTCHit = rtcore::RTCHit<{ 2 * INSTANCE_LEVELS }>;
         assert_eq!(offset_of!(RTCHit, prim_id), 20);
         assert_eq!(offset_of!(RTCHit, geom_id), 24);
         assert_eq!(offset_of!(RTCHit, instance_tail), 28);
