@@ -7,7 +7,7 @@
 use raykit_core::rng::Pcg32;
 use raykit_core::tri::reference::{edge_distance_f64, intersect_f64, plane_t_f64};
 use raykit_core::{Ray, TriangleMesh, Vec3};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Output;
 
 #[path = "support/cli.rs"]
