@@ -166,7 +166,7 @@ fn differing(a: &CastImage, b: &CastImage) -> usize {
 /// Steps per ray as the heat map of `raykit terrain render --heatmap`, on
 /// the common scale `max`.
 fn write_heatmap(path: &Path, img: &CastImage, width: u32, height: u32, max: f64) -> Result<()> {
-    let rgb = crate::cmd::terrain::render::shade::heatmap_scaled(&img.steps, max as u32);
+    let rgb = raykit_terrain::shade::heatmap_scaled(&img.steps, max as u32);
     raykit_io::write_png(path, width, height, &rgb)
         .with_context(|| format!("writing {}", path.display()))
 }

@@ -3,9 +3,6 @@
 //! shading on the declared surface times the shadow mask, written
 //! to a PNG; optionally a steps-per-ray heat map and fly-throughs.
 
-#[path = "render_shade.rs"]
-pub mod shade;
-
 use super::dem_arg;
 use crate::measure::{median_min_max, pool, timed};
 use crate::paths::ensure_not_input;
@@ -13,23 +10,14 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_gpu::{GpuCaster, GpuContext, GpuTerrain};
+use raykit_terrain::camera::{centre, default_camera, path_cameras};
+use raykit_terrain::georef::{format_number, MapWorld};
+use raykit_terrain::shade::{self, Albedo, Drape, Shading};
 use raykit_terrain::shadow::{light_above_ground, shadow_mask, Light, ShadowMethod};
 use raykit_terrain::view::{cast_image, Caster};
-use raykit_terrain::{Dem, HeightField, MaxMipmap, TerrainCamera};
-use shade::{Albedo, Drape, Shading};
+use raykit_terrain::{HeightField, MaxMipmap, TerrainCamera};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-
-/// Pitch of the default camera below the horizontal, degrees (less than
-/// half the default 50° field of view, so the top rows see the sky).
-const DEFAULT_PITCH_DEG: f64 = 20.0;
-/// How far the default eye sits from the DEM's centre, as a fraction of the
-/// way to the south-west corner.
-const DEFAULT_EYE_FRACTION: f64 = 0.75;
-/// How far below the path's direction a fly-through camera looks, degrees.
-const PATH_PITCH_DEG: f64 = 10.0;
-/// Cameras more than this many DEM diagonals outside the DEM are refused.
-const SANE_DIAGONALS: f64 = 10.0;
 
 /// Which caster (all three are exact and give identical images).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -182,210 +170,6 @@ fn parse_path(s: &str) -> Result<FlyPath, String> {
     Ok(FlyPath(points))
 }
 
-/// Map coordinates ↔ world metres (x east, y north from grid point (0, 0)).
-struct Georef<'a> {
-    dem: &'a Dem,
-    field: &'a HeightField,
-}
-
-impl Georef<'_> {
-    fn to_world(&self, m: [f64; 3]) -> [f64; 3] {
-        let (c, r) = self.dem.map_to_grid(m[0], m[1]);
-        [c * self.field.sx, -r * self.field.sy, m[2]]
-    }
-
-    fn to_map(&self, w: [f64; 3]) -> [f64; 3] {
-        let (x, y) = self
-            .dem
-            .grid_to_map(w[0] / self.field.sx, -w[1] / self.field.sy);
-        [x, y, w[2]]
-    }
-
-    /// World extent (x to the east edge, y to the south edge) and diagonal.
-    fn extent(&self) -> (f64, f64, f64) {
-        let f = self.field;
-        let (w, h) = ((f.width - 1) as f64 * f.sx, (f.height - 1) as f64 * f.sy);
-        (w, h, w.hypot(h))
-    }
-
-    /// The map extent of the grid points, for messages.
-    fn describe_extent(&self) -> String {
-        let f = self.field;
-        let (x0, y0) = self.dem.grid_to_map(0.0, 0.0);
-        let (x1, y1) = self
-            .dem
-            .grid_to_map((f.width - 1) as f64, (f.height - 1) as f64);
-        let units = if self.dem.georef.geographic {
-            " (degrees of longitude/latitude)"
-        } else {
-            ""
-        };
-        format!(
-            "x {}..{}, y {}..{}{units}, heights {:.1}..{:.1} m",
-            fmt_num(x0.min(x1)),
-            fmt_num(x0.max(x1)),
-            fmt_num(y0.min(y1)),
-            fmt_num(y0.max(y1)),
-            f.zmin,
-            f.zmax
-        )
-    }
-
-    /// Refuse a camera point (`map`, given to `flag`) far outside the DEM,
-    /// or, with `above`, under the surface.
-    fn check(&self, flag: &str, map: [f64; 3], above: bool) -> Result<[f64; 3]> {
-        let w = self.to_world(map);
-        let f = self.field;
-        let (ew, eh, diag) = self.extent();
-        let m = SANE_DIAGONALS * diag;
-        let shown = format!(
-            "{},{},{}",
-            fmt_num(map[0]),
-            fmt_num(map[1]),
-            fmt_num(map[2])
-        );
-        if !w.iter().all(|c| c.is_finite())
-            || w[0] < -m
-            || w[0] > ew + m
-            || w[1] > m
-            || w[1] < -eh - m
-        {
-            bail!(
-                "{flag} {shown}: more than {SANE_DIAGONALS} DEM diagonals ({:.1} km) away from the \
-                 DEM; expected map coordinates near {}",
-                m / 1e3,
-                self.describe_extent()
-            );
-        }
-        if w[2] < f.zmin as f64 - m || w[2] > f.zmax as f64 + m {
-            bail!(
-                "{flag} {shown}: height {} m is more than {SANE_DIAGONALS} DEM diagonals \
-                 ({:.1} km) outside the DEM's heights {:.1}..{:.1} m",
-                fmt_num(w[2]),
-                m / 1e3,
-                f.zmin,
-                f.zmax
-            );
-        }
-        let (gx, gy) = (w[0] / f.sx, -w[1] / f.sy);
-        let (gw, gh) = ((f.width - 1) as f64, (f.height - 1) as f64);
-        if above && (0.0..=gw).contains(&gx) && (0.0..=gh).contains(&gy) {
-            let ground = f.height_at(gx, gy);
-            if w[2] <= ground {
-                bail!(
-                    "{flag} {shown}: below the terrain surface there ({ground:.1} m); \
-                     put the camera above the ground"
-                );
-            }
-        }
-        Ok(w)
-    }
-}
-
-/// A number in a message: integers without decimals, others with up to 6.
-fn fmt_num(x: f64) -> String {
-    if x == x.round() && x.abs() < 1e15 {
-        format!("{x:.0}")
-    } else {
-        let s = format!("{x:.6}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    }
-}
-
-/// The surface point at the DEM's centre, world metres.
-fn centre(field: &HeightField) -> [f64; 3] {
-    let (gx, gy) = (
-        (field.width - 1) as f64 * 0.5,
-        (field.height - 1) as f64 * 0.5,
-    );
-    [gx * field.sx, -gy * field.sy, field.height_at(gx, gy)]
-}
-
-/// The default camera (world metres): see the command's help.
-fn default_camera(field: &HeightField) -> ([f64; 3], [f64; 3]) {
-    let c = centre(field);
-    let (w, h) = (
-        (field.width - 1) as f64 * field.sx,
-        (field.height - 1) as f64 * field.sy,
-    );
-    let sw = [0.0, -h];
-    let ex = c[0] + DEFAULT_EYE_FRACTION * (sw[0] - c[0]);
-    let ey = c[1] + DEFAULT_EYE_FRACTION * (sw[1] - c[1]);
-    let d = (c[0] - ex).hypot(c[1] - ey).max(1e-9);
-    let slope = DEFAULT_PITCH_DEG.to_radians().tan();
-    let margin = 0.02 * w.hypot(h);
-    let ez = (c[2] + d * slope).max(field.zmax as f64 + margin);
-    // Look towards the centre horizontally, DEFAULT_PITCH_DEG down.
-    let target = [c[0], c[1], ez - d * slope];
-    ([ex, ey, ez], target)
-}
-
-/// Eyes and targets (world metres) of `frames` frames along `points`
-/// (world metres), evenly spaced by distance; each looks along the path
-/// (a central difference over 2% of its length), `PATH_PITCH_DEG` down.
-fn path_cameras(points: &[[f64; 3]], frames: u32, diag: f64) -> Result<Vec<([f64; 3], [f64; 3])>> {
-    let mut cum = vec![0.0];
-    for w in points.windows(2) {
-        let d = ((w[1][0] - w[0][0]).powi(2)
-            + (w[1][1] - w[0][1]).powi(2)
-            + (w[1][2] - w[0][2]).powi(2))
-        .sqrt();
-        cum.push(cum.last().copied().unwrap_or(0.0) + d);
-    }
-    let total = *cum.last().expect("two points or more");
-    if total <= 0.0 {
-        bail!("--path: all points are the same; the camera needs a path to follow");
-    }
-    let at = |s: f64| -> [f64; 3] {
-        let s = s.clamp(0.0, total);
-        let k = cum
-            .windows(2)
-            .position(|c| s <= c[1])
-            .unwrap_or(points.len() - 2);
-        let len = cum[k + 1] - cum[k];
-        let a = if len > 0.0 { (s - cum[k]) / len } else { 0.0 };
-        let (p, q) = (points[k], points[k + 1]);
-        [
-            p[0] + a * (q[0] - p[0]),
-            p[1] + a * (q[1] - p[1]),
-            p[2] + a * (q[2] - p[2]),
-        ]
-    };
-    let delta = 0.02 * total;
-    let look = 0.1 * diag.max(1.0);
-    (0..frames)
-        .map(|i| {
-            let s = if frames > 1 {
-                total * i as f64 / (frames - 1) as f64
-            } else {
-                0.0
-            };
-            let eye = at(s);
-            let (a, b) = (at(s - delta), at(s + delta));
-            let t = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let horiz = t[0].hypot(t[1]);
-            if horiz <= 1e-9 * total {
-                bail!(
-                    "--path: the path is vertical at frame {i}; the camera needs a horizontal \
-                     direction to look along"
-                );
-            }
-            let el = (t[2].atan2(horiz).to_degrees() - PATH_PITCH_DEG)
-                .clamp(-80.0, 80.0)
-                .to_radians();
-            let dir = [t[0] / horiz * el.cos(), t[1] / horiz * el.cos(), el.sin()];
-            Ok((
-                eye,
-                [
-                    eye[0] + look * dir[0],
-                    eye[1] + look * dir[1],
-                    eye[2] + look * dir[2],
-                ],
-            ))
-        })
-        .collect()
-}
-
 /// `pattern` with every `{}` replaced by `frame`, zero-padded to `digits`.
 fn frame_path(pattern: &Path, frame: u32, digits: usize) -> PathBuf {
     PathBuf::from(
@@ -527,10 +311,7 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
     let (dem, load_s) = timed(|| dem_arg::load(&args.dem));
     let dem = dem?;
     let field = HeightField::new(&dem).map_err(|e| anyhow!("{}: {e}", args.dem))?;
-    let geo = Georef {
-        dem: &dem,
-        field: &field,
-    };
+    let geo = MapWorld::new(&dem, &field);
     let (pyramid, pyramid_s) = pool.install(|| timed(|| MaxMipmap::new(&field)));
 
     // Light.
@@ -540,8 +321,8 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
             let p = light_above_ground(&field, w[0], w[1], l[2]).ok_or_else(|| {
                 anyhow!(
                     "--light {},{}: outside the DEM; expected map coordinates within {}",
-                    fmt_num(l[0]),
-                    fmt_num(l[1]),
+                    format_number(l[0]),
+                    format_number(l[1]),
                     geo.describe_extent()
                 )
             })?;
@@ -592,9 +373,12 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
             let world = points
                 .iter()
                 .enumerate()
-                .map(|(i, p)| geo.check(&format!("--path (point {})", i + 1), *p, true))
+                .map(|(i, p)| {
+                    geo.check(&format!("--path (point {})", i + 1), *p, true)
+                        .map_err(|e| anyhow!(e))
+                })
                 .collect::<Result<Vec<_>>>()?;
-            path_cameras(&world, frames, diag)?
+            path_cameras(&world, frames, diag).map_err(|e| anyhow!("--path: {e}"))?
         }
         None => {
             let (def_eye, def_target) = default_camera(&field);
@@ -603,11 +387,11 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
                 None => (args.eye, args.target),
             };
             let eye = match cam_eye {
-                Some(e) => geo.check("--eye", e, true)?,
+                Some(e) => geo.check("--eye", e, true).map_err(|e| anyhow!(e))?,
                 None => def_eye,
             };
             let target = match cam_target {
-                Some(t) => geo.check("--target", t, false)?,
+                Some(t) => geo.check("--target", t, false).map_err(|e| anyhow!(e))?,
                 None if cam_eye.is_some() => centre(&field),
                 None => def_target,
             };
@@ -745,11 +529,11 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
             pixels as f64 / cast_s.max(1e-9) / 1e6,
             shade_s * 1e3,
             write_s * 1e3,
-            fmt_num(m[0]),
-            fmt_num(m[1]),
+            format_number(m[0]),
+            format_number(m[1]),
             m[2],
-            fmt_num(t[0]),
-            fmt_num(t[1]),
+            format_number(t[0]),
+            format_number(t[1]),
             t[2],
             args.out.display()
         );
@@ -803,32 +587,5 @@ mod tests {
             frame_path(Path::new("f/f{}.png"), 7, 3),
             PathBuf::from("f/f007.png")
         );
-    }
-
-    #[test]
-    fn default_camera_sees_sky_at_the_top() {
-        let dem = raykit_terrain::fractal::fractal(65, 3, 0.55);
-        let field = HeightField::new(&dem).unwrap();
-        let (eye, target) = default_camera(&field);
-        assert!(eye[2] > field.zmax as f64);
-        let cam = TerrainCamera {
-            eye,
-            target,
-            vfov_deg: 50.0,
-            width: 16,
-            height: 9,
-        };
-        assert!(cam.direction(0, 0)[2] > 0.0);
-        assert!(cam.direction(8, 8)[2] < 0.0);
-    }
-
-    #[test]
-    fn path_cameras_follow_the_path_downwards() {
-        let cams = path_cameras(&[[0.0, 0.0, 10.0], [100.0, 0.0, 10.0]], 3, 100.0).unwrap();
-        assert_eq!(cams.len(), 3);
-        assert_eq!(cams[1].0, [50.0, 0.0, 10.0]);
-        let (e, t) = cams[1];
-        assert!(t[0] > e[0] && t[2] < e[2]);
-        assert!(path_cameras(&[[0.0, 0.0, 0.0], [0.0, 0.0, 5.0]], 2, 1.0).is_err());
     }
 }

@@ -13,6 +13,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_terrain::curvature::curvature_corrected;
+use raykit_terrain::georef::MapWorld;
 use raykit_terrain::io::GeoTiffLayout;
 use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
 use raykit_terrain::sun::{day_of_year, sun_position};
@@ -120,18 +121,6 @@ pub struct ShadowArgs {
     /// PNG preview (default: OUT with .png).
     #[arg(long)]
     preview: Option<PathBuf>,
-}
-
-/// Map position → world metres of the field (x east, y north).
-fn world_of(dem: &Dem, field: &HeightField, x: f64, y: f64, flag: &str) -> Result<[f64; 2]> {
-    let (col, row) = dem.map_to_grid(x, y);
-    let (w, h) = ((dem.width - 1) as f64, (dem.height - 1) as f64);
-    if !(0.0..=w).contains(&col) || !(0.0..=h).contains(&row) {
-        let (x0, y0) = dem.grid_to_map(0.0, 0.0);
-        let (x1, y1) = dem.grid_to_map(w, h);
-        bail!("{flag}: ({x}, {y}) lies outside the DEM, whose grid points span x {x0}..{x1}, y {y1}..{y0}");
-    }
-    Ok([col * field.sx, -row * field.sy])
 }
 
 fn compute(
@@ -244,14 +233,18 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     }
     let light = if let Some(s) = &args.light {
         let [x, y, h] = numbers::<3>("--light", s)?;
-        let [wx, wy] = world_of(&dem, &field, x, y, "--light")?;
+        let geo = MapWorld::new(&dem, &field);
+        let [wx, wy] = geo
+            .inside(x, y, "--light")
+            .map_err(|e| anyhow::anyhow!(e))?;
         let z = if args.light_elevation {
             h
         } else {
             if h < 0.0 {
                 bail!("--light '{s}': the height above the ground must be >= 0 (use --light-elevation for an absolute elevation)");
             }
-            field.height_at(wx / field.sx, -wy / field.sy) + h
+            let (gx, gy) = geo.world_to_grid(wx, wy);
+            field.height_at(gx, gy) + h
         };
         Light::Point([wx, wy, z])
     } else {
