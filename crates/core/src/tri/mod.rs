@@ -75,6 +75,12 @@ pub struct TriHit {
 pub trait TriangleTest: Send + Sync + 'static {
     /// Name used on the command line (`--test NAME`).
     const NAME: &'static str;
+    /// Whether the wide BVHs keep this test's triangles in SIMD packs of
+    /// four (`accel/bvh/tri4/`, Embree's `triangle4`; Wald et al. 2014),
+    /// which also opens their packet path. True for Möller–Trumbore, whose
+    /// pack kernel gives the scalar test's answers bit for bit; the other
+    /// tests keep one triangle at a time.
+    const PACKS_OF_FOUR: bool = false;
     /// Data precomputed once per triangle when an accel is built.
     type Tri: Copy + Send + Sync + Debug + 'static;
     /// Data precomputed once per ray before traversal.

@@ -212,6 +212,7 @@ impl Moller {
 
 impl TriangleTest for Moller {
     const NAME: &'static str = "moller";
+    const PACKS_OF_FOUR: bool = true;
     type Tri = MollerTri;
     /// `64u · max |d_i|`, the ray's factor of the barycentric tolerance.
     type RayData = f32;

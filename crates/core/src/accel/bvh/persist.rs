@@ -613,7 +613,7 @@ fn check_header<B: WideParts>(
             format!("{node_bytes}, expected {}", std::mem::size_of::<B::Node>()),
         ));
     }
-    let packed = std::any::TypeId::of::<B::Test>() == std::any::TypeId::of::<Moller>();
+    let packed = <B::Test as TriangleTest>::PACKS_OF_FOUR;
     let (want_form, want_unit) = match packed {
         true => (FORM_PACKED, std::mem::size_of::<Tri4>()),
         false => (FORM_SINGLE, 4),

@@ -17,8 +17,7 @@ use crate::accel::leaf::LeafTriangles;
 use crate::accel::node_box::NodeBox;
 use crate::accel::AccelStats;
 use crate::mesh::TriangleMesh;
-use crate::tri::{Moller, TriangleTest};
-use std::any::TypeId;
+use crate::tri::TriangleTest;
 
 /// A wide tree ready for traversal.
 pub(crate) struct WideTree<N, T: TriangleTest> {
@@ -38,7 +37,7 @@ pub(crate) fn build_wide<N: WideSlots, T: TriangleTest>(
     mesh: &TriangleMesh,
     options: &BuildOptions,
 ) -> WideTree<N, T> {
-    let packed = TypeId::of::<T>() == TypeId::of::<Moller>();
+    let packed = T::PACKS_OF_FOUR;
     let options = &wide_build_options(options, packed);
     // The SAH builds make the wide nodes directly; the linear BVH is
     // collapsed from its binary tree, which is freed while the leaves are
