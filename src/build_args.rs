@@ -2,6 +2,7 @@
 
 use clap::Args;
 use raykit_core::accel::{BuildOptions, BuildQuality, KdOptions, KdSplit};
+use std::str::FromStr;
 
 /// The structure `trace`, `bench` and `render` use on the CPU when
 /// `--accel` is not given: the fastest (BENCHMARKS.md), an 8-wide BVH over
@@ -10,11 +11,7 @@ pub const DEFAULT_ACCEL: &str = "bvh8";
 
 /// The `--bvh-build` name of a build quality.
 pub fn quality_name(q: BuildQuality) -> &'static str {
-    match q {
-        BuildQuality::Sah => "sah",
-        BuildQuality::High => "high",
-        BuildQuality::Fast => "fast",
-    }
+    q.name()
 }
 
 /// BVH build options on the command line.
@@ -41,12 +38,12 @@ pub struct BuildArgs {
     /// about 8% slower to build) or `fast` (linear BVH after Karras 2012:
     /// Morton codes, radix sort; several times faster to build, for dynamic
     /// scenes, a worse tree).
-    #[arg(long, default_value = "sah", value_parser = BuildQuality::parse)]
+    #[arg(long, default_value = "sah", value_parser = BuildQuality::from_str)]
     bvh_build: BuildQuality,
     /// kd-tree split rule: `sah` (Wald & Havran's O(N log N) SAH with perfect
     /// splits), `median` (spatial median) or `game:H` (Kim's (2013) score
     /// |front-back|·(20-H) + splits·H, H in 0..=20).
-    #[arg(long, default_value = "sah", value_parser = KdSplit::parse)]
+    #[arg(long, default_value = "sah", value_parser = KdSplit::from_str)]
     kd_split: KdSplit,
     /// kd-tree SAH cost of one triangle test relative to a node traversal.
     #[arg(long, default_value_t = KdOptions::default().intersection_cost)]

@@ -89,7 +89,7 @@ pub fn compare_occlusion(reference: &[bool], got: &[bool]) -> Verdict {
 /// the triangle's nearest edge: negative outside, positive inside.
 pub fn edge_margin(mesh: &TriangleMesh, ray: &Ray, prim: u32) -> f64 {
     let [a, b, c] = mesh.triangle(prim as usize).map(|p| p.as_dvec3());
-    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir().as_dvec3());
     let (e1, e2) = (b - a, c - a);
     let p = d.cross(e2);
     let det = e1.dot(p);

@@ -133,7 +133,7 @@ type Crossing = (f64, u32, u32, f64);
 
 /// Every `f64` crossing of `ray` with the meshes, sorted by `t`.
 fn crossings(meshes: &[TriangleMesh], ray: &Ray) -> Vec<Crossing> {
-    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir().as_dvec3());
     let mut out = Vec::new();
     for (g, m) in meshes.iter().enumerate() {
         for t in 0..m.num_triangles() {
@@ -159,7 +159,7 @@ fn crossings(meshes: &[TriangleMesh], ray: &Ray) -> Vec<Crossing> {
 /// triangle's boundary, inside or outside: there f32 tests with a
 /// tolerance band and the f64 reference may disagree.
 fn grazes(meshes: &[TriangleMesh], ray: &Ray, margin: f64) -> bool {
-    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir().as_dvec3());
     meshes.iter().any(|m| {
         (0..m.num_triangles()).any(|t| {
             let [a, b, c] = m.triangle(t).map(|v| v.as_dvec3());

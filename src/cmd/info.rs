@@ -29,12 +29,12 @@ pub fn run(args: InfoArgs) -> Result<ExitCode> {
     match args.topic {
         Topic::Accels => {
             for k in AccelKind::ALL {
-                println!("{:<14} {}", k.name(), k.description());
+                println!("{:<14} {}", k.name(), accel_description(k));
             }
         }
         Topic::Tests => {
             for k in TestKind::ALL {
-                println!("{:<14} {}", k.name(), k.description());
+                println!("{:<14} {}", k.name(), test_description(k));
             }
         }
         Topic::Scenes => {
@@ -49,4 +49,48 @@ pub fn run(args: InfoArgs) -> Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// One line on a structure, for `raykit info accels`.
+fn accel_description(kind: AccelKind) -> &'static str {
+    match kind {
+        AccelKind::Brute => {
+            "every ray against every triangle; the reference (slow: O(rays x triangles))"
+        }
+        AccelKind::Bvh2 => {
+            "binary BVH, parallel binned-SAH build, stack traversal nearest child first"
+        }
+        AccelKind::Bvh4 => {
+            "4-wide BVH, binned-SAH build making wide nodes directly, SSE box tests, ordered stack traversal"
+        }
+        AccelKind::Bvh8 => {
+            "8-wide BVH, binned-SAH build making wide nodes directly, AVX box tests (SSE/scalar fallback), ordered stack traversal"
+        }
+        AccelKind::ThreadedBvh => {
+            "BVH nodes in pre-order with escape indices, stackless traversal (Smits 1998)"
+        }
+        AccelKind::KdStack => "kd-tree (--kd-split), 8-byte nodes, per-ray stack traversal",
+        AccelKind::KdRopes => "kd-tree with ropes and leaf boxes, stackless (Popov et al. 2007)",
+        AccelKind::KdRestart => {
+            "kd-tree, kd-restart: stackless, descends from the root per leaf (Foley & Sugerman 2005)"
+        }
+        AccelKind::KdBacktrack => {
+            "kd-tree, kd-backtrack: stackless, climbs parent links (Foley & Sugerman 2005)"
+        }
+    }
+}
+
+/// One line on a triangle test, for `raykit info tests`.
+fn test_description(kind: TestKind) -> &'static str {
+    match kind {
+        TestKind::Moller => {
+            "Möller–Trumbore 1997: edge vectors, determinant and barycentrics per ray"
+        }
+        TestKind::Plucker => {
+            "Plücker coordinates (Jones 2000): sign test on precomputed edge lines, then distance; watertight on shared edges"
+        }
+        TestKind::Projection => {
+            "Wald's projection test (2004): precomputed projection onto the dominant axis plane"
+        }
+    }
 }

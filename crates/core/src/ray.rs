@@ -4,10 +4,13 @@ use glam::Vec3;
 
 /// A ray `origin + t * dir` restricted to `t` in `[tnear, tfar]`.
 ///
-/// `inv_dir` is the component-wise reciprocal of `dir`, precomputed once so that
-/// slab tests against boxes (BVH and kd-tree traversal) need only multiplies.
-/// A zero component gives an infinite reciprocal, which the slab tests handle.
-/// The direction need not be unit length: `t` is measured in units of `dir`.
+/// The ray keeps the component-wise reciprocal of its direction, computed
+/// once so that slab tests against boxes (BVH and kd-tree traversal) need
+/// only multiplies. A zero component gives an infinite reciprocal, which the
+/// slab tests handle. The direction need not be unit length: `t` is measured
+/// in units of `dir`. Direction and reciprocal are private and change only
+/// together ([`Ray::set_dir`]), so the reciprocal cannot go stale; origin
+/// and interval are plain fields.
 ///
 /// The layout is C's, fields in this order (44 bytes), so that the packet
 /// path can move eight rays into its lanes with vector loads
@@ -17,14 +20,14 @@ use glam::Vec3;
 pub struct Ray {
     /// Start point.
     pub origin: Vec3,
-    /// Direction (any non-zero length).
-    pub dir: Vec3,
+    /// Direction (any non-zero length); read with [`Ray::dir`].
+    pub(crate) dir: Vec3,
     /// Smallest accepted distance.
     pub tnear: f32,
     /// Largest accepted distance.
     pub tfar: f32,
-    /// `1 / dir`, component-wise.
-    pub inv_dir: Vec3,
+    /// `1 / dir`, component-wise; read with [`Ray::inv_dir`].
+    pub(crate) inv_dir: Vec3,
 }
 
 impl Ray {
@@ -42,6 +45,25 @@ impl Ray {
             tfar,
             inv_dir: Vec3::ONE / dir,
         }
+    }
+
+    /// The direction.
+    #[inline(always)]
+    pub fn dir(&self) -> Vec3 {
+        self.dir
+    }
+
+    /// The component-wise reciprocal of the direction.
+    #[inline(always)]
+    pub fn inv_dir(&self) -> Vec3 {
+        self.inv_dir
+    }
+
+    /// Change the direction, and its reciprocal with it.
+    #[inline]
+    pub fn set_dir(&mut self, dir: Vec3) {
+        self.dir = dir;
+        self.inv_dir = Vec3::ONE / dir;
     }
 
     /// The point at distance `t`.
@@ -73,5 +95,23 @@ impl Ray {
             && self.tnear.is_finite()
             && !self.tfar.is_nan()
             && self.tnear <= self.tfar
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn set_dir_keeps_the_reciprocal_with_the_direction() {
+        let mut ray = Ray::segment(Vec3::ZERO, Vec3::new(1.0, 2.0, 4.0), 0.5, 9.0);
+        ray.set_dir(Vec3::new(-0.25, 0.0, 8.0));
+        assert_eq!(ray.dir(), Vec3::new(-0.25, 0.0, 8.0));
+        // Each component against an f64 division of the new direction.
+        let want = [1.0 / -0.25f64, f64::INFINITY, 1.0 / 8.0];
+        for (got, want) in ray.inv_dir().to_array().into_iter().zip(want) {
+            assert_eq!(got as f64, want);
+        }
+        assert_eq!((ray.tnear, ray.tfar), (0.5, 9.0));
     }
 }

@@ -26,7 +26,7 @@ impl RayKind {
     /// Every kind, in a fixed order.
     pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Shadow, RayKind::Incoherent];
 
-    /// The command-line name.
+    /// The ray set's name, as `Display` writes it.
     pub fn name(self) -> &'static str {
         match self {
             RayKind::Primary => "primary",
@@ -35,11 +35,13 @@ impl RayKind {
         }
     }
 
-    /// Parse a command-line name.
+    /// The ray set with this name, if any.
     pub fn from_name(name: &str) -> Option<RayKind> {
         RayKind::ALL.into_iter().find(|k| k.name() == name)
     }
 }
+
+crate::names::named_choice!(RayKind, "ray set");
 
 /// Vertical field of view of the standard primary camera, degrees.
 pub const PRIMARY_FOV_DEG: f32 = 40.0;

@@ -42,7 +42,7 @@ fn nearest_hits_match_f64_brute_force_on_the_world_triangles() {
             (Some(g), Some(r)) => {
                 hits += 1;
                 assert!(
-                    close_on_plane(g.t as f64, r.t, r.normal, ray.dir.as_dvec3(), scale),
+                    close_on_plane(g.t as f64, r.t, r.normal, ray.dir().as_dvec3(), scale),
                     "ray {k}: t {} vs f64 {}",
                     g.t,
                     r.t
@@ -56,18 +56,18 @@ fn nearest_hits_match_f64_brute_force_on_the_world_triangles() {
                     );
                 } else {
                     assert!(
-                        near_edge(&reference, ray.dir.as_dvec3(), scale),
+                        near_edge(&reference, ray.dir().as_dvec3(), scale),
                         "ray {k}: {g:?} vs {r:?}"
                     );
                     excused += 1;
                 }
             }
             (g, _) => {
-                let graze = near_edge(&reference, ray.dir.as_dvec3(), scale)
+                let graze = near_edge(&reference, ray.dir().as_dvec3(), scale)
                     || g.is_some_and(|g| {
                         // A hit just outside its triangle (the tolerance band).
                         let tri = world.iter().find(|w| w.1 == ids(&g)).unwrap().0;
-                        let p = ray.origin.as_dvec3() + ray.dir.as_dvec3() * g.t as f64;
+                        let p = ray.origin.as_dvec3() + ray.dir().as_dvec3() * g.t as f64;
                         raykit_core::tri::reference::edge_distance_f64(tri[0], tri[1], tri[2], p)
                             < 1e-3
                     });
@@ -191,7 +191,7 @@ fn all_hits_first_k_and_counts_match_f64_brute_force() {
         got_ids.sort_unstable();
         want_ids.sort_unstable();
         assert_eq!(got_ids, want_ids, "ray {k}");
-        let d = ray.dir.as_dvec3();
+        let d = ray.dir().as_dvec3();
         for (g, w) in all.iter().zip(want) {
             assert!(
                 close_on_plane(g.t as f64, w.t, w.normal, d, scale),
@@ -229,12 +229,12 @@ fn filtered_any_hit_and_filtered_hits_match_a_brute_force_filter() {
     let keep_ref = |c: &Crossing, dir: DVec3| c.ids.1 % 2 == 1 && c.normal.dot(dir) < 0.0;
     let (mut some, mut none) = (0, 0);
     for (k, (ray, want)) in cases.iter().enumerate() {
-        let dir = ray.dir.as_dvec3();
+        let dir = ray.dir().as_dvec3();
         let accepted: Vec<&Crossing> = want.iter().filter(|c| keep_ref(c, dir)).collect();
         let mut asked = 0;
         let got = scene.any_hit_filtered(ray, MASK_ALL, |h| {
             asked += 1;
-            h.instance % 2 == 1 && !h.is_back_face(ray.dir)
+            h.instance % 2 == 1 && !h.is_back_face(ray.dir())
         });
         match got {
             Some(h) => {
@@ -256,7 +256,7 @@ fn filtered_any_hit_and_filtered_hits_match_a_brute_force_filter() {
             ray,
             MASK_ALL,
             usize::MAX,
-            |h| h.instance % 2 == 1 && !h.is_back_face(ray.dir),
+            |h| h.instance % 2 == 1 && !h.is_back_face(ray.dir()),
             &mut kept,
         );
         let got_ids: Vec<_> = kept.iter().map(ids).collect();

@@ -115,10 +115,10 @@ fn any_hit_filter_skips_back_faces() {
     for (ray, want) in clear_rays(&mesh, 500, 41) {
         let front: Vec<u32> = want
             .iter()
-            .filter(|c| normal(c.prim).dot(ray.dir) < 0.0)
+            .filter(|c| normal(c.prim).dot(ray.dir()) < 0.0)
             .map(|c| c.prim)
             .collect();
-        let got = bvh.any_hit(&ray, |h| normal(h.prim).dot(ray.dir) < 0.0);
+        let got = bvh.any_hit(&ray, |h| normal(h.prim).dot(ray.dir()) < 0.0);
         match got {
             None => assert!(front.is_empty(), "missed a front face"),
             Some(h) => assert!(
@@ -130,7 +130,7 @@ fn any_hit_filter_skips_back_faces() {
         bvh.ray_hits_filtered(
             &ray,
             usize::MAX,
-            |h| normal(h.prim).dot(ray.dir) < 0.0,
+            |h| normal(h.prim).dot(ray.dir()) < 0.0,
             &mut out,
         );
         let mut prims: Vec<u32> = out.iter().map(|h| h.prim).collect();

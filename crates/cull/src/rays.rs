@@ -445,7 +445,7 @@ fn views(
                     if t >= mesh.num_triangles() {
                         return None;
                     }
-                    let back = -r.dir;
+                    let back = -r.dir();
                     if beam > 0.0 {
                         let n = mesh.face_normal(t).normalize_or_zero();
                         let face = if n.dot(back) > 0.0 { n } else { -n };

@@ -292,7 +292,7 @@ fn packet<const N: usize>(rays: &[Ray]) -> (ffi::Valid<N>, ffi::RTCRayHitN<N>) {
     for (i, r) in rays.iter().enumerate().take(N) {
         valid.0[i] = -1;
         [p.org_x[i], p.org_y[i], p.org_z[i]] = r.origin.to_array();
-        [p.dir_x[i], p.dir_y[i], p.dir_z[i]] = r.dir.to_array();
+        [p.dir_x[i], p.dir_y[i], p.dir_z[i]] = r.dir().to_array();
         p.tnear[i] = r.tnear;
         p.tfar[i] = r.tfar;
     }

@@ -55,7 +55,7 @@ impl RTCRay {
         RTCRay {
             org: r.origin.to_array(),
             tnear: r.tnear,
-            dir: r.dir.to_array(),
+            dir: r.dir().to_array(),
             time: 0.0,
             tfar: r.tfar,
             mask: u32::MAX,

@@ -94,7 +94,14 @@ impl<'a> GpuTracer<'a> {
         for r in rays {
             words.extend(
                 [
-                    r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar,
+                    r.origin.x,
+                    r.origin.y,
+                    r.origin.z,
+                    r.dir().x,
+                    r.dir().y,
+                    r.dir().z,
+                    r.tnear,
+                    r.tfar,
                 ]
                 .map(f32::to_bits),
             );

@@ -77,7 +77,7 @@ fn engine_instanced_traces_as_engine_flattened() {
                 same += 1;
                 let n = flat.face_normal(b.prim as usize).as_dvec3();
                 assert!(
-                    close_on_plane(a.t as f64, b.t as f64, n, ray.dir.as_dvec3(), scale),
+                    close_on_plane(a.t as f64, b.t as f64, n, ray.dir().as_dvec3(), scale),
                     "ray {k}: {a:?} vs {b:?}"
                 );
                 assert!(a.normal.as_dvec3().dot(n.normalize()) > 0.999, "ray {k}");
@@ -88,7 +88,7 @@ fn engine_instanced_traces_as_engine_flattened() {
                 let tie = matches!((a, b), (Some(a), Some(b))
                     if instancing_support::close(a.t as f64, b.t as f64, 1e-5));
                 assert!(
-                    tie || near_edge(&reference, ray.dir.as_dvec3(), scale),
+                    tie || near_edge(&reference, ray.dir().as_dvec3(), scale),
                     "ray {k}: {a:?} vs {b:?} (reference {:?})",
                     reference.first()
                 );

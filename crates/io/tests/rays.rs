@@ -41,14 +41,21 @@ fn rays_round_trip_and_match_the_layout() {
     for (i, r) in rays.iter().enumerate() {
         let f: Vec<f32> = (0..8).map(|k| le_f32(&bytes, 32 * i + 4 * k)).collect();
         let expect = [
-            r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar,
+            r.origin.x,
+            r.origin.y,
+            r.origin.z,
+            r.dir().x,
+            r.dir().y,
+            r.dir().z,
+            r.tnear,
+            r.tfar,
         ];
         assert_eq!(f, expect, "ray {i}");
     }
     let back = read_rays(&p).unwrap();
     assert_eq!(back, rays);
     // inv_dir is rebuilt by Ray::segment.
-    assert_eq!(back[5].inv_dir, Vec3::ONE / rays[5].dir);
+    assert_eq!(back[5].inv_dir(), Vec3::ONE / rays[5].dir());
     // Empty file: no rays.
     write_rays(&p, &[]).unwrap();
     assert!(read_rays(&p).unwrap().is_empty());

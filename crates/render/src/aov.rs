@@ -72,7 +72,7 @@ impl Aovs {
             if let Some(h) = h {
                 let ray = rays.pixel((i % width as usize) as u32, (i / width as usize) as u32);
                 let s = Surface::at(mesh, &ray, h, &fallback);
-                depth[i] = h.t * ray.dir.length();
+                depth[i] = h.t * ray.dir().length();
                 normal[i] = s.shading_normal;
                 id[i] = h.prim as i64;
             }
@@ -184,7 +184,7 @@ mod tests {
                     let [p, q, r] = scene.mesh.triangle(hit.prim as usize);
                     let point = p * (1.0 - hit.u - hit.v) + q * hit.u + r * hit.v;
                     assert!((a.depth[i] - point.distance(ray.origin)).abs() < 1e-3 * a.depth[i]);
-                    assert!(a.normal[i].dot(ray.dir) < 0.0);
+                    assert!(a.normal[i].dot(ray.dir()) < 0.0);
                     assert!((a.normal[i].length() - 1.0).abs() < 1e-4);
                     assert_eq!(a.id[i], hit.prim as i64);
                 }

@@ -57,14 +57,14 @@ impl<'a> Shader<'a> {
     pub fn radiance(&self, ray: &Ray) -> Vec3 {
         match self.accel.intersect(ray) {
             Some(hit) => self.shade(ray, &hit),
-            None => sky(ray.dir.normalize_or_zero()),
+            None => sky(ray.dir().normalize_or_zero()),
         }
     }
 
     /// Linear radiance leaving the hit `hit` of `ray` towards the ray origin.
     pub fn shade(&self, ray: &Ray, hit: &Hit) -> Vec3 {
         let s = Surface::at(self.mesh, ray, hit, &self.fallback);
-        let view = -ray.dir.normalize_or_zero();
+        let view = -ray.dir().normalize_or_zero();
         blinn_phong(&s, view, self.lights, self.ambient, &mut |_, ls| {
             if self.visible(&s, ls) {
                 1.0

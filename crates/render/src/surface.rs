@@ -36,7 +36,7 @@ impl<'a> Surface<'a> {
         let w = 1.0 - u - v;
         let point = a * w + b * u + c * v;
         let mut ng = (b - a).cross(c - a).normalize_or_zero();
-        let front_face = ng.dot(ray.dir) <= 0.0;
+        let front_face = ng.dot(ray.dir()) <= 0.0;
         if !front_face {
             ng = -ng;
         }

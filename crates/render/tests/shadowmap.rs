@@ -44,7 +44,7 @@ fn seen_points(
             };
             let p = ray.at(hit.t);
             let mut n = mesh.face_normal(hit.prim as usize).normalize_or_zero();
-            if n.dot(ray.dir) > 0.0 {
+            if n.dot(ray.dir()) > 0.0 {
                 n = -n;
             }
             let ls = light.toward(p);

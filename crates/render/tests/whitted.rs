@@ -113,7 +113,7 @@ fn mirror_shows_the_pattern_where_f64_reflection_says() {
     for y in 0..h {
         for x in 0..w {
             let r = rays.pixel(x, y);
-            let (o, dir) = (r.origin.as_dvec3(), r.dir.as_dvec3());
+            let (o, dir) = (r.origin.as_dvec3(), r.dir().as_dvec3());
             // f64: hit the mirror plane, reflect, hit the pattern plane.
             let t = -o.z / dir.z;
             let p = o + dir * t;
@@ -201,12 +201,12 @@ fn glass_slab_shifts_a_ray_by_snells_lateral_offset() {
         let out = path[2];
         // Leaves parallel to the incoming ray.
         assert!(
-            (out.dir.as_dvec3() - dir).length() < 1e-5,
+            (out.dir().as_dvec3() - dir).length() < 1e-5,
             "{deg}°: {}",
-            out.dir
+            out.dir()
         );
         // Inside: Snell's law.
-        let inside = path[1].dir.as_dvec3();
+        let inside = path[1].dir().as_dvec3();
         let sin_t = inside.x.hypot(inside.z);
         assert!((th.sin() - ior as f64 * sin_t).abs() < 1e-5, "{deg}°");
         // Lateral offset between the exiting ray's line and the incoming
@@ -555,7 +555,7 @@ fn textured_diffuse_surface_shows_its_texture_under_a_directional_light() {
     for y in 0..h {
         for x in 0..w {
             let r = rays.pixel(x, y);
-            let (o, d) = (r.origin.as_dvec3(), r.dir.as_dvec3());
+            let (o, d) = (r.origin.as_dvec3(), r.dir().as_dvec3());
             let p = o + d * (-o.z / d.z);
             let got = f.image.linear[(y * w + x) as usize];
             if p.x.abs() >= 0.999 || p.y.abs() >= 0.999 {

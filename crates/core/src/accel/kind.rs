@@ -1,6 +1,8 @@
 //! The structures by name, for run-time choice.
 
-/// The acceleration structures by name (`--accel NAME`).
+use crate::names::named_choice;
+
+/// The acceleration structures by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum AccelKind {
     /// [`BruteForce`](super::BruteForce).
@@ -45,7 +47,7 @@ impl AccelKind {
         AccelKind::KdBacktrack,
     ];
 
-    /// The command-line name.
+    /// The structure's name (`bvh8`, `kd-ropes`, …), as `Display` writes it.
     pub fn name(self) -> &'static str {
         match self {
             AccelKind::Brute => "brute",
@@ -60,37 +62,11 @@ impl AccelKind {
         }
     }
 
-    /// One-line description for `raykit info accels`.
-    pub fn description(self) -> &'static str {
-        match self {
-            AccelKind::Brute => {
-                "every ray against every triangle; the reference (slow: O(rays x triangles))"
-            }
-            AccelKind::Bvh2 => {
-                "binary BVH, parallel binned-SAH build, stack traversal nearest child first"
-            }
-            AccelKind::Bvh4 => {
-                "4-wide BVH, binned-SAH build making wide nodes directly, SSE box tests, ordered stack traversal"
-            }
-            AccelKind::Bvh8 => {
-                "8-wide BVH, binned-SAH build making wide nodes directly, AVX box tests (SSE/scalar fallback), ordered stack traversal"
-            }
-            AccelKind::ThreadedBvh => {
-                "BVH nodes in pre-order with escape indices, stackless traversal (Smits 1998)"
-            }
-            AccelKind::KdStack => {
-                "kd-tree (--kd-split), 8-byte nodes, per-ray stack traversal"
-            }
-            AccelKind::KdRopes => {
-                "kd-tree with ropes and leaf boxes, stackless (Popov et al. 2007)"
-            }
-            AccelKind::KdRestart => "kd-tree, kd-restart: stackless, descends from the root per leaf (Foley & Sugerman 2005)",
-            AccelKind::KdBacktrack => "kd-tree, kd-backtrack: stackless, climbs parent links (Foley & Sugerman 2005)",
-        }
-    }
-
-    /// Parse a command-line name.
+    /// The structure with this name, if any (`str::parse` gives an error
+    /// listing the names instead).
     pub fn from_name(name: &str) -> Option<AccelKind> {
         AccelKind::ALL.into_iter().find(|k| k.name() == name)
     }
 }
+
+named_choice!(AccelKind, "structure");

@@ -73,7 +73,8 @@ pub struct TriHit {
 
 /// A ray/triangle test with precomputed per-triangle and per-ray data.
 pub trait TriangleTest: Send + Sync + 'static {
-    /// Name used on the command line (`--test NAME`).
+    /// The test's name: how saved structures, reports and front ends
+    /// (`--test`, `test=`) identify it.
     const NAME: &'static str;
     /// Whether the wide BVHs keep this test's triangles in SIMD packs of
     /// four (`accel/bvh/tri4/`, Embree's `triangle4`; Wald et al. 2014),
@@ -106,14 +107,15 @@ pub trait TriangleTest: Send + Sync + 'static {
     /// triangle.
     const WORDS: usize;
 
-    /// Append the precomputed triangle as 32-bit words (`f32` bits, or a
-    /// `u32` where the record holds an integer), in the order the GPU
-    /// kernels read them (`crates/gpu/src/shaders/tri_*.wgsl`), so a device
-    /// tests exactly the data the CPU tests.
+    /// Append the precomputed triangle as its flat record: 32-bit words
+    /// (`f32` bits, or a `u32` where the record holds an integer). Saved
+    /// structures store these records (`accel/bvh/persist.rs`), and the
+    /// GPU kernels of `raykit-gpu` read the same layout, so a loaded
+    /// structure and a device test exactly the data the CPU precomputed.
     fn write_words(tri: &Self::Tri, out: &mut Vec<u32>);
 }
 
-/// The triangle tests by name, for run-time selection (`--test NAME`).
+/// The triangle tests by name, for run-time selection.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TestKind {
     /// [`Moller`].
@@ -128,7 +130,7 @@ impl TestKind {
     /// Every test, in a fixed order.
     pub const ALL: [TestKind; 3] = [TestKind::Moller, TestKind::Plucker, TestKind::Projection];
 
-    /// The command-line name.
+    /// The test's name (its [`TriangleTest::NAME`]), as `Display` writes it.
     pub fn name(self) -> &'static str {
         match self {
             TestKind::Moller => Moller::NAME,
@@ -137,20 +139,14 @@ impl TestKind {
         }
     }
 
-    /// One-line description for `raykit info tests`.
-    pub fn description(self) -> &'static str {
-        match self {
-            TestKind::Moller => "Möller–Trumbore 1997: edge vectors, determinant and barycentrics per ray",
-            TestKind::Plucker => "Plücker coordinates (Jones 2000): sign test on precomputed edge lines, then distance; watertight on shared edges",
-            TestKind::Projection => "Wald's projection test (2004): precomputed projection onto the dominant axis plane",
-        }
-    }
-
-    /// Parse a command-line name.
+    /// The test with this name, if any (`str::parse` gives an error
+    /// listing the names instead).
     pub fn from_name(name: &str) -> Option<TestKind> {
         TestKind::ALL.into_iter().find(|k| k.name() == name)
     }
 }
+
+crate::names::named_choice!(TestKind, "triangle test");
 
 /// Call `$body` with the type alias `$T` bound to the triangle test named by
 /// a [`TestKind`] value, so that generic code can be chosen at run time.

@@ -148,7 +148,7 @@ pub struct Crossing {
 
 /// Every crossing of `ray` with `world` within `[tnear, tfar]`, sorted by `t`.
 pub fn crossings(world: &[WorldTri], ray: &Ray) -> Vec<Crossing> {
-    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir().as_dvec3());
     let mut out = Vec::new();
     for ([a, b, c], ids) in world {
         if let Some((t, _, _)) = intersect_f64(*a, *b, *c, o, d) {
@@ -225,7 +225,7 @@ pub fn agree_with_flattened(
         match (a, b) {
             (None, None) => same += 1,
             (Some(a), Some(b)) if ids(&a) == flat_ids[b.prim as usize] => {
-                let (t, d) = (b.t as f64, ray.dir.as_dvec3());
+                let (t, d) = (b.t as f64, ray.dir().as_dvec3());
                 let n = a.normal.as_dvec3();
                 assert!(
                     close_on_plane(a.t as f64, t, n, d, scale),
@@ -238,7 +238,7 @@ pub fn agree_with_flattened(
                 let tie =
                     matches!((a, b), (Some(a), Some(b)) if close(a.t as f64, b.t as f64, 1e-5));
                 assert!(
-                    tie || near_edge(&reference, ray.dir.as_dvec3(), scale),
+                    tie || near_edge(&reference, ray.dir().as_dvec3(), scale),
                     "ray {k}: {a:?} vs {b:?} (reference {:?})",
                     reference.first()
                 );

@@ -114,7 +114,7 @@ pub fn rays_at(mesh: &TriangleMesh, n: usize, seed: u64) -> Vec<Ray> {
 /// `t` is ill-conditioned.
 fn grazes(mesh: &TriangleMesh, ray: &Ray, prim: u32) -> bool {
     let [a, b, c] = mesh.triangle(prim as usize).map(|p| p.as_dvec3());
-    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir().as_dvec3());
     match plane_t_f64(a, b, c, o, d) {
         Some(t) => edge_distance_f64(a, b, c, o + d * t) < EDGE_BAND,
         None => true,

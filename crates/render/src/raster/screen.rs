@@ -79,7 +79,7 @@ impl Screen {
     /// `U·|x|`). Not finite for a ray that does not point into the image.
     pub fn sample(&self, ray: &Ray) -> [f32; 2] {
         let v = if self.perspective {
-            ray.dir.as_dvec3()
+            ray.dir().as_dvec3()
         } else {
             ray.origin.as_dvec3() - self.base.as_dvec3()
         };

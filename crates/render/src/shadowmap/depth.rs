@@ -64,7 +64,7 @@ impl DepthMap {
                 // ray meets the plane of the surface at `p` (exact for
                 // planar receivers), or `p`'s own distance for grazing rays.
                 let ray = self.view.pixel(tx as u32, ty as u32);
-                let cos = ray.dir.dot(n);
+                let cos = ray.dir().dot(n);
                 let mut receiver = own;
                 if cos.abs() > 0.05 {
                     let t = (p - ray.origin).dot(n) / cos;

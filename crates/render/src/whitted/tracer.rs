@@ -167,7 +167,7 @@ impl<'a> Tracer<'a> {
     /// Radiance of a ray that left the scene.
     pub fn miss(&self, ray: &Ray) -> Vec3 {
         self.counts.environment.add(1);
-        self.environment.radiance(ray.origin, ray.dir)
+        self.environment.radiance(ray.origin, ray.dir())
     }
 
     /// The surface at a hit.
@@ -180,7 +180,7 @@ impl<'a> Tracer<'a> {
     pub fn scatter(&self, ray: &Ray, hit: &Hit, depth: u32) -> Scatter {
         let s = self.surface(ray, hit);
         let m = s.material;
-        let d = ray.dir.normalize_or_zero();
+        let d = ray.dir().normalize_or_zero();
         let t = m.transmission.clamp(0.0, 1.0);
         let r = m.reflectivity.clamp(0.0, 1.0);
         let mut local = Vec3::from(m.emission);

@@ -92,29 +92,38 @@ pub enum KdSplit {
 }
 
 impl KdSplit {
-    /// Parse `sah`, `median` or `game:H`.
-    pub fn parse(s: &str) -> Result<KdSplit, String> {
-        match s {
-            "sah" => Ok(KdSplit::Sah),
-            "median" => Ok(KdSplit::Median),
-            _ => {
-                let h = s.strip_prefix("game:").ok_or_else(|| {
-                    format!("unknown kd split '{s}': expected sah, median or game:H")
-                })?;
-                match h.parse::<u8>() {
-                    Ok(h) if h <= 20 => Ok(KdSplit::Game(h)),
-                    _ => Err(format!("game:H needs an integer H in 0..=20, got '{h}'")),
-                }
-            }
-        }
-    }
-
-    /// The name [`KdSplit::parse`] reads.
+    /// The rule's name (`sah`, `median`, `game:H`), as `Display` writes it
+    /// and `FromStr` reads it.
     pub fn name(self) -> String {
         match self {
             KdSplit::Sah => "sah".into(),
             KdSplit::Median => "median".into(),
             KdSplit::Game(h) => format!("game:{h}"),
+        }
+    }
+}
+
+impl std::fmt::Display for KdSplit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.name())
+    }
+}
+
+/// Reads `sah`, `median` or `game:H` with an integer `H` in `0..=20`.
+impl std::str::FromStr for KdSplit {
+    type Err = crate::names::UnknownName;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let game = s.strip_prefix("game:").and_then(|h| h.parse::<u8>().ok());
+        match (s, game) {
+            ("sah", _) => Ok(KdSplit::Sah),
+            ("median", _) => Ok(KdSplit::Median),
+            (_, Some(h)) if h <= 20 => Ok(KdSplit::Game(h)),
+            _ => Err(crate::names::UnknownName {
+                what: "kd split",
+                given: s.to_string(),
+                choices: vec!["sah", "median", "game:H (H an integer in 0..=20)"],
+            }),
         }
     }
 }

@@ -88,14 +88,40 @@ pub enum BuildQuality {
 }
 
 impl BuildQuality {
-    /// Parse `sah`, `high` or `fast` (also `lbvh`).
-    pub fn parse(s: &str) -> Result<Self, String> {
-        match s.to_ascii_lowercase().as_str() {
-            "sah" => Ok(BuildQuality::Sah),
-            "high" => Ok(BuildQuality::High),
-            "fast" | "lbvh" => Ok(BuildQuality::Fast),
-            _ => Err(format!("unknown build quality {s:?} (sah, high, fast)")),
+    /// Every quality, in a fixed order.
+    pub const ALL: [BuildQuality; 3] = [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast];
+
+    /// The quality's name: `sah`, `high` or `fast`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BuildQuality::Sah => "sah",
+            BuildQuality::High => "high",
+            BuildQuality::Fast => "fast",
         }
+    }
+}
+
+impl std::fmt::Display for BuildQuality {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Reads a [`BuildQuality::name`] in any case, and `lbvh` for `fast`.
+impl std::str::FromStr for BuildQuality {
+    type Err = crate::names::UnknownName;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let lower = s.to_ascii_lowercase();
+        let lower = if lower == "lbvh" { "fast" } else { &lower };
+        BuildQuality::ALL
+            .into_iter()
+            .find(|q| q.name() == lower)
+            .ok_or_else(|| crate::names::UnknownName {
+                what: "build quality",
+                given: s.to_string(),
+                choices: BuildQuality::ALL.iter().map(|q| q.name()).collect(),
+            })
     }
 }
 
