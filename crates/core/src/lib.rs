@@ -59,6 +59,8 @@ pub mod query;
 pub mod ray;
 pub mod raysets;
 pub mod rng;
+#[cfg(test)]
+mod test_soup;
 pub mod texture;
 pub mod tjunction;
 pub mod tri;

@@ -30,8 +30,8 @@ mod registry;
 
 pub use brute::BruteForce;
 pub use bvh::{
-    BuildNode, BuildOptions, BuildQuality, Bvh2, Bvh4, Bvh8, Node4, Node8, PersistError,
-    RefitError, RefitReport, ThreadedBvh, WideBvh,
+    BuildOptions, BuildQuality, Bvh2, Bvh4, Bvh8, Node4, Node8, PersistError, RefitError,
+    RefitReport, ThreadedBvh, WideBvh,
 };
 pub use flat::{
     FlatBvh8, FlatChild, FlatKdRopes, FlatKdTree, FlatNode8, FlatThreadedBvh, FlatTriangles,

@@ -32,7 +32,7 @@ mod box4;
 mod box8;
 mod box_path;
 mod boxes;
-pub mod build;
+pub(crate) mod build;
 mod bvh2;
 mod bvh8_flat;
 mod collapse;
@@ -69,7 +69,8 @@ mod wide_parts;
 mod wide_tree;
 mod words;
 
-pub use build::{BuildNode, BuildOptions, BuildQuality};
+pub(crate) use build::BuildNode;
+pub use build::{BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;
 pub use node4::Node4;
 pub use node8::Node8;

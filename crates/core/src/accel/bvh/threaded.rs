@@ -153,7 +153,6 @@ fn complete_tree(mesh: &TriangleMesh) -> BuildNode {
                     let bounds = a.bounds().union(b.bounds());
                     next.push(BuildNode::Inner {
                         bounds,
-                        axis: bounds.extent().max_position() as u8,
                         children: Box::new([a, b]),
                         leaf_ok: false,
                     });

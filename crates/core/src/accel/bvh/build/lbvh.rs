@@ -189,7 +189,7 @@ impl Ctx<'_> {
             let b = self.refs[lo].bounds();
             return (self.leaf(lo, hi, b), b);
         }
-        let (mid, axis) = self.split(lo, hi);
+        let (mid, _) = self.split(lo, hi);
         if n <= self.opts.max_leaf_size {
             let (bl, cl) = self.small_cost(lo, mid);
             let (br, cr) = self.small_cost(mid, hi);
@@ -205,10 +205,8 @@ impl Ctx<'_> {
             (self.node(lo, mid), self.node(mid, hi))
         };
         let b = bl.union(br);
-        let axis = axis.unwrap_or_else(|| b.aabb().largest_axis() as u8);
         let node = BuildNode::Inner {
             bounds: b.aabb(),
-            axis,
             children: Box::new([l, r]),
             leaf_ok: false,
         };

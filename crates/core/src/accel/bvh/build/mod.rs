@@ -15,6 +15,8 @@
 
 pub mod lbvh;
 pub(crate) mod sweep;
+#[cfg(test)]
+mod tests;
 
 use super::binning::{partition, Bins, Mapping, PrimRef, RangeInfo, Split};
 use super::MAX_DEPTH;
@@ -186,8 +188,6 @@ pub enum BuildNode {
     Inner {
         /// Bounds of both children.
         bounds: Aabb,
-        /// Split axis (0, 1, 2).
-        axis: u8,
         /// The two children.
         children: Box<[BuildNode; 2]>,
         /// The SAH prefers one leaf of the whole subtree to this split (only
@@ -478,7 +478,7 @@ fn sah_node(
         Plan::Median { .. } => false,
     };
     let n = refs.len();
-    let (axis, mid, linfo, rinfo) = split_refs(refs, &plan);
+    let (_, mid, linfo, rinfo) = split_refs(refs, &plan);
     let (left, right) = refs.split_at_mut(mid);
     let (l, r) = if leaf_ok {
         // Only seen when a wide node has slots to fill: swept, not binned.
@@ -502,7 +502,6 @@ fn sah_node(
     };
     BuildNode::Inner {
         bounds,
-        axis: axis as u8,
         children: Box::new([l, r]),
         leaf_ok,
     }

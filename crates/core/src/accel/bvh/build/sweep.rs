@@ -32,11 +32,9 @@ pub(crate) fn sweep_node(refs: &mut [PrimRef], first: usize, opts: &BuildOptions
             count: refs.len() as u32,
         };
     };
-    let axis = info.centers.aabb().largest_axis();
     let (l, r) = refs.split_at_mut(best);
     BuildNode::Inner {
         bounds,
-        axis: axis as u8,
         children: Box::new([
             sweep_node(l, first, opts),
             sweep_node(r, first + best, opts),

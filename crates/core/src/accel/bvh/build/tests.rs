@@ -4,20 +4,18 @@
 //! from the mesh), every inner box the union of its children's; and the same
 //! tree whatever the number of threads.
 
-use raykit_core::aabb::Aabb;
-use raykit_core::accel::bvh::build::{build, tree_shape, BuildTree};
-use raykit_core::accel::BuildNode;
-use raykit_core::accel::{BuildOptions, BuildQuality};
-use raykit_core::rng::Pcg32;
-use raykit_core::{TriangleMesh, Vec3};
-
-mod soup;
+use super::{build, tree_shape, BuildNode, BuildOptions, BuildQuality, BuildTree};
+use crate::aabb::Aabb;
+use crate::mesh::TriangleMesh;
+use crate::rng::Pcg32;
+use crate::test_soup;
+use glam::Vec3;
 
 const QUALITIES: [BuildQuality; 2] = [BuildQuality::Sah, BuildQuality::Fast];
 
 /// `n` random triangles of varied size in the unit cube.
 fn soup(n: usize, seed: u64) -> TriangleMesh {
-    soup::soup(n, seed, 0.001, 0.05, 3)
+    test_soup::soup(n, seed, 0.001, 0.05, 3)
 }
 
 /// `n` copies of one triangle (every centroid equal), plus a clustered
@@ -48,7 +46,7 @@ fn check_tree(mesh: &TriangleMesh, tree: &BuildTree, opts: &BuildOptions) -> usi
     let mut leaves = 0;
     let mut stack = vec![(&tree.root, 0usize)];
     while let Some((node, depth)) = stack.pop() {
-        assert!(depth <= raykit_core::accel::bvh::MAX_DEPTH, "too deep");
+        assert!(depth <= crate::accel::bvh::MAX_DEPTH, "too deep");
         match node {
             BuildNode::Leaf {
                 bounds,
@@ -71,7 +69,6 @@ fn check_tree(mesh: &TriangleMesh, tree: &BuildTree, opts: &BuildOptions) -> usi
             }
             BuildNode::Inner {
                 bounds,
-                axis,
                 children,
                 leaf_ok,
             } => {
@@ -80,7 +77,6 @@ fn check_tree(mesh: &TriangleMesh, tree: &BuildTree, opts: &BuildOptions) -> usi
                     let (_, count) = node.triangle_range();
                     assert!(count as usize <= opts.max_leaf_size, "a marked leaf fits");
                 }
-                assert!(*axis < 3);
                 let u = children[0].bounds().union(children[1].bounds());
                 assert_eq!(*bounds, u, "inner box is its children's union");
                 for c in children.iter() {
@@ -119,23 +115,15 @@ fn same_tree(a: &BuildNode, b: &BuildNode) -> bool {
         (
             BuildNode::Inner {
                 bounds: b1,
-                axis: a1,
                 children: k1,
                 leaf_ok: o1,
             },
             BuildNode::Inner {
                 bounds: b2,
-                axis: a2,
                 children: k2,
                 leaf_ok: o2,
             },
-        ) => {
-            b1 == b2
-                && a1 == a2
-                && o1 == o2
-                && same_tree(&k1[0], &k2[0])
-                && same_tree(&k1[1], &k2[1])
-        }
+        ) => b1 == b2 && o1 == o2 && same_tree(&k1[0], &k2[0]) && same_tree(&k1[1], &k2[1]),
         _ => false,
     }
 }
