@@ -61,6 +61,7 @@ pub mod rng;
 pub mod texture;
 pub mod tjunction;
 pub mod tri;
+pub mod verify;
 
 pub use aabb::Aabb;
 pub use accel::{Accel, AccelStats};
