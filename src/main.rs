@@ -1,17 +1,13 @@
 //! The `raykit` command line: argument parsing and wiring only; the work is
 //! done by the library crates.
 
-mod backend;
-mod build_args;
 mod cmd;
-mod gpu_measure;
 mod instanced_arg;
-mod measure;
-mod one_ray;
 mod paths;
-mod plot;
-mod scene_arg;
-mod verify;
+
+use raykit_core::verify;
+use raykit_lab::args::{backend, build_args, scene_arg};
+use raykit_lab::{measure, one_ray};
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -40,7 +36,7 @@ enum Command {
     /// Point and ray queries on a mesh's surface: closest point, distance, signed distance, inside, hit counts, all hits.
     Query(cmd::query::QueryArgs),
     /// Measure build time, memory and Mrays/s of bvh8 (the default) or of every structure × triangle test.
-    Bench(cmd::bench::BenchArgs),
+    Bench(raykit_lab::bench::BenchArgs),
     /// Find and remove T-junctions (vertices inside other triangles' edges).
     Tjunctions(cmd::tjunctions::TJunctionsArgs),
     /// Remove the hidden interior of a model: triangles or parts no outside viewpoint sees.
@@ -50,7 +46,7 @@ enum Command {
     /// Stream rendered frames to browsers over WebSocket (JPEG) or MJPEG, with interactive cameras.
     Serve(cmd::serve::ServeArgs),
     /// Reproduce published tables and figures on this machine (CSV, Markdown, SVG).
-    Experiment(cmd::experiment::ExperimentArgs),
+    Experiment(raykit_lab::experiment::ExperimentArgs),
     /// Write a scene (built-in or file) as glTF with its materials, camera and lights.
     Export(cmd::export::ExportArgs),
     /// List the names accepted by --accel, --test and --scene.
@@ -65,12 +61,12 @@ fn main() -> ExitCode {
         Command::Rays(a) => cmd::rays::run(a),
         Command::Trace(a) => cmd::trace::run(a),
         Command::Query(a) => cmd::query::run(a),
-        Command::Bench(a) => cmd::bench::run(a),
+        Command::Bench(a) => raykit_lab::bench::run(a),
         Command::Tjunctions(a) => cmd::tjunctions::run(a),
         Command::Cull(a) => cmd::cull::run(a),
         Command::Serve(a) => cmd::serve::run(a),
         Command::Terrain(a) => cmd::terrain::run(a),
-        Command::Experiment(a) => cmd::experiment::run(a),
+        Command::Experiment(a) => raykit_lab::experiment::run(a),
         Command::Export(a) => cmd::export::run(a),
         Command::Info(a) => cmd::info::run(a),
     };

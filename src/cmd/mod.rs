@@ -1,11 +1,6 @@
 //! One module per subcommand.
 
-pub mod bench;
-#[cfg(feature = "embree")]
-pub mod bench_compare;
-pub mod bench_gpu;
 pub mod cull;
-pub mod experiment;
 pub mod export;
 pub mod info;
 pub mod merge_tiles;

@@ -1,13 +1,12 @@
 //! `raykit serve`: stream rendered frames to browsers and other clients.
 
-use crate::scene_arg;
 use anyhow::{Context, Result};
 use clap::Args;
-use raykit_serve::{start, ServeConfig};
+use raykit_lab::args::scene_arg::loader;
+use raykit_serve::{runtime, start, ServeConfig};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
 use std::time::Duration;
 
 /// Arguments of `raykit serve`.
@@ -100,20 +99,6 @@ impl ServeArgs {
             ..ServeConfig::default()
         }
     }
-}
-
-/// The loader the server uses for `--scene` and `POST /api/scene`.
-pub fn loader() -> raykit_serve::SceneLoader {
-    Arc::new(|spec: &str| scene_arg::load(spec))
-}
-
-/// A tokio runtime for the server (rendering runs on the rayon pool).
-pub fn runtime() -> Result<tokio::runtime::Runtime> {
-    tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .context("cannot start the async runtime")
 }
 
 /// Serve until Ctrl-C (or `--seconds`).

@@ -64,6 +64,7 @@ mod test_soup;
 pub mod texture;
 pub mod tjunction;
 pub mod tri;
+pub mod verify;
 
 pub use aabb::Aabb;
 pub use accel::{Accel, AccelStats};

@@ -23,11 +23,13 @@
 pub mod aov;
 pub mod env;
 mod image;
+pub mod light_spec;
 pub mod lighting;
 mod options;
 mod primary;
 pub mod raster;
 mod render;
+pub mod scene_setup;
 pub mod shade;
 pub mod shadowmap;
 pub mod sky;

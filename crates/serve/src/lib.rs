@@ -43,6 +43,7 @@ pub mod link;
 pub mod load;
 mod mjpeg;
 pub mod protocol;
+mod runtime;
 mod session;
 pub mod stats;
 mod sync;
@@ -53,6 +54,7 @@ pub use app::{AppState, SceneLoader};
 pub use config::ServeConfig;
 pub use frame::encode_jpeg;
 pub use mjpeg::BOUNDARY;
+pub use runtime::runtime;
 pub use ws::{CLOSE_GOING_AWAY, CLOSE_TOO_BIG};
 
 use anyhow::{bail, Context, Result};

@@ -6,9 +6,7 @@
 //! with `--backend gpu`, on the GPU.
 
 mod gpu;
-pub mod lights_arg;
 mod output;
-pub mod setup;
 pub mod split;
 
 use crate::cmd::trace::parse_names;
@@ -17,6 +15,7 @@ use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_core::accel::build_accel;
+use raykit_lab::args::scene as setup;
 use raykit_render::aov::AovKind;
 use raykit_render::shadowmap::{ShadowMapOptions, ShadowMaps};
 use raykit_render::whitted::{

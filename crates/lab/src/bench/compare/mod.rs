@@ -15,12 +15,14 @@ mod print;
 
 use crate::measure::{median_min_max, pool, timed};
 use crate::one_ray;
-use crate::verify::{compare_hits, compare_occlusion, edge_grazes, occlusion_grazes, Verdict};
 use anyhow::Result;
 use print::{print_report, print_summary, summarise};
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions, BuildQuality};
 use raykit_core::raysets::{self, RayKind};
 use raykit_core::tri::TestKind;
+use raykit_core::verify::{
+    compare_hits, compare_occlusion, edge_grazes, occlusion_grazes, Verdict,
+};
 use raykit_core::{Accel, Hit, Ray, TriangleMesh};
 use raykit_embree::{
     Embree3Device, Embree3Scene, Embree4, Embree4Device, Embree4Scene, Quality, QueryApi,

@@ -2,10 +2,10 @@
 //! GPU kernels (the kd-tree with a per-ray stack, the threaded BVH (Smits 1998)) × the
 //! Plücker and Möller tests, every answer checked against the CPU twin.
 
-use crate::backend::{gpu_accel, open_gpu};
+use crate::args::backend::{gpu_accel, open_gpu};
+use crate::args::scene_arg;
 use crate::gpu_measure::{measure, GpuRow, Workload};
 use crate::measure::pool;
-use crate::scene_arg;
 use anyhow::{anyhow, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};

@@ -4,9 +4,9 @@
 //! threaded BVH (Smits 1998) in the same table.
 
 use super::{cached_dragon, shared_mesh, write_csv, write_text};
-use crate::build_args::BuildArgs;
+use crate::args::build_args::BuildArgs;
+use crate::args::scene_arg;
 use crate::measure::{median_min_max, pool, timed};
-use crate::scene_arg;
 use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -191,7 +191,8 @@ pub fn run(args: KdTraversalArgs) -> Result<ExitCode> {
                     accel.intersect_batch(&primary, &mut hits);
                     accel.occluded_batch(&shadow, &mut occ);
                 });
-                let disagreements = crate::verify::compare_hits(&prim_ref, &hits).disagreements()
+                let disagreements = raykit_core::verify::compare_hits(&prim_ref, &hits)
+                    .disagreements()
                     + shadow_ref.iter().zip(&occ).filter(|(a, b)| a != b).count();
                 speed.push(SpeedRow {
                     mesh: name.clone(),

@@ -1,4 +1,5 @@
-//! `--light` specifications: point, directional and spot lights.
+//! Light specifications as written on a command line or in a config:
+//! point, directional and spot lights (`--light` of `raykit render`).
 
 use anyhow::{bail, Context, Result};
 use raykit_core::{Light, PointLight, Vec3};

@@ -2,12 +2,12 @@
 //! answer checked against the CPU structure it mirrors: shared by `raykit
 //! bench --backend gpu` and `raykit experiment gpu`.
 
-use crate::backend::cpu_twin;
+use crate::args::backend::cpu_twin;
 use crate::measure::median_min_max;
-use crate::verify::{self, Verdict};
 use anyhow::{anyhow, Result};
 use raykit_core::accel::{build_accel, BuildOptions};
 use raykit_core::tri::TestKind;
+use raykit_core::verify::{self, Verdict};
 use raykit_core::{Ray, TriangleMesh};
 use raykit_gpu::{count_traversal, cwbvh, GpuAccelKind, GpuContext, GpuScene, GpuTracer, CHUNK};
 use serde::Serialize;

@@ -4,9 +4,9 @@
 //! bytes per frame, the bit rate, and input-to-frame latency percentiles.
 
 use super::{provenance, write_text};
-use crate::cmd::serve::runtime;
 use anyhow::Result;
 use raykit_serve::link::{measure_link, LinkOptions, LinkReport};
+use raykit_serve::runtime;
 use serde::Serialize;
 use std::path::Path;
 use std::process::ExitCode;

@@ -2,10 +2,10 @@
 //! weight H = 0..20 (its Figures 5 to 8) with the SAH tree as a reference.
 
 use super::{shared_mesh, write_csv, write_text};
-use crate::build_args::BuildArgs;
+use crate::args::build_args::BuildArgs;
+use crate::args::scene_arg;
 use crate::measure::{median_min_max, pool, timed};
 use crate::plot::{write_svg, LineChart, Series};
-use crate::scene_arg;
 use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -257,7 +257,7 @@ fn sweep_point(
         let (_, t) = timed(|| accel.intersect_batch(rays, &mut hits));
         ray_speed.push(rays.len() as f64 / t / 1e6);
     }
-    let ray_disagreements = crate::verify::compare_hits(want, &hits).disagreements();
+    let ray_disagreements = raykit_core::verify::compare_hits(want, &hits).disagreements();
     let mut q_speed = Vec::new();
     let mut frustum_disagreements = 0;
     for rep in 0..reps {

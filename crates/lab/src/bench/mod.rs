@@ -2,16 +2,20 @@
 //! triangle tests (the default one, or every one with `--accel all --test
 //! all`) on the standard ray sets, on one thread and on all threads.
 
-use crate::backend::Backend;
+#[cfg(feature = "embree")]
+pub mod compare;
+pub mod gpu;
+
+use crate::args::backend::Backend;
+use crate::args::scene_arg;
 use crate::measure::{median_min_max, pool, timed};
-use crate::scene_arg;
-use crate::verify::{self, Verdict};
 use anyhow::{anyhow, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_core::accel::{build_accel, AccelKind};
 use raykit_core::raysets::{self, RayKind};
 use raykit_core::tri::TestKind;
+use raykit_core::verify::{self, Verdict};
 use raykit_core::{Accel, Hit, Ray, TriangleMesh};
 use serde::Serialize;
 use std::process::ExitCode;
@@ -83,7 +87,7 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     backend: Backend,
     #[command(flatten)]
-    build: crate::build_args::BuildArgs,
+    build: crate::args::build_args::BuildArgs,
 }
 
 /// Speed on one ray set.
@@ -156,7 +160,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         anyhow::bail!("--mesh may be given several times only with --compare; this measurement takes one mesh");
     };
     if args.backend == Backend::Gpu {
-        return crate::cmd::bench_gpu::run(crate::cmd::bench_gpu::GpuBenchSetup {
+        return gpu::run(gpu::GpuBenchSetup {
             mesh: mesh_spec,
             accel: args.accel.as_deref().unwrap_or("all"),
             test: args.test.as_deref().unwrap_or("all"),
@@ -169,7 +173,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     let accels = parse_list(
         args.accel
             .as_deref()
-            .unwrap_or(crate::build_args::DEFAULT_ACCEL),
+            .unwrap_or(crate::args::build_args::DEFAULT_ACCEL),
         &AccelKind::ALL,
         AccelKind::name,
         "--accel",
@@ -506,7 +510,7 @@ fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
             .iter()
             .map(|m| Ok((m.clone(), scene_arg::load(m)?.mesh)))
             .collect::<Result<Vec<_>>>()?;
-        crate::cmd::bench_compare::run(crate::cmd::bench_compare::CompareSetup {
+        compare::run(compare::CompareSetup {
             meshes: &meshes,
             ours,
             options: args.build.options(),
@@ -514,7 +518,7 @@ fn compare(args: &BenchArgs, engine: &str) -> Result<ExitCode> {
             reps: args.reps.max(1),
             threads: args.threads,
             json: args.json,
-            yardsticks: crate::cmd::bench_compare::Yardsticks {
+            yardsticks: compare::Yardsticks {
                 embree3: want3,
                 embree4,
             },

@@ -6,7 +6,7 @@
 //! frames per second of the Whitted renderer at 2 passes.
 
 use super::{shared_mesh, write_csv, write_text};
-use crate::cmd::render::setup::{setup, RenderSetup, SceneArgs};
+use crate::args::scene::{setup, RenderSetup, SceneArgs};
 use crate::measure::{median_ms, pool, timed};
 use anyhow::{Context, Result};
 use clap::Args;

@@ -1,58 +1,59 @@
-//! What `raykit render` and `raykit experiment whitted` render: the scene,
-//! its camera, lights, environment and material overrides, from the
-//! command line over the scene file's own settings.
+//! A scene made ready to render: its camera, lights, environment and
+//! material overrides applied over the scene file's own settings, as
+//! `raykit render` and the Whitted experiments take them from options.
 
-use super::lights_arg::{parse_light, parse_vec3, LIGHT_HELP};
-use crate::scene_arg;
+use crate::env::{Environment, EquirectMap, DEFAULT_BOX_SCALE};
+use crate::light_spec::{parse_light, parse_vec3};
 use anyhow::{bail, Context, Result};
-use clap::Args;
 use raykit_core::raysets::standard_light;
-use raykit_core::{Camera, Light, Material, PointLight, Vec3};
-use raykit_render::env::Environment;
+use raykit_core::{Aabb, Camera, Light, Material, PointLight, Vec3};
 use raykit_scene::Scene;
 
-/// Scene, camera, light, environment and material options.
-#[derive(Args, Clone, Debug)]
-pub struct SceneArgs {
-    /// Scene: builtin:NAME[:key=value,...] (`raykit info scenes`) or a mesh or
-    /// glTF/GLB file (a glTF file's camera and lights are used unless
-    /// overridden).
-    #[arg(long, default_value = "builtin:whitted")]
-    pub scene: String,
-    /// Camera position x,y,z (replaces the scene's camera).
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+/// Camera, light, environment and material overrides of a scene.
+#[derive(Clone, Debug)]
+pub struct SceneOptions {
+    /// Camera position (replaces the scene's camera).
     pub eye: Option<Vec3>,
-    /// Point the camera looks at, x,y,z (default: the scene centre).
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    /// Point the camera looks at (default: the scene centre).
     pub target: Option<Vec3>,
-    /// Up direction x,y,z.
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,1,0")]
+    /// Up direction.
     pub up: Vec3,
     /// Vertical field of view in degrees (default: the scene camera's, else 40).
-    #[arg(long)]
     pub fov: Option<f32>,
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true, help = LIGHT_HELP)]
+    /// Light specifications ([`parse_light`]); they replace the scene's lights.
     pub light: Vec<String>,
-    /// What rays leaving the scene see: `sky` (a gradient), `black`, `white`,
-    /// `R,G,B` (uniform), or an equirectangular HDR map (`.exr`, `.hdr`).
-    #[arg(long, default_value = "sky")]
+    /// What rays leaving the scene see: `sky`, `black`, `white`, `R,G,B` or
+    /// an equirectangular HDR map file.
     pub env: String,
-    /// The environment box: look the map up where a ray leaves a box
-    /// around the scene (reflections get parallax) instead of by direction.
-    #[arg(long)]
+    /// Look the map up where a ray leaves a box around the scene.
     pub env_box: bool,
     /// Size of the environment box relative to the scene bounds.
-    #[arg(long, default_value_t = raykit_render::env::DEFAULT_BOX_SCALE)]
     pub env_box_scale: f32,
     /// Factor on the environment map's radiance.
-    #[arg(long, default_value_t = 1.0)]
     pub env_intensity: f32,
     /// Rotation of the environment map about +y, degrees.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub env_rotate: f32,
-    /// Give every triangle one material: glass, mirror, gold, white or plastic.
-    #[arg(long)]
+    /// One material for every triangle ([`material_preset`]).
     pub material: Option<String>,
+}
+
+impl Default for SceneOptions {
+    /// The scene's own settings under a sky gradient.
+    fn default() -> Self {
+        SceneOptions {
+            eye: None,
+            target: None,
+            up: Vec3::Y,
+            fov: None,
+            light: Vec::new(),
+            env: "sky".into(),
+            env_box: false,
+            env_box_scale: DEFAULT_BOX_SCALE,
+            env_intensity: 1.0,
+            env_rotate: 0.0,
+            material: None,
+        }
+    }
 }
 
 /// A scene ready to render.
@@ -61,14 +62,14 @@ pub struct RenderSetup {
     pub scene: Scene,
     /// The camera after overrides.
     pub camera: Camera,
-    /// The lights after overrides: `--light`, else the scene's, else one
-    /// white point light above the scene.
+    /// The lights after overrides: the options' lights, else the scene's,
+    /// else one white point light above the scene.
     pub lights: Vec<Light>,
     /// The environment.
     pub environment: Environment,
 }
 
-/// Material presets of `--material`.
+/// Material presets: glass, mirror, gold, white and plastic.
 pub fn material_preset(name: &str) -> Result<Material> {
     let base = Material {
         name: name.to_string(),
@@ -114,7 +115,7 @@ pub fn material_preset(name: &str) -> Result<Material> {
 }
 
 /// The environment named by `spec` around a scene with bounds `bounds`.
-pub fn environment(args: &SceneArgs, bounds: &raykit_core::Aabb) -> Result<Environment> {
+pub fn environment(args: &SceneOptions, bounds: &Aabb) -> Result<Environment> {
     let uniform = match args.env.as_str() {
         "sky" => return Ok(Environment::Sky),
         "black" => Some(Vec3::ZERO),
@@ -133,7 +134,7 @@ pub fn environment(args: &SceneArgs, bounds: &raykit_core::Aabb) -> Result<Envir
     if !(args.env_box_scale.is_finite() && args.env_box_scale >= 1.0) {
         bail!("--env-box-scale must be at least 1 (the box must contain the scene)");
     }
-    let map = raykit_render::env::EquirectMap::load(std::path::Path::new(&args.env))
+    let map = EquirectMap::load(std::path::Path::new(&args.env))
         .with_context(|| format!("--env {}", args.env))?
         .with_rotation_deg(args.env_rotate)
         .with_intensity(args.env_intensity);
@@ -144,14 +145,14 @@ pub fn environment(args: &SceneArgs, bounds: &raykit_core::Aabb) -> Result<Envir
     })
 }
 
-/// Load the scene and apply the overrides; `aspect` is width / height.
-pub fn setup(args: &SceneArgs, aspect: f32) -> Result<RenderSetup> {
+/// Apply the overrides to a loaded scene (vertex normals computed where the
+/// file has none); `aspect` is width / height.
+pub fn setup(mut scene: Scene, args: &SceneOptions, aspect: f32) -> Result<RenderSetup> {
     if let Some(fov) = args.fov {
         if !(1.0..179.0).contains(&fov) {
             bail!("--fov must be between 1 and 179 degrees");
         }
     }
-    let mut scene = scene_arg::load(&args.scene)?;
     if scene.mesh.normals.is_none() {
         scene.mesh.compute_vertex_normals();
     }

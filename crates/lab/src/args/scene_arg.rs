@@ -3,6 +3,7 @@
 use anyhow::{Context, Result};
 use raykit_scene::Scene;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Prefix that selects a built-in scene.
 pub const BUILTIN: &str = "builtin:";
@@ -29,4 +30,10 @@ pub fn load(spec: &str) -> Result<Scene> {
         lights: loaded.lights,
         camera: loaded.camera,
     })
+}
+
+/// The loader `raykit serve` uses for `--scene` and `POST /api/scene`:
+/// [`load`].
+pub fn loader() -> raykit_serve::SceneLoader {
+    Arc::new(|spec: &str| load(spec))
 }

@@ -8,12 +8,12 @@
 //! A ratio whose two sides' run ranges overlap is marked not significant.
 
 use super::{cached_dragon, gpu_terrain, shared_mesh, write_csv, write_text};
-use crate::backend::{cpu_twin, open_gpu};
-use crate::build_args::BuildArgs;
-use crate::cmd::bench_gpu::gpu_lists;
+use crate::args::backend::{cpu_twin, open_gpu};
+use crate::args::build_args::BuildArgs;
+use crate::args::scene_arg;
+use crate::bench::gpu::gpu_lists;
 use crate::gpu_measure::{measure, Workload, SETS};
 use crate::measure::{median_min_max, pool, timed};
-use crate::scene_arg;
 use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};

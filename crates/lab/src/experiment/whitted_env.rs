@@ -5,7 +5,7 @@
 //! the images differ.
 
 use super::{shared_data, shared_mesh};
-use crate::cmd::render::setup::{setup, RenderSetup, SceneArgs};
+use crate::args::scene::{setup, RenderSetup, SceneArgs};
 use crate::measure::median_ms;
 use anyhow::{Context, Result};
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};

@@ -5,7 +5,7 @@
 //! mapping at 5 bounces.
 
 use super::{shared_data, shared_mesh, write_csv, write_text};
-use crate::cmd::render::setup::{setup, RenderSetup, SceneArgs};
+use crate::args::scene::{setup, RenderSetup, SceneArgs};
 use crate::measure::{median_ms, pool, timed};
 use anyhow::{Context, Result};
 use clap::Args;

@@ -1,0 +1,8 @@
+//! Argument groups shared by the commands: the scene or mesh to load, BVH
+//! and kd-tree build options, the CPU or GPU backend, and a scene with its
+//! camera, light and environment overrides.
+
+pub mod backend;
+pub mod build_args;
+pub mod scene;
+pub mod scene_arg;
