@@ -3,13 +3,21 @@
 //!
 //! - [`BruteForce`]: every ray against every triangle, the reference.
 //! - [`Bvh2`]: binary BVH, binned-SAH build, stack traversal nearest child first.
-//! - [`Bvh4`]: 4-wide BVH, binned-SAH build making wide nodes directly, SSE
-//!   box tests of four children at once.
+//! - [`Bvh4`] and [`Bvh8`]: the one [`WideBvh`] at widths four and eight,
+//!   built as wide nodes directly from the binned SAH, box tests of all
+//!   children at once (SSE, AVX2, AVX-512), ordered stack traversal, and
+//!   for Möller–Trumbore leaves of four-triangle packs with a packet path.
 //! - [`ThreadedBvh`]: BVH in pre-order with escape indices (Smits 1998),
 //!   traversed without a stack; [`ThreadedBvh::complete`] builds it as the
 //!   complete tree over the triangles in mesh order.
 //! - [`LinearBoxes`]: one level of boxes over runs of eight triangles in
 //!   mesh order, scanned in order.
+//! - The kd-trees ([`KdStack`], [`KdRopes`], [`KdRestart`], [`KdBacktrack`]):
+//!   one tree, four traversals (a stack; ropes, Popov et al. 2007; restart
+//!   and backtrack, Foley & Sugerman 2005).
+//!
+//! [`build_accel`] builds any of them by [`AccelKind`] and
+//! [`TestKind`](crate::tri::TestKind) at run time.
 
 use crate::aabb::Aabb;
 use crate::hit::Hit;

@@ -2,7 +2,7 @@
 //! distance, winding number) and the multi-hit ray queries.
 //!
 //! It is made by the same binned-SAH build as [`crate::accel::Bvh8`]
-//! ([`crate::accel::bvh::build`]), collapsed into nodes of up to eight
+//! (module `accel::bvh::build`), collapsed into nodes of up to eight
 //! children the same way (the largest-area inner child's children pulled
 //! up first), with the children's boxes in structure-of-arrays layout so
 //! that one query point or ray is tested against all eight at once (the

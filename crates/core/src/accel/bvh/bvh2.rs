@@ -65,7 +65,7 @@ impl Node {
 }
 
 /// Binary BVH over precomputed triangles, built with the binned SAH
-/// ([`super::build`]). Each inner node stores both children's boxes in one
+/// (module `bvh::build`). Each inner node stores both children's boxes in one
 /// cache line; traversal tests both, visits the nearer first and pushes the
 /// other, with its entry distance, on a fixed-size stack, skipping it on pop
 /// when a nearer hit has been found since. Occlusion queries stop at the

@@ -1,6 +1,6 @@
 //! Bounding volume hierarchies.
 //!
-//! - [`build`]: the binned surface-area-heuristic (SAH) build shared by all BVH
+//! - `build`: the binned surface-area-heuristic (SAH) build shared by all BVH
 //!   layouts, parallel over subtrees with rayon.
 //! - [`Bvh2`]: binary BVH in depth-first order with sibling pairs side by side,
 //!   traversed with a per-ray stack, nearest child first.

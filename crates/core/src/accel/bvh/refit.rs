@@ -207,7 +207,7 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     /// Refit the tree to `mesh` as [`Self::refit`], and rebuild it
     /// with `options` when the refit tree's SAH cost is more than
     /// `max_degradation` times the built tree's (see
-    /// [`DEFAULT_MAX_DEGRADATION`]); the rebuilt tree is the new
+    /// [`super::DEFAULT_MAX_DEGRADATION`]); the rebuilt tree is the new
     /// reference for later refits.
     pub fn refit_or_rebuild(
         &mut self,
@@ -226,7 +226,7 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
         Ok(report)
     }
 
-    /// The SAH cost ([`stored_sah`]) of the tree as it is now, and of
+    /// The SAH cost (`stored_sah`) of the tree as it is now, and of
     /// the tree as built (or loaded), whose ratio is the refit's
     /// degradation.
     pub fn sah_costs(&self) -> (f64, f64) {

@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-/// The SAH degradation past which [`Bvh8::refit_or_rebuild`] rebuilds
+/// The SAH degradation past which [`WideBvh::refit_or_rebuild`](super::WideBvh::refit_or_rebuild) rebuilds
 /// when given no other limit: 1.5, the refit tree costing 50% more than
 /// the built one. The SAH cost estimates the traversal work per ray, so
 /// past it rays may trace up to 1.5× slower; a rebuild costs about ten
@@ -14,13 +14,13 @@ pub const DEFAULT_MAX_DEGRADATION: f64 = 1.5;
 /// What a refit found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RefitReport {
-    /// SAH cost ([`stored_sah`]) of the tree as built (or loaded).
+    /// SAH cost (`stored_sah`) of the tree as built (or loaded).
     pub built_sah: f64,
     /// SAH cost of the refit tree, or of the rebuilt one when `rebuilt`.
     pub sah: f64,
     /// SAH cost of the refit tree before any rebuild.
     pub refit_sah: f64,
-    /// Whether [`Bvh8::refit_or_rebuild`] rebuilt the tree.
+    /// Whether [`WideBvh::refit_or_rebuild`](super::WideBvh::refit_or_rebuild) rebuilt the tree.
     pub rebuilt: bool,
 }
 

@@ -49,7 +49,7 @@ pub struct BuildOptions {
     /// over Möller sets 4; the other structures test one at a time.
     pub leaf_block: usize,
     /// Keep splitting below the nodes the SAH would make leaves, marking
-    /// them ([`BuildNode::Inner`]'s `leaf_ok`), down to single leaf blocks:
+    /// them (the binary node's `leaf_ok`), down to single leaf blocks:
     /// a wide collapse then fills a node's free slots with the halves of
     /// its largest children, leaves or not, as Embree's wide builders do
     /// (Wald et al. 2014). The SAH builder only; [`super::Bvh4`] and
@@ -84,7 +84,7 @@ pub enum BuildQuality {
     /// Linear BVH (Karras 2012, "Maximizing parallelism in the construction
     /// of BVHs, octrees, and k-d trees"): Morton codes of the centroids,
     /// radix sort, the hierarchy from the codes' highest differing bits,
-    /// leaves merged where the SAH prefers (see [`lbvh`]). Several
+    /// leaves merged where the SAH prefers (module `build::lbvh`). Several
     /// times faster to build, a worse tree: for dynamic scenes.
     Fast,
 }
