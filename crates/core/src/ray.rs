@@ -66,6 +66,13 @@ impl Ray {
         self.inv_dir = Vec3::ONE / dir;
     }
 
+    /// `[origin, dir, tnear, tfar]` as eight floats: the 32-byte record
+    /// of ray files and of the GPU's ray buffers.
+    pub fn to_array(&self) -> [f32; 8] {
+        let (o, d) = (self.origin, self.dir);
+        [o.x, o.y, o.z, d.x, d.y, d.z, self.tnear, self.tfar]
+    }
+
     /// The point at distance `t`.
     #[inline]
     pub fn at(&self, t: f32) -> Vec3 {

@@ -92,19 +92,7 @@ impl<'a> GpuTracer<'a> {
         assert!(rays.len() <= CHUNK, "upload at most CHUNK rays at a time");
         let mut words = Vec::with_capacity(rays.len() * 8);
         for r in rays {
-            words.extend(
-                [
-                    r.origin.x,
-                    r.origin.y,
-                    r.origin.z,
-                    r.dir().x,
-                    r.dir().y,
-                    r.dir().z,
-                    r.tnear,
-                    r.tfar,
-                ]
-                .map(f32::to_bits),
-            );
+            words.extend(r.to_array().map(f32::to_bits));
         }
         let (x, y, row) = grid(self.ctx, rays.len())?;
         Ok(GpuRays {

@@ -75,16 +75,7 @@ pub fn read_rays(path: &Path) -> Result<Vec<Ray>, LoadError> {
 pub fn write_rays(path: &Path, rays: &[Ray]) -> io::Result<()> {
     write_atomic(path, |w| {
         for r in rays {
-            let v = [
-                r.origin.x,
-                r.origin.y,
-                r.origin.z,
-                r.dir().x,
-                r.dir().y,
-                r.dir().z,
-                r.tnear,
-                r.tfar,
-            ];
+            let v = r.to_array();
             for x in v {
                 w.write_all(&x.to_le_bytes())?;
             }

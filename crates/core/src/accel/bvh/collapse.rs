@@ -227,22 +227,11 @@ pub(crate) mod tests {
     use crate::accel::bvh::node4::Node4;
     use crate::accel::bvh::node8::Node8;
     use crate::mesh::TriangleMesh;
-    use crate::rng::Pcg32;
     use glam::Vec3;
 
     /// `n` small random triangles in the unit cube.
     pub(crate) fn soup(n: usize, seed: u64) -> TriangleMesh {
-        let mut rng = Pcg32::new(seed);
-        let mut positions = Vec::new();
-        let mut indices = Vec::new();
-        for i in 0..n as u32 {
-            let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
-            for _ in 0..3 {
-                positions.push(c + rng.unit_vector() * 0.02);
-            }
-            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
-        }
-        TriangleMesh::new(positions, indices)
+        crate::test_soup::soup(n, seed, 0.02, 0.0, 1)
     }
 
     /// Walking the collapsed tree covers every triangle position of the
