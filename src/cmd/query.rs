@@ -7,14 +7,14 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use raykit_core::query::{ClosestPoint, SurfaceBvh};
 use raykit_core::{Ray, Vec3};
-use raykit_io::LoadError;
+use raykit_io::{
+    write_closest_points, write_f32s, write_flags, write_hit_lists, write_scene_hit_lists,
+    write_u32s,
+};
 use serde_json::json;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-
-/// Bytes per point in a point file.
-const POINT_RECORD_SIZE: usize = 12;
 
 /// The question asked of each point or ray.
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -114,35 +114,6 @@ pub struct QueryArgs {
     threads: usize,
 }
 
-/// Read a point file: 3 little-endian f32 per point. Any values are
-/// accepted (a NaN point has NaN answers); a size that is not a multiple of
-/// 12 is an error naming the byte offset of the incomplete record.
-pub fn read_points(path: &Path) -> Result<Vec<Vec3>> {
-    let data = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let rest = data.len() % POINT_RECORD_SIZE;
-    if rest != 0 {
-        let at = data.len() - rest;
-        return Err(LoadError::at_byte(
-            path,
-            at as u64,
-            format!(
-                "file size {} is not a multiple of the {POINT_RECORD_SIZE}-byte point record: \
-                 {rest} bytes left over after {} points (truncated?)",
-                data.len(),
-                data.len() / POINT_RECORD_SIZE
-            ),
-        )
-        .into());
-    }
-    Ok(data
-        .chunks_exact(POINT_RECORD_SIZE)
-        .map(|r| {
-            let f = |i: usize| f32::from_le_bytes([r[i], r[i + 1], r[i + 2], r[i + 3]]);
-            Vec3::new(f(0), f(4), f(8))
-        })
-        .collect())
-}
-
 /// Write `out` atomically with `write`.
 fn write_out(out: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
     raykit_io::write_atomic(out, write).with_context(|| format!("{}: cannot write", out.display()))
@@ -174,7 +145,7 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
     let (points, rays): (Vec<Vec3>, Vec<Ray>) = if q.takes_rays() {
         (Vec::new(), raykit_io::read_rays(input)?)
     } else {
-        (read_points(input)?, Vec::new())
+        (raykit_io::read_points(input)?, Vec::new())
     };
     let (bvh, build_s) = pool.install(|| timed(|| SurfaceBvh::build(&mesh)));
     let n = points.len() + rays.len();
@@ -196,47 +167,28 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
                 .1
             });
             answered = d.iter().filter(|x| x.is_finite()).count();
-            write_out(&args.out, |w| {
-                d.iter().try_for_each(|x| w.write_all(&x.to_le_bytes()))
-            })?;
+            write_out(&args.out, |w| write_f32s(w, &d))?;
         }
         Query::Inside => {
             let mut inside = vec![false; n];
             query_s = pool.install(|| timed(|| bvh.inside_batch(&points, &mut inside)).1);
             answered = points.iter().filter(|p| p.is_finite()).count();
             inside_count = Some(inside.iter().filter(|&&x| x).count());
-            let bytes: Vec<u8> = inside.iter().map(|&x| u8::from(x)).collect();
-            write_out(&args.out, |w| w.write_all(&bytes))?;
+            write_out(&args.out, |w| write_flags(w, &inside))?;
         }
         Query::Closest => {
             let mut found: Vec<Option<ClosestPoint>> = vec![None; n];
             query_s =
                 pool.install(|| timed(|| bvh.closest_points(&points, f32::INFINITY, &mut found)).1);
             answered = found.iter().filter(|c| c.is_some()).count();
-            write_out(&args.out, |w| {
-                for c in &found {
-                    let (p, d, prim) = match c {
-                        Some(c) => (c.point.to_array(), c.distance, c.prim),
-                        None => ([f32::NAN; 3], f32::NAN, u32::MAX),
-                    };
-                    for x in p.into_iter().chain([d]) {
-                        w.write_all(&x.to_le_bytes())?;
-                    }
-                    w.write_all(&prim.to_le_bytes())?;
-                }
-                Ok(())
-            })?;
+            write_out(&args.out, |w| write_closest_points(w, &found))?;
         }
         Query::Count => {
             let mut counts = vec![0u32; n];
             query_s = pool.install(|| timed(|| bvh.count_hits_batch(&rays, &mut counts)).1);
             answered = counts.iter().filter(|&&c| c > 0).count();
             hits = Some(counts.iter().map(|&c| u64::from(c)).sum());
-            write_out(&args.out, |w| {
-                counts
-                    .iter()
-                    .try_for_each(|c| w.write_all(&c.to_le_bytes()))
-            })?;
+            write_out(&args.out, |w| write_u32s(w, &counts))?;
         }
         Query::AllHits => {
             let cap = args.max_hits as usize;
@@ -244,16 +196,7 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
             query_s = s;
             answered = lists.iter().filter(|l| !l.is_empty()).count();
             hits = Some(lists.iter().map(|l| l.len() as u64).sum());
-            write_out(&args.out, |w| {
-                for l in &lists {
-                    w.write_all(&(l.len() as u32).to_le_bytes())?;
-                    for h in l {
-                        w.write_all(&h.t.to_le_bytes())?;
-                        w.write_all(&h.prim.to_le_bytes())?;
-                    }
-                }
-                Ok(())
-            })?;
+            write_out(&args.out, |w| write_hit_lists(w, &lists))?;
         }
     }
     let mut stats = json!({
@@ -310,26 +253,14 @@ fn run_instanced(args: &QueryArgs, input: &Path) -> Result<ExitCode> {
         query_s = pool.install(|| timed(|| scene.count_hits_batch(&rays, mask, &mut counts)).1);
         answered = counts.iter().filter(|&&c| c > 0).count();
         hits = counts.iter().map(|&c| u64::from(c)).sum::<u64>();
-        write_out(&args.out, |w| {
-            counts
-                .iter()
-                .try_for_each(|c| w.write_all(&c.to_le_bytes()))
-        })?;
+        write_out(&args.out, |w| write_u32s(w, &counts))?;
     } else {
         let cap = args.max_hits as usize;
         let (lists, s) = pool.install(|| timed(|| scene.ray_hits_batch(&rays, mask, cap)));
         query_s = s;
         answered = lists.iter().filter(|l| !l.is_empty()).count();
         hits = lists.iter().map(|l| l.len() as u64).sum();
-        write_out(&args.out, |w| {
-            for l in &lists {
-                w.write_all(&(l.len() as u32).to_le_bytes())?;
-                for h in l {
-                    raykit_io::write_scene_hit_record(w, raykit_io::scene_hit_record(&Some(*h)))?;
-                }
-            }
-            Ok(())
-        })?;
+        write_out(&args.out, |w| write_scene_hit_lists(w, &lists))?;
     }
     let per_s = if query_s > 0.0 {
         n as f64 / query_s
