@@ -5,12 +5,9 @@ use crate::measure::{pool, timed};
 use crate::scene_arg;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use raykit_core::query::{ClosestPoint, SurfaceBvh};
+use raykit_core::query::{QueryKind, SurfaceBvh};
 use raykit_core::{Ray, Vec3};
-use raykit_io::{
-    write_closest_points, write_f32s, write_flags, write_hit_lists, write_scene_hit_lists,
-    write_u32s,
-};
+use raykit_io::{write_answers, write_scene_hit_lists, write_u32s};
 use serde_json::json;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -39,19 +36,24 @@ pub enum Query {
 }
 
 impl Query {
-    fn name(self) -> &'static str {
+    /// The library's query of the same name.
+    fn kind(self) -> QueryKind {
         match self {
-            Query::Closest => "closest",
-            Query::Distance => "distance",
-            Query::SignedDistance => "signed-distance",
-            Query::Inside => "inside",
-            Query::Count => "count",
-            Query::AllHits => "all-hits",
+            Query::Closest => QueryKind::Closest,
+            Query::Distance => QueryKind::Distance,
+            Query::SignedDistance => QueryKind::SignedDistance,
+            Query::Inside => QueryKind::Inside,
+            Query::Count => QueryKind::Count,
+            Query::AllHits => QueryKind::AllHits,
         }
     }
 
+    fn name(self) -> &'static str {
+        self.kind().name()
+    }
+
     fn takes_rays(self) -> bool {
-        matches!(self, Query::Count | Query::AllHits)
+        self.kind().takes_rays()
     }
 }
 
@@ -149,56 +151,11 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
     };
     let (bvh, build_s) = pool.install(|| timed(|| SurfaceBvh::build(&mesh)));
     let n = points.len() + rays.len();
-    let answered;
-    let mut hits: Option<u64> = None;
-    let mut inside_count: Option<usize> = None;
-    let query_s;
-    match q {
-        Query::Distance | Query::SignedDistance => {
-            let mut d = vec![0f32; n];
-            query_s = pool.install(|| {
-                timed(|| {
-                    if q == Query::Distance {
-                        bvh.distances(&points, &mut d)
-                    } else {
-                        bvh.signed_distances(&points, &mut d)
-                    }
-                })
-                .1
-            });
-            answered = d.iter().filter(|x| x.is_finite()).count();
-            write_out(&args.out, |w| write_f32s(w, &d))?;
-        }
-        Query::Inside => {
-            let mut inside = vec![false; n];
-            query_s = pool.install(|| timed(|| bvh.inside_batch(&points, &mut inside)).1);
-            answered = points.iter().filter(|p| p.is_finite()).count();
-            inside_count = Some(inside.iter().filter(|&&x| x).count());
-            write_out(&args.out, |w| write_flags(w, &inside))?;
-        }
-        Query::Closest => {
-            let mut found: Vec<Option<ClosestPoint>> = vec![None; n];
-            query_s =
-                pool.install(|| timed(|| bvh.closest_points(&points, f32::INFINITY, &mut found)).1);
-            answered = found.iter().filter(|c| c.is_some()).count();
-            write_out(&args.out, |w| write_closest_points(w, &found))?;
-        }
-        Query::Count => {
-            let mut counts = vec![0u32; n];
-            query_s = pool.install(|| timed(|| bvh.count_hits_batch(&rays, &mut counts)).1);
-            answered = counts.iter().filter(|&&c| c > 0).count();
-            hits = Some(counts.iter().map(|&c| u64::from(c)).sum());
-            write_out(&args.out, |w| write_u32s(w, &counts))?;
-        }
-        Query::AllHits => {
-            let cap = args.max_hits as usize;
-            let (lists, s) = pool.install(|| timed(|| bvh.ray_hits_batch(&rays, cap)));
-            query_s = s;
-            answered = lists.iter().filter(|l| !l.is_empty()).count();
-            hits = Some(lists.iter().map(|l| l.len() as u64).sum());
-            write_out(&args.out, |w| write_hit_lists(w, &lists))?;
-        }
-    }
+    let cap = args.max_hits as usize;
+    let (answers, query_s) = pool.install(|| timed(|| bvh.answer(q.kind(), &points, &rays, cap)));
+    write_out(&args.out, |w| write_answers(w, &answers))?;
+    let (answered, hits, inside_count) =
+        (answers.answered(&points), answers.hits(), answers.inside());
     let mut stats = json!({
         "query": q.name(),
         "mesh_triangles": mesh.num_triangles(),

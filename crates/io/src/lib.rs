@@ -63,7 +63,7 @@ pub use image_part::{read_png_part, write_png_part, ImagePart, PART_KEYWORD};
 pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
 pub use png::write_png;
 pub use query_files::{
-    read_points, write_closest_points, write_f32s, write_flags, write_hit_lists,
+    read_points, write_answers, write_closest_points, write_f32s, write_flags, write_hit_lists,
     write_scene_hit_lists, write_u32s, POINT_RECORD_SIZE,
 };
 pub use rays::{

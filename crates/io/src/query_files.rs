@@ -5,7 +5,7 @@
 use crate::error::LoadError;
 use crate::scene_hits::{scene_hit_record, write_scene_hit_record};
 use raykit_core::instancing::SceneHit;
-use raykit_core::query::ClosestPoint;
+use raykit_core::query::{Answers, ClosestPoint};
 use raykit_core::{Hit, Vec3};
 use std::io::{self, Write};
 use std::path::Path;
@@ -100,6 +100,18 @@ pub fn write_scene_hit_lists(w: &mut dyn Write, lists: &[Vec<SceneHit>]) -> io::
         }
     }
     Ok(())
+}
+
+/// The answer file of `answers`: [`write_f32s`], [`write_flags`],
+/// [`write_closest_points`], [`write_u32s`] or [`write_hit_lists`] by kind.
+pub fn write_answers(w: &mut dyn Write, answers: &Answers) -> io::Result<()> {
+    match answers {
+        Answers::Distances(d) => write_f32s(w, d),
+        Answers::Inside(i) => write_flags(w, i),
+        Answers::Closest(c) => write_closest_points(w, c),
+        Answers::Counts(c) => write_u32s(w, c),
+        Answers::HitLists(l) => write_hit_lists(w, l),
+    }
 }
 
 #[cfg(test)]
