@@ -4,7 +4,7 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use raykit_io::merge_png_parts;
+use raykit_io::{merge_png_parts, MergeError};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -28,7 +28,10 @@ pub struct MergeTilesArgs {
 pub fn run(args: MergeTilesArgs) -> Result<ExitCode> {
     let inputs: Vec<&Path> = args.parts.iter().map(PathBuf::as_path).collect();
     crate::paths::ensure_not_input(&args.out, &inputs)?;
-    let (width, height, rgb) = merge_png_parts(&inputs).map_err(anyhow::Error::msg)?;
+    let (width, height, rgb) = merge_png_parts(&inputs).map_err(|e| match e {
+        MergeError::Read(e) => anyhow::Error::from(e),
+        MergeError::Parts(m) => anyhow::Error::msg(m),
+    })?;
     raykit_io::write_png(&args.out, width, height, &rgb)
         .with_context(|| format!("writing {}", args.out.display()))?;
     eprintln!(

@@ -3,15 +3,44 @@
 //! refusing parts that overlap, leave pixels uncovered or belong to
 //! pictures of different sizes.
 
+use crate::error::LoadError;
 use crate::image_part::{read_png_part, ImagePart};
 use std::path::Path;
+
+/// Why parts do not make a picture.
+#[derive(Debug)]
+pub enum MergeError {
+    /// A part could not be read.
+    Read(LoadError),
+    /// The parts do not fit together (overlap, gap, sizes); the message
+    /// names the part at fault.
+    Parts(String),
+}
+
+impl std::fmt::Display for MergeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MergeError::Read(e) => write!(f, "{e}"),
+            MergeError::Parts(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for MergeError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            MergeError::Read(e) => e.source(),
+            MergeError::Parts(_) => None,
+        }
+    }
+}
 
 /// The picture the parts at `paths` cover: width, height and RGB bytes.
 /// Every pixel must come from exactly one part, and all parts must belong
 /// to a picture of one size; errors name the part at fault.
-pub fn merge_png_parts(paths: &[&Path]) -> Result<(u32, u32, Vec<u8>), String> {
+pub fn merge_png_parts(paths: &[&Path]) -> Result<(u32, u32, Vec<u8>), MergeError> {
     if paths.is_empty() {
-        return Err("no parts to merge".into());
+        return Err(MergeError::Parts("no parts to merge".into()));
     }
     let mut size: Option<(u32, u32, &Path)> = None;
     let mut rgb = Vec::new();
@@ -19,7 +48,7 @@ pub fn merge_png_parts(paths: &[&Path]) -> Result<(u32, u32, Vec<u8>), String> {
     let mut owner: Vec<u32> = Vec::new();
     const NONE: u32 = u32::MAX;
     for (i, path) in paths.iter().enumerate() {
-        let (part, pixels) = read_png_part(path).map_err(|e| e.to_string())?;
+        let (part, pixels) = read_png_part(path).map_err(MergeError::Read)?;
         match size {
             None => {
                 size = Some((part.full_width, part.full_height, path));
@@ -28,26 +57,27 @@ pub fn merge_png_parts(paths: &[&Path]) -> Result<(u32, u32, Vec<u8>), String> {
                 owner = vec![NONE; n];
             }
             Some((w, h, first)) if (w, h) != (part.full_width, part.full_height) => {
-                return Err(format!(
+                return Err(MergeError::Parts(format!(
                     "{}: a part of a {}×{} image, but {} is a part of a {w}×{h} image",
                     path.display(),
                     part.full_width,
                     part.full_height,
                     first.display()
-                ))
+                )))
             }
             Some(_) => {}
         }
-        paste(&part, &pixels, i as u32, &mut rgb, &mut owner)
-            .map_err(|(x, y, other)| overlap(path, paths[other as usize], x, y))?;
+        paste(&part, &pixels, i as u32, &mut rgb, &mut owner).map_err(|(x, y, other)| {
+            MergeError::Parts(overlap(path, paths[other as usize], x, y))
+        })?;
     }
     let (width, height, _) = size.expect("at least one part");
     let missing = owner.iter().filter(|&&o| o == NONE).count();
     if let Some(first) = owner.iter().position(|&o| o == NONE) {
         let (x, y) = (first % width as usize, first / width as usize);
-        return Err(format!(
+        return Err(MergeError::Parts(format!(
             "the parts leave {missing} of the {width}×{height} pixels uncovered, the first at column {x}, row {y}: a part is missing"
-        ));
+        )));
     }
     Ok((width, height, rgb))
 }
@@ -140,9 +170,16 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let paths = write_bands(dir.path(), &[(0, 2), (1, 3)]);
         let refs: Vec<&Path> = paths.iter().map(|p| p.as_path()).collect();
-        assert!(merge_png_parts(&refs).unwrap_err().contains("overlaps"));
-        assert!(merge_png_parts(&refs[..1])
-            .unwrap_err()
-            .contains("uncovered"));
+        let message = |r: Result<_, MergeError>| match r {
+            Err(MergeError::Parts(m)) => m,
+            other => panic!("{:?}", other.map(|_| ())),
+        };
+        assert!(message(merge_png_parts(&refs)).contains("overlaps"));
+        assert!(message(merge_png_parts(&refs[..1])).contains("uncovered"));
+        let missing = dir.path().join("none.png");
+        assert!(matches!(
+            merge_png_parts(&[missing.as_path()]),
+            Err(MergeError::Read(_))
+        ));
     }
 }

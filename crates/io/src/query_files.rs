@@ -2,7 +2,7 @@
 //! files in, and the answer files out — distances, inside flags, closest
 //! points, hit counts and hit lists.
 
-use crate::error::LoadError;
+use crate::error::{ErrorKind, LoadError, Location};
 use crate::scene_hits::{scene_hit_record, write_scene_hit_record};
 use raykit_core::instancing::SceneHit;
 use raykit_core::query::{Answers, ClosestPoint};
@@ -18,7 +18,16 @@ pub const POINT_RECORD_SIZE: usize = 12;
 /// [`POINT_RECORD_SIZE`] is an error naming the byte offset of the
 /// incomplete record.
 pub fn read_points(path: &Path) -> Result<Vec<Vec3>, LoadError> {
-    let data = std::fs::read(path).map_err(|e| LoadError::io(path, "cannot read", e))?;
+    // The I/O error is in the message, not a source, so that a chain of
+    // causes does not print it twice.
+    let data = std::fs::read(path).map_err(|e| {
+        LoadError::new(
+            path,
+            ErrorKind::Io,
+            Location::File,
+            format!("cannot read: {e}"),
+        )
+    })?;
     let rest = data.len() % POINT_RECORD_SIZE;
     if rest != 0 {
         let at = data.len() - rest;
@@ -135,6 +144,12 @@ mod tests {
         std::fs::write(&path, &bytes).unwrap();
         let err = read_points(&path).unwrap_err().to_string();
         assert!(err.contains("byte 24"), "{err}");
+        let missing = read_points(&dir.path().join("none.bin")).unwrap_err();
+        assert!(std::error::Error::source(&missing).is_none());
+        assert!(
+            missing.to_string().contains("none.bin: cannot read: "),
+            "{missing}"
+        );
     }
 
     #[test]

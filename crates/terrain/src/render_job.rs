@@ -108,7 +108,17 @@ impl<'a> TerrainRender<'a> {
         let drape = match &options.drape {
             Some(p) => {
                 let img = image::open(p)
-                    .map_err(|e| format!("--drape {}: cannot read the image: {e}", p.display()))?
+                    .map_err(|e| {
+                        // The error and each of its causes, as a chain.
+                        let mut message =
+                            format!("--drape {}: cannot read the image: {e}", p.display());
+                        let mut cause = std::error::Error::source(&e);
+                        while let Some(c) = cause {
+                            message += &format!(": {c}");
+                            cause = c.source();
+                        }
+                        message
+                    })?
                     .to_rgb8();
                 Some(Drape::new(img.width(), img.height(), img.as_raw()))
             }
