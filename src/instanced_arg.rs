@@ -3,12 +3,12 @@
 //! glTF file brings one geometry per glTF mesh and one instance per node
 //! (its instancing kept); a built-in scene is one geometry.
 
-use crate::measure::timed;
-use crate::scene_arg;
 use anyhow::{Context, Result};
 use raykit_core::accel::BuildOptions;
 use raykit_core::glam::Affine3A;
 use raykit_core::instancing::{InstancedScene, SceneBuilder};
+use raykit_lab::args::scene_arg;
+use raykit_lab::measure::timed;
 use serde_json::{json, Value};
 use std::path::Path;
 

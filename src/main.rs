@@ -5,10 +5,6 @@ mod cmd;
 mod instanced_arg;
 mod paths;
 
-use raykit_core::verify;
-use raykit_lab::args::{backend, build_args, scene_arg};
-use raykit_lab::{measure, one_ray};
-
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 

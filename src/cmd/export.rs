@@ -2,9 +2,9 @@
 //! as glTF 2.0 with its materials, camera and lights, ready for `raykit
 //! render` or any glTF viewer.
 
-use crate::scene_arg;
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use raykit_lab::args::scene_arg;
 use std::path::PathBuf;
 use std::process::ExitCode;
 

@@ -1,20 +1,17 @@
 //! `raykit query`: point and multi-hit ray queries on a mesh's surface,
 //! from a point or ray file to a binary answer file.
 
-use crate::measure::{pool, timed};
-use crate::scene_arg;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use raykit_core::query::{ClosestPoint, SurfaceBvh};
+use raykit_core::query::{QueryKind, SurfaceBvh};
 use raykit_core::{Ray, Vec3};
-use raykit_io::LoadError;
+use raykit_io::{write_answers, write_scene_hit_lists, write_u32s};
+use raykit_lab::args::scene_arg;
+use raykit_lab::measure::{pool, timed};
 use serde_json::json;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-
-/// Bytes per point in a point file.
-const POINT_RECORD_SIZE: usize = 12;
 
 /// The question asked of each point or ray.
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -39,19 +36,24 @@ pub enum Query {
 }
 
 impl Query {
-    fn name(self) -> &'static str {
+    /// The library's query of the same name.
+    fn kind(self) -> QueryKind {
         match self {
-            Query::Closest => "closest",
-            Query::Distance => "distance",
-            Query::SignedDistance => "signed-distance",
-            Query::Inside => "inside",
-            Query::Count => "count",
-            Query::AllHits => "all-hits",
+            Query::Closest => QueryKind::Closest,
+            Query::Distance => QueryKind::Distance,
+            Query::SignedDistance => QueryKind::SignedDistance,
+            Query::Inside => QueryKind::Inside,
+            Query::Count => QueryKind::Count,
+            Query::AllHits => QueryKind::AllHits,
         }
     }
 
+    fn name(self) -> &'static str {
+        self.kind().name()
+    }
+
     fn takes_rays(self) -> bool {
-        matches!(self, Query::Count | Query::AllHits)
+        self.kind().takes_rays()
     }
 }
 
@@ -114,35 +116,6 @@ pub struct QueryArgs {
     threads: usize,
 }
 
-/// Read a point file: 3 little-endian f32 per point. Any values are
-/// accepted (a NaN point has NaN answers); a size that is not a multiple of
-/// 12 is an error naming the byte offset of the incomplete record.
-pub fn read_points(path: &Path) -> Result<Vec<Vec3>> {
-    let data = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let rest = data.len() % POINT_RECORD_SIZE;
-    if rest != 0 {
-        let at = data.len() - rest;
-        return Err(LoadError::at_byte(
-            path,
-            at as u64,
-            format!(
-                "file size {} is not a multiple of the {POINT_RECORD_SIZE}-byte point record: \
-                 {rest} bytes left over after {} points (truncated?)",
-                data.len(),
-                data.len() / POINT_RECORD_SIZE
-            ),
-        )
-        .into());
-    }
-    Ok(data
-        .chunks_exact(POINT_RECORD_SIZE)
-        .map(|r| {
-            let f = |i: usize| f32::from_le_bytes([r[i], r[i + 1], r[i + 2], r[i + 3]]);
-            Vec3::new(f(0), f(4), f(8))
-        })
-        .collect())
-}
-
 /// Write `out` atomically with `write`.
 fn write_out(out: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
     raykit_io::write_atomic(out, write).with_context(|| format!("{}: cannot write", out.display()))
@@ -174,88 +147,15 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
     let (points, rays): (Vec<Vec3>, Vec<Ray>) = if q.takes_rays() {
         (Vec::new(), raykit_io::read_rays(input)?)
     } else {
-        (read_points(input)?, Vec::new())
+        (raykit_io::read_points(input)?, Vec::new())
     };
     let (bvh, build_s) = pool.install(|| timed(|| SurfaceBvh::build(&mesh)));
     let n = points.len() + rays.len();
-    let answered;
-    let mut hits: Option<u64> = None;
-    let mut inside_count: Option<usize> = None;
-    let query_s;
-    match q {
-        Query::Distance | Query::SignedDistance => {
-            let mut d = vec![0f32; n];
-            query_s = pool.install(|| {
-                timed(|| {
-                    if q == Query::Distance {
-                        bvh.distances(&points, &mut d)
-                    } else {
-                        bvh.signed_distances(&points, &mut d)
-                    }
-                })
-                .1
-            });
-            answered = d.iter().filter(|x| x.is_finite()).count();
-            write_out(&args.out, |w| {
-                d.iter().try_for_each(|x| w.write_all(&x.to_le_bytes()))
-            })?;
-        }
-        Query::Inside => {
-            let mut inside = vec![false; n];
-            query_s = pool.install(|| timed(|| bvh.inside_batch(&points, &mut inside)).1);
-            answered = points.iter().filter(|p| p.is_finite()).count();
-            inside_count = Some(inside.iter().filter(|&&x| x).count());
-            let bytes: Vec<u8> = inside.iter().map(|&x| u8::from(x)).collect();
-            write_out(&args.out, |w| w.write_all(&bytes))?;
-        }
-        Query::Closest => {
-            let mut found: Vec<Option<ClosestPoint>> = vec![None; n];
-            query_s =
-                pool.install(|| timed(|| bvh.closest_points(&points, f32::INFINITY, &mut found)).1);
-            answered = found.iter().filter(|c| c.is_some()).count();
-            write_out(&args.out, |w| {
-                for c in &found {
-                    let (p, d, prim) = match c {
-                        Some(c) => (c.point.to_array(), c.distance, c.prim),
-                        None => ([f32::NAN; 3], f32::NAN, u32::MAX),
-                    };
-                    for x in p.into_iter().chain([d]) {
-                        w.write_all(&x.to_le_bytes())?;
-                    }
-                    w.write_all(&prim.to_le_bytes())?;
-                }
-                Ok(())
-            })?;
-        }
-        Query::Count => {
-            let mut counts = vec![0u32; n];
-            query_s = pool.install(|| timed(|| bvh.count_hits_batch(&rays, &mut counts)).1);
-            answered = counts.iter().filter(|&&c| c > 0).count();
-            hits = Some(counts.iter().map(|&c| u64::from(c)).sum());
-            write_out(&args.out, |w| {
-                counts
-                    .iter()
-                    .try_for_each(|c| w.write_all(&c.to_le_bytes()))
-            })?;
-        }
-        Query::AllHits => {
-            let cap = args.max_hits as usize;
-            let (lists, s) = pool.install(|| timed(|| bvh.ray_hits_batch(&rays, cap)));
-            query_s = s;
-            answered = lists.iter().filter(|l| !l.is_empty()).count();
-            hits = Some(lists.iter().map(|l| l.len() as u64).sum());
-            write_out(&args.out, |w| {
-                for l in &lists {
-                    w.write_all(&(l.len() as u32).to_le_bytes())?;
-                    for h in l {
-                        w.write_all(&h.t.to_le_bytes())?;
-                        w.write_all(&h.prim.to_le_bytes())?;
-                    }
-                }
-                Ok(())
-            })?;
-        }
-    }
+    let cap = args.max_hits as usize;
+    let (answers, query_s) = pool.install(|| timed(|| bvh.answer(q.kind(), &points, &rays, cap)));
+    write_out(&args.out, |w| write_answers(w, &answers))?;
+    let (answered, hits, inside_count) =
+        (answers.answered(&points), answers.hits(), answers.inside());
     let mut stats = json!({
         "query": q.name(),
         "mesh_triangles": mesh.num_triangles(),
@@ -310,26 +210,14 @@ fn run_instanced(args: &QueryArgs, input: &Path) -> Result<ExitCode> {
         query_s = pool.install(|| timed(|| scene.count_hits_batch(&rays, mask, &mut counts)).1);
         answered = counts.iter().filter(|&&c| c > 0).count();
         hits = counts.iter().map(|&c| u64::from(c)).sum::<u64>();
-        write_out(&args.out, |w| {
-            counts
-                .iter()
-                .try_for_each(|c| w.write_all(&c.to_le_bytes()))
-        })?;
+        write_out(&args.out, |w| write_u32s(w, &counts))?;
     } else {
         let cap = args.max_hits as usize;
         let (lists, s) = pool.install(|| timed(|| scene.ray_hits_batch(&rays, mask, cap)));
         query_s = s;
         answered = lists.iter().filter(|l| !l.is_empty()).count();
         hits = lists.iter().map(|l| l.len() as u64).sum();
-        write_out(&args.out, |w| {
-            for l in &lists {
-                w.write_all(&(l.len() as u32).to_le_bytes())?;
-                for h in l {
-                    raykit_io::write_scene_hit_record(w, raykit_io::scene_hit_record(&Some(*h)))?;
-                }
-            }
-            Ok(())
-        })?;
+        write_out(&args.out, |w| write_scene_hit_lists(w, &lists))?;
     }
     let per_s = if query_s > 0.0 {
         n as f64 / query_s

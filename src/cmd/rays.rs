@@ -1,11 +1,11 @@
 //! `raykit rays`: generate a standard ray set as a binary ray file.
 
-use crate::scene_arg;
 use anyhow::{bail, Result};
 use clap::Args;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::raysets::{self, RayKind};
 use raykit_core::tri::TestKind;
+use raykit_lab::args::scene_arg;
 use std::path::PathBuf;
 use std::process::ExitCode;
 

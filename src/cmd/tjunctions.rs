@@ -1,10 +1,10 @@
 //! `raykit tjunctions`: T-junction elimination (Kim 2013) on a mesh file.
 
-use crate::measure::{pool, timed};
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_core::tjunction::{eliminate, Method, TJunctionOptions, TJunctionReport};
+use raykit_lab::measure::{pool, timed};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

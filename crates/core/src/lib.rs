@@ -53,6 +53,7 @@ pub mod icosphere;
 pub mod instancing;
 pub mod light;
 pub mod mesh;
+mod mesh_subset;
 pub mod names;
 pub mod prelude;
 pub mod query;

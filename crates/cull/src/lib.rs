@@ -41,8 +41,11 @@ pub mod distance_field;
 pub mod escape;
 pub mod evaluate;
 pub mod grid;
+pub mod independent;
 pub mod propagate;
 pub mod rays;
+pub mod report;
+pub mod saved_truth;
 pub mod shared_escapes;
 pub mod synthetic;
 pub mod visible;
@@ -54,8 +57,11 @@ pub use evaluate::{
     EvalReport, GroundTruth, RoundLog,
 };
 pub use grid::Grid;
+pub use independent::independent_truth;
 pub use propagate::{propagate, Classification, Tag};
 pub use rays::{visible_by_rays, RayOptions, RayRound, RayStats};
+pub use report::{CullMode, CullReport, Removal};
+pub use saved_truth::{SavedTruth, SavedTruthMismatch};
 pub use visible::{confirm_frontier, touches_outside, visible_from_outside};
 
 use raykit_core::accel::{build_accel, Accel, AccelKind, BuildOptions};

@@ -205,23 +205,37 @@ impl<'a> GpuTracer<'a> {
 
     /// Nearest hits of any number of rays.
     pub fn intersect_batch(&self, rays: &[Ray]) -> GpuResult<Vec<Option<Hit>>> {
-        let mut out = Vec::with_capacity(rays.len());
-        for chunk in rays.chunks(CHUNK) {
-            let up = self.upload(chunk)?;
-            self.run(&up, false)?;
-            out.extend(self.hits(&up)?);
-        }
-        Ok(out)
+        Ok(self.intersect_timed(rays)?.0)
     }
 
     /// Occlusion of any number of rays.
     pub fn occluded_batch(&self, rays: &[Ray]) -> GpuResult<Vec<bool>> {
+        Ok(self.occluded_timed(rays)?.0)
+    }
+
+    /// Nearest hits of any number of rays, in chunks of [`CHUNK`], and the
+    /// seconds the kernels ran.
+    pub fn intersect_timed(&self, rays: &[Ray]) -> GpuResult<(Vec<Option<Hit>>, f64)> {
         let mut out = Vec::with_capacity(rays.len());
+        let mut seconds = 0.0;
         for chunk in rays.chunks(CHUNK) {
             let up = self.upload(chunk)?;
-            self.run(&up, true)?;
+            seconds += self.run(&up, false)?;
+            out.extend(self.hits(&up)?);
+        }
+        Ok((out, seconds))
+    }
+
+    /// Occlusion of any number of rays, in chunks of [`CHUNK`], and the
+    /// seconds the kernels ran.
+    pub fn occluded_timed(&self, rays: &[Ray]) -> GpuResult<(Vec<bool>, f64)> {
+        let mut out = Vec::with_capacity(rays.len());
+        let mut seconds = 0.0;
+        for chunk in rays.chunks(CHUNK) {
+            let up = self.upload(chunk)?;
+            seconds += self.run(&up, true)?;
             out.extend(self.occlusion(&up)?);
         }
-        Ok(out)
+        Ok((out, seconds))
     }
 }

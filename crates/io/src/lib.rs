@@ -34,6 +34,7 @@ mod gltf_instances;
 mod gltf_scene;
 mod gltf_support;
 mod hashing;
+mod image_merge;
 mod image_part;
 mod input;
 mod load;
@@ -43,6 +44,7 @@ mod off;
 mod ply;
 mod ply_header;
 mod png;
+mod query_files;
 mod rays;
 mod scene_hits;
 mod stl;
@@ -56,9 +58,14 @@ pub use atomic::{write_atomic, write_atomic_file};
 pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
 pub use gltf_instances::{load_gltf_instances, parse_gltf_instances, GltfInstance, GltfInstances};
+pub use image_merge::{merge_png_parts, MergeError};
 pub use image_part::{read_png_part, write_png_part, ImagePart, PART_KEYWORD};
 pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
 pub use png::write_png;
+pub use query_files::{
+    read_points, write_answers, write_closest_points, write_f32s, write_flags, write_hit_lists,
+    write_scene_hit_lists, write_u32s, POINT_RECORD_SIZE,
+};
 pub use rays::{
     read_hits, read_occlusion, read_rays, write_hits, write_occlusion, write_rays, HIT_RECORD_SIZE,
     RAY_RECORD_SIZE,

@@ -20,12 +20,14 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod animation;
 pub mod aov;
 pub mod env;
 mod image;
 pub mod light_spec;
 pub mod lighting;
 mod options;
+pub mod output;
 mod primary;
 pub mod raster;
 mod render;

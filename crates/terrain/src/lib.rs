@@ -19,11 +19,14 @@ pub mod georef;
 pub mod heightfield;
 pub mod io;
 pub mod march;
+pub mod mask_cells;
 pub mod maxmip;
 pub mod pyramid;
+pub mod render_job;
 pub mod shade;
 pub mod shadow;
 pub mod sun;
+pub mod sun_hours;
 pub mod view;
 
 pub use camera::TerrainCamera;

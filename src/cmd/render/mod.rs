@@ -5,199 +5,27 @@
 //! integration — written to PNG or EXR, with optional AOVs — on the CPU or,
 //! with `--backend gpu`, on the GPU.
 
+mod args;
 mod gpu;
-mod output;
 pub mod split;
 
+use args::BackendArg;
+pub use args::RenderArgs;
+
 use crate::cmd::trace::parse_names;
-use crate::measure::{pool, timed};
 use anyhow::{bail, Result};
-use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_core::accel::build_accel;
 use raykit_lab::args::scene as setup;
+use raykit_lab::measure::{pool, timed};
+use raykit_render::animation::{animation_frames, AnimationFrame};
 use raykit_render::aov::AovKind;
+use raykit_render::output::{write_aov, write_image, ImageFormat};
 use raykit_render::shadowmap::{ShadowMapOptions, ShadowMaps};
-use raykit_render::whitted::{
-    render_whitted, IntegratorKind, PrimaryMode, ShadowMode, WhittedOptions, WhittedScene,
-    DEFAULT_MAX_DEPTH,
-};
+use raykit_render::whitted::{render_whitted, ShadowMode, WhittedOptions, WhittedScene};
 use raykit_render::Encoding;
-use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
-
-/// Shadow test on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ShadowArg {
-    /// Shadow rays: one occlusion query per light and hit.
-    Rays,
-    /// Shadow maps rendered from each light, box-filtered (Williams 1978).
-    Maps,
-    /// No shadows.
-    Off,
-}
-
-/// First-hit source on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum PrimaryArg {
-    /// Trace camera rays.
-    Traced,
-    /// Rasterize a visibility buffer (hybrid rendering: rasterized first hits, traced rays after).
-    Raster,
-}
-
-/// Ray organisation on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum IntegratorArg {
-    /// Depth-first recursion per camera sample.
-    Recursive,
-    /// Stream organisation after Purcell et al. (2002): stages over ray queues.
-    Wavefront,
-}
-
-/// Where the frame is rendered.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum BackendArg {
-    /// The CPU renderer (every feature), tile-parallel on the worker threads.
-    Cpu,
-    /// WGSL compute kernels through wgpu (any Vulkan, Metal or DX12 GPU, or
-    /// Mesa's lavapipe): one kernel per ray path for --integrator
-    /// recursive, a stream of kernels (after Purcell et al. 2002) for --integrator wavefront.
-    Gpu,
-}
-
-impl From<ShadowArg> for ShadowMode {
-    fn from(a: ShadowArg) -> ShadowMode {
-        match a {
-            ShadowArg::Rays => ShadowMode::Rays,
-            ShadowArg::Maps => ShadowMode::Maps,
-            ShadowArg::Off => ShadowMode::Off,
-        }
-    }
-}
-
-impl From<PrimaryArg> for PrimaryMode {
-    fn from(a: PrimaryArg) -> PrimaryMode {
-        match a {
-            PrimaryArg::Traced => PrimaryMode::Traced,
-            PrimaryArg::Raster => PrimaryMode::Rasterized,
-        }
-    }
-}
-
-impl From<IntegratorArg> for IntegratorKind {
-    fn from(a: IntegratorArg) -> IntegratorKind {
-        match a {
-            IntegratorArg::Recursive => IntegratorKind::Recursive,
-            IntegratorArg::Wavefront => IntegratorKind::Wavefront,
-        }
-    }
-}
-
-/// Arguments of `raykit render`.
-#[derive(Args)]
-#[command(
-    after_help = "Examples:\n  raykit render                                   # builtin:whitted (mirror + glass Cornell box) to render.png\n  \
-raykit render --scene examples/cornell-glass.gltf         # a glTF scene with its own camera and lights\n  \
-raykit render --scene dragon.ply.gz --material glass --env data/envmaps/courtyard.exr --env-box\n  \
-raykit render --shadows maps --pcf 5 --primary raster --integrator wavefront --out frame.exr --aov depth,normal,id\n  \
-raykit render --scene bunny.obj --light dir:-1,-2,-1 --light spot:0,3,2:0,0,0:25:1,0.8,0.6\n  \
-raykit render --tile 2/8 --out part2.png && raykit merge-tiles render.png part*.png   # one band per process\n  \
-raykit render --orbit 120 --frames 30..60 --out anim/f.png   # frames 30 to 59 of a 120-frame orbit\n\n\
-Without --eye the scene's own camera is used, or one framing the whole mesh.\n\
-Without --light the scene's lights are used, or one point light above the mesh.\n\
---depth counts rays per path: 1 is direct light only, 2 adds one reflection/refraction bounce.\n\n\
---backend gpu renders the same image on the GPU (wgpu compute; Mesa's lavapipe without a GPU):\n\
---integrator recursive runs one kernel per ray path (one thread per pixel sample, --depth up to 16),\n\
---integrator wavefront a stream of kernels (after Purcell et al. 2002) over ray queues. --accel picks kd-stack,\n\
-bvh-threaded (default) or brute, --test plucker or moller. --shadows maps and --primary raster\n\
-are CPU-only and are refused with an error."
-)]
-pub struct RenderArgs {
-    #[command(flatten)]
-    scene: setup::SceneArgs,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 800)]
-    width: u32,
-    /// Image height in pixels.
-    #[arg(long, default_value_t = 600)]
-    height: u32,
-    /// Samples per pixel (jittered anti-aliasing).
-    #[arg(long, default_value_t = 1)]
-    spp: u32,
-    /// Longest path in rays (1 = direct light only).
-    #[arg(long, default_value_t = DEFAULT_MAX_DEPTH)]
-    depth: u32,
-    /// Shadow test.
-    #[arg(long, value_enum, default_value_t = ShadowArg::Rays)]
-    shadows: ShadowArg,
-    /// Disable shadows (same as --shadows off).
-    #[arg(long)]
-    no_shadows: bool,
-    /// Shadow-map resolution in texels per side (per cube face for point lights).
-    #[arg(long, default_value_t = ShadowMapOptions::default().resolution)]
-    shadow_map_size: u32,
-    /// Shadow-map box filter (percentage-closer filtering) width in texels; 1 = unfiltered.
-    #[arg(long, default_value_t = ShadowMapOptions::default().pcf)]
-    pcf: u32,
-    /// Shadow-map depth bias, constant part, as a fraction of the scene diagonal
-    /// (default: automatic).
-    #[arg(long)]
-    shadow_bias: Option<f32>,
-    /// Shadow-map depth bias, slope-scaled part, in texels (default: automatic).
-    #[arg(long)]
-    shadow_slope_bias: Option<f32>,
-    /// First-hit source.
-    #[arg(long, value_enum, default_value_t = PrimaryArg::Traced)]
-    primary: PrimaryArg,
-    /// Ray organisation.
-    #[arg(long, value_enum, default_value_t = IntegratorArg::Recursive)]
-    integrator: IntegratorArg,
-    /// Factor on the linear radiance before encoding.
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
-    /// Ambient radiance, times each surface's diffuse colour.
-    #[arg(long, default_value_t = 0.06)]
-    ambient: f32,
-    /// Also write AOVs of the first hit: any of depth,normal,id (EXR next to
-    /// the output, plus PNG previews).
-    #[arg(long, value_delimiter = ',')]
-    aov: Vec<String>,
-    /// Acceleration structure (`raykit info accels`; default bvh8, the
-    /// fastest, or bvh-threaded with --backend gpu, which takes kd-stack,
-    /// bvh-threaded or brute). The summary line names the one used.
-    #[arg(long)]
-    accel: Option<String>,
-    /// Render on the CPU or the GPU (same image; see below).
-    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
-    backend: BackendArg,
-    /// Ray/triangle test (`raykit info tests`).
-    #[arg(long, default_value = "moller")]
-    test: String,
-    /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
-    threads: usize,
-    /// Output image: `.png` (8-bit sRGB) or `.exr` (linear float). With
-    /// --orbit each frame goes to OUT's name with the frame number before
-    /// the extension (render.0007.png).
-    #[arg(long, default_value = "render.png")]
-    out: PathBuf,
-    /// Render only horizontal band I of N (I from 0; rows I·H/N up to
-    /// (I+1)·H/N) as a PNG part that `raykit merge-tiles` assembles into the
-    /// image a one-process render gives, bit for bit.
-    #[arg(long, value_name = "I/N", value_parser = split::parse_tile)]
-    tile: Option<split::TileArg>,
-    /// Camera path: FRAMES frames orbiting the camera target about the up
-    /// axis (a full turn; frame 0 is the camera itself).
-    #[arg(long, value_name = "FRAMES")]
-    orbit: Option<u32>,
-    /// Render only frames A..B (B excluded; A..=B includes it) of --orbit.
-    #[arg(long, value_name = "A..B", value_parser = split::parse_frames)]
-    frames: Option<split::FrameRange>,
-    #[command(flatten)]
-    build: crate::build_args::BuildArgs,
-}
 
 /// Render and write the image.
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
@@ -222,14 +50,14 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                 .ok_or_else(|| anyhow::anyhow!("unknown --aov '{a}': expected depth, normal or id"))
         })
         .collect::<Result<_>>()?;
-    let format = output::Format::of(&args.out)?;
+    let format = ImageFormat::of(&args.out).map_err(anyhow::Error::msg)?;
     let backend = args.backend;
     let cpu_accel = match backend {
         BackendArg::Cpu => args
             .accel
             .as_deref()
-            .unwrap_or(crate::build_args::DEFAULT_ACCEL),
-        BackendArg::Gpu => crate::build_args::DEFAULT_ACCEL,
+            .unwrap_or(raykit_lab::args::build_args::DEFAULT_ACCEL),
+        BackendArg::Gpu => raykit_lab::args::build_args::DEFAULT_ACCEL,
     };
     let (kind, test) = parse_names(cpu_accel, &args.test)?;
     let gpu_kind = match backend {
@@ -238,7 +66,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     };
     let window = match args.tile {
         Some(t) => {
-            if format != output::Format::Png {
+            if format != ImageFormat::Png {
                 bail!("--tile writes PNG parts (with their place in the image) for `raykit merge-tiles`: --out must end in .png");
             }
             if !aovs.is_empty() || backend == BackendArg::Gpu {
@@ -274,9 +102,9 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let aspect = args.width as f32 / args.height as f32;
     let (setup, load_s) = timed(|| setup::setup(&args.scene, aspect));
     let mut setup = setup?;
-    let frames = split::frames(&setup.camera, &args.out, args.orbit, args.frames)?;
-    for (_, _, out) in &frames {
-        crate::paths::ensure_not_input(out, &[std::path::Path::new(&args.scene.scene)])?;
+    let frames = animation_frames(&setup.camera, &args.out, args.orbit, args.frames)?;
+    for f in &frames {
+        crate::paths::ensure_not_input(&f.out, &[std::path::Path::new(&args.scene.scene)])?;
     }
     let window = window.unwrap_or(raykit_render::Tile::whole(args.width, args.height));
     let samples = window.pixels() * args.spp as u64 * frames.len() as u64;
@@ -298,7 +126,12 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         Some(gkind) => {
             let mut build_s = 0.0;
             let mut describe = String::new();
-            for (number, camera, out) in &frames {
+            for AnimationFrame {
+                number,
+                camera,
+                out,
+            } in &frames
+            {
                 setup.camera = *camera;
                 let g = pool.install(|| {
                     gpu::render(
@@ -346,11 +179,16 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                 environment: &setup.environment,
                 shadow_maps: maps.as_ref(),
             };
-            for (number, camera, out) in &frames {
+            for AnimationFrame {
+                number,
+                camera,
+                out,
+            } in &frames
+            {
                 let frame = pool.install(|| render_whitted(&scene, camera, &opts, &progress))?;
                 rendered.push((*number, *camera, out.clone(), frame));
             }
-            let build = crate::build_args::quality_name(args.build.options().quality);
+            let build = args.build.options().quality.name();
             (
                 build_s,
                 format!("{} ({build} build), {}", kind.name(), test.name()),
@@ -372,10 +210,16 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                 };
                 raykit_io::write_png_part(out, &part, &frame.image.rgb)?;
             }
-            None => output::write_image(out, format, &frame.image)?,
+            None => write_image(out, format, &frame.image)?,
         }
         for kind in &aovs {
-            output::write_aov(out, *kind, mesh, camera, frame)?;
+            let (exr, png) = write_aov(out, *kind, mesh, camera, frame)?;
+            eprintln!(
+                "{} AOV -> {} and {}",
+                kind.name(),
+                exr.display(),
+                png.display()
+            );
         }
         let st = &frame.stats;
         let what = match (number, args.tile) {

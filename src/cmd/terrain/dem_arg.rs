@@ -1,32 +1,15 @@
 //! The DEM argument of the terrain commands: a file or `fractal:SIZE[:SEED]`.
 
-use anyhow::{bail, Context, Result};
-use raykit_terrain::io::{load_dem, LoadOptions};
+use anyhow::Result;
+use raykit_terrain::io::load_dem_source;
 use raykit_terrain::Dem;
 
-/// Prefix of generated DEMs.
-pub const FRACTAL: &str = "fractal:";
+pub use raykit_terrain::io::FRACTAL_PREFIX as FRACTAL;
 
-/// Load `spec`: a DEM file (GeoTIFF, .hgt, .ter, 16-bit PNG, raw) or
-/// `fractal:SIZE[:SEED]` (diamond-square, 10 m pixels, 0..2000 m).
+/// Load `spec`: a DEM file or `fractal:SIZE[:SEED]`
+/// ([`raykit_terrain::io::load_dem_source`]).
 pub fn load(spec: &str) -> Result<Dem> {
-    if let Some(rest) = spec.strip_prefix(FRACTAL) {
-        let mut parts = rest.split(':');
-        let size: usize = parts.next().unwrap_or_default().parse().with_context(|| {
-            format!("'{spec}': expected fractal:SIZE[:SEED] with SIZE an integer")
-        })?;
-        let seed: u64 = match parts.next() {
-            Some(s) => s
-                .parse()
-                .with_context(|| format!("'{spec}': SEED must be an integer"))?,
-            None => 1,
-        };
-        if !(2..=16384).contains(&size) {
-            bail!("'{spec}': SIZE must be between 2 and 16384");
-        }
-        return Ok(raykit_terrain::fractal::fractal(size, seed, 0.55));
-    }
-    Ok(load_dem(spec, &LoadOptions::default())?)
+    load_dem_source(spec).map_err(anyhow::Error::msg)
 }
 
 /// Parse `N` comma-separated finite numbers; `what` (e.g. "X,Y,Z", or

@@ -1,7 +1,6 @@
 //! `raykit terrain`: DEMs — rendering by height-field ray casting (per-frame
 //! quadtree boxes, maximum mipmap) and shadow masks (Min 2008).
 
-mod creation_options;
 pub mod dem_arg;
 pub mod render;
 pub mod shadow;

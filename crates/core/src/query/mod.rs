@@ -29,6 +29,7 @@
 //! [`crate::accel::AccelKind`].
 
 pub mod all_hits;
+pub mod answers;
 pub(crate) mod batch;
 pub mod closest;
 pub mod exact;
@@ -40,6 +41,7 @@ mod surface_node;
 pub mod walk;
 pub mod winding;
 
+pub use answers::{Answers, QueryKind};
 pub use closest::ClosestPoint;
 pub use exact::Triangle64;
 pub use frustum::{Frustum, Plane};

@@ -9,11 +9,6 @@ use std::str::FromStr;
 /// packs of four triangles.
 pub const DEFAULT_ACCEL: &str = "bvh8";
 
-/// The `--bvh-build` name of a build quality.
-pub fn quality_name(q: BuildQuality) -> &'static str {
-    q.name()
-}
-
 /// BVH build options on the command line.
 #[derive(Args, Clone, Debug)]
 pub struct BuildArgs {

@@ -84,4 +84,12 @@ impl GeoTiffLayout {
         }
         Ok(())
     }
+
+    /// The layout in words, e.g. "DEFLATE, tiles 256x256".
+    pub fn describe(&self) -> String {
+        match self.tile {
+            Some((w, h)) => format!("{}, tiles {w}x{h}", self.compression.name()),
+            None => format!("{}, strips", self.compression.name()),
+        }
+    }
 }

@@ -3,6 +3,7 @@
 //! by extension. Every failure is a [`DemError`] naming the file, the
 //! position in it and what was expected; no input makes a reader panic.
 
+mod creation_options;
 mod error;
 mod geokeys;
 mod geotiff_blocks;
@@ -16,8 +17,10 @@ mod nodata;
 mod png;
 mod raw;
 mod samples;
+mod source;
 mod terragen;
 
+pub use creation_options::layout_from_creation_options;
 pub use error::DemError;
 pub use geokeys::{geo_key_short, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
 pub use geotiff_blocks::TileSample;
@@ -36,4 +39,5 @@ pub use load::{load_dem, LoadOptions, RawSpec, SUPPORTED_EXTENSIONS};
 pub use nodata::{nodata_as_f32, nodata_text};
 pub use png::read_png;
 pub use raw::{read_raw, RawType};
+pub use source::{load_dem_source, FRACTAL_PREFIX};
 pub use terragen::read_ter;

@@ -1,43 +1,47 @@
-//! Writing `raykit render`'s images: PNG or EXR, and AOV files next to them.
+//! Writing rendered images: PNG (8-bit sRGB) or OpenEXR (linear float), and
+//! AOV files next to them.
 
-use anyhow::{bail, Result};
+use crate::aov::{AovKind, Aovs};
+use crate::whitted::Frame;
+use crate::Image;
 use raykit_core::Camera;
 use raykit_core::TriangleMesh;
-use raykit_render::aov::{AovKind, Aovs};
-use raykit_render::whitted::Frame;
-use raykit_render::Image;
+use std::io;
 use std::path::{Path, PathBuf};
 
 /// Output image format, from the file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
+pub enum ImageFormat {
     /// 8-bit sRGB PNG.
     Png,
     /// Linear float OpenEXR.
     Exr,
 }
 
-impl Format {
-    /// The format of `path` by its extension.
-    pub fn of(path: &Path) -> Result<Format> {
+impl ImageFormat {
+    /// The format of `path` by its extension; the error names the file.
+    pub fn of(path: &Path) -> Result<ImageFormat, String> {
         match path
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase)
             .as_deref()
         {
-            Some("png") => Ok(Format::Png),
-            Some("exr") => Ok(Format::Exr),
-            _ => bail!("{}: the output must end in .png or .exr", path.display()),
+            Some("png") => Ok(ImageFormat::Png),
+            Some("exr") => Ok(ImageFormat::Exr),
+            _ => Err(format!(
+                "{}: the output must end in .png or .exr",
+                path.display()
+            )),
         }
     }
 }
 
 /// Write `image` to `path` (atomically).
-pub fn write_image(path: &Path, format: Format, image: &Image) -> Result<()> {
+pub fn write_image(path: &Path, format: ImageFormat, image: &Image) -> io::Result<()> {
     match format {
-        Format::Png => raykit_io::write_png(path, image.width, image.height, &image.rgb)?,
-        Format::Exr => {
+        ImageFormat::Png => raykit_io::write_png(path, image.width, image.height, &image.rgb)?,
+        ImageFormat::Exr => {
             let rgb: Vec<[f32; 3]> = image.linear.iter().map(|c| c.to_array()).collect();
             raykit_io::write_exr_rgb(path, image.width, image.height, &rgb)?
         }
@@ -54,14 +58,15 @@ fn sibling(out: &Path, kind: AovKind, ext: &str) -> PathBuf {
     out.with_file_name(format!("{stem}.{}.{ext}", kind.name()))
 }
 
-/// Write AOV `kind` of `frame` as EXR and a PNG preview next to `out`.
+/// Write AOV `kind` of `frame` as EXR and a PNG preview next to `out`
+/// (`STEM.KIND.exr` and `STEM.KIND.png`); the paths written.
 pub fn write_aov(
     out: &Path,
     kind: AovKind,
     mesh: &TriangleMesh,
     camera: &Camera,
     frame: &Frame,
-) -> Result<()> {
+) -> io::Result<(PathBuf, PathBuf)> {
     let (w, h) = (frame.image.width, frame.image.height);
     let aovs = Aovs::from_hits(mesh, camera, w, h, &frame.first_hits);
     let channels = aovs.channels(kind);
@@ -70,11 +75,5 @@ pub fn write_aov(
     raykit_io::write_exr_channels(&exr, w, h, &refs)?;
     let png = sibling(out, kind, "png");
     raykit_io::write_png(&png, w, h, &aovs.preview(kind))?;
-    eprintln!(
-        "{} AOV -> {} and {}",
-        kind.name(),
-        exr.display(),
-        png.display()
-    );
-    Ok(())
+    Ok((exr, png))
 }

@@ -1,0 +1,179 @@
+//! `raykit cull`: visibility culling of a model — removes the triangles (or
+//! parts) that no viewpoint outside the model can see: by ray tracing (the
+//! default), or by Min's (2008) grid method.
+
+mod args;
+mod truth_file;
+
+pub use args::CullArgs;
+use args::ModeArg;
+use truth_file::{load_truth, save_truth};
+
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use raykit_core::TriangleMesh;
+use raykit_cull::{
+    compare, cull, cull_by_rays, independent_truth, CullOptions, CullReport, EvalOptions,
+    GroundTruth, RayOptions,
+};
+use raykit_lab::measure::timed;
+use std::process::ExitCode;
+use std::time::Duration;
+
+/// Load, cull, write, report.
+pub fn run(args: CullArgs) -> Result<ExitCode> {
+    if raykit_io::MeshFormat::from_path(&args.output).is_none() {
+        bail!(
+            "{}: unknown mesh file extension; expected .obj, .ply, .stl, .off, .gltf or .glb (optionally .gz)",
+            args.output.display()
+        );
+    }
+    crate::paths::ensure_not_input(&args.output, &[args.input.as_path()])?;
+    if let Some(r) = &args.report {
+        crate::paths::ensure_not_input(r, &[args.input.as_path(), args.output.as_path()])?;
+    }
+    let mode = if args.paper {
+        ModeArg::Paper
+    } else {
+        args.mode
+    };
+    if args.confirm && mode != ModeArg::Conservative {
+        bail!("--confirm belongs to --mode conservative");
+    }
+    let options = match mode {
+        ModeArg::Paper => CullOptions::paper(args.resolution as usize),
+        _ => CullOptions {
+            confirm: args.confirm.then(EvalOptions::confirmation),
+            ..CullOptions::conservative(args.resolution as usize)
+        },
+    };
+    let ray_options = RayOptions {
+        min_opening: args.min_opening,
+        max_rounds: args.rounds as usize,
+        ..Default::default()
+    };
+    let bar = ProgressBar::new_spinner().with_style(
+        ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").expect("valid template"),
+    );
+    bar.enable_steady_tick(Duration::from_millis(100));
+    bar.set_message(format!("reading {}", args.input.display()));
+    let (mesh, load_s) = timed(|| raykit_io::load_mesh(&args.input));
+    let mesh = match mesh {
+        Ok(m) => m,
+        Err(e) => {
+            bar.finish_and_clear();
+            return Err(e.into());
+        }
+    };
+    bar.set_message(match mode {
+        ModeArg::Rays => format!("culling {} triangles by rays", mesh.num_triangles()),
+        _ => format!(
+            "culling {} triangles at resolution {}",
+            mesh.num_triangles(),
+            args.resolution
+        ),
+    });
+    let (result, cull_s) = timed(|| match mode {
+        ModeArg::Rays => cull_by_rays(&mesh, &ray_options),
+        _ => cull(&mesh, &options),
+    });
+    bar.finish_and_clear();
+    let result = result.with_context(|| format!("{}", args.input.display()))?;
+    let keep = result.keep(&mesh, args.by.into());
+    let kept = mesh.retain_triangles(&keep);
+    if kept.num_triangles() == 0 {
+        bail!(
+            "{}: every triangle was found hidden; nothing to write",
+            args.input.display()
+        );
+    }
+    let (saved, save_s) = timed(|| raykit_io::save_mesh(&args.output, &kept));
+    let (ground_truth, evaluation) = if args.evaluate {
+        let truth = match &args.truth {
+            Some(path) => load_truth(path, &args.input, mesh.num_triangles())?,
+            None => {
+                let truth = evaluate_input(&mesh, &args);
+                if let Some(path) = &args.save_truth {
+                    save_truth(path, &args, &truth)?;
+                }
+                truth
+            }
+        };
+        let eval = compare(&truth, &keep, &mesh);
+        (Some(truth), Some(eval))
+    } else {
+        (None, None)
+    };
+    saved.with_context(|| format!("cannot write {}", args.output.display()))?;
+    let stats = &result.stats;
+    let parts_out = kept.parts.len().max(1);
+    let report = CullReport {
+        input: args.input.display().to_string(),
+        output: args.output.display().to_string(),
+        by: args.by.into(),
+        mode: mode.into(),
+        confirm: options.confirm.is_some(),
+        resolution: args.resolution,
+        min_opening: args.min_opening,
+        triangles_in: mesh.num_triangles(),
+        triangles_out: kept.num_triangles(),
+        triangles_removed: mesh.num_triangles() - kept.num_triangles(),
+        parts_in: stats.parts,
+        parts_out,
+        parts_removed: stats.parts - parts_out,
+        load_s,
+        cull_s,
+        save_s,
+        stats: stats.clone(),
+        ground_truth,
+        evaluation,
+    };
+    let json = serde_json::to_string_pretty(&report)?;
+    if let Some(path) = &args.report {
+        raykit_io::write_atomic(path, |w| {
+            w.write_all(json.as_bytes())?;
+            w.write_all(b"\n")
+        })
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if args.json {
+        println!("{json}");
+    } else {
+        print!("{}", report.summary(&args.output, args.report.as_deref()));
+    }
+    match &report.evaluation {
+        Some(e) if e.false_removals > 0 => Ok(ExitCode::from(2)),
+        _ => Ok(ExitCode::SUCCESS),
+    }
+}
+
+/// The ground truth of `mesh` with the arguments' settings
+/// ([`independent_truth`]), with a progress bar.
+fn evaluate_input(mesh: &TriangleMesh, args: &CullArgs) -> GroundTruth {
+    let eval_options = EvalOptions {
+        max_rounds: args.eval_rounds as usize,
+        min_opening: args.eval_min_opening,
+        ..Default::default()
+    };
+    let bar = ProgressBar::new(1).with_style(
+        ProgressStyle::with_template(
+            "ground truth, round {msg} {bar:30} {pos}/{len} [{elapsed}, eta {eta}]",
+        )
+        .expect("valid template"),
+    );
+    let truth = independent_truth(mesh, &eval_options, &|p| {
+        if p.done == 1 {
+            bar.set_length(p.total);
+            bar.reset_eta();
+            bar.set_message(format!(
+                "{} of at most {} ({} triangles visible so far; triangles, then viewpoints)",
+                p.round + 1,
+                eval_options.max_rounds,
+                p.visible
+            ));
+        }
+        bar.set_position(p.done);
+    });
+    bar.finish_and_clear();
+    truth
+}

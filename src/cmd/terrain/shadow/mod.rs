@@ -1,0 +1,240 @@
+//! `raykit terrain shadow`: where a point light or the sun is visible from
+//! the ground (Min's (2008) terrain shadow map), exact for the declared
+//! surface, written as a GeoTIFF with the DEM's georeferencing and a PNG
+//! preview; or hours of direct sun per cell over a day. The options follow
+//! gdal_viewshed where the meaning is the same (values of visible,
+//! invisible, out-of-range and no-data cells, target height, maximum
+//! distance, curvature coefficient, creation options).
+
+mod args;
+mod sun_path;
+
+use args::Method;
+pub use args::ShadowArgs;
+use sun_path::sun_path;
+
+use super::dem_arg::{self, numbers};
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use raykit_lab::measure::timed;
+use raykit_terrain::curvature::curvature_corrected;
+use raykit_terrain::georef::MapWorld;
+use raykit_terrain::io::layout_from_creation_options;
+use raykit_terrain::mask_cells::{classify, MaskCell, MaskValues, Range};
+use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
+use raykit_terrain::{HeightField, MaxMipmap};
+use std::path::Path;
+use std::process::ExitCode;
+
+fn compute(
+    field: &HeightField,
+    pyramid: &MaxMipmap,
+    light: &Light,
+    method: ShadowMethod,
+    target_height: f64,
+    label: &str,
+) -> (Vec<u8>, f64) {
+    let bar = ProgressBar::new((field.width * field.height) as u64).with_style(
+        ProgressStyle::with_template("{bar:30} {percent:>3}% {msg} [{elapsed}<{eta}]")
+            .expect("valid template"),
+    );
+    bar.set_message(label.to_string());
+    let (mask, s) = timed(|| {
+        shadow_mask_for_targets(field, pyramid, light, method, target_height, &|n| {
+            bar.inc(n as u64)
+        })
+    });
+    bar.finish_and_clear();
+    (mask, s)
+}
+
+/// Compute and write the mask (or the hours of sun).
+pub fn run(args: ShadowArgs) -> Result<ExitCode> {
+    let chosen = [
+        args.light.is_some(),
+        args.sun.is_some(),
+        args.sun_path.is_some(),
+    ];
+    if chosen.iter().filter(|&&c| c).count() != 1 {
+        bail!("give exactly one of --light, --sun, --sun-path");
+    }
+    if args.light_elevation && args.light.is_none() {
+        bail!("--light-elevation applies to --light only");
+    }
+    if args.light.is_none() && (args.max_distance.is_some() || args.curvature_coefficient != 0.0) {
+        bail!("--max-distance and --curvature-coefficient apply to --light only");
+    }
+    if !(args.target_height.is_finite() && args.target_height >= 0.0) {
+        bail!(
+            "--target-height {}: expected a height >= 0 metres",
+            args.target_height
+        );
+    }
+    if let Some(md) = args.max_distance {
+        if !(md.is_finite() && md > 0.0) {
+            bail!("--max-distance {md}: expected a distance > 0 metres");
+        }
+    }
+    if !args.curvature_coefficient.is_finite() {
+        bail!("--curvature-coefficient must be a finite number");
+    }
+    let nv = args.nodata_value;
+    if nv == args.visible_value || nv == args.invisible_value {
+        bail!(
+            "--nodata-value {nv} equals --visible-value or --invisible-value: GDAL would read those cells as no data"
+        );
+    }
+    if args.max_distance.is_some() && nv == args.out_of_range_value {
+        bail!("--nodata-value {nv} equals --out-of-range-value: GDAL would read those cells as no data");
+    }
+    let layout =
+        layout_from_creation_options(&args.creation_options).map_err(anyhow::Error::msg)?;
+    let preview = args
+        .preview
+        .clone()
+        .unwrap_or_else(|| args.out.with_extension("png"));
+    let input = Path::new(&args.dem);
+    crate::paths::ensure_not_input(&args.out, &[input])?;
+    crate::paths::ensure_not_input(&preview, &[input])?;
+    let (dem, load_s) = timed(|| dem_arg::load(&args.dem));
+    let dem = dem?;
+    // The light's grid position, for the curvature and the distances.
+    let light_grid = match &args.light {
+        Some(s) => {
+            let [x, y, _] = numbers::<3>("--light", s)?;
+            Some(dem.map_to_grid(x, y))
+        }
+        None => None,
+    };
+    let field_dem = match light_grid {
+        Some((c, r)) if args.curvature_coefficient != 0.0 => {
+            curvature_corrected(&dem, c, r, args.curvature_coefficient)
+        }
+        _ => dem.clone(),
+    };
+    let field = HeightField::new(&field_dem).map_err(|e| anyhow::anyhow!("{}: {e}", args.dem))?;
+    let (pyramid, pyr_s) = timed(|| MaxMipmap::new(&field));
+    let method = match args.method {
+        Method::Fast => ShadowMethod::Fast,
+        Method::Brute => ShadowMethod::BruteForce,
+    };
+    let nodata: Vec<bool> = dem.heights.iter().map(|h| h.is_nan()).collect();
+    eprintln!(
+        "{}: {}x{} grid points, cells {:.2} x {:.2} m, load {:.0} ms, pyramid {:.0} ms",
+        args.dem,
+        dem.width,
+        dem.height,
+        field.sx,
+        field.sy,
+        load_s * 1e3,
+        pyr_s * 1e3
+    );
+
+    if let Some(spec) = &args.sun_path {
+        return sun_path(
+            &args, spec, &dem, &field, &pyramid, method, &nodata, &preview, &layout,
+        );
+    }
+    let light = if let Some(s) = &args.light {
+        let [x, y, h] = numbers::<3>("--light", s)?;
+        let geo = MapWorld::new(&dem, &field);
+        let [wx, wy] = geo
+            .inside(x, y, "--light")
+            .map_err(|e| anyhow::anyhow!(e))?;
+        let z = if args.light_elevation {
+            h
+        } else {
+            if h < 0.0 {
+                bail!("--light '{s}': the height above the ground must be >= 0 (use --light-elevation for an absolute elevation)");
+            }
+            let (gx, gy) = geo.world_to_grid(wx, wy);
+            field.height_at(gx, gy) + h
+        };
+        Light::Point([wx, wy, z])
+    } else {
+        let [az, el] = numbers::<2>("--sun", args.sun.as_deref().unwrap_or_default())?;
+        if !(0.0..=90.0).contains(&el) {
+            bail!("--sun: the elevation must be between 0 and 90 degrees, got {el}");
+        }
+        Light::Sun {
+            azimuth_deg: az,
+            elevation_deg: el,
+        }
+    };
+    let tz = args.target_height;
+    let (mask, secs) = compute(&field, &pyramid, &light, method, tz, "shadow mask");
+    if args.compare {
+        let other = match method {
+            ShadowMethod::Fast => ShadowMethod::BruteForce,
+            ShadowMethod::BruteForce => ShadowMethod::Fast,
+        };
+        let (m2, s2) = compute(
+            &field,
+            &pyramid,
+            &light,
+            other,
+            tz,
+            "shadow mask (second method)",
+        );
+        let differ = mask.iter().zip(&m2).filter(|(a, b)| a != b).count();
+        let (fast_s, brute_s) = if method == ShadowMethod::Fast {
+            (secs, s2)
+        } else {
+            (s2, secs)
+        };
+        eprintln!(
+            "compare: fast {:.3} s, brute force {:.3} s ({:.1}x), cells that differ: {differ} of {}",
+            fast_s,
+            brute_s,
+            brute_s / fast_s.max(1e-9),
+            mask.len()
+        );
+        if differ > 0 {
+            eprintln!("raykit: the two exact methods disagree: please report this");
+        }
+    }
+    // Each cell's class: lit, shadow, out of range or no data.
+    let range = match (args.max_distance, light_grid) {
+        (Some(max_distance), Some(light_grid)) => Some(Range {
+            light_grid,
+            cell: (field.sx, field.sy),
+            max_distance,
+        }),
+        _ => None,
+    };
+    let class = classify(&mask, &nodata, dem.width, range.as_ref());
+    let lit = class.iter().filter(|&&c| c == MaskCell::Lit).count();
+    let mask_values = MaskValues {
+        visible: args.visible_value,
+        invisible: args.invisible_value,
+        out_of_range: args.out_of_range_value,
+        nodata: nv,
+    };
+    let values: Vec<u8> = class.iter().map(|c| c.value(&mask_values)).collect();
+    raykit_terrain::io::write_geotiff_u8_with(
+        &args.out,
+        dem.width,
+        dem.height,
+        &values,
+        &dem.georef,
+        Some(nv as f64),
+        &layout,
+    )?;
+    let rgb: Vec<u8> = class.iter().flat_map(|c| c.preview()).collect();
+    raykit_io::write_png(&preview, dem.width as u32, dem.height as u32, &rgb)
+        .with_context(|| format!("writing {}", preview.display()))?;
+    eprintln!(
+        "{:?}: {:.1}% of the grid points lit, {:.3} s ({}) -> {} ({}) and {}",
+        light,
+        100.0 * lit as f64 / mask.len() as f64,
+        secs,
+        match method {
+            ShadowMethod::Fast => "fast",
+            ShadowMethod::BruteForce => "brute force",
+        },
+        args.out.display(),
+        layout.describe(),
+        preview.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}

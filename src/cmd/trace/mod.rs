@@ -1,0 +1,134 @@
+//! `raykit trace`: trace a ray file and write hits or occlusion bytes.
+
+mod args;
+mod brute_check;
+mod gpu;
+mod instanced;
+
+pub use args::TraceArgs;
+use brute_check::check_against_brute;
+use gpu::run_gpu;
+use instanced::run_instanced;
+
+use anyhow::{anyhow, bail, Result};
+use raykit_core::accel::{build_accel, AccelKind};
+use raykit_core::tri::TestKind;
+use raykit_lab::args::backend::Backend;
+use raykit_lab::args::scene_arg;
+use raykit_lab::measure::{pool, timed};
+use serde_json::json;
+use std::process::ExitCode;
+
+/// Parse `--accel` and `--test`.
+pub fn parse_names(accel: &str, test: &str) -> Result<(AccelKind, TestKind)> {
+    let a = AccelKind::from_name(accel).ok_or_else(|| {
+        let names: Vec<_> = AccelKind::ALL.iter().map(|k| k.name()).collect();
+        anyhow!(
+            "unknown --accel '{accel}'; expected one of: {}",
+            names.join(", ")
+        )
+    })?;
+    let t = TestKind::from_name(test).ok_or_else(|| {
+        let names: Vec<_> = TestKind::ALL.iter().map(|k| k.name()).collect();
+        anyhow!(
+            "unknown --test '{test}'; expected one of: {}",
+            names.join(", ")
+        )
+    })?;
+    Ok((a, t))
+}
+
+/// Trace the file.
+pub fn run(args: TraceArgs) -> Result<ExitCode> {
+    if args.instanced || args.mesh.len() > 1 {
+        return run_instanced(args);
+    }
+    if args.backend == Backend::Gpu {
+        if args.one_ray {
+            bail!("--one-ray traces on the CPU; drop it or --backend gpu");
+        }
+        return run_gpu(args);
+    }
+    let (kind, test) = parse_names(
+        args.accel
+            .as_deref()
+            .unwrap_or(raykit_lab::args::build_args::DEFAULT_ACCEL),
+        &args.test,
+    )?;
+    crate::paths::ensure_not_input(
+        &args.out,
+        &[&args.rays, std::path::Path::new(&args.mesh[0])],
+    )?;
+    let pool = pool(args.threads)?;
+    let threads = pool.current_num_threads();
+    let (scene, load_s) = timed(|| scene_arg::load(&args.mesh[0]));
+    let mesh = scene?.mesh;
+    let rays = raykit_io::read_rays(&args.rays)?;
+    if rays.is_empty() {
+        bail!("{}: the ray file holds no rays", args.rays.display());
+    }
+    let opts = args.build.options();
+    let (accel, build_s) = pool.install(|| timed(|| build_accel(kind, test, &mesh, &opts)));
+    let (hits, occluded);
+    let trace_s;
+    if args.occlusion {
+        let mut out = vec![false; rays.len()];
+        trace_s = pool.install(|| {
+            timed(|| {
+                if args.one_ray {
+                    raykit_lab::one_ray::occluded_each(accel.as_ref(), &rays, &mut out)
+                } else {
+                    accel.occluded_batch(&rays, &mut out)
+                }
+            })
+            .1
+        });
+        raykit_io::write_occlusion(&args.out, &out)?;
+        occluded = Some(out);
+        hits = None;
+    } else {
+        let mut out = vec![None; rays.len()];
+        trace_s = pool.install(|| {
+            timed(|| {
+                if args.one_ray {
+                    raykit_lab::one_ray::intersect_each(accel.as_ref(), &rays, &mut out)
+                } else {
+                    accel.intersect_batch(&rays, &mut out)
+                }
+            })
+            .1
+        });
+        raykit_io::write_hits(&args.out, &out)?;
+        hits = Some(out);
+        occluded = None;
+    }
+    eprintln!(
+        "{}",
+        json!({
+            "accel": kind.name(),
+            "bvh_build": opts.quality.name(),
+            "test": test.name(),
+            "api": if args.one_ray { "one-ray" } else { "batch" },
+            "load_ms": load_s * 1e3,
+            "build_ms": build_s * 1e3,
+            "trace_ms": trace_s * 1e3,
+            "rays": rays.len(),
+            "mrays": rays.len() as f64 / trace_s / 1e6,
+            "threads": threads,
+        })
+    );
+    let Some(k) = args.verify else {
+        return Ok(ExitCode::SUCCESS);
+    };
+    check_against_brute(
+        false,
+        &mesh,
+        &rays,
+        test,
+        &opts,
+        k,
+        &pool,
+        hits.as_deref(),
+        occluded.as_deref(),
+    )
+}
