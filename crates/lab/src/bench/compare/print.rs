@@ -1,7 +1,7 @@
 //! The tables of `raykit bench --compare`: per mesh its builds, Mrays/s
 //! and agreement, then a summary of our best ratio per cell across meshes.
 
-use super::{trace_quality, Cell, Comparison};
+use super::report::{trace_quality, Cell, Comparison};
 use raykit_embree::Quality;
 use serde::Serialize;
 
