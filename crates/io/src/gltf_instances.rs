@@ -46,14 +46,7 @@ pub struct GltfInstances {
 
 /// Load the glTF or GLB file at `path` with its instancing kept.
 pub fn load_gltf_instances(path: &Path) -> Result<GltfInstances, LoadError> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        LoadError::new(
-            path,
-            ErrorKind::Io,
-            Location::File,
-            format!("cannot read: {e}"),
-        )
-    })?;
+    let bytes = crate::input::read_file_cause_in_message(path)?;
     parse_gltf_instances(path, &bytes)
 }
 

@@ -1,6 +1,6 @@
 //! Reading a whole input file, and gzip decompression with located errors.
 
-use crate::error::LoadError;
+use crate::error::{ErrorKind, LoadError, Location};
 use flate2::bufread::MultiGzDecoder;
 use std::io::Read;
 use std::path::Path;
@@ -8,6 +8,20 @@ use std::path::Path;
 /// The bytes of `path`.
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, LoadError> {
     std::fs::read(path).map_err(|e| LoadError::io(path, "cannot read the file", e))
+}
+
+/// The bytes of `path`, the I/O error written into the message instead of
+/// kept as a source: for errors whose whole chain of causes is printed,
+/// which would show it twice.
+pub(crate) fn read_file_cause_in_message(path: &Path) -> Result<Vec<u8>, LoadError> {
+    std::fs::read(path).map_err(|e| {
+        LoadError::new(
+            path,
+            ErrorKind::Io,
+            Location::File,
+            format!("cannot read: {e}"),
+        )
+    })
 }
 
 /// Decompress gzip `data` (all members) read from `path`.

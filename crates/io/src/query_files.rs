@@ -2,7 +2,7 @@
 //! files in, and the answer files out — distances, inside flags, closest
 //! points, hit counts and hit lists.
 
-use crate::error::{ErrorKind, LoadError, Location};
+use crate::error::LoadError;
 use crate::scene_hits::{scene_hit_record, write_scene_hit_record};
 use raykit_core::instancing::SceneHit;
 use raykit_core::query::{Answers, ClosestPoint};
@@ -18,16 +18,7 @@ pub const POINT_RECORD_SIZE: usize = 12;
 /// [`POINT_RECORD_SIZE`] is an error naming the byte offset of the
 /// incomplete record.
 pub fn read_points(path: &Path) -> Result<Vec<Vec3>, LoadError> {
-    // The I/O error is in the message, not a source, so that a chain of
-    // causes does not print it twice.
-    let data = std::fs::read(path).map_err(|e| {
-        LoadError::new(
-            path,
-            ErrorKind::Io,
-            Location::File,
-            format!("cannot read: {e}"),
-        )
-    })?;
+    let data = crate::input::read_file_cause_in_message(path)?;
     let rest = data.len() % POINT_RECORD_SIZE;
     if rest != 0 {
         let at = data.len() - rest;

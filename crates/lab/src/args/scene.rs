@@ -56,6 +56,24 @@ pub struct SceneArgs {
 }
 
 impl SceneArgs {
+    /// `scene` with the overrides `options`.
+    pub fn new(scene: String, options: SceneOptions) -> Self {
+        SceneArgs {
+            scene,
+            eye: options.eye,
+            target: options.target,
+            up: options.up,
+            fov: options.fov,
+            light: options.light,
+            env: options.env,
+            env_box: options.env_box,
+            env_box_scale: options.env_box_scale,
+            env_intensity: options.env_intensity,
+            env_rotate: options.env_rotate,
+            material: options.material,
+        }
+    }
+
     /// The overrides, apart from the scene itself.
     pub fn options(&self) -> SceneOptions {
         SceneOptions {

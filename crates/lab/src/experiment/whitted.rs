@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
-use raykit_core::Vec3;
+use raykit_render::scene_setup::SceneOptions;
 use raykit_render::shadowmap::{ShadowMapOptions, ShadowMaps};
 use raykit_render::whitted::{
     render_whitted, Frame, IntegratorKind, PrimaryMode, ShadowMode, WhittedOptions, WhittedScene,
@@ -90,20 +90,7 @@ const ENGINE_REFLECTIVITY: f32 = 0.1;
 
 /// The scene arguments of one named experiment scene.
 fn scene_args(name: &str) -> Result<SceneArgs> {
-    let mut a = SceneArgs {
-        scene: String::new(),
-        eye: None,
-        target: None,
-        up: Vec3::Y,
-        fov: None,
-        light: Vec::new(),
-        env: "sky".into(),
-        env_box: false,
-        env_box_scale: raykit_render::env::DEFAULT_BOX_SCALE,
-        env_intensity: 1.0,
-        env_rotate: 0.0,
-        material: None,
-    };
+    let mut a = SceneArgs::new(String::new(), SceneOptions::default());
     match name {
         "whitted" => a.scene = "builtin:whitted".into(),
         "dragon" => {
