@@ -46,6 +46,12 @@ impl<T: TriangleTest> LeafTriangles<T> {
         self.tris.len()
     }
 
+    /// The precomputed triangle at position `i`.
+    #[inline]
+    pub fn tri(&self, i: usize) -> &T::Tri {
+        &self.tris[i]
+    }
+
     /// Mesh triangle index of the triangle at position `i`.
     #[inline]
     pub fn prim(&self, i: usize) -> u32 {

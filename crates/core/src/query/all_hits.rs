@@ -3,17 +3,16 @@
 //! any-hit query that asks a filter callback about each hit found (for
 //! example to skip back faces).
 //!
-//! Each triangle is crossed at most once: the tree ([`SurfaceBvh`] or any
-//! [`Accel`]'s regions) is walked with a slab test against the boxes, and
-//! the triangles are tested with textbook Möller–Trumbore (1997) without
-//! the tolerance band of the nearest-hit tests, so that two neighbours do
-//! not both report one crossing near their shared edge (a ray through the
-//! shared edge itself may be counted by both or by neither). When the cap is
-//! reached, boxes entered beyond the farthest kept hit are skipped.
-//! [`ray_hits_brute`] is the `f64` reference of the tests.
+//! Each triangle is crossed at most once: the tree (a [`SurfaceBvh`]'s
+//! ray-casting tree, or any [`Accel`]'s regions) is walked with its box
+//! tests, and the triangles are tested with textbook Möller–Trumbore (1997)
+//! without the tolerance band of the nearest-hit tests, so that two
+//! neighbours do not both report one crossing near their shared edge (a ray
+//! through the shared edge itself may be counted by both or by neither).
+//! When the cap is reached, boxes entered beyond the farthest kept hit are
+//! skipped. [`ray_hits_brute`] is the `f64` reference of the tests.
 
-use super::batch::answer_each;
-use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
+use super::surface_bvh::{SurfaceBvh, EMPTY, WIDTH};
 use crate::accel::{Accel, BATCH_GRAIN};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
@@ -109,67 +108,31 @@ impl Kept<'_> {
 }
 
 impl SurfaceBvh {
-    /// Walk the triangles the ray may meet within `reach()`: `visit` gets
-    /// each hit and returns false to stop the walk.
+    /// Walk the hits of `ray` within `reach` (which `visit` may lower;
+    /// boxes entered beyond it are skipped): `visit` gets each and returns
+    /// false to stop. Through the ray-casting tree ([`super::ray_tree`]),
+    /// nearest children first when `NEAR_FIRST`.
     #[inline(always)]
-    fn walk_hits<R: FnMut() -> f32, V: FnMut(Hit) -> bool>(
+    fn walk_hits<const NEAR_FIRST: bool, V: FnMut(Hit, &mut f32) -> bool>(
         &self,
         ray: &Ray,
-        mut reach: R,
         mut visit: V,
     ) {
-        if self.nodes.is_empty() || !ray.is_valid() {
+        if self.prims.is_empty() {
             return;
         }
-        let (mut small, mut big) = ([(0u32, 0u32, 0f32); SMALL_STACK], Vec::new());
-        let stack = stack_of(&mut small, &mut big, self.stack_need);
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let (child, count, entry) = stack[sp];
-            let tfar = reach();
-            if entry > tfar {
-                continue;
-            }
-            if count > 0 {
-                for t in child as usize..(child + count) as usize {
-                    if let Some((th, u, v)) = moller(ray, &self.tris[t], reach()) {
-                        let hit = Hit {
-                            t: th,
-                            u,
-                            v,
-                            prim: self.prims[t],
-                        };
-                        if !visit(hit) {
-                            return;
-                        }
-                    }
-                }
-                continue;
-            }
-            let node = &self.nodes[child as usize];
-            let entry = slab8(&node.min, &node.max, &node.child, ray, tfar);
-            // Far children pushed first, so the nearest is walked first.
-            let mut order = [(0f32, 0usize); WIDTH];
-            let mut n = 0;
-            for (k, &e) in entry.iter().enumerate() {
-                if e <= tfar {
-                    let mut i = n;
-                    while i > 0 && order[i - 1].0 < e {
-                        order[i] = order[i - 1];
-                        i -= 1;
-                    }
-                    order[i] = (e, k);
-                    n += 1;
-                }
-            }
-            for &(e, k) in &order[..n] {
-                if sp < stack.len() {
-                    stack[sp] = (node.child[k], node.count[k], e);
-                    sp += 1;
-                }
-            }
-        }
+        let prims = &self.prims;
+        self.ray_tree()
+            .0
+            .surface_hits::<NEAR_FIRST>(ray, |c, p, reach| {
+                let hit = Hit {
+                    t: c.t,
+                    u: c.u,
+                    v: c.v,
+                    prim: prims[p as usize],
+                };
+                visit(hit, reach)
+            });
     }
 
     /// The hits along `ray` with `t` in `[ray.tnear, ray.tfar]` that
@@ -188,20 +151,17 @@ impl SurfaceBvh {
         if max_hits == 0 {
             return;
         }
-        let kept = std::cell::RefCell::new(Kept {
+        let mut kept = Kept {
             hits: out,
             cap: max_hits,
+        };
+        self.walk_hits::<true, _>(ray, |h, reach| {
+            if h.t <= kept.reach(*reach) && accept(&h) {
+                kept.insert(h);
+                *reach = kept.reach(*reach);
+            }
+            true
         });
-        self.walk_hits(
-            ray,
-            || kept.borrow().reach(ray.tfar),
-            |h| {
-                if accept(&h) {
-                    kept.borrow_mut().insert(h);
-                }
-                true
-            },
-        );
     }
 
     /// Every hit along `ray`, sorted by `t`, at most `max_hits` (the
@@ -215,15 +175,10 @@ impl SurfaceBvh {
     /// Number of triangles `ray` crosses with `t` in `[ray.tnear, ray.tfar]`.
     pub fn count_hits(&self, ray: &Ray) -> u32 {
         let mut n = 0u32;
-        let tfar = ray.tfar;
-        self.walk_hits(
-            ray,
-            || tfar,
-            |_| {
-                n += 1;
-                true
-            },
-        );
+        self.walk_hits::<false, _>(ray, |_, _| {
+            n += 1;
+            true
+        });
         n
     }
 
@@ -231,34 +186,64 @@ impl SurfaceBvh {
     /// example `|h| !back_face(h)`; stops at the first accepted hit.
     pub fn any_hit<F: FnMut(&Hit) -> bool>(&self, ray: &Ray, mut accept: F) -> Option<Hit> {
         let mut found = None;
-        let tfar = ray.tfar;
-        self.walk_hits(
-            ray,
-            || tfar,
-            |h| {
-                if accept(&h) {
-                    found = Some(h);
-                    false
-                } else {
-                    true
-                }
-            },
-        );
+        self.walk_hits::<false, _>(ray, |h, _| {
+            if accept(&h) {
+                found = Some(h);
+                false
+            } else {
+                true
+            }
+        });
         found
     }
 
     /// [`SurfaceBvh::count_hits`] for many rays, in parallel.
     pub fn count_hits_batch(&self, rays: &[Ray], out: &mut [u32]) {
-        answer_each(rays, out, |r| self.count_hits(r));
+        assert_eq!(rays.len(), out.len(), "one count per ray");
+        if self.prims.is_empty() {
+            out.fill(0);
+            return;
+        }
+        let tree = self.ray_tree().0;
+        rays.par_chunks(BATCH_GRAIN)
+            .zip(out.par_chunks_mut(BATCH_GRAIN))
+            .for_each(|(rays, out)| tree.count_hits(rays, out));
     }
 
     /// [`SurfaceBvh::ray_hits`] for many rays, in parallel: one sorted list
-    /// per ray.
+    /// per ray. The rays are walked in turn, each collecting all its hits,
+    /// which are then sorted and cut to `max_hits`: the same lists as one
+    /// [`SurfaceBvh::ray_hits`] per ray.
     pub fn ray_hits_batch(&self, rays: &[Ray], max_hits: usize) -> Vec<Vec<Hit>> {
-        rays.par_iter()
-            .with_min_len(BATCH_GRAIN)
-            .map(|r| self.ray_hits(r, max_hits))
-            .collect()
+        let mut lists: Vec<Vec<Hit>> = (0..rays.len()).map(|_| Vec::new()).collect();
+        if self.prims.is_empty() || max_hits == 0 {
+            return lists;
+        }
+        let tree = self.ray_tree().0;
+        rays.par_chunks(BATCH_GRAIN)
+            .zip(lists.par_chunks_mut(BATCH_GRAIN))
+            .for_each(|(rays, lists)| {
+                tree.hits(rays, |i, found, at| {
+                    let mut hits: Vec<Hit> = found
+                        .iter()
+                        .zip(at)
+                        .map(|(c, &p)| Hit {
+                            t: c.t,
+                            u: c.u,
+                            v: c.v,
+                            prim: self.prims[p as usize],
+                        })
+                        .collect();
+                    hits.sort_by(|a, b| {
+                        (a.t, a.prim)
+                            .partial_cmp(&(b.t, b.prim))
+                            .unwrap_or(std::cmp::Ordering::Equal)
+                    });
+                    hits.truncate(max_hits);
+                    lists[i] = hits;
+                })
+            });
+        lists
     }
 }
 

@@ -15,12 +15,15 @@
 //!   [`QueryStats`], and the brute-force references.
 //!
 //! - [`surface_bvh`]: [`SurfaceBvh`], the 8-wide BVH of the point and
-//!   multi-hit ray queries below.
+//!   multi-hit ray queries below, with its ray-casting tree (`ray_tree`, a
+//!   [`crate::accel::Bvh8`] walked to every crossing) over the surface and
+//!   the cap that closes its boundary (`closing`).
 //! - [`closest`]: closest point on the surface and unsigned distance
 //!   (Ericson 2005), nearest box first.
 //! - [`winding`]: generalized winding number (Jacobson et al. 2013) with
-//!   Barill et al.'s 2018 far-field approximation: occupancy and signed
-//!   distance that are right on open and self-intersecting meshes.
+//!   Barill et al.'s 2018 far-field approximation, and counted by one ray
+//!   through the closed surface: occupancy and signed distance that are
+//!   right on open and self-intersecting meshes.
 //! - [`all_hits`]: all hits along a ray sorted by `t` (with a cap), their
 //!   count, and any-hit with a filter callback.
 //!
@@ -32,9 +35,11 @@ pub mod all_hits;
 pub mod answers;
 pub(crate) mod batch;
 pub mod closest;
+mod closing;
 pub mod exact;
 pub mod frustum;
 mod moments;
+mod ray_tree;
 pub mod shapes;
 pub mod surface_bvh;
 mod surface_node;

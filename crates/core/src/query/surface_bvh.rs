@@ -12,7 +12,9 @@
 //! need, and every child slot keeps the range of triangles below it, from
 //! which the winding-number moments are made ([`super::winding`]).
 
+use super::closing::closing_cap;
 use super::moments::Moments;
+use super::ray_tree::RayTree;
 use crate::aabb::Aabb;
 use crate::accel::bvh::{build, BuildNode, BuildOptions};
 use crate::mesh::TriangleMesh;
@@ -37,6 +39,9 @@ pub struct SurfaceBvh {
     pub(crate) stack_need: usize,
     /// Winding-number moments, made on first use.
     pub(crate) moments: OnceLock<Moments>,
+    /// The ray-casting tree of the multi-hit queries and occupancy, and
+    /// the cap's own tree, made on first use.
+    pub(crate) rays: OnceLock<(RayTree, Option<Box<SurfaceBvh>>)>,
 }
 
 impl SurfaceBvh {
@@ -61,6 +66,7 @@ impl SurfaceBvh {
             bounds: tree.root.bounds(),
             stack_need: 1,
             moments: OnceLock::new(),
+            rays: OnceLock::new(),
         };
         if !bvh.prims.is_empty() {
             bvh.nodes.push(SurfaceNode::default());
@@ -111,6 +117,25 @@ impl SurfaceBvh {
             depth = depth.max(1 + self.fill(idx, &widen(s)));
         }
         depth
+    }
+
+    /// The ray-casting tree over the triangles and the cap that closes
+    /// them ([`super::closing`]), and the cap's own tree for its winding
+    /// number (none when the surface is closed); made on first use.
+    pub(crate) fn ray_tree(&self) -> (&RayTree, Option<&SurfaceBvh>) {
+        let (tree, cap) = self.rays.get_or_init(|| {
+            let cap = closing_cap(&self.tris);
+            let tree = RayTree::build(&self.tris, &cap);
+            let cap_tree = (!cap.is_empty()).then(|| {
+                let positions: Vec<Vec3> = cap.iter().flatten().copied().collect();
+                let indices = (0..cap.len() as u32)
+                    .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                    .collect();
+                Box::new(SurfaceBvh::build(&TriangleMesh::new(positions, indices)))
+            });
+            (tree, cap_tree)
+        });
+        (tree, cap.as_deref())
     }
 
     /// Number of triangles.

@@ -30,6 +30,15 @@
 //! otherwise it is opened, and leaves are summed exactly. The error falls
 //! as `(ρ / r)⁴`; at β = 2 the tests find it below 1% of a unit winding
 //! number, far from the ½ threshold.
+//!
+//! Occupancy first counts instead of summing: a surface `M` closed by a
+//! cap `C` ([`super::closing`]) has an integer winding number, the signed
+//! count of one ray's crossings, so `w_M = crossings_{M ∪ C} - w_C`, one
+//! ray through the ray-casting tree plus the cap's (small) solid angle.
+//! Each crossing is classified with its rounding-error bounds
+//! ([`crate::tri::moller::Moller::crossing`]); when one is too close to an
+//! edge, a corner or the point to be sure of, the solid angles are summed
+//! as above.
 
 use super::batch::answer_coherent;
 use super::moments::{Moments, SlotMoments};
@@ -170,6 +179,21 @@ impl SurfaceBvh {
         self.winding_number_with(q, DEFAULT_BETA)
     }
 
+    /// The winding number of `q` counted rather than summed: the signed
+    /// crossings of one ray through the surface and the cap that closes it,
+    /// less the cap's winding number ([`super::closing`]); exact for a
+    /// closed surface, and as accurate as the cap's solid angle otherwise.
+    /// None when a crossing lies within rounding error of an edge, a
+    /// corner or `q` itself, or `q` is not finite.
+    pub fn winding_number_counted(&self, q: Vec3) -> Option<f32> {
+        if self.nodes.is_empty() {
+            return q.is_finite().then_some(0.0);
+        }
+        let (tree, cap) = self.ray_tree();
+        let count = tree.signed_crossings(q)?;
+        Some(count as f32 - cap.map_or(0.0, |c| c.winding_number(q)))
+    }
+
     /// Occupancy: true when `q` is inside the surface, i.e. its generalized
     /// winding number is at least ½. Unlike the parity of one ray's
     /// crossings, this is right on open meshes (a ray leaving through a hole
@@ -177,8 +201,22 @@ impl SurfaceBvh {
     /// and overlapping triangles (one crossing counted twice flips the
     /// parity) and self-intersecting meshes; the tests show such cases.
     /// False for a point that is not finite.
+    ///
+    /// The winding number is counted exactly where it can be: the signed
+    /// crossings of one ray through the surface and the cap that closes
+    /// it, less the cap's own winding number ([`super::closing`]). When a
+    /// crossing lies within rounding error of an edge, a corner or `q`
+    /// itself, the solid angles are summed instead
+    /// ([`SurfaceBvh::winding_number`]).
     pub fn is_inside(&self, q: Vec3) -> bool {
-        self.winding_number(q) >= 0.5
+        if !q.is_finite() {
+            return false;
+        }
+        let w = match self.winding_number_counted(q) {
+            Some(w) => w,
+            None => self.winding_number(q),
+        };
+        w >= 0.5
     }
 
     /// Signed distance: the unsigned distance, negative inside (by
@@ -213,6 +251,7 @@ impl SurfaceBvh {
     /// order.
     pub fn inside_batch(&self, points: &[Vec3], out: &mut [bool]) {
         self.moments();
+        self.ray_tree();
         answer_coherent(points, out, |p, _: &mut ()| self.is_inside(p));
     }
 
@@ -220,6 +259,7 @@ impl SurfaceBvh {
     /// distances searched as in [`SurfaceBvh::distances`].
     pub fn signed_distances(&self, points: &[Vec3], out: &mut [f32]) {
         self.moments();
+        self.ray_tree();
         answer_coherent(points, out, |p, hint| self.signed_distance_hinted(p, hint));
     }
 }

@@ -184,6 +184,30 @@ fn test<const TOL: bool>(
     (inside & in_range).then_some(TriHit { t, u, v })
 }
 
+/// A ray meeting a triangle, or passing too close to its boundary to tell,
+/// as [`Moller::crossing`] classifies it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crossing {
+    /// Distance along the ray.
+    pub t: f32,
+    /// Weight of the second corner.
+    pub u: f32,
+    /// Weight of the third corner.
+    pub v: f32,
+    /// `e1 · (d × e2)`: negative when the ray leaves through the
+    /// triangle's front (the side its corners turn counter-clockwise).
+    pub det: f32,
+    /// The textbook test ([`Moller::intersect_strict`]) counts this hit.
+    pub hit: bool,
+    /// Exact arithmetic on the `f32` corners and ray agrees with `hit`:
+    /// `det` clears its rounding-error bound and `u`, `v`, `1 - u - v` and
+    /// `t - tnear` clear theirs (the bounds of the module documentation,
+    /// uncapped). When false, the crossing lies within rounding error of an
+    /// edge, a corner, the ray's start, or the ray lies in the triangle's
+    /// plane.
+    pub sure: bool,
+}
+
 impl Moller {
     /// Textbook Möller–Trumbore without the tolerance (`0 <= u, v`,
     /// `u + v <= 1`, `det != 0`): not watertight on shared edges (see the
@@ -191,6 +215,99 @@ impl Moller {
     #[inline]
     pub fn intersect_strict(tri: &MollerTri, ray: &Ray, tfar: f32) -> Option<TriHit> {
         test::<false>(tri, ray, 0.0, tfar, 0.0)
+    }
+
+    /// The textbook test ([`Moller::intersect_strict`]) with how sure its
+    /// answer is: `None` when exact arithmetic on the `f32` inputs surely
+    /// misses the triangle over `[ray.tnear, tfar]`, else the crossing with
+    /// `hit` (the textbook answer) and `sure` (exact arithmetic agrees).
+    /// Counting crossings by their sides is then exact whenever every
+    /// crossing reported is sure: no ray slips between two neighbours, and
+    /// none is counted by both. `scale` is [`Moller::prepare`]'s. Without
+    /// `SURE`, only the textbook answer: `None` exactly when it misses,
+    /// `sure` left true.
+    #[inline(always)]
+    pub fn crossing<const SURE: bool>(
+        tri: &MollerTri,
+        ray: &Ray,
+        scale: f32,
+        tfar: f32,
+    ) -> Option<Crossing> {
+        let d = ray.dir();
+        let p = d.cross(tri.e2);
+        let det = tri.e1.dot(p);
+        if !det.is_finite() || (!SURE && det == 0.0) {
+            return None;
+        }
+        let det_sure = SURE && {
+            let (ad, a2) = (d.abs(), tri.e2.abs());
+            let pc = Vec3::new(
+                ad.y * a2.z + ad.z * a2.y,
+                ad.z * a2.x + ad.x * a2.z,
+                ad.x * a2.y + ad.y * a2.x,
+            );
+            det.abs() > 8.0 * U * tri.e1.abs().dot(pc)
+        };
+        if det == 0.0 {
+            // Exactly parallel in f32: the textbook test misses; unsure,
+            // since the exact determinant may differ from zero, unless a
+            // zero edge makes the triangle degenerate.
+            let degenerate = tri.e1 == Vec3::ZERO || tri.e2 == Vec3::ZERO;
+            return (!degenerate).then_some(Crossing {
+                t: f32::NAN,
+                u: f32::NAN,
+                v: f32::NAN,
+                det,
+                hit: false,
+                sure: false,
+            });
+        }
+        let inv_det = 1.0 / det;
+        let s = ray.origin - tri.v0;
+        let u = s.dot(p) * inv_det;
+        let q = s.cross(tri.e1);
+        let v = d.dot(q) * inv_det;
+        let t = tri.e2.dot(q) * inv_det;
+        let hit = (u >= 0.0)
+            & (v >= 0.0)
+            & (u + v <= 1.0)
+            & (t >= ray.tnear)
+            & (t <= tfar)
+            & (t < f32::INFINITY);
+        if !SURE {
+            return hit.then_some(Crossing {
+                t,
+                u,
+                v,
+                det,
+                hit,
+                sure: true,
+            });
+        }
+        let c = scale * inv_det.abs();
+        let sm = max_abs(s);
+        let eu = c * tri.e2_max * (sm + tri.e1_max);
+        let ev = c * tri.e1_max * (sm + tri.e2_max);
+        let et = 3.0 * c * tri.e1_max * tri.e2_max * (sm + tri.e1_max + tri.e2_max) / max_abs(d)
+            + 1e-5 * t.abs();
+        let near = (u >= -eu) & (v >= -ev) & (u + v <= 1.0 + (eu + ev));
+        let in_reach = (t >= ray.tnear - et) & (t <= tfar) & (t < f32::INFINITY);
+        if !(near & in_reach) && det_sure {
+            return None;
+        }
+        // Here `det` is unsure, or the crossing lies near the triangle and
+        // within reach: sure only when clearly inside and clearly beyond
+        // the start.
+        let inside = (u >= eu) & (v >= ev) & (u + v <= 1.0 - (eu + ev));
+        let sure = det_sure & inside & (t >= ray.tnear + et);
+        Some(Crossing {
+            t,
+            u,
+            v,
+            det,
+            hit,
+            sure,
+        })
     }
 
     /// The test with its rounding-error tolerance not capped at

@@ -78,6 +78,7 @@ pub use persist::{saved_kind, FORMAT_VERSION, MAGIC};
 pub use persist_error::PersistError;
 pub use refit_report::{RefitError, RefitReport, DEFAULT_MAX_DEGRADATION};
 pub use threaded::ThreadedBvh;
+pub(crate) use wide_bvh::CrossingVisitor;
 pub use wide_bvh::{Bvh4, Bvh8, WideBvh};
 
 /// Deepest tree the builders produce; traversal stacks are sized from it.

@@ -24,6 +24,8 @@ use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::TriangleTest;
 
+mod crossings;
+pub(crate) use crossings::CrossingVisitor;
 #[cfg(test)]
 mod tests;
 mod walk;

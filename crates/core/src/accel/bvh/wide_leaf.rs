@@ -39,6 +39,24 @@ pub(crate) trait LeafTest {
     fn prefetch(&self, _first: usize, _count: usize) {}
 }
 
+impl<L: LeafTest> LeafTest for &L {
+    #[inline(always)]
+    fn test<const ANY: bool>(
+        &self,
+        first: usize,
+        count: usize,
+        tfar: &mut f32,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        (**self).test::<ANY>(first, count, tfar, best)
+    }
+
+    #[inline(always)]
+    fn prefetch(&self, first: usize, count: usize) {
+        (**self).prefetch(first, count)
+    }
+}
+
 /// [`LeafTest`] over packs of four.
 pub(crate) struct PackedLeaf<'a> {
     pub packs: &'a Tri4Leaves,

@@ -101,6 +101,21 @@ impl Tri4 {
         }
     }
 
+    /// The lanes of `lanes` that [`Moller::crossing`] might not dismiss
+    /// (see `sse::crossing_candidates`); all of them off x86_64.
+    #[inline(always)]
+    pub fn crossing_candidates<const SURE: bool>(&self, r: &Ray4, lanes: u32) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            sse::crossing_candidates::<SURE>(self, r, lanes)
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = r;
+            lanes
+        }
+    }
+
     /// [`Tri4::hits`] one lane at a time with [`Moller::intersect`] (the
     /// fallback off x86_64, and the reference of the unit tests).
     #[cfg_attr(target_arch = "x86_64", allow(dead_code))]

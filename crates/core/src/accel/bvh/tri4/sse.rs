@@ -188,3 +188,82 @@ fn early_miss(det: __m128, adet: __m128, us: __m128, vs: __m128, sign_bit: __m12
         )
     }
 }
+
+/// The lanes in `lanes` that [`crate::tri::Moller::crossing`] might not
+/// dismiss (return `None` for), found from the undivided barycentrics as
+/// [`early_miss`] finds them: a lane is dropped only when its determinant
+/// clears the cheap bound (so `crossing` takes it as sure) and `us`, `vs`
+/// or their sum lie beyond the edges by more than `crossing`'s widening
+/// (`SURE`: its error bounds `eu·|det|`, `ev·|det|`; otherwise none) with a
+/// relative margin of `2^-8` for the roundings of the division, and at
+/// least the smallest normal. Every lane kept is classified by `crossing`
+/// itself, so its answers are unchanged.
+#[inline(always)]
+pub(crate) fn crossing_candidates<const SURE: bool>(tri: &Tri4, r: &Ray4, lanes: u32) -> u32 {
+    // SAFETY: SSE and SSE2 are part of the x86_64 baseline; the loads are
+    // the aligned rows of `hits`.
+    unsafe {
+        let ld = |row: &[f32; 4]| _mm_load_ps(row.as_ptr());
+        let abs_bits = _mm_castsi128_ps(_mm_set1_epi32(0x7fff_ffff));
+        let sign_bit = _mm_castsi128_ps(_mm_set1_epi32(i32::MIN));
+        let abs = |x: __m128| _mm_and_ps(x, abs_bits);
+        let dot = |ax, ay, az, bx, by, bz| {
+            _mm_add_ps(
+                _mm_add_ps(_mm_mul_ps(ax, bx), _mm_mul_ps(ay, by)),
+                _mm_mul_ps(az, bz),
+            )
+        };
+        let (e1x, e1y, e1z) = (ld(&tri.e1[0]), ld(&tri.e1[1]), ld(&tri.e1[2]));
+        let (e2x, e2y, e2z) = (ld(&tri.e2[0]), ld(&tri.e2[1]), ld(&tri.e2[2]));
+        let (dx, dy, dz) = (ld(&r.dir[0]), ld(&r.dir[1]), ld(&r.dir[2]));
+        let (e1m, e2m) = (ld(&tri.e1_max), ld(&tri.e2_max));
+        let px = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(e2y, dz));
+        let py = _mm_sub_ps(_mm_mul_ps(dz, e2x), _mm_mul_ps(e2z, dx));
+        let pz = _mm_sub_ps(_mm_mul_ps(dx, e2y), _mm_mul_ps(e2x, dy));
+        let det = dot(e1x, e1y, e1z, px, py, pz);
+        let adet = abs(det);
+        let sx = _mm_sub_ps(ld(&r.origin[0]), ld(&tri.v0[0]));
+        let sy = _mm_sub_ps(ld(&r.origin[1]), ld(&tri.v0[1]));
+        let sz = _mm_sub_ps(ld(&r.origin[2]), ld(&tri.v0[2]));
+        let us = dot(sx, sy, sz, px, py, pz);
+        let qx = _mm_sub_ps(_mm_mul_ps(sy, e1z), _mm_mul_ps(e1y, sz));
+        let qy = _mm_sub_ps(_mm_mul_ps(sz, e1x), _mm_mul_ps(e1z, sx));
+        let qz = _mm_sub_ps(_mm_mul_ps(sx, e1y), _mm_mul_ps(e1x, sy));
+        let vs = dot(dx, dy, dz, qx, qy, qz);
+        let sign = _mm_and_ps(det, sign_bit);
+        let (su, sv) = (_mm_xor_ps(us, sign), _mm_xor_ps(vs, sign));
+        let margin = _mm_set1_ps(1.0 + 1.0 / 256.0);
+        let floor = _mm_set1_ps(f32::MIN_POSITIVE);
+        let (wide_u, wide_v, clear) = if SURE {
+            let scale = ld(&r.scale);
+            let sm = _mm_max_ps(_mm_max_ps(abs(sx), abs(sy)), abs(sz));
+            let wu = _mm_mul_ps(_mm_mul_ps(scale, e2m), _mm_add_ps(sm, e1m));
+            let wv = _mm_mul_ps(_mm_mul_ps(scale, e1m), _mm_add_ps(sm, e2m));
+            let cheap = _mm_mul_ps(_mm_mul_ps(ld(&r.clear_scale), e1m), e2m);
+            (wu, wv, _mm_cmpgt_ps(adet, cheap))
+        } else {
+            let zero = _mm_setzero_ps();
+            (zero, zero, _mm_cmpneq_ps(det, zero))
+        };
+        let edge_u = _mm_max_ps(_mm_mul_ps(wide_u, margin), floor);
+        let edge_v = _mm_max_ps(_mm_mul_ps(wide_v, margin), floor);
+        // A relative 2^-20 of |det| besides, for the roundings of `u`, `v`
+        // and `u + v` when there is no widening.
+        let slack = _mm_mul_ps(adet, _mm_set1_ps(1.0 / (1u32 << 20) as f32));
+        let edge_u = _mm_add_ps(edge_u, slack);
+        let edge_v = _mm_add_ps(edge_v, slack);
+        let sum = _mm_add_ps(
+            _mm_mul_ps(_mm_add_ps(adet, _mm_add_ps(wide_u, wide_v)), margin),
+            _mm_add_ps(floor, slack),
+        );
+        let miss = _mm_or_ps(
+            _mm_or_ps(
+                _mm_cmplt_ps(su, _mm_xor_ps(edge_u, sign_bit)),
+                _mm_cmplt_ps(sv, _mm_xor_ps(edge_v, sign_bit)),
+            ),
+            _mm_cmpgt_ps(_mm_add_ps(su, sv), sum),
+        );
+        let dropped = _mm_and_ps(miss, clear);
+        lanes & !(_mm_movemask_ps(dropped) as u32)
+    }
+}

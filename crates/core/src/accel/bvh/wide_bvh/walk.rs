@@ -223,6 +223,7 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
             ray,
             r4: Ray4::new(ray),
         };
+        let done = move |i, any, best, _: &PackedLeaf<'_>| done(i, any, best);
         if self.small_stack {
             self.group::<ANY, SMALL_STACK, _>(rays, path, leaf, done)
         } else {
@@ -231,14 +232,15 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     }
 
     /// [`WALKS`] walks over `rays` (at least [`WALKS`]), each taking the
-    /// next ray when its own is done.
+    /// next ray when its own is done: `done(i, any, best, leaf)` gets ray
+    /// `i`'s answer and its leaf test (which may hold the ray's state).
     #[inline(always)]
-    fn group<'a, const ANY: bool, const S: usize, L: LeafTest>(
+    pub(super) fn group<'a, const ANY: bool, const S: usize, L: LeafTest>(
         &self,
         rays: &'a [Ray],
         path: BoxPath,
         leaf: impl Fn(&'a Ray) -> L,
-        mut done: impl FnMut(usize, bool, Option<Hit>),
+        mut done: impl FnMut(usize, bool, Option<Hit>, &L),
     ) {
         let start = |r: &'a Ray| Walk::<L, S>::new(r, self.root, r.traversal_tfar(), None, leaf(r));
         let mut walks: [Walk<L, S>; WALKS] = std::array::from_fn(|k| start(&rays[k]));
@@ -252,7 +254,7 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
                     continue;
                 }
                 if let Some(any) = self.step::<ANY, S>(&mut walks[k], path) {
-                    done(index[k], any, walks[k].best);
+                    done(index[k], any, walks[k].best, &walks[k].leaf);
                     if let Some(ray) = rays.get(next) {
                         walks[k].restart(ray, self.root, leaf(ray));
                         index[k] = next;
@@ -275,7 +277,7 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
 /// or four walks were no faster than two on the full dragon on an AMD EPYC,
 /// and six were 1.1-1.3x faster than two on an Intel Xeon (AVX-512, the
 /// sorted child order of `sort8.rs`).
-const WALKS: usize = 12;
+pub(super) const WALKS: usize = 12;
 
 #[cfg(test)]
 mod tests {

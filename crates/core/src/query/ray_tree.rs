@@ -1,0 +1,203 @@
+//! The ray-casting trees of a [`super::SurfaceBvh`]: 8-wide BVHs over packs
+//! of four Möller triangles ([`Bvh8`], Wald et al. 2014's layout), made on
+//! the first query that needs them, for the multi-hit ray queries and the
+//! crossing count behind occupancy.
+//!
+//! The point queries' tree keeps the triangles' corners, which the
+//! closest-point and solid-angle kernels need; rays are faster through the
+//! ray-casting tree's boxes, compiled box kernels and packs (on the full
+//! dragon the multi-hit walk is bound by memory latency, and these nodes
+//! and leaves are what the nearest-hit engine keeps hot). One tree holds
+//! the surface's triangles in the point tree's leaf order; the cap that
+//! closes the surface's boundary ([`super::closing`]) has a tree of its
+//! own, so that its triangles, which may be long, never slow the hit
+//! queries.
+
+use crate::accel::bvh::{BuildOptions, Bvh8, CrossingVisitor};
+use crate::mesh::TriangleMesh;
+use crate::ray::Ray;
+use crate::tri::moller::Crossing;
+use crate::tri::Moller;
+use glam::Vec3;
+
+/// Which way the crossing rays of occupancy leave a point: along the axis
+/// to the nearest face of the box, tilted by these fixed amounts towards
+/// the other two axes so that the ray does not run along axis-aligned
+/// faces and edges.
+const TILT: [f32; 2] = [0.013_1, 0.023_7];
+
+/// A surface's ray-casting tree, with the cap's that closes it.
+pub(crate) struct RayTree {
+    /// Over the surface's triangles, in the point tree's leaf order.
+    surface: Bvh8<Moller>,
+    /// Over the cap's triangles; none for a closed surface.
+    cap: Option<Bvh8<Moller>>,
+    /// Bounds of surface and cap.
+    lo: Vec3,
+    hi: Vec3,
+}
+
+/// A tree over a triangle soup.
+fn soup_tree(tris: &[[Vec3; 3]]) -> (Bvh8<Moller>, TriangleMesh) {
+    let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
+    let indices = (0..tris.len() as u32)
+        .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+        .collect();
+    let mesh = TriangleMesh::new(positions, indices);
+    (Bvh8::build(&mesh, &BuildOptions::default()), mesh)
+}
+
+impl RayTree {
+    /// The trees of the `surface` triangles (in the point tree's leaf
+    /// order) and of the `cap` that closes them.
+    pub fn build(surface: &[[Vec3; 3]], cap: &[[Vec3; 3]]) -> Self {
+        let (tree, mesh) = soup_tree(surface);
+        let mut b = mesh.bounds();
+        let cap = (!cap.is_empty()).then(|| {
+            let (tree, mesh) = soup_tree(cap);
+            b = b.union(mesh.bounds());
+            tree
+        });
+        RayTree {
+            surface: tree,
+            cap,
+            lo: b.min,
+            hi: b.max,
+        }
+    }
+
+    /// Walk the surface's hits along `ray` (the textbook test's):
+    /// `visit(c, p, reach)` with `p` the triangle's position in the point
+    /// tree's leaf order; see [`Bvh8::crossings`].
+    #[inline(always)]
+    pub fn surface_hits<const NEAR_FIRST: bool>(
+        &self,
+        ray: &Ray,
+        mut visit: impl FnMut(&Crossing, u32, &mut f32) -> bool,
+    ) {
+        let _ = self
+            .surface
+            .crossings::<NEAR_FIRST, false, _>(ray, |c: &Crossing, p, reach: &mut f32| {
+                !c.hit || visit(c, p, reach)
+            });
+    }
+
+    /// The number of the surface's hits along each of `rays`, walked in
+    /// turn (see [`Bvh8::crossings_batch`]).
+    pub fn count_hits(&self, rays: &[Ray], out: &mut [u32]) {
+        self.surface
+            .crossings_batch::<false, _>(rays, |_| HitCount(0), |i, v| out[i] = v.0);
+    }
+
+    /// The surface's hits along each of `rays`, unsorted, with the
+    /// triangles' positions in the point tree's leaf order, walked in turn
+    /// (see [`Bvh8::crossings_batch`]): `done(i, hits, positions)` may
+    /// take ray `i`'s.
+    pub fn hits(&self, rays: &[Ray], mut done: impl FnMut(usize, &mut Vec<Crossing>, &[u32])) {
+        self.surface.crossings_batch::<false, _>(
+            rays,
+            |_| HitList::default(),
+            |i, v| done(i, &mut v.hits, &v.prims),
+        );
+    }
+
+    /// The winding number of surface and cap together at `q`: the signed
+    /// crossings of one ray (leaving through a front face +1, entering
+    /// through one -1). None when a crossing is too close to an edge, a
+    /// corner or `q` itself to be sure of, or `q` is not finite.
+    pub fn signed_crossings(&self, q: Vec3) -> Option<i32> {
+        if !q.is_finite() {
+            return None;
+        }
+        // The way out nearest to a face of the box.
+        let exits = [
+            self.hi.x - q.x,
+            q.x - self.lo.x,
+            self.hi.y - q.y,
+            q.y - self.lo.y,
+            self.hi.z - q.z,
+            q.z - self.lo.z,
+        ];
+        let mut best = 0;
+        for k in 1..6 {
+            if exits[k] < exits[best] {
+                best = k;
+            }
+        }
+        // Outside the box on that side the ray moves away from everything.
+        if exits[best] < 0.0 {
+            return Some(0);
+        }
+        let (axis, sign) = (best / 2, if best % 2 == 0 { 1.0 } else { -1.0 });
+        let mut dir = Vec3::ZERO;
+        dir[axis] = sign;
+        dir[(axis + 1) % 3] = TILT[0];
+        dir[(axis + 2) % 3] = TILT[1];
+        let ray = Ray::new(q, dir.normalize());
+        let mut sum = SignedCount::default();
+        for tree in std::iter::once(&self.surface).chain(&self.cap) {
+            if sum.sure {
+                sum = tree.crossings::<false, true, _>(&ray, sum);
+            }
+        }
+        sum.sure.then_some(sum.count)
+    }
+}
+
+/// Counts hits.
+struct HitCount(u32);
+
+impl CrossingVisitor for HitCount {
+    #[inline(always)]
+    fn visit(&mut self, c: &Crossing, _: u32, _: &mut f32) -> bool {
+        self.0 += c.hit as u32;
+        true
+    }
+}
+
+/// Collects hits and their triangles.
+#[derive(Default)]
+struct HitList {
+    hits: Vec<Crossing>,
+    prims: Vec<u32>,
+}
+
+impl CrossingVisitor for HitList {
+    #[inline(always)]
+    fn visit(&mut self, c: &Crossing, prim: u32, _: &mut f32) -> bool {
+        if c.hit {
+            self.hits.push(*c);
+            self.prims.push(prim);
+        }
+        true
+    }
+}
+
+/// Counts crossings by side, and stops at the first unsure one.
+struct SignedCount {
+    count: i32,
+    sure: bool,
+}
+
+impl Default for SignedCount {
+    fn default() -> Self {
+        SignedCount {
+            count: 0,
+            sure: true,
+        }
+    }
+}
+
+impl CrossingVisitor for SignedCount {
+    #[inline(always)]
+    fn visit(&mut self, c: &Crossing, _: u32, _: &mut f32) -> bool {
+        if !self.sure || !c.sure {
+            self.sure = false;
+            return false;
+        }
+        if c.hit {
+            self.count += if c.det < 0.0 { 1 } else { -1 };
+        }
+        true
+    }
+}
