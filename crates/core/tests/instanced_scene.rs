@@ -123,6 +123,36 @@ fn batch_queries_answer_as_the_single_ray_ones() {
 }
 
 #[test]
+fn one_geometry_in_place_answers_batches_as_single_rays() {
+    // The batch path of a scene that is one geometry at the identity walks
+    // the geometry's rays in turn; the single-ray path goes through the top
+    // level and the instance.
+    let placed = Placed {
+        meshes: vec![shared_obj("bunny_3674.obj")],
+        instances: vec![(0, Affine3A::IDENTITY, u32::MAX)],
+    };
+    let scene = placed.scene();
+    let mut rays = rays(&placed.bounds(), 3000, 12);
+    rays.push(Ray::new(Vec3::NAN, Vec3::X));
+    rays.push(Ray::new(Vec3::ZERO, Vec3::ZERO));
+    for mask in [MASK_ALL, 0] {
+        let mut counts = vec![0; rays.len()];
+        scene.count_hits_batch(&rays, mask, &mut counts);
+        let all = scene.ray_hits_batch(&rays, mask, usize::MAX);
+        let first = scene.ray_hits_batch(&rays, mask, 3);
+        let mut crossed = 0;
+        for (k, r) in rays.iter().enumerate() {
+            assert_eq!(counts[k], scene.count_hits(r, mask));
+            assert_eq!(all[k], scene.ray_hits(r, mask, usize::MAX));
+            assert_eq!(first[k], scene.ray_hits(r, mask, 3));
+            assert_eq!(all[k].len(), counts[k] as usize);
+            crossed += counts[k];
+        }
+        assert_eq!(crossed > 0, mask == MASK_ALL);
+    }
+}
+
+#[test]
 fn masks_hide_instances_and_geometries_as_the_flattened_subset() {
     let mut placed = real_scene(30, 7);
     for (i, inst) in placed.instances.iter_mut().enumerate() {
