@@ -25,7 +25,11 @@ impl InstancedScene {
     /// rays, so the geometry's batch queries answer for the scene.
     fn single_in_place(&self, mask: u32) -> Option<u32> {
         match self.instances.as_slice() {
-            [inst] if self.visible(inst, mask) && inst.transform.to_world() == Affine3A::IDENTITY => Some(0),
+            [inst]
+                if self.visible(inst, mask) && inst.transform.to_world() == Affine3A::IDENTITY =>
+            {
+                Some(0)
+            }
             _ => None,
         }
     }
@@ -36,7 +40,9 @@ impl InstancedScene {
     pub fn count_hits_batch(&self, rays: &[Ray], mask: u32, counts: &mut [u32]) {
         if let Some(i) = self.single_in_place(mask) {
             let g = self.instances[i as usize].geometry;
-            return self.geometries[g as usize].surface().count_hits_batch(rays, counts);
+            return self.geometries[g as usize]
+                .surface()
+                .count_hits_batch(rays, counts);
         }
         answer_each(rays, counts, |r| self.count_hits(r, mask));
     }
@@ -47,7 +53,9 @@ impl InstancedScene {
     pub fn ray_hits_batch(&self, rays: &[Ray], mask: u32, max_hits: usize) -> Vec<Vec<SceneHit>> {
         if let Some(i) = self.single_in_place(mask) {
             let g = self.instances[i as usize].geometry;
-            let lists = self.geometries[g as usize].surface().ray_hits_batch(rays, max_hits);
+            let lists = self.geometries[g as usize]
+                .surface()
+                .ray_hits_batch(rays, max_hits);
             return lists
                 .into_par_iter()
                 .map(|l| l.iter().map(|h| self.scene_hit(i, h)).collect())

@@ -175,7 +175,7 @@ impl SurfaceBvh {
     /// Number of triangles `ray` crosses with `t` in `[ray.tnear, ray.tfar]`.
     pub fn count_hits(&self, ray: &Ray) -> u32 {
         let mut n = 0u32;
-        self.walk_hits::<false, _>(ray, |_, _| {
+        self.walk_hits::<true, _>(ray, |_, _| {
             n += 1;
             true
         });

@@ -138,9 +138,10 @@ impl<N: NodeWidth> WideBvh<N, Moller> {
 
     /// Walk every triangle `ray` may cross over `[ray.tnear, reach]`,
     /// handing each to `visitor` (see [`CrossingVisitor`]; `reach` starts
-    /// at `ray.tfar`); returns the visitor. `NEAR_FIRST` enters the
-    /// children nearest first (worth it when the visitor lowers `reach`);
-    /// otherwise unsorted, as occlusion rays. `SURE` classifies each
+    /// at `ray.tfar`); returns the visitor. `NEAR_FIRST` walks as nearest
+    /// hits do (children nearest first, every pack of a leaf fetched);
+    /// otherwise as occlusion rays do (unsorted, the first pack fetched),
+    /// cheaper for short rays that cross little. `SURE` classifies each
     /// crossing's certainty. A ray that is not valid crosses nothing.
     pub(crate) fn crossings<const NEAR_FIRST: bool, const SURE: bool, V: CrossingVisitor>(
         &self,
@@ -207,10 +208,13 @@ impl<N: NodeWidth> WideBvh<N, Moller> {
         leaf
     }
 
-    /// [`WideBvh::crossings`] (unsorted) for each of `rays`, [`WALKS`] rays
-    /// stepped in turn (`walk.rs`): `visitor(ray)` makes each ray's visitor
-    /// and `done(i, visitor)` receives ray `i`'s when its walk ends (to read
-    /// or take its state).
+    /// [`WideBvh::crossings`] for each of `rays`, [`WALKS`] rays stepped in
+    /// turn (`walk.rs`) in the nearest-hit walk's order: `visitor(ray)`
+    /// makes each ray's visitor and `done(i, visitor)` receives ray `i`'s
+    /// when its walk ends (to read or take its state). The nearest-hit
+    /// walk fetches every pack of the leaves it enters, where the occlusion
+    /// walk fetches the first; a walk to every crossing tests them all
+    /// (the two orders measured in BENCHMARKS.md).
     pub(crate) fn crossings_batch<const SURE: bool, V: CrossingVisitor>(
         &self,
         rays: &[Ray],
@@ -277,9 +281,9 @@ impl<N: NodeWidth> WideBvh<N, Moller> {
         let done =
             |i, _, _, leaf: &CrossingLeaf<'_, V, SURE>| done(i, &mut leaf.visitor.borrow_mut());
         if self.small_stack {
-            self.group::<true, SMALL_STACK, _>(rays, path, leaf, done)
+            self.group::<false, SMALL_STACK, _>(rays, path, leaf, done)
         } else {
-            self.group::<true, LARGE_STACK, _>(rays, path, leaf, done)
+            self.group::<false, LARGE_STACK, _>(rays, path, leaf, done)
         }
     }
 }
