@@ -65,7 +65,8 @@ impl Geometry {
         self.mask
     }
 
-    /// The 8-wide BVH of the multi-hit queries, built on first use.
+    /// The point-query BVH, which owns the multi-hit queries' ray-casting
+    /// tree, built on first use.
     pub fn surface(&self) -> &SurfaceBvh {
         self.surface.get_or_init(|| SurfaceBvh::build(&self.mesh))
     }
@@ -77,14 +78,11 @@ impl Geometry {
     }
 
     /// Bytes held: the mesh's positions and indices, the bottom-level BVH,
-    /// and the multi-hit BVH if it has been made.
+    /// and the multi-hit trees if they have been made.
     pub fn bytes(&self) -> usize {
         let mesh = self.mesh.positions.len() * std::mem::size_of::<Vec3>()
             + self.mesh.indices.len() * std::mem::size_of::<[u32; 3]>();
-        let surface = self.surface.get().map_or(0, |s| {
-            s.num_nodes() * std::mem::size_of::<crate::query::surface_bvh::SurfaceNode>()
-                + s.num_triangles() * (std::mem::size_of::<[Vec3; 3]>() + 4)
-        });
+        let surface = self.surface.get().map_or(0, SurfaceBvh::bytes);
         mesh + self.bvh.stats().bytes + surface
     }
 }

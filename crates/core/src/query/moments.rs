@@ -31,6 +31,11 @@ impl Moments {
     /// The moments of every child of every node, in `f64` from the
     /// triangles below it (each triangle is summed once per level above
     /// it), stored in `f32`.
+    /// Bytes held.
+    pub(super) fn bytes(&self) -> usize {
+        self.0.len() * std::mem::size_of::<SlotMoments>()
+    }
+
     #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
     pub(super) fn build(nodes: &[SurfaceNode], leaf_tris: &[[Vec3; 3]]) -> Moments {
         let nodes = nodes

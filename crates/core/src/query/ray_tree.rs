@@ -32,6 +32,8 @@ pub(crate) struct RayTree {
     surface: Bvh8<Moller>,
     /// Over the cap's triangles; none for a closed surface.
     cap: Option<Bvh8<Moller>>,
+    /// Whether crossings are counted at all (see [`RayTree::build`]).
+    countable: bool,
     /// Bounds of surface and cap.
     lo: Vec3,
     hi: Vec3,
@@ -49,11 +51,16 @@ fn soup_tree(tris: &[[Vec3; 3]]) -> (Bvh8<Moller>, TriangleMesh) {
 
 impl RayTree {
     /// The trees of the `surface` triangles (in the point tree's leaf
-    /// order) and of the `cap` that closes them.
+    /// order) and of the `cap` that closes them. A cap of more than a
+    /// quarter as many triangles as the surface (a soup rather than a
+    /// surface with holes) is left out, and crossings are not counted:
+    /// through such a cap, counting costs more than summing the solid
+    /// angles (BENCHMARKS.md).
     pub fn build(surface: &[[Vec3; 3]], cap: &[[Vec3; 3]]) -> Self {
         let (tree, mesh) = soup_tree(surface);
         let mut b = mesh.bounds();
-        let cap = (!cap.is_empty()).then(|| {
+        let countable = cap.len() <= surface.len() / 4;
+        let cap = (countable && !cap.is_empty()).then(|| {
             let (tree, mesh) = soup_tree(cap);
             b = b.union(mesh.bounds());
             tree
@@ -61,9 +68,16 @@ impl RayTree {
         RayTree {
             surface: tree,
             cap,
+            countable,
             lo: b.min,
             hi: b.max,
         }
+    }
+
+    /// Bytes held by both trees.
+    pub fn bytes(&self) -> usize {
+        use crate::accel::Accel;
+        self.surface.stats().bytes + self.cap.as_ref().map_or(0, |c| c.stats().bytes)
     }
 
     /// Walk the surface's hits along `ray` (the textbook test's):
@@ -101,12 +115,19 @@ impl RayTree {
         );
     }
 
+    /// Whether [`RayTree::signed_crossings`] counts: false when the cap
+    /// was left out (see [`RayTree::build`]).
+    pub fn countable(&self) -> bool {
+        self.countable
+    }
+
     /// The winding number of surface and cap together at `q`: the signed
     /// crossings of one ray (leaving through a front face +1, entering
     /// through one -1). None when a crossing is too close to an edge, a
-    /// corner or `q` itself to be sure of, or `q` is not finite.
+    /// corner or `q` itself to be sure of, `q` is not finite, or the tree
+    /// does not count.
     pub fn signed_crossings(&self, q: Vec3) -> Option<i32> {
-        if !q.is_finite() {
+        if !q.is_finite() || !self.countable {
             return None;
         }
         // The way out nearest to a face of the box.

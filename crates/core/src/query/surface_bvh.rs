@@ -1,5 +1,6 @@
 //! [`SurfaceBvh`]: the 8-wide BVH behind the point queries (closest point,
-//! distance, winding number) and the multi-hit ray queries.
+//! distance, winding number), and the owner of the ray-casting tree
+//! (`super::ray_tree`) behind the multi-hit ray queries and occupancy.
 //!
 //! It is made by the same binned-SAH build as [`crate::accel::Bvh8`]
 //! (module `accel::bvh::build`), collapsed into nodes of up to eight
@@ -126,7 +127,7 @@ impl SurfaceBvh {
         let (tree, cap) = self.rays.get_or_init(|| {
             let cap = closing_cap(&self.tris);
             let tree = RayTree::build(&self.tris, &cap);
-            let cap_tree = (!cap.is_empty()).then(|| {
+            let cap_tree = (tree.countable() && !cap.is_empty()).then(|| {
                 let positions: Vec<Vec3> = cap.iter().flatten().copied().collect();
                 let indices = (0..cap.len() as u32)
                     .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
@@ -136,6 +137,19 @@ impl SurfaceBvh {
             (tree, cap_tree)
         });
         (tree, cap.as_deref())
+    }
+
+    /// Bytes held: nodes, corners and triangle indices, and the
+    /// winding-number moments and ray-casting trees where they have been
+    /// made.
+    pub fn bytes(&self) -> usize {
+        let own = self.nodes.len() * std::mem::size_of::<SurfaceNode>()
+            + self.tris.len() * (std::mem::size_of::<[Vec3; 3]>() + std::mem::size_of::<u32>());
+        let moments = self.moments.get().map_or(0, Moments::bytes);
+        let rays = self.rays.get().map_or(0, |(tree, cap)| {
+            tree.bytes() + cap.as_ref().map_or(0, |c| c.bytes())
+        });
+        own + moments + rays
     }
 
     /// Number of triangles.

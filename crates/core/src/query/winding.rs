@@ -184,7 +184,9 @@ impl SurfaceBvh {
     /// less the cap's winding number ([`super::closing`]); exact for a
     /// closed surface, and as accurate as the cap's solid angle otherwise.
     /// None when a crossing lies within rounding error of an edge, a
-    /// corner or `q` itself, or `q` is not finite.
+    /// corner or `q` itself, or `q` is not finite; always None for a soup
+    /// whose cap would hold more than a quarter as many triangles as it
+    /// (counting would cost more than summing).
     pub fn winding_number_counted(&self, q: Vec3) -> Option<f32> {
         if self.nodes.is_empty() {
             return q.is_finite().then_some(0.0);
