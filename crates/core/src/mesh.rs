@@ -139,6 +139,16 @@ impl TriangleMesh {
         }
     }
 
+    /// A mesh of separate triangles, each with corners of its own (no
+    /// vertex shared): triangle `t` is `tris[t]`.
+    pub fn from_triangles(tris: &[[Vec3; 3]]) -> Self {
+        let positions = tris.iter().flatten().copied().collect();
+        let indices = (0..tris.len() as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect();
+        TriangleMesh::new(positions, indices)
+    }
+
     /// A mesh copied from vertex and index arrays as Embree's buffers,
     /// numpy and trimesh hold them: `positions` one `[x, y, z]` per vertex,
     /// `indices` three vertex indices per triangle. Checked as

@@ -41,11 +41,7 @@ pub(crate) struct RayTree {
 
 /// A tree over a triangle soup.
 fn soup_tree(tris: &[[Vec3; 3]]) -> (Bvh8<Moller>, TriangleMesh) {
-    let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
-    let indices = (0..tris.len() as u32)
-        .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
-        .collect();
-    let mesh = TriangleMesh::new(positions, indices);
+    let mesh = TriangleMesh::from_triangles(tris);
     (Bvh8::build(&mesh, &BuildOptions::default()), mesh)
 }
 

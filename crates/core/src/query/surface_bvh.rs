@@ -127,13 +127,8 @@ impl SurfaceBvh {
         let (tree, cap) = self.rays.get_or_init(|| {
             let cap = closing_cap(&self.tris);
             let tree = RayTree::build(&self.tris, &cap);
-            let cap_tree = (tree.countable() && !cap.is_empty()).then(|| {
-                let positions: Vec<Vec3> = cap.iter().flatten().copied().collect();
-                let indices = (0..cap.len() as u32)
-                    .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
-                    .collect();
-                Box::new(SurfaceBvh::build(&TriangleMesh::new(positions, indices)))
-            });
+            let cap_tree = (tree.countable() && !cap.is_empty())
+                .then(|| Box::new(SurfaceBvh::build(&TriangleMesh::from_triangles(&cap))));
             (tree, cap_tree)
         });
         (tree, cap.as_deref())
