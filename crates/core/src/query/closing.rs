@@ -9,22 +9,30 @@
 //! number at `q` is the number of times a ray from `q` leaves through a
 //! front face minus the times it enters through one (the degree of the
 //! surface around `q`). Then `w_M(q) = crossings_{M ∪ C}(ray) - w_C(q)`:
-//! one ray through both, plus the solid angle of the cap, which is small
-//! wherever the surface is nearly closed. The dragon and the bunny need no
-//! cap at all; the teapot's lid rim and the engine's open seams get small
-//! ones.
+//! one ray through both, plus the solid angle of the cap. The dragon and
+//! the bunny need no cap at all; the teapot's lid rim and the engine's
+//! open rims and seams get one.
 //!
 //! The boundary is found on the corners welded by their exact position
 //! (two triangles share an edge when its two end points are the same
 //! `f32` triples), with orientation: an edge's net use is the number of
 //! triangles running it `a → b` minus those running `b → a`, and every
-//! edge with a net use is boundary, that many times. The cap is the cone
-//! over each connected piece of the boundary from the mean of its
-//! corners: triangle `(b, a, apex)` for each boundary edge `a → b`. Its
-//! spokes cancel because the boundary of a surface is a cycle (as many
-//! boundary edges leave each corner as arrive).
+//! edge with a net use is boundary, that many times. As many boundary
+//! edges leave each corner as arrive, so the boundary splits into cycles,
+//! and each cycle is closed by a triangulated disc facing against it.
+//!
+//! Any closing cap gives the same winding number; what the choice of cap
+//! changes is the cost of its solid angle. A cone over the cycle from its
+//! centre (the obvious cap) has long triangles only: a point near a large
+//! open rim must sum all of them, one per boundary edge. The disc here is
+//! cut by halving (a chord across each arc from its middle corner, then
+//! the two half arcs), so its triangles shrink geometrically towards the
+//! rim: seen from any point a few are large, and the many small ones
+//! subtend a solid angle bounded by their area over the squared distance,
+//! which occupancy adds up instead of summing them (see
+//! [`super::winding`]).
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 /// A position as a key: its bits, with `-0.0` read as `0.0`.
@@ -86,42 +94,63 @@ pub(crate) fn closing_cap(tris: &[[Vec3; 3]]) -> Vec<[Vec3; 3]> {
     if boundary.is_empty() {
         return Vec::new();
     }
-    // Connected pieces of the boundary (union-find over its corners), each
-    // with the mean of its corners as the apex.
-    let mut parent: Vec<u32> = (0..positions.len() as u32).collect();
-    fn root(parent: &mut [u32], mut x: u32) -> u32 {
-        while parent[x as usize] != x {
-            parent[x as usize] = parent[parent[x as usize] as usize];
-            x = parent[x as usize];
+    // Split the boundary into cycles: from each unused edge, follow unused
+    // edges out of the corner reached until the walk comes back (every
+    // corner has as many boundary edges leaving as arriving, so it does).
+    boundary.sort_unstable();
+    let mut used = vec![false; boundary.len()];
+    let mut cap = Vec::new();
+    let mut cycle: Vec<u32> = Vec::new();
+    for start in 0..boundary.len() {
+        if used[start] {
+            continue;
         }
-        x
-    }
-    for &(a, b) in &boundary {
-        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-        if ra != rb {
-            parent[ra as usize] = rb;
+        used[start] = true;
+        cycle.clear();
+        cycle.push(boundary[start].0);
+        let mut at = boundary[start].1;
+        while at != boundary[start].0 {
+            cycle.push(at);
+            let from = boundary.partition_point(|&(a, _)| a < at);
+            let next = (from..boundary.len())
+                .take_while(|&e| boundary[e].0 == at)
+                .find(|&e| !used[e])
+                .expect("a boundary corner with as many edges out as in");
+            used[next] = true;
+            at = boundary[next].1;
         }
+        let corners: Vec<Vec3> = cycle.iter().map(|&v| positions[v as usize]).collect();
+        close_cycle(&corners, &mut cap);
     }
-    let mut sums: std::collections::HashMap<u32, (DVec3, u32)> = Default::default();
-    let mut seen = vec![false; positions.len()];
-    for &(a, b) in &boundary {
-        for v in [a, b] {
-            if !std::mem::replace(&mut seen[v as usize], true) {
-                let r = root(&mut parent, v);
-                let e = sums.entry(r).or_insert((DVec3::ZERO, 0));
-                e.0 += positions[v as usize].as_dvec3();
-                e.1 += 1;
-            }
+    cap
+}
+
+/// Appends the triangles that close one boundary cycle `c[0] → c[1] → …
+/// → c[0]`, facing against it: the cycle is cut in three arcs at thirds
+/// of its length, and each arc `c[i] … c[j]` is closed by its chord,
+/// triangle `(c[j], c[m], c[i])` from its middle corner `m` and the two
+/// half arcs in turn. Triangles shrink towards the boundary, so that
+/// seen from any point only a few are large and the many small ones are
+/// bounded by their area (see [`super::winding`]).
+fn close_cycle(c: &[Vec3], cap: &mut Vec<[Vec3; 3]>) {
+    fn arc(c: &[Vec3], i: usize, j: usize, cap: &mut Vec<[Vec3; 3]>) {
+        if j - i < 2 {
+            return;
         }
+        let m = (i + j) / 2;
+        cap.push([c[j % c.len()], c[m], c[i]]);
+        arc(c, i, m, cap);
+        arc(c, m, j, cap);
     }
-    boundary
-        .iter()
-        .map(|&(a, b)| {
-            let (sum, n) = sums[&root(&mut parent, a)];
-            let apex = (sum / n as f64).as_vec3();
-            [positions[b as usize], positions[a as usize], apex]
-        })
-        .collect()
+    let n = c.len();
+    if n < 3 {
+        return;
+    }
+    let (a, b) = (n / 3, 2 * n / 3);
+    cap.push([c[b], c[a], c[0]]);
+    arc(c, 0, a, cap);
+    arc(c, a, b, cap);
+    arc(c, b, n, cap);
 }
 
 #[cfg(test)]

@@ -119,33 +119,38 @@ impl RayTree {
 
     /// The winding number of surface and cap together at `q`: the signed
     /// crossings of one ray (leaving through a front face +1, entering
-    /// through one -1). None when a crossing is too close to an edge, a
-    /// corner or `q` itself to be sure of, `q` is not finite, or the tree
-    /// does not count.
+    /// through one -1), towards the nearest face of the box. When a
+    /// crossing is too close to an edge, a corner or `q` itself to be sure
+    /// of, the rays towards the next two nearest faces are tried. None
+    /// when all three are unsure, `q` is not finite, or the tree does not
+    /// count.
     pub fn signed_crossings(&self, q: Vec3) -> Option<i32> {
         if !q.is_finite() || !self.countable {
             return None;
         }
-        // The way out nearest to a face of the box.
-        let exits = [
-            self.hi.x - q.x,
-            q.x - self.lo.x,
-            self.hi.y - q.y,
-            q.y - self.lo.y,
-            self.hi.z - q.z,
-            q.z - self.lo.z,
+        let mut exits = [
+            (self.hi.x - q.x, 0),
+            (q.x - self.lo.x, 1),
+            (self.hi.y - q.y, 2),
+            (q.y - self.lo.y, 3),
+            (self.hi.z - q.z, 4),
+            (q.z - self.lo.z, 5),
         ];
-        let mut best = 0;
-        for k in 1..6 {
-            if exits[k] < exits[best] {
-                best = k;
-            }
-        }
+        exits.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
         // Outside the box on that side the ray moves away from everything.
-        if exits[best] < 0.0 {
+        if exits[0].0 < 0.0 {
             return Some(0);
         }
-        let (axis, sign) = (best / 2, if best % 2 == 0 { 1.0 } else { -1.0 });
+        exits[..3]
+            .iter()
+            .find_map(|&(_, face)| self.crossings_towards(q, face))
+    }
+
+    /// The signed crossings of the ray from `q` towards box face `face`
+    /// (`+x, -x, +y, -y, +z, -z`), tilted off the axis; None when one is
+    /// unsure.
+    fn crossings_towards(&self, q: Vec3, face: usize) -> Option<i32> {
+        let (axis, sign) = (face / 2, if face.is_multiple_of(2) { 1.0 } else { -1.0 });
         let mut dir = Vec3::ZERO;
         dir[axis] = sign;
         dir[(axis + 1) % 3] = TILT[0];
