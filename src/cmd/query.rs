@@ -149,7 +149,13 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
     } else {
         (raykit_io::read_points(input)?, Vec::new())
     };
-    let (bvh, build_s) = pool.install(|| timed(|| SurfaceBvh::build(&mesh)));
+    let (bvh, build_s) = pool.install(|| {
+        timed(|| {
+            let bvh = SurfaceBvh::build(&mesh);
+            bvh.prepare(q.kind());
+            bvh
+        })
+    });
     let n = points.len() + rays.len();
     let cap = args.max_hits as usize;
     let (answers, query_s) = pool.install(|| timed(|| bvh.answer(q.kind(), &points, &rays, cap)));

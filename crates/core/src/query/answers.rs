@@ -62,6 +62,24 @@ impl QueryKind {
 }
 
 impl SurfaceBvh {
+    /// Make now what queries of `kind` would otherwise make on their first
+    /// use: the winding-number moments and the ray-casting trees for
+    /// occupancy and signed distance, the ray-casting trees for counts and
+    /// hit lists (nothing for closest points and distances). A one-shot
+    /// caller can then time building and answering apart.
+    pub fn prepare(&self, kind: QueryKind) {
+        match kind {
+            QueryKind::Distance | QueryKind::Closest => {}
+            QueryKind::SignedDistance | QueryKind::Inside => {
+                self.moments();
+                self.ray_tree();
+            }
+            QueryKind::Count | QueryKind::AllHits => {
+                self.ray_tree();
+            }
+        }
+    }
+
     /// Answer `kind` for every point of `points` (point queries) or every
     /// ray of `rays` (ray queries), keeping at most `max_hits` hits per ray
     /// for [`QueryKind::AllHits`]; parallel over the batch.
@@ -164,5 +182,27 @@ mod tests {
         let counts = bvh.answer(QueryKind::Count, &[], &rays, 8);
         assert_eq!(lists.hits(), counts.hits());
         assert_eq!(lists, Answers::HitLists(bvh.ray_hits_batch(&rays, 8)));
+    }
+
+    #[test]
+    fn prepare_makes_what_the_query_needs_and_changes_no_answer() {
+        let sphere = crate::icosphere::Icosphere::new(2);
+        let mesh = TriangleMesh::new(sphere.positions.clone(), sphere.indices.clone());
+        let points = [Vec3::ZERO, Vec3::splat(0.9), Vec3::splat(2.0)];
+        let rays = [Ray::new(Vec3::new(0.1, 0.2, -3.0), Vec3::Z)];
+        use QueryKind::*;
+        for kind in [Closest, Distance, SignedDistance, Inside, Count, AllHits] {
+            let (lazy, ready) = (SurfaceBvh::build(&mesh), SurfaceBvh::build(&mesh));
+            let before = ready.bytes();
+            ready.prepare(kind);
+            let made = ready.bytes() > before;
+            let needs = !matches!(kind, QueryKind::Distance | QueryKind::Closest);
+            assert_eq!(made, needs, "{kind:?}");
+            assert_eq!(
+                lazy.answer(kind, &points, &rays, 4),
+                ready.answer(kind, &points, &rays, 4),
+                "{kind:?}"
+            );
+        }
     }
 }

@@ -192,7 +192,7 @@ fn far_fields(m: &SlotMoments, q: Vec3, beta2: f32, far: &mut [bool; WIDTH]) -> 
 }
 
 impl SurfaceBvh {
-    fn moments(&self) -> &Moments {
+    pub(super) fn moments(&self) -> &Moments {
         self.moments
             .get_or_init(|| Moments::build(&self.nodes, &self.tris))
     }
