@@ -104,6 +104,57 @@ fn all_hits_counts_and_first_k_match_brute_force() {
     }
 }
 
+/// Triangles without area (collinear corners, repeated corners) are
+/// never crossed: a surface with such slivers spread through it lists the
+/// same crossings as the surface alone (its `f64` brute force), with every
+/// hit naming the triangle's index in the mesh with the slivers.
+#[test]
+fn triangles_without_area_are_never_hit() {
+    let base = random_soup(2000, 23);
+    let b = base.bounds();
+    let mut rng = Pcg32::new(24);
+    let mut positions = base.positions.clone();
+    let mut indices = Vec::new();
+    let mut original = Vec::new(); // new index -> base index, or None for a sliver
+    for (t, tri) in base.indices.iter().enumerate() {
+        if t % 5 == 0 {
+            // A long sliver across the box: corners a, a + e, a + 2e with
+            // `e` of small dyadic steps (exactly collinear in f32), then a
+            // triangle with a repeated corner.
+            let a = rng.in_box(b.min, b.max);
+            let e = Vec3::new(0.25, -0.125, 0.0625) * (1 + t % 3) as f32;
+            let first = positions.len() as u32;
+            positions.extend([a, a + e, a + 2.0 * e]);
+            indices.push([first, first + 1, first + 2]);
+            original.push(None);
+            indices.push([first, first + 2, first + 2]);
+            original.push(None);
+        }
+        indices.push(*tri);
+        original.push(Some(t as u32));
+    }
+    let mesh = TriangleMesh::new(positions, indices);
+    let bvh = SurfaceBvh::build(&mesh);
+    let rays = clear_rays(&base, 400, 25);
+    let plain: Vec<Ray> = rays.iter().map(|r| r.0).collect();
+    let lists = bvh.ray_hits_batch(&plain, usize::MAX);
+    let mut counts = vec![0; plain.len()];
+    bvh.count_hits_batch(&plain, &mut counts);
+    let mut any = 0;
+    for (i, (ray, want)) in rays.iter().enumerate() {
+        let mut got = bvh.ray_hits(ray, usize::MAX);
+        assert_eq!(lists[i], got, "ray {i}: batch and single differ");
+        for h in &mut got {
+            h.prim = original[h.prim as usize].expect("a sliver was hit");
+        }
+        same(&got, want, &format!("ray {i}"));
+        assert_eq!(counts[i] as usize, want.len());
+        assert_eq!(bvh.count_hits(ray) as usize, want.len());
+        any += usize::from(!want.is_empty());
+    }
+    assert!(any > 50, "too few rays hit ({any})");
+}
+
 #[test]
 fn any_hit_filter_skips_back_faces() {
     let mesh = random_soup(2000, 40);

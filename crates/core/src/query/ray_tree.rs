@@ -8,7 +8,8 @@
 //! ray-casting tree's boxes, compiled box kernels and packs (on the full
 //! dragon the multi-hit walk is bound by memory latency, and these nodes
 //! and leaves are what the nearest-hit engine keeps hot). One tree holds
-//! the surface's triangles in the point tree's leaf order; the cap that
+//! the surface's triangles that have area, in the point tree's leaf order
+//! (see [`RayTree::build`]); the cap that
 //! closes the surface's boundary ([`super::closing`]) has a tree of its
 //! own, so that its triangles, which may be long, never slow the hit
 //! queries.
@@ -28,8 +29,13 @@ const TILT: [f32; 2] = [0.013_1, 0.023_7];
 
 /// A surface's ray-casting tree, with the cap's that closes it.
 pub(crate) struct RayTree {
-    /// Over the surface's triangles, in the point tree's leaf order.
+    /// Over the surface's triangles with area, in the point tree's leaf
+    /// order.
     surface: Bvh8<Moller>,
+    /// The position in the point tree's leaf order of each of `surface`'s
+    /// triangles, where some were left out for having no area; none when
+    /// all were kept (the positions are the indices).
+    positions: Option<Vec<u32>>,
     /// Over the cap's triangles; none for a closed surface.
     cap: Option<Bvh8<Moller>>,
     /// Whether crossings are counted at all (see [`RayTree::build`]).
@@ -37,6 +43,14 @@ pub(crate) struct RayTree {
     /// Bounds of surface and cap.
     lo: Vec3,
     hi: Vec3,
+}
+
+/// Whether a triangle's corners are not collinear: its edge vectors'
+/// cross product is not zero, in `f64`, where the products of `f32`
+/// differences are exact, so that only truly collinear corners fail.
+fn has_area(t: &[Vec3; 3]) -> bool {
+    let [a, b, c] = t.map(|v| v.as_dvec3());
+    (b - a).cross(c - a) != glam::DVec3::ZERO
 }
 
 /// A tree over a triangle soup.
@@ -52,8 +66,22 @@ impl RayTree {
     /// surface with holes) is left out, and crossings are not counted:
     /// through such a cap, counting costs more than summing the solid
     /// angles (BENCHMARKS.md).
+    ///
+    /// Triangles without area (collinear corners: slivers that CAD
+    /// tessellations leave, whose long boxes every ray along them must
+    /// open) are left out of the surface's tree; no ray crosses them. An
+    /// `f32` Möller test can still report a crossing of one, from rounding
+    /// alone; the `f64` references never do, and neither does this tree.
     pub fn build(surface: &[[Vec3; 3]], cap: &[[Vec3; 3]]) -> Self {
-        let (tree, mesh) = soup_tree(surface);
+        let kept: Vec<u32> = (0..surface.len() as u32)
+            .filter(|&i| has_area(&surface[i as usize]))
+            .collect();
+        let (positions, (tree, mesh)) = if kept.len() == surface.len() {
+            (None, soup_tree(surface))
+        } else {
+            let tris: Vec<[Vec3; 3]> = kept.iter().map(|&i| surface[i as usize]).collect();
+            (Some(kept), soup_tree(&tris))
+        };
         let mut b = mesh.bounds();
         let countable = cap.len() <= surface.len() / 4;
         let cap = (countable && !cap.is_empty()).then(|| {
@@ -63,6 +91,7 @@ impl RayTree {
         });
         RayTree {
             surface: tree,
+            positions,
             cap,
             countable,
             lo: b.min,
@@ -73,7 +102,9 @@ impl RayTree {
     /// Bytes held by both trees.
     pub fn bytes(&self) -> usize {
         use crate::accel::Accel;
-        self.surface.stats().bytes + self.cap.as_ref().map_or(0, |c| c.stats().bytes)
+        self.surface.stats().bytes
+            + self.positions.as_ref().map_or(0, |p| 4 * p.len())
+            + self.cap.as_ref().map_or(0, |c| c.stats().bytes)
     }
 
     /// Walk the surface's hits along `ray` (the textbook test's):
@@ -88,7 +119,7 @@ impl RayTree {
         let _ = self
             .surface
             .crossings::<NEAR_FIRST, false, _>(ray, |c: &Crossing, p, reach: &mut f32| {
-                !c.hit || visit(c, p, reach)
+                !c.hit || visit(c, self.position(p), reach)
             });
     }
 
@@ -107,8 +138,20 @@ impl RayTree {
         self.surface.crossings_batch::<false, _>(
             rays,
             |_| HitList::default(),
-            |i, v| done(i, &mut v.hits, &v.prims),
+            |i, v| {
+                for p in &mut v.prims {
+                    *p = self.position(*p);
+                }
+                done(i, &mut v.hits, &v.prims)
+            },
         );
+    }
+
+    /// The position in the point tree's leaf order of the surface tree's
+    /// triangle `p`.
+    #[inline(always)]
+    fn position(&self, p: u32) -> u32 {
+        self.positions.as_ref().map_or(p, |m| m[p as usize])
     }
 
     /// Whether [`RayTree::signed_crossings`] counts: false when the cap
