@@ -421,23 +421,25 @@ impl<N: NodeWidth, T: TriangleTest> PacketTree for WideBvh<N, T> {
         self.subtree::<ANY>(start, ray, tfar, best)
     }
 
-    /// Nearest hits on wide nodes that interleave ([`NodeWidth::INTERLEAVE`]):
-    /// twelve rays stepped in turn (`WALKS` in `wide_bvh/walk.rs`).
-    /// Otherwise, and for occlusion, one ray after the other: the plain loop
-    /// was 1.25–1.6× faster than two walks on shadow rays (full dragon and
-    /// scatter, 1 thread).
+    /// Nearest hits and occlusion on wide nodes that interleave
+    /// ([`NodeWidth::INTERLEAVE`]): twelve rays stepped in turn (`WALKS` in
+    /// `wide_bvh/walk.rs`), so that one ray's node loads overlap the
+    /// others' work. These are the rays that formed no packet; on
+    /// incoherent rays, occlusion ran 1.6–2.0× faster this way than one
+    /// ray after the other (BENCHMARKS.md). Otherwise one ray after the
+    /// other.
     #[inline(always)]
     fn singles<const ANY: bool>(
         &self,
         rays: &[Ray],
         mut done: impl FnMut(usize, bool, Option<Hit>),
     ) {
-        if ANY {
+        if N::INTERLEAVE {
+            self.interleaved::<ANY>(rays, done);
+        } else if ANY {
             for (i, ray) in rays.iter().enumerate() {
                 done(i, self.occluded(ray), None);
             }
-        } else if N::INTERLEAVE {
-            self.interleaved::<ANY>(rays, done);
         } else {
             for (i, ray) in rays.iter().enumerate() {
                 done(i, false, self.intersect(ray));
