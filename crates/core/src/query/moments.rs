@@ -28,14 +28,14 @@ pub(crate) struct SlotMoments {
 pub(crate) struct Moments(pub(super) Vec<SlotMoments>);
 
 impl Moments {
-    /// The moments of every child of every node, in `f64` from the
-    /// triangles below it (each triangle is summed once per level above
-    /// it), stored in `f32`.
     /// Bytes held.
     pub(super) fn bytes(&self) -> usize {
         self.0.len() * std::mem::size_of::<SlotMoments>()
     }
 
+    /// The moments of every child of every node, in `f64` from the
+    /// triangles below it (each triangle is summed once per level above
+    /// it), stored in `f32`.
     #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
     pub(super) fn build(nodes: &[SurfaceNode], leaf_tris: &[[Vec3; 3]]) -> Moments {
         let nodes = nodes

@@ -53,13 +53,6 @@ use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
 
-/// AVX2 and FMA, which [`SurfaceBvh::winding_number_with`]'s fast walk is
-/// compiled for.
-#[cfg(target_arch = "x86_64")]
-fn avx2() -> bool {
-    is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
-}
-
 /// The accuracy occupancy decides at first: a child is approximated when
 /// the point is farther than 1.25 times its radius from its centre. On
 /// the 2CylinderEngine's cap, at 4,000 points uniform in its box, the
@@ -211,7 +204,7 @@ impl SurfaceBvh {
         }
         let moments = &self.moments().0;
         #[cfg(target_arch = "x86_64")]
-        if avx2() {
+        if crate::accel::bvh::avx2() {
             // SAFETY: the CPU has AVX2 and FMA.
             return unsafe { self.winding_avx2(moments, q, beta) };
         }

@@ -62,9 +62,10 @@ impl BoxPath {
     }
 }
 
-/// AVX2 and FMA, which [`BoxPath::Avx2`]'s traversal is compiled for.
+/// AVX2 and FMA, which [`BoxPath::Avx2`]'s traversal is compiled for
+/// (and the winding-number walk of `query/winding.rs`).
 #[cfg(target_arch = "x86_64")]
-fn avx2() -> bool {
+pub(crate) fn avx2() -> bool {
     is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
 }
 

@@ -31,6 +31,8 @@ mod binning;
 mod box4;
 mod box8;
 mod box_path;
+#[cfg(target_arch = "x86_64")]
+pub(crate) use box_path::avx2;
 mod boxes;
 pub(crate) mod build;
 mod bvh2;
