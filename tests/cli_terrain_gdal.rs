@@ -13,7 +13,7 @@ use cli::{raykit, s, text};
 use raykit_terrain::curvature::curvature_corrected;
 use raykit_terrain::io::{load_dem, LoadOptions};
 use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
-use raykit_terrain::{Dem, HeightField, MaxMipmap};
+use raykit_terrain::{Dem, HeightField};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -68,20 +68,12 @@ fn gdal_style_values_tiles_and_compression_read_back_in_gdal() {
     let dem_path = data("terrain/lidar_dem_400.tif");
     let dem = load_dem(&dem_path, &LoadOptions::default()).unwrap();
     let field = HeightField::new(&dem).unwrap();
-    let pyramid = MaxMipmap::new(&field);
     let (arg, light) = light_at(&dem, &field, 200, 170, 3.0);
     let (tz, md) = (1.5, 120.0);
     let (vv, iv, ov, nv) = (255u8, 10u8, 128u8, 200u8);
     // The reference, computed here: brute force for the targets 1.5 m above
     // the ground, then gdal_viewshed's classes by distance and no-data.
-    let lit = shadow_mask_for_targets(
-        &field,
-        &pyramid,
-        &light,
-        ShadowMethod::BruteForce,
-        tz,
-        &|_| {},
-    );
+    let lit = shadow_mask_for_targets(&field, None, &light, ShadowMethod::BruteForce, tz, &|_| {});
     let want: Vec<u8> = (0..lit.len())
         .map(|i| {
             let (c, r) = ((i % dem.width) as f64, (i / dem.width) as f64);
@@ -371,11 +363,10 @@ fn agrees_with_gdal_viewshed_over_the_curved_earth() {
     // Our curved mask is the exact mask of the corrected heights.
     let corrected = curvature_corrected(&dem, col as f64, row as f64, 0.85714);
     let field = HeightField::new(&corrected).unwrap();
-    let pyramid = MaxMipmap::new(&field);
     let ground = field.at(col, row) as f64;
     let lit = shadow_mask_for_targets(
         &field,
-        &pyramid,
+        None,
         &Light::Point([
             col as f64 * field.sx,
             -(row as f64) * field.sy,

@@ -10,7 +10,7 @@ use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use raykit_terrain::io::{load_dem as read_dem, LoadOptions};
-use raykit_terrain::shadow::{shadow_mask, Light, ShadowMethod};
+use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
 use raykit_terrain::view::{cast_image, Caster};
 use raykit_terrain::{Dem, GeoRef, HeightField, MaxMipmap, TerrainCamera};
 use std::path::PathBuf;
@@ -165,8 +165,8 @@ pub fn shadow<'py>(
         _ => return Err(value_error("give exactly one of sun, light")),
     };
     let mask = detached(py, threads, || {
-        let pyramid = MaxMipmap::new(&field);
-        let mut mask = shadow_mask(&field, &pyramid, &light, method);
+        // The quadtree is built only if the light needs it.
+        let mut mask = shadow_mask_for_targets(&field, None, &light, method, 0.0, &|_| {});
         for (m, h) in mask.iter_mut().zip(&dem.heights) {
             if h.is_nan() {
                 *m = 255;

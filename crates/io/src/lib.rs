@@ -17,7 +17,7 @@
 //!   ([`read_rays`], [`write_hits`], …), and the hit file of an instanced
 //!   scene with geometry and instance ids ([`write_scene_hits`]).
 //! * Safe output: [`write_atomic`] (temporary file + rename) under every writer,
-//!   and [`write_png`]; parts of a split image ([`write_png_part`],
+//!   and [`write_png`] ([`write_png_indexed`] for palette images); parts of a split image ([`write_png_part`],
 //!   [`read_png_part`]) carry their place in the picture.
 
 #![forbid(unsafe_code)]
@@ -61,7 +61,7 @@ pub use gltf_instances::{load_gltf_instances, parse_gltf_instances, GltfInstance
 pub use image_merge::{merge_png_parts, MergeError};
 pub use image_part::{read_png_part, write_png_part, ImagePart, PART_KEYWORD};
 pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
-pub use png::write_png;
+pub use png::{write_png, write_png_indexed};
 pub use query_files::{
     read_points, write_answers, write_closest_points, write_f32s, write_flags, write_hit_lists,
     write_scene_hit_lists, write_u32s, POINT_RECORD_SIZE,

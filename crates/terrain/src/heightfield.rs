@@ -110,15 +110,27 @@ impl HeightField {
                 dem.width, dem.height
             ));
         }
+        use rayon::prelude::*;
         let (zmin, zmax) = dem
-            .range()
-            .ok_or("the DEM has no valid height (every sample is no-data)")?;
-        let mut heights = dem.heights.clone();
-        for h in &mut heights {
-            if h.is_nan() {
-                *h = zmin;
-            }
+            .heights
+            .par_iter()
+            .filter(|h| !h.is_nan())
+            .fold(
+                || (f32::INFINITY, f32::NEG_INFINITY),
+                |(lo, hi), &h| (lo.min(h), hi.max(h)),
+            )
+            .reduce(
+                || (f32::INFINITY, f32::NEG_INFINITY),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
+        if zmin > zmax {
+            return Err("the DEM has no valid height (every sample is no-data)".into());
         }
+        let heights = dem
+            .heights
+            .par_iter()
+            .map(|&h| if h.is_nan() { zmin } else { h })
+            .collect();
         let (sx, sy) = dem.cell_size_m();
         if !(sx > 0.0 && sy > 0.0 && sx.is_finite() && sy.is_finite()) {
             return Err(format!("cell size must be positive, got {sx} x {sy}"));

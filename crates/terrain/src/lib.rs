@@ -17,6 +17,7 @@ pub mod dem;
 pub mod fractal;
 pub mod georef;
 pub mod heightfield;
+pub mod horizon;
 pub mod io;
 pub mod march;
 pub mod mask_cells;

@@ -32,6 +32,20 @@ pub fn march_from(
     t1: f64,
     steps: &mut Steps,
 ) -> Option<TerrainHit> {
+    march_cells(field, ray, t0, t1, steps, |_, _, _, _| true)
+}
+
+/// [`march_from`], testing only the cells for which `worth(col, row, t_in,
+/// t_out)` is true (`t_in`, `t_out`: where the ray enters and leaves the
+/// cell); the caller answers for the others.
+pub fn march_cells(
+    field: &HeightField,
+    ray: &GridRay,
+    t0: f64,
+    t1: f64,
+    steps: &mut Steps,
+    worth: impl Fn(usize, usize, f64, f64) -> bool,
+) -> Option<TerrainHit> {
     let (cw, ch) = field.cells();
     let p = ray.at(t0);
     let mut c = (p[0].floor().max(0.0) as usize).min(cw - 1);
@@ -47,16 +61,21 @@ pub fn march_from(
             f64::INFINITY
         }
     };
+    let mut t_in = t0;
     loop {
-        steps.cells += 1;
-        if let Some(t) = field.hit_cell(c, r, ray, t0, t1) {
-            return Some(TerrainHit {
-                t,
-                col: c as u32,
-                row: r as u32,
-            });
-        }
         let (tx, ty) = (exit(ray.o[0], dx, c), exit(ray.o[1], dy, r));
+        let t_out = tx.min(ty).min(t1);
+        if worth(c, r, t_in, t_out) {
+            steps.cells += 1;
+            if let Some(t) = field.hit_cell(c, r, ray, t0, t1) {
+                return Some(TerrainHit {
+                    t,
+                    col: c as u32,
+                    row: r as u32,
+                });
+            }
+        }
+        t_in = t_out;
         if tx.min(ty) >= t1 {
             return None;
         }

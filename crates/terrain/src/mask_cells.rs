@@ -55,18 +55,31 @@ impl MaskCell {
     /// The cell's colour in a preview image: light sand when lit, dark
     /// blue in shadow, grey beyond range, magenta without data.
     pub fn preview(self) -> [u8; 3] {
+        PREVIEW_PALETTE[self.preview_index() as usize]
+    }
+
+    /// The cell's entry in [`PREVIEW_PALETTE`], for a palette image.
+    pub fn preview_index(self) -> u8 {
         match self {
-            MaskCell::Lit => [235, 225, 190],
-            MaskCell::Shadow => [40, 45, 70],
-            MaskCell::OutOfRange => [120, 120, 120],
-            MaskCell::NoData => [255, 0, 255],
+            MaskCell::Lit => 0,
+            MaskCell::Shadow => 1,
+            MaskCell::OutOfRange => 2,
+            MaskCell::NoData => 3,
         }
     }
 }
 
+/// The preview colours of lit, shadowed, out-of-range and no-data cells.
+pub const PREVIEW_PALETTE: [[u8; 3]; 4] = [
+    [235, 225, 190],
+    [40, 45, 70],
+    [120, 120, 120],
+    [255, 0, 255],
+];
+
 /// The class of every grid point of a `width`-wide grid (row-major): no
 /// data where `nodata` is set, then out of range where `range` says so,
-/// then lit where `mask` is 1, else in shadow.
+/// then lit where `mask` is 1, else in shadow (parallel).
 pub fn classify(
     mask: &[u8],
     nodata: &[bool],
@@ -81,7 +94,9 @@ pub fn classify(
         }
         None => false,
     };
+    use rayon::prelude::*;
     (0..mask.len())
+        .into_par_iter()
         .map(|i| {
             if nodata[i] {
                 MaskCell::NoData

@@ -5,13 +5,15 @@
 //! Two exact algorithms give identical masks:
 //! - [`ShadowMethod::BruteForce`]: Min's (2008) method, each segment marched
 //!   cell by cell;
-//! - [`ShadowMethod::Fast`]: each segment through the min/max quadtree
-//!   ([`crate::pyramid`]), walked from the segment's own cell upwards,
-//!   skipping nodes the segment passes above and stopping at the first node
-//!   the segment passes wholly *below* (it must then cross the surface,
-//!   since both of its ends are on or above it).
+//! - [`ShadowMethod::Fast`]: for a point light over the grid, the horizon
+//!   sweep of [`crate::horizon`] first; then each segment it leaves through
+//!   the min/max quadtree ([`crate::pyramid`]), walked from the segment's
+//!   own cell upwards, skipping nodes the segment passes above and stopping
+//!   at the first node the segment passes wholly *below* (it must then
+//!   cross the surface, since both of its ends are on or above it).
 
 use crate::heightfield::{GridRay, HeightField, Steps};
+use crate::horizon::{self, UNDECIDED};
 use crate::march::march;
 use crate::pyramid::MaxMipmap;
 use rayon::prelude::*;
@@ -137,15 +139,26 @@ pub fn occluded_with_hint(
     hint: &mut Option<Blocker>,
     steps: &mut Steps,
 ) -> bool {
-    occluded_from(field, pyramid, light, col, row, 0.0, method, hint, steps)
+    occluded_from(
+        field,
+        Some(pyramid),
+        light,
+        col,
+        row,
+        0.0,
+        method,
+        hint,
+        steps,
+    )
 }
 
 /// [`occluded_with_hint`] for the point `lift` >= 0 metres above the grid
-/// point (a target above the ground).
+/// point (a target above the ground); without a pyramid the segment is
+/// marched cell by cell whatever the method.
 #[allow(clippy::too_many_arguments)]
 fn occluded_from(
     field: &HeightField,
-    pyramid: &MaxMipmap,
+    pyramid: Option<&MaxMipmap>,
     light: &Light,
     col: usize,
     row: usize,
@@ -155,9 +168,12 @@ fn occluded_from(
     steps: &mut Steps,
 ) -> bool {
     let (ray, tmax) = segment(field, light, col, row, lift);
-    match method {
-        ShadowMethod::BruteForce => march(field, &ray, END_EPS, tmax, steps).is_some(),
-        ShadowMethod::Fast => {
+    match (method, pyramid) {
+        (ShadowMethod::BruteForce, _) => march(field, &ray, END_EPS, tmax, steps).is_some(),
+        (ShadowMethod::Fast, None) => field
+            .clip(&ray, END_EPS, tmax)
+            .is_some_and(|(t0, t1)| march_below(field, &ray, t0, t1, steps)),
+        (ShadowMethod::Fast, Some(pyramid)) => {
             // A point light over the grid needs no clipping: the segment
             // stays over the grid, and above the highest point nothing is hit.
             let over_grid = matches!(light, Light::Point(_)) && {
@@ -193,6 +209,31 @@ fn occluded_from(
             hint.is_some()
         }
     }
+}
+
+/// Whether the segment meets the surface for `t` in `[t0, t1]`, marching
+/// it cell by cell like the brute force but testing the triangles only of
+/// the cells it does not clear: a cell whose highest corner lies below the
+/// segment over the whole cell (by a margin for the triangle test's
+/// tolerance beyond the cell's edges) cannot be met.
+fn march_below(field: &HeightField, ray: &GridRay, t0: f64, t1: f64, steps: &mut Steps) -> bool {
+    let [dx, dy, dz] = ray.d;
+    let slope = dz.abs() / dx.hypot(dy).max(1e-300);
+    crate::march::march_cells(field, ray, t0, t1, steps, |c, r, ta, tb| {
+        let h = [
+            field.at(c, r),
+            field.at(c + 1, r),
+            field.at(c, r + 1),
+            field.at(c + 1, r + 1),
+        ];
+        let (hi, lo) = (
+            h.iter().copied().fold(f32::MIN, f32::max) as f64,
+            h.iter().copied().fold(f32::MAX, f32::min) as f64,
+        );
+        let low = (ray.o[2] + ta * dz).min(ray.o[2] + tb * dz);
+        low <= hi + 1e-6 + 1e-8 * (hi - lo + slope)
+    })
+    .is_some()
 }
 
 /// Whether the segment from grid point (`col`, `row`) starts *into* the
@@ -412,16 +453,22 @@ pub fn shadow_mask_with_progress(
     method: ShadowMethod,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Vec<u8> {
-    shadow_mask_for_targets(field, pyramid, light, method, 0.0, progress)
+    shadow_mask_for_targets(field, Some(pyramid), light, method, 0.0, progress)
 }
+
+/// Points a sweep leaves up to this many are marched cell by cell, which
+/// needs no quadtree; more go through the quadtree walk.
+const MARCHED_LEFTOVERS: usize = 1 << 16;
 
 /// [`shadow_mask_with_progress`] for targets `target_height` >= 0 metres
 /// above the ground at every grid point (gdal_viewshed's `-tz`): 1 where
 /// the segment from the target to the light meets no part of the surface.
-/// A negative or non-finite height counts as 0.
+/// A negative or non-finite height counts as 0. Without a `pyramid`, the
+/// fast method builds one only where it needs one: for a sun, or a point
+/// light the sweep cannot take or leaves many points of.
 pub fn shadow_mask_for_targets(
     field: &HeightField,
-    pyramid: &MaxMipmap,
+    pyramid: Option<&MaxMipmap>,
     light: &Light,
     method: ShadowMethod,
     target_height: f64,
@@ -433,13 +480,33 @@ pub fn shadow_mask_for_targets(
         0.0
     };
     let w = field.width;
-    let mut mask = vec![0u8; w * field.height];
+    // A point light over the grid is swept first; the segment test answers
+    // the points the sweep leaves.
+    let swept = match (method, light) {
+        (ShadowMethod::Fast, Light::Point(p)) => horizon::point_light_mask(field, *p, lift),
+        _ => None,
+    };
+    let few_left = swept
+        .as_ref()
+        .is_some_and(|m| m.par_iter().filter(|&&v| v == UNDECIDED).count() <= MARCHED_LEFTOVERS);
+    let built;
+    let pyramid = match pyramid {
+        _ if few_left || method == ShadowMethod::BruteForce => None,
+        Some(p) => Some(p),
+        None => {
+            built = MaxMipmap::new(field);
+            Some(&built)
+        }
+    };
+    let mut mask = swept.unwrap_or_else(|| vec![UNDECIDED; w * field.height]);
     mask.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
         let mut steps = Steps::default();
         for (col, m) in line.iter_mut().enumerate() {
-            *m = u8::from(!occluded_from(
-                field, pyramid, light, col, row, lift, method, &mut None, &mut steps,
-            ));
+            if *m == UNDECIDED {
+                *m = u8::from(!occluded_from(
+                    field, pyramid, light, col, row, lift, method, &mut None, &mut steps,
+                ));
+            }
         }
         progress(w);
     });

@@ -64,7 +64,8 @@ pub fn sun_hours(
             azimuth_deg: az,
             elevation_deg: el,
         };
-        let mask = shadow_mask_for_targets(field, pyramid, &light, method, target_height, &|_| {});
+        let mask =
+            shadow_mask_for_targets(field, Some(pyramid), &light, method, target_height, &|_| {});
         for (h, &m) in hours.iter_mut().zip(&mask) {
             *h += m as f32 * step as f32;
         }

@@ -71,6 +71,13 @@ pub struct TerrainExperimentArgs {
     /// DEMs above 1024² run once.
     #[arg(long, default_value_t = 3)]
     reps: usize,
+    /// Parts to run: any of a, b, c.
+    #[arg(long, value_delimiter = ',', default_value = "a,b,c")]
+    parts: Vec<char>,
+    /// Part (c) on this DEM file (e.g. a GeoTIFF warped by gdalwarp)
+    /// instead of the generated one.
+    #[arg(long, value_name = "FILE")]
+    gdal_dem: Option<PathBuf>,
     /// Output folder.
     #[arg(long, default_value = "experiments/terrain")]
     out: PathBuf,
@@ -105,10 +112,16 @@ struct ShadowRow {
 
 #[derive(Serialize)]
 struct GdalRow {
-    size: usize,
+    dem: String,
     light: String,
+    /// The mask alone, in this process.
     ours_s: f64,
+    /// `raykit terrain shadow` as a command: load, mask, GeoTIFF, preview.
+    ours_command_s: Option<f64>,
+    /// Spread of the command's runs, (max − min) / median.
+    ours_noise: Option<f64>,
     gdal_s: Option<f64>,
+    gdal_noise: Option<f64>,
     ours_over_gdal: Option<f64>,
     cells_differing_pct: Option<f64>,
     lit_by_us_shadowed_by_gdal: Option<usize>,
@@ -340,11 +353,30 @@ fn part_b(args: &TerrainExperimentArgs) -> Result<Vec<ShadowRow>> {
     Ok(rows)
 }
 
-fn part_c(args: &TerrainExperimentArgs, dem: &Dem) -> Result<GdalRow> {
+/// Part (c): our mask and gdal_viewshed's from the same point light on the
+/// same DEM. Both are timed as commands (`raykit terrain shadow` with its
+/// defaults, a DEFLATE GeoTIFF and a PNG preview; gdal_viewshed writing its
+/// GeoTIFF), run in turn `--reps` times; the mask alone is timed in this
+/// process too.
+fn part_c(args: &TerrainExperimentArgs, generated: &Dem) -> Result<GdalRow> {
+    let dir = args.out.join("gdal");
+    std::fs::create_dir_all(&dir)?;
+    let (input, loaded, name) = match &args.gdal_dem {
+        Some(path) => {
+            let dem = raykit_terrain::io::load_dem(path, &Default::default())?;
+            (path.clone(), dem, path.display().to_string())
+        }
+        None => {
+            let input = dir.join("dem.tif");
+            raykit_terrain::io::write_dem_geotiff(&input, generated)?;
+            (input, generated.clone(), format!("fractal:{}", args.size))
+        }
+    };
+    let dem = &loaded;
     let field = HeightField::new(dem).map_err(anyhow::Error::msg)?;
     let pyramid = MaxMipmap::new(&field);
     let (light, [x, y], h) = point_light(&field);
-    // Map coordinates of the light for gdal: world → grid → map.
+    // Map coordinates of the light for both commands: world → grid → map.
     let (col, row) = (x / field.sx, -y / field.sy);
     let (mx, my) = dem.grid_to_map(col, row);
     let mut ours_t = Vec::new();
@@ -355,65 +387,75 @@ fn part_c(args: &TerrainExperimentArgs, dem: &Dem) -> Result<GdalRow> {
         ours = m;
     }
     let ours_s = median_min_max(&ours_t).0;
-    let light_text = format!("point at map ({mx}, {my}), {h} m above ground");
-    let skipped = |note: String| GdalRow {
-        size: dem.width,
-        light: light_text.clone(),
+    let light_text = format!("point at map ({mx:.1}, {my:.1}), {h} m above ground");
+    let mut row = GdalRow {
+        dem: format!("{name}, {}x{}", dem.width, dem.height),
+        light: light_text,
         ours_s,
+        ours_command_s: None,
+        ours_noise: None,
         gdal_s: None,
+        gdal_noise: None,
         ours_over_gdal: None,
         cells_differing_pct: None,
         lit_by_us_shadowed_by_gdal: None,
         shadowed_by_us_lit_by_gdal: None,
-        note,
+        note: String::new(),
     };
     if Command::new("gdal_viewshed")
         .arg("--help")
         .output()
         .is_err()
     {
-        let note = "skipped: gdal_viewshed is not installed (apt-get install gdal-bin, or run scripts/terrain-experiment.sh)";
-        eprintln!("(c) {note}");
-        return Ok(skipped(note.into()));
+        row.note = "skipped: gdal_viewshed is not installed (apt-get install gdal-bin, or run scripts/terrain-experiment.sh)".into();
+        eprintln!("(c) {}", row.note);
+        return Ok(row);
     }
-    let dir = args.out.join("gdal");
-    std::fs::create_dir_all(&dir)?;
-    let input = dir.join("dem.tif");
-    raykit_terrain::io::write_dem_geotiff(&input, dem)?;
     let output = dir.join("viewshed.tif");
-    let mut gt = Vec::new();
-    for _ in 0..args.reps.max(1) {
-        let _ = std::fs::remove_file(&output);
-        let (status, s) = timed(|| {
-            Command::new("gdal_viewshed")
-                .args([
-                    "-q",
-                    "-ox",
-                    &mx.to_string(),
-                    "-oy",
-                    &my.to_string(),
-                    "-oz",
-                    &h.to_string(),
-                ])
-                .args(["-tz", "0", "-cc", "0", "-vv", "1", "-iv", "0", "-ov", "0"])
-                .arg(&input)
-                .arg(&output)
-                .output()
-        });
-        // gdal complains on stderr that the generated DEM has no CRS; only a
-        // failure is worth showing.
-        let ran = status.context("running gdal_viewshed")?;
+    let ours_out = dir.join("raykit.tif");
+    let exe = std::env::current_exe().context("finding the raykit executable")?;
+    let run = |mut cmd: Command, what: &str| -> Result<f64> {
+        let (ran, s) = timed(|| cmd.output());
+        let ran = ran.with_context(|| format!("running {what}"))?;
         if !ran.status.success() {
             bail!(
-                "gdal_viewshed failed with {}: {}",
+                "{what} failed with {}: {}",
                 ran.status,
                 String::from_utf8_lossy(&ran.stderr)
             );
         }
-        gt.push(s);
+        Ok(s)
+    };
+    let (mut gt, mut ot) = (Vec::new(), Vec::new());
+    for _ in 0..args.reps.max(1) {
+        let _ = std::fs::remove_file(&output);
+        let mut gdal = Command::new("gdal_viewshed");
+        gdal.args(["-q", "-ox", &mx.to_string(), "-oy", &my.to_string()])
+            .args(["-oz", &h.to_string()])
+            .args(["-tz", "0", "-cc", "0", "-vv", "1", "-iv", "0", "-ov", "0"])
+            .arg(&input)
+            .arg(&output);
+        // gdal complains on stderr when the DEM has no CRS; only a failure
+        // is worth showing.
+        gt.push(run(gdal, "gdal_viewshed")?);
+        let mut raykit = Command::new(&exe);
+        raykit
+            .args(["terrain", "shadow"])
+            .arg(&input)
+            .arg("--light")
+            .arg(format!("{mx},{my},{h}"))
+            .arg("--out")
+            .arg(&ours_out);
+        ot.push(run(raykit, "raykit terrain shadow")?);
     }
-    let gdal_s = median_min_max(&gt).0;
+    let noise = |t: &[f64]| {
+        let (m, lo, hi) = median_min_max(t);
+        (m, (hi - lo) / m)
+    };
+    let (gdal_s, gdal_noise) = noise(&gt);
+    let (command_s, command_noise) = noise(&ot);
     let theirs = raykit_terrain::io::read_geotiff(&output)?;
+    let written = raykit_terrain::io::read_geotiff(&ours_out)?;
     if (theirs.width, theirs.height) != (dem.width, dem.height) {
         bail!(
             "gdal_viewshed wrote {}x{}, expected {}x{}",
@@ -423,6 +465,15 @@ fn part_c(args: &TerrainExperimentArgs, dem: &Dem) -> Result<GdalRow> {
             dem.height
         );
     }
+    // The command's mask is this process's mask, written out.
+    let same = written
+        .heights
+        .iter()
+        .zip(&ours)
+        .all(|(&w, &m)| w.is_nan() || (w > 0.5) == (m == 1));
+    if !same {
+        bail!("raykit terrain shadow wrote a mask that differs from the library's");
+    }
     let (mut a, mut b) = (0usize, 0usize);
     for (&o, &t) in ours.iter().zip(&theirs.heights) {
         match (o, t > 0.5) {
@@ -431,17 +482,19 @@ fn part_c(args: &TerrainExperimentArgs, dem: &Dem) -> Result<GdalRow> {
             _ => {}
         }
     }
-    Ok(GdalRow {
-        size: dem.width,
-        light: light_text,
-        ours_s,
-        gdal_s: Some(gdal_s),
-        ours_over_gdal: Some(ours_s / gdal_s),
-        cells_differing_pct: Some(100.0 * (a + b) as f64 / ours.len() as f64),
-        lit_by_us_shadowed_by_gdal: Some(a),
-        shadowed_by_us_lit_by_gdal: Some(b),
-        note: "gdal_viewshed -cc 0 (flat earth, no refraction), -tz 0".into(),
-    })
+    row.ours_command_s = Some(command_s);
+    row.ours_noise = Some(command_noise);
+    row.gdal_s = Some(gdal_s);
+    row.gdal_noise = Some(gdal_noise);
+    row.ours_over_gdal = Some(command_s / gdal_s);
+    row.cells_differing_pct = Some(100.0 * (a + b) as f64 / ours.len() as f64);
+    row.lit_by_us_shadowed_by_gdal = Some(a);
+    row.shadowed_by_us_lit_by_gdal = Some(b);
+    row.note = format!(
+        "gdal_viewshed -cc 0 (flat earth, no refraction), -tz 0; commands run in turn, median of {}",
+        args.reps.max(1)
+    );
+    Ok(row)
 }
 
 fn opt(v: Option<f64>, digits: usize) -> String {
@@ -462,19 +515,60 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
     if args.taus.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         bail!("--taus must be positive numbers");
     }
+    if let Some(p) = args.parts.iter().find(|p| !"abc".contains(**p)) {
+        bail!("--parts: unknown part '{p}'; the parts are a, b and c");
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let head = super::provenance();
     let dem = raykit_terrain::fractal::fractal(args.size, 1, 0.55);
-    let a = part_a(&args, &dem)?;
-    let b = part_b(&args)?;
-    let c = part_c(&args, &dem)?;
-    write_csv(&args.out, "cast.csv", &a)?;
-    write_csv(&args.out, "shadow.csv", &b)?;
-    write_csv(&args.out, "gdal.csv", std::slice::from_ref(&c))?;
+    let part = |p: char| args.parts.contains(&p);
+    let a = if part('a') {
+        part_a(&args, &dem)?
+    } else {
+        Vec::new()
+    };
+    let b = if part('b') {
+        part_b(&args)?
+    } else {
+        Vec::new()
+    };
+    let c = if part('c') {
+        Some(part_c(&args, &dem)?)
+    } else {
+        None
+    };
+    let mut md = format!("# Terrain experiment\n\n{head}\n");
+    if !a.is_empty() {
+        write_csv(&args.out, "cast.csv", &a)?;
+        md += &part_a_table(&args, &a);
+    }
+    if !b.is_empty() {
+        write_csv(&args.out, "shadow.csv", &b)?;
+        md += &part_b_table(&b);
+    }
+    if let Some(c) = &c {
+        write_csv(&args.out, "gdal.csv", std::slice::from_ref(c))?;
+        md += &part_c_table(c);
+    }
+    write_text(&args.out, "results.md", &md)?;
+    print!("{md}");
+    if !a.is_empty() {
+        table1_plot(&args, &a)?;
+    }
+    let differs = a.iter().any(|r| r.pixels_differing_from_march > 0)
+        || b.iter().any(|r| r.cells_differing > 0);
+    Ok(if differs {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+/// Part (a)'s table.
+fn part_a_table(args: &TerrainExperimentArgs, a: &[CastRow]) -> String {
     let mut md = format!(
-        "# Terrain experiment\n\n{head}\n\
-         ## (a) Per-frame quadtree boxes against per-cell and maximum-mipmap casting: fractal:{} DEM, {}x{}, {}, median of {} runs\n\n\
+        "## (a) Per-frame quadtree boxes against per-cell and maximum-mipmap casting: fractal:{} DEM, {}x{}, {}, median of {} runs\n\n\
          | method | τ | ms | noise | boxes | cells/ray | nodes or boxes/ray | A:B (ours) | A:B (paper) | A:C (ours) | A:C (paper) | pixels ≠ march |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         args.size,
@@ -487,7 +581,7 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
         },
         args.reps
     );
-    for r in &a {
+    for r in a {
         md += &format!(
             "| {} | {} | {:.1} | {:.0}% | {} | {:.1} | {:.1} | {:.2} | {} | {:.2} | {} | {} |\n",
             r.method,
@@ -504,32 +598,50 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
             r.pixels_differing_from_march
         );
     }
-    md += "\nHeat maps (steps per ray, same scale): heat-march.png, heat-maxmip.png, heat-boxes-tau16.png.\n\n\
-           ## (b) Terrain shadow map (Min 2008), brute force against fast\n\n\
-           | DEM | light | brute force s | fast s | speed-up | cells ≠ | lit % |\n|---:|---|---:|---:|---:|---:|---:|\n";
-    for r in &b {
+    md += "\nHeat maps (steps per ray, same scale): heat-march.png, heat-maxmip.png, heat-boxes-tau16.png.\n\n";
+    md
+}
+
+/// Part (b)'s table.
+fn part_b_table(b: &[ShadowRow]) -> String {
+    let mut md = String::from(
+        "## (b) Terrain shadow map (Min 2008), brute force against fast\n\n\
+         | DEM | light | brute force s | fast s | speed-up | cells ≠ | lit % |\n|---:|---|---:|---:|---:|---:|---:|\n",
+    );
+    for r in b {
         md += &format!(
             "| {}² | {} | {:.3} | {:.3} | {:.1}x | {} | {:.1} |\n",
             r.size, r.light, r.brute_s, r.fast_s, r.speedup, r.cells_differing, r.lit_pct
         );
     }
-    md += &format!(
-        "\n## (c) gdal_viewshed on the same DEM and light\n\n\
-         | DEM | light | ours (fast) s | gdal_viewshed s | ours ÷ gdal | cells differing % | lit by us, not by gdal | lit by gdal, not by us | note |\n\
-         |---:|---|---:|---:|---:|---:|---:|---:|---|\n\
-         | {}² | {} | {:.3} | {} | {} | {} | {} | {} | {} |\n",
-        c.size,
+    md.push('\n');
+    md
+}
+
+/// Part (c)'s table.
+fn part_c_table(c: &GdalRow) -> String {
+    format!(
+        "## (c) gdal_viewshed on the same DEM and light\n\n\
+         | DEM | light | ours, mask s | ours, command s (noise) | gdal_viewshed s (noise) | command ÷ gdal | cells differing % | lit by us, not by gdal | lit by gdal, not by us | note |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---|\n\
+         | {} | {} | {:.3} | {} ({}) | {} ({}) | {} | {} | {} | {} | {} |\n",
+        c.dem,
         c.light,
         c.ours_s,
+        opt(c.ours_command_s, 3),
+        c.ours_noise.map_or("–".into(), |n| format!("{:.0}%", 100.0 * n)),
         opt(c.gdal_s, 3),
+        c.gdal_noise.map_or("–".into(), |n| format!("{:.0}%", 100.0 * n)),
         opt(c.ours_over_gdal, 2),
         opt(c.cells_differing_pct, 3),
         c.lit_by_us_shadowed_by_gdal.map_or("–".into(), |v| v.to_string()),
         c.shadowed_by_us_lit_by_gdal.map_or("–".into(), |v| v.to_string()),
         c.note
-    );
-    write_text(&args.out, "results.md", &md)?;
-    print!("{md}");
+    )
+}
+
+/// The plot of part (a)'s speed-ups against the paper's Table 1.
+fn table1_plot(args: &TerrainExperimentArgs, a: &[CastRow]) -> Result<()> {
     let boxes: Vec<&CastRow> = a.iter().filter(|r| r.tau.is_some()).collect();
     let series = |f: &dyn Fn(&CastRow) -> Option<f64>| -> Vec<(f64, f64)> {
         boxes
@@ -567,11 +679,5 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
         },
         &args.out.join("table1.svg"),
     )?;
-    let differs = a.iter().any(|r| r.pixels_differing_from_march > 0)
-        || b.iter().any(|r| r.cells_differing > 0);
-    Ok(if differs {
-        ExitCode::FAILURE
-    } else {
-        ExitCode::SUCCESS
-    })
+    Ok(())
 }

@@ -9,7 +9,7 @@
 use std::io::{Seek, Write};
 
 use tiff::encoder::colortype::ColorType;
-use tiff::encoder::compression::{CompressionAlgorithm, Deflate, Lzw, Packbits};
+use tiff::encoder::compression::{CompressionAlgorithm, Deflate, DeflateLevel, Lzw, Packbits};
 use tiff::encoder::{DirectoryEncoder, TiffKind, TiffValue};
 use tiff::tags::Tag;
 use tiff::TiffResult;
@@ -41,7 +41,7 @@ fn compress(compression: TiffCompression, bytes: &[u8]) -> std::io::Result<Vec<u
     match compression {
         TiffCompression::None => out.extend_from_slice(bytes),
         TiffCompression::Deflate => {
-            Deflate::default().write_to(&mut out, bytes)?;
+            Deflate::with_level(DeflateLevel::Fast).write_to(&mut out, bytes)?;
         }
         TiffCompression::Lzw => {
             Lzw.write_to(&mut out, bytes)?;
@@ -51,6 +51,24 @@ fn compress(compression: TiffCompression, bytes: &[u8]) -> std::io::Result<Vec<u
         }
     }
     Ok(out)
+}
+
+/// Blocks `0..count`, each laid out by `block(index, bytes)` and compressed
+/// on its own, in parallel, in order.
+fn packed_blocks(
+    count: usize,
+    compression: TiffCompression,
+    block: impl Fn(usize, &mut Vec<u8>) + Sync,
+) -> std::io::Result<Vec<Vec<u8>>> {
+    use rayon::prelude::*;
+    (0..count)
+        .into_par_iter()
+        .map_init(Vec::new, |raw, k| {
+            raw.clear();
+            block(k, raw);
+            compress(compression, raw)
+        })
+        .collect()
 }
 
 /// The tags that describe one band of samples of type `C`.
@@ -86,27 +104,27 @@ pub fn write_strips<W, K, C>(
     height: usize,
     data: &[C::Inner],
     compression: TiffCompression,
-    fix: &impl Fn(C::Inner) -> C::Inner,
+    fix: &(impl Fn(C::Inner) -> C::Inner + Sync),
 ) -> TiffResult<()>
 where
     W: Write + Seek,
     K: TiffKind,
     C: ColorType,
-    C::Inner: TileSample,
+    C::Inner: TileSample + Sync,
     [C::Inner]: TiffValue,
 {
     let row_bytes = width * std::mem::size_of::<C::Inner>();
     let rows = (65536 / row_bytes.max(1)).clamp(1, height);
-    let mut offsets = Vec::with_capacity(height.div_ceil(rows));
-    let mut counts = Vec::with_capacity(offsets.capacity());
-    let mut raw = Vec::with_capacity(rows * row_bytes);
-    for first in (0..height).step_by(rows) {
-        raw.clear();
+    let strips = packed_blocks(height.div_ceil(rows), compression, |k, raw| {
+        let first = k * rows;
         let end = (first + rows).min(height);
         for &s in &data[first * width..end * width] {
-            fix(s).put(&mut raw);
+            fix(s).put(raw);
         }
-        let packed = compress(compression, &raw)?;
+    })?;
+    let mut offsets = Vec::with_capacity(strips.len());
+    let mut counts = Vec::with_capacity(strips.len());
+    for packed in &strips {
         offsets.push(K::convert_offset(d.write_data(&packed[..])?)?);
         counts.push(K::convert_offset(packed.len() as u64)?);
     }
@@ -129,39 +147,37 @@ pub fn write_tiles<W, K, C>(
     tile: (u32, u32),
     compression: TiffCompression,
     pad: C::Inner,
-    fix: &impl Fn(C::Inner) -> C::Inner,
+    fix: &(impl Fn(C::Inner) -> C::Inner + Sync),
 ) -> TiffResult<()>
 where
     W: Write + Seek,
     K: TiffKind,
     C: ColorType,
-    C::Inner: TileSample,
+    C::Inner: TileSample + Sync,
     [C::Inner]: TiffValue,
 {
     let (tw, th) = (tile.0 as usize, tile.1 as usize);
     let (across, down) = (width.div_ceil(tw), height.div_ceil(th));
-    let mut offsets = Vec::with_capacity(across * down);
-    let mut counts = Vec::with_capacity(across * down);
-    let mut raw = Vec::new();
-    for ty in 0..down {
-        for tx in 0..across {
-            raw.clear();
-            for r in 0..th {
-                let row = ty * th + r;
-                for c in 0..tw {
-                    let col = tx * tw + c;
-                    let s = if row < height && col < width {
-                        fix(data[row * width + col])
-                    } else {
-                        pad
-                    };
-                    s.put(&mut raw);
-                }
+    let tiles = packed_blocks(across * down, compression, |k, raw| {
+        let (tx, ty) = (k % across, k / across);
+        for r in 0..th {
+            let row = ty * th + r;
+            for c in 0..tw {
+                let col = tx * tw + c;
+                let s = if row < height && col < width {
+                    fix(data[row * width + col])
+                } else {
+                    pad
+                };
+                s.put(raw);
             }
-            let packed = compress(compression, &raw)?;
-            offsets.push(K::convert_offset(d.write_data(&packed[..])?)?);
-            counts.push(K::convert_offset(packed.len() as u64)?);
         }
+    })?;
+    let mut offsets = Vec::with_capacity(tiles.len());
+    let mut counts = Vec::with_capacity(tiles.len());
+    for packed in &tiles {
+        offsets.push(K::convert_offset(d.write_data(&packed[..])?)?);
+        counts.push(K::convert_offset(packed.len() as u64)?);
     }
     write_sample_tags::<W, K, C>(d, width, height, compression)?;
     d.write_tag(Tag::TileWidth, tile.0)?;

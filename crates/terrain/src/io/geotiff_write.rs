@@ -191,11 +191,11 @@ fn write<C>(
     nodata: Option<f64>,
     layout: &GeoTiffLayout,
     pad: C::Inner,
-    fix: impl Fn(C::Inner) -> C::Inner,
+    fix: impl Fn(C::Inner) -> C::Inner + Sync,
 ) -> Result<(), DemError>
 where
     C: ColorType,
-    C::Inner: TileSample,
+    C::Inner: TileSample + Sync,
     [C::Inner]: TiffValue,
 {
     check_dimensions(path, "arguments", width, height)?;
@@ -296,11 +296,11 @@ fn encode<C, K>(
     w: &mut BufWriter<File>,
     image: &Image<C::Inner>,
     tags: &Tags,
-    fix: &impl Fn(C::Inner) -> C::Inner,
+    fix: &(impl Fn(C::Inner) -> C::Inner + Sync),
 ) -> Result<(), DemError>
 where
     C: ColorType,
-    C::Inner: TileSample,
+    C::Inner: TileSample + Sync,
     [C::Inner]: TiffValue,
     K: TiffKind,
 {

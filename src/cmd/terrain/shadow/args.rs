@@ -6,7 +6,9 @@ use std::path::PathBuf;
 /// Which algorithm.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum Method {
-    /// Each segment through the min/max quadtree (default).
+    /// A point light over the grid: a horizon sweep outward from the light,
+    /// with the segment test for the points it leaves; a sun: each segment
+    /// through the min/max quadtree (default).
     Fast,
     /// Each segment marched cell by cell (brute force).
     Brute,

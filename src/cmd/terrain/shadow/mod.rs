@@ -20,15 +20,16 @@ use raykit_lab::measure::timed;
 use raykit_terrain::curvature::curvature_corrected;
 use raykit_terrain::georef::MapWorld;
 use raykit_terrain::io::layout_from_creation_options;
-use raykit_terrain::mask_cells::{classify, MaskCell, MaskValues, Range};
+use raykit_terrain::mask_cells::{classify, MaskCell, MaskValues, Range, PREVIEW_PALETTE};
 use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
 use raykit_terrain::{HeightField, MaxMipmap};
+use rayon::prelude::*;
 use std::path::Path;
 use std::process::ExitCode;
 
 fn compute(
     field: &HeightField,
-    pyramid: &MaxMipmap,
+    pyramid: Option<&MaxMipmap>,
     light: &Light,
     method: ShadowMethod,
     target_height: f64,
@@ -106,31 +107,31 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         }
         None => None,
     };
-    let field_dem = match light_grid {
+    let field = match light_grid {
         Some((c, r)) if args.curvature_coefficient != 0.0 => {
-            curvature_corrected(&dem, c, r, args.curvature_coefficient)
+            HeightField::new(&curvature_corrected(&dem, c, r, args.curvature_coefficient))
         }
-        _ => dem.clone(),
-    };
-    let field = HeightField::new(&field_dem).map_err(|e| anyhow::anyhow!("{}: {e}", args.dem))?;
-    let (pyramid, pyr_s) = timed(|| MaxMipmap::new(&field));
+        _ => HeightField::new(&dem),
+    }
+    .map_err(|e| anyhow::anyhow!("{}: {e}", args.dem))?;
     let method = match args.method {
         Method::Fast => ShadowMethod::Fast,
         Method::Brute => ShadowMethod::BruteForce,
     };
-    let nodata: Vec<bool> = dem.heights.iter().map(|h| h.is_nan()).collect();
+    let nodata: Vec<bool> = dem.heights.par_iter().map(|h| h.is_nan()).collect();
     eprintln!(
-        "{}: {}x{} grid points, cells {:.2} x {:.2} m, load {:.0} ms, pyramid {:.0} ms",
+        "{}: {}x{} grid points, cells {:.2} x {:.2} m, load {:.0} ms",
         args.dem,
         dem.width,
         dem.height,
         field.sx,
         field.sy,
         load_s * 1e3,
-        pyr_s * 1e3
     );
 
     if let Some(spec) = &args.sun_path {
+        let (pyramid, pyr_s) = timed(|| MaxMipmap::new(&field));
+        eprintln!("min/max quadtree {:.0} ms", pyr_s * 1e3);
         return sun_path(
             &args, spec, &dem, &field, &pyramid, method, &nodata, &preview, &layout,
         );
@@ -162,7 +163,9 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         }
     };
     let tz = args.target_height;
-    let (mask, secs) = compute(&field, &pyramid, &light, method, tz, "shadow mask");
+    // The fast method builds the min/max quadtree only if this light needs
+    // it.
+    let (mask, secs) = compute(&field, None, &light, method, tz, "shadow mask");
     if args.compare {
         let other = match method {
             ShadowMethod::Fast => ShadowMethod::BruteForce,
@@ -170,7 +173,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         };
         let (m2, s2) = compute(
             &field,
-            &pyramid,
+            None,
             &light,
             other,
             tz,
@@ -210,19 +213,29 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         out_of_range: args.out_of_range_value,
         nodata: nv,
     };
-    let values: Vec<u8> = class.iter().map(|c| c.value(&mask_values)).collect();
-    raykit_terrain::io::write_geotiff_u8_with(
-        &args.out,
-        dem.width,
-        dem.height,
-        &values,
-        &dem.georef,
-        Some(nv as f64),
-        &layout,
-    )?;
-    let rgb: Vec<u8> = class.iter().flat_map(|c| c.preview()).collect();
-    raykit_io::write_png(&preview, dem.width as u32, dem.height as u32, &rgb)
-        .with_context(|| format!("writing {}", preview.display()))?;
+    // The GeoTIFF and the preview, side by side.
+    let (tif, png) = rayon::join(
+        || {
+            let values: Vec<u8> = class.par_iter().map(|c| c.value(&mask_values)).collect();
+            raykit_terrain::io::write_geotiff_u8_with(
+                &args.out,
+                dem.width,
+                dem.height,
+                &values,
+                &dem.georef,
+                Some(nv as f64),
+                &layout,
+            )
+        },
+        || {
+            let index: Vec<u8> = class.par_iter().map(|c| c.preview_index()).collect();
+            let (w, h) = (dem.width as u32, dem.height as u32);
+            raykit_io::write_png_indexed(&preview, w, h, &PREVIEW_PALETTE, &index)
+                .with_context(|| format!("writing {}", preview.display()))
+        },
+    );
+    tif?;
+    png?;
     eprintln!(
         "{:?}: {:.1}% of the grid points lit, {:.3} s ({}) -> {} ({}) and {}",
         light,

@@ -1,0 +1,769 @@
+//! Point-light shadow masks by a front-to-back horizon sweep (De Floriani
+//! and Magillo 1994): exact for the declared surface, and a few operations
+//! per grid point instead of one segment walk each.
+//!
+//! **Projection.** The grid around the light L is cut into eight octants.
+//! In each, `a` is the distance from L along the octant's main grid axis and
+//! `b` the distance across it, `0 ≤ b ≤ a`. Seen from L, a point projects
+//! to `(u, v) = (b / a, (z − z_L) / a)`: the central projection onto the
+//! plane `a = 1`, which keeps straight lines straight. The segment from a
+//! grid point P to L projects to the single direction `u_P`, and P is lit
+//! exactly when no part of the surface between L and P projects above
+//! `v_P` there.
+//!
+//! **Sweep.** Columns (lines of constant `a`) are swept outward. The
+//! horizon, the upper envelope of the projection of everything swept so
+//! far, is a piecewise linear function of `u` kept as a list of vertices.
+//! Each column's points are compared with it; then the strip of triangles
+//! between the previous column and this one is merged in. A strip's
+//! projection is bounded above by its projected edges (the two columns, the
+//! edges along `a` and the cell diagonals), so the merge is the upper
+//! envelope of a few segments per cell and the old horizon, done in one
+//! pass over both.
+//!
+//! **What is decided here.** The ray from a point back to the previous
+//! column stays inside one triangle, or crosses one diagonal when the
+//! diagonals lean towards the octant's axis, so a point's answer is the
+//! horizon of the columns before it, that diagonal, and a bound for the
+//! part nearer than the second column. A point is decided only when its
+//! `v` clears all of these by a margin that covers rounding and the
+//! triangle test's tolerance; the rest (points on the octants' borders,
+//! next to the light, or within the margin) are left to the caller's exact
+//! segment test. Lights off the grid, or at or below the ground, are not
+//! swept at all.
+
+use crate::heightfield::HeightField;
+
+/// A mask cell the sweep left to the exact segment test.
+pub const UNDECIDED: u8 = 2;
+
+/// A horizon vertex: direction `u = b / a`, height `v = (z − z_L) / a`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Vertex {
+    u: f64,
+    v: f64,
+}
+
+/// One octant in grid-index terms: grid point (m, n) is column `m` (at
+/// `a = a0 + m`) and row `n` (at `b = n − beta`) of the octant, stored at
+/// `base + m·sm + n·sn` in the height array.
+#[derive(Clone, Copy, Debug)]
+struct Octant {
+    base: isize,
+    sm: isize,
+    sn: isize,
+    columns: usize,
+    rows: usize,
+    a0: f64,
+    beta: f64,
+    /// Whether each cell's diagonal runs from (m−1, n) to (m, n+1), away
+    /// from the axis; otherwise from (m−1, n+1) to (m, n).
+    outward: bool,
+}
+
+/// The eight octants around a light at grid position (`lx`, `ly`) of a
+/// `width` × `height` grid.
+fn octants(lx: f64, ly: f64, width: usize, height: usize) -> Vec<Octant> {
+    let (w, h) = (width as isize, height as isize);
+    let mut out = Vec::with_capacity(8);
+    // Major axis along columns (x) or rows (y); s: direction along it,
+    // t: direction across it.
+    for major_x in [true, false] {
+        let (lm, ln, len_m, len_n) = if major_x {
+            (lx, ly, w, h)
+        } else {
+            (ly, lx, h, w)
+        };
+        let (stride_m, stride_n) = if major_x { (1, w) } else { (w, 1) };
+        for s in [1isize, -1] {
+            let c0 = if s > 0 {
+                lm.floor() as isize + 1
+            } else {
+                lm.ceil() as isize - 1
+            };
+            let columns = if s > 0 { len_m - c0 } else { c0 + 1 };
+            let a0 = s as f64 * (c0 as f64 - lm);
+            for t in [1isize, -1] {
+                let j0 = if t > 0 {
+                    ln.floor() as isize
+                } else {
+                    ln.ceil() as isize
+                };
+                let rows = if t > 0 { len_n - j0 } else { j0 + 1 };
+                if columns < 3 || rows < 2 {
+                    continue;
+                }
+                out.push(Octant {
+                    base: c0 * stride_m + j0 * stride_n,
+                    sm: s * stride_m,
+                    sn: t * stride_n,
+                    columns: columns as usize,
+                    rows: rows as usize,
+                    a0,
+                    beta: t as f64 * (ln - j0 as f64),
+                    outward: s * t > 0,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The light and the tolerances every octant uses.
+struct Setup<'a> {
+    heights: &'a [f32],
+    zl: f64,
+    lift: f64,
+    /// Margins within which an answer is left to the exact test.
+    tol: Margins,
+    /// The largest height step between grid neighbours ([`max_step`]).
+    step: f64,
+}
+
+/// How far, in `v`, the surface must stay below a point's segment for the
+/// sweep to call the point lit, or rise above it to call it shadowed.
+///
+/// Shadowed needs only room for rounding: a surface point above the segment
+/// makes the segment cross the surface between there and the light. Lit
+/// needs room for the triangle test's tolerance too: it accepts crossings up
+/// to 10⁻⁹ cells outside a triangle along each axis, where the triangle's
+/// plane may stand above the neighbouring triangle by 10⁻⁹ times the sum of
+/// their slopes and the segment's (every `a` here is over 1).
+#[derive(Clone, Copy, Debug)]
+struct Margins {
+    /// Rounding: near 10⁻¹⁵ of the largest |v|, kept at 10⁻¹².
+    round: f64,
+    /// Lit, before the segment's own slope: rounding plus the steepest
+    /// triangles' part, 10⁻⁸ times (1 + the largest step between grid
+    /// neighbours).
+    lit: f64,
+}
+
+impl Margins {
+    /// Both margins grown by `extra`.
+    fn widened(&self, extra: f64) -> Margins {
+        Margins {
+            round: self.round + extra,
+            lit: self.lit + extra,
+        }
+    }
+
+    /// The margin for calling a point whose segment has slope `vp` lit.
+    #[inline]
+    fn lit(&self, vp: f64) -> f64 {
+        self.lit + 1e-8 * vp.abs()
+    }
+}
+
+/// One line on a stretch of `u`: an identity (so that vertices are only
+/// kept where the envelope changes line), and its values at both ends.
+#[derive(Clone, Copy, Debug)]
+struct Line {
+    id: i64,
+    l: f64,
+    r: f64,
+}
+
+/// Appends the upper envelope of `lines` over `[x0, x1]` to `out`: a
+/// vertex at `x0` when the top line differs from `last` (the top line at
+/// the end of the previous stretch), and one at every crossing inside.
+/// Returns the envelope's value at `x1`.
+fn envelope(lines: &[Line], x0: f64, x1: f64, last: &mut i64, out: &mut Vec<Vertex>) -> f64 {
+    let mut top = 0;
+    for (i, c) in lines.iter().enumerate().skip(1) {
+        let t = &lines[top];
+        if c.l > t.l || (c.l == t.l && c.r > t.r) {
+            top = i;
+        }
+    }
+    if lines[top].id != *last {
+        out.push(Vertex {
+            u: x0,
+            v: lines[top].l,
+        });
+    }
+    let mut s = 0.0;
+    loop {
+        let t = lines[top];
+        let (mut best, mut next) = (1.0, usize::MAX);
+        for (i, c) in lines.iter().enumerate() {
+            if c.r > t.r {
+                let (dl, dr) = (t.l - c.l, c.r - t.r);
+                let si = dl / (dl + dr);
+                if si >= s && si < best {
+                    best = si;
+                    next = i;
+                }
+            }
+        }
+        if next == usize::MAX {
+            break;
+        }
+        s = best;
+        out.push(Vertex {
+            u: x0 + s * (x1 - x0),
+            v: t.l + s * (t.r - t.l),
+        });
+        top = next;
+    }
+    *last = lines[top].id;
+    lines[top].r
+}
+
+/// The value at `x` of the segment from `p` to `q` (`p.u != q.u`); exactly
+/// an end's value at that end.
+#[inline]
+fn at(p: Vertex, q: Vertex, x: f64) -> f64 {
+    if x == q.u {
+        q.v
+    } else if x == p.u {
+        p.v
+    } else {
+        p.v + (q.v - p.v) * ((x - p.u) / (q.u - p.u))
+    }
+}
+
+/// The projected vertices of octant column `m`, rows `0..rows` (fewer at
+/// the grid's edge), into `out`.
+fn column(oct: &Octant, setup: &Setup, m: usize, rows: usize, out: &mut Vec<Vertex>) {
+    out.clear();
+    let inv = 1.0 / (oct.a0 + m as f64);
+    let start = oct.base + m as isize * oct.sm;
+    for n in 0..rows.min(oct.rows) {
+        let z = setup.heights[(start + n as isize * oct.sn) as usize] as f64;
+        out.push(Vertex {
+            u: (n as f64 - oct.beta) * inv,
+            v: (z - setup.zl) * inv,
+        });
+    }
+}
+
+/// Rows the octant's column `m` needs: all with `b` up to past `a + 1`, so
+/// that the column also serves as the near side of the next strip.
+fn rows_for(oct: &Octant, m: usize) -> usize {
+    (oct.a0 + m as f64 + oct.beta).ceil() as usize + 4
+}
+
+/// An upper bound on `v` over the part of the octant nearer than column 1
+/// (`a ≤ a0 + 1`, `b ≤ a`), from the highest corner of the cells there
+/// (columns −1 to 1, the first on or behind the light; rows 0 to 3); `+∞`
+/// when that corner is not below the light.
+fn near_bound(oct: &Octant, setup: &Setup) -> f64 {
+    let mut zmax = f64::NEG_INFINITY;
+    for m in -1isize..=1 {
+        for n in 0..4.min(oct.rows) {
+            let i = oct.base + m * oct.sm + n as isize * oct.sn;
+            if i >= 0 && (i as usize) < setup.heights.len() {
+                zmax = zmax.max(setup.heights[i as usize] as f64);
+            }
+        }
+    }
+    if zmax < setup.zl {
+        (zmax - setup.zl) / (oct.a0 + 1.0)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Sweeps one octant, writing 1 (lit), 0 (shadowed) or [`UNDECIDED`] for its
+/// interior points through `put(index, value)`.
+fn sweep(oct: &Octant, setup: &Setup, put: &mut dyn FnMut(usize, u8)) {
+    let near = near_bound(oct, setup);
+    let mut near_col = Vec::new();
+    let mut far_col = Vec::new();
+    // The horizon of columns 1..m−1, starting from column 1's polyline
+    // clipped to [0, 1].
+    column(oct, setup, 1, rows_for(oct, 1), &mut near_col);
+    let mut horizon = clip_polyline(&near_col);
+    let mut next = Vec::new();
+    for m in 2..oct.columns {
+        column(oct, setup, m, rows_for(oct, m), &mut far_col);
+        merge_strip(
+            oct, setup, m, near, &horizon, &near_col, &far_col, &mut next, put,
+        );
+        std::mem::swap(&mut horizon, &mut next);
+        std::mem::swap(&mut near_col, &mut far_col);
+    }
+}
+
+/// A column's polyline clipped to `u ∈ [0, 1]`.
+fn clip_polyline(col: &[Vertex]) -> Vec<Vertex> {
+    let mut out = Vec::with_capacity(col.len());
+    for k in 1..col.len() {
+        let (p, q) = (col[k - 1], col[k]);
+        if q.u <= 0.0 {
+            continue;
+        }
+        if out.is_empty() {
+            out.push(Vertex {
+                u: 0.0,
+                v: if p.u == 0.0 { p.v } else { at(p, q, 0.0) },
+            });
+        }
+        if q.u >= 1.0 {
+            out.push(Vertex {
+                u: 1.0,
+                v: at(p, q, 1.0),
+            });
+            return out;
+        }
+        out.push(q);
+    }
+    out
+}
+
+/// Rows per block in [`merge_strip`]'s fast paths.
+const BLOCK: usize = 16;
+
+/// Rows taken one by one where a block fails the fast paths.
+const DETAIL: usize = 8;
+
+/// The identity of horizon piece `k` (from vertex `k` to `k + 1`) among the
+/// lines of [`envelope`]; strip edges have non-negative identities.
+fn piece_id(k: usize) -> i64 {
+    -(k as i64) - 1
+}
+
+/// The state of one pass over the old horizon while the new one is
+/// written: position `x`, the old horizon's piece `k` there, and the line
+/// on top of the new one.
+struct Walk<'a> {
+    horizon: &'a [Vertex],
+    k: usize,
+    x: f64,
+    last_id: i64,
+    top_r: f64,
+    out: &'a mut Vec<Vertex>,
+}
+
+impl Walk<'_> {
+    /// Moves `k` to the piece that holds `x` (and continues to its right).
+    fn seek(&mut self) {
+        while self.horizon[self.k + 1].u <= self.x {
+            self.k += 1;
+        }
+    }
+
+    /// The old horizon at `x`, on the current piece.
+    fn old_at(&self, x: f64) -> f64 {
+        at(self.horizon[self.k], self.horizon[self.k + 1], x)
+    }
+
+    /// The new horizon over `[x, x1]`: the upper envelope of the old one
+    /// and the strip edges `segs`, piece by piece of the old one.
+    fn merge(&mut self, segs: &[(Vertex, Vertex, i64)], x1: f64) {
+        let vmax = segs
+            .iter()
+            .fold(f64::NEG_INFINITY, |acc, s| acc.max(s.0.v).max(s.1.v));
+        while self.x < x1 {
+            self.seek();
+            let (hp, hq) = (self.horizon[self.k], self.horizon[self.k + 1]);
+            let xe = x1.min(hq.u);
+            let (hl, hr) = (at(hp, hq, self.x), at(hp, hq, xe));
+            let mut lines = [Line {
+                id: piece_id(self.k),
+                l: hl,
+                r: hr,
+            }; 5];
+            let mut count = 1;
+            if vmax >= hl.min(hr) {
+                for &(p, q, id) in segs {
+                    lines[count] = Line {
+                        id,
+                        l: at(p, q, self.x),
+                        r: at(p, q, xe),
+                    };
+                    count += 1;
+                }
+            }
+            self.top_r = envelope(&lines[..count], self.x, xe, &mut self.last_id, self.out);
+            self.x = xe;
+        }
+    }
+
+    /// Appends `p` to the new horizon unless a vertex is already there.
+    fn push(&mut self, p: Vertex) {
+        if self.out.last().is_none_or(|q| q.u < p.u) {
+            self.out.push(p);
+        }
+    }
+
+    /// The old horizon's highest value over `[x, x1]`.
+    fn max_over(&mut self, x1: f64) -> f64 {
+        self.seek();
+        let k0 = self.k;
+        let mut hmax = self.old_at(self.x);
+        while self.horizon[self.k + 1].u < x1 {
+            self.k += 1;
+            hmax = hmax.max(self.horizon[self.k].v);
+        }
+        hmax = hmax.max(self.old_at(x1));
+        self.k = k0;
+        hmax
+    }
+
+    /// Copies the old horizon over `[x, x1]` as the new one and returns
+    /// true if it stays above `below` there (so no strip edge under
+    /// `below` can show); otherwise changes nothing and returns false.
+    fn copy_above(&mut self, x1: f64, below: f64) -> bool {
+        self.seek();
+        let (k0, len0) = (self.k, self.out.len());
+        let h0 = self.old_at(self.x);
+        let mut ok = h0 > below;
+        if ok && self.last_id != piece_id(self.k) {
+            self.out.push(Vertex { u: self.x, v: h0 });
+        }
+        while ok && self.horizon[self.k + 1].u < x1 {
+            let q = self.horizon[self.k + 1];
+            ok = q.v > below;
+            self.out.push(q);
+            self.k += 1;
+        }
+        let h1 = self.old_at(x1);
+        if !(ok && h1 > below) {
+            self.k = k0;
+            self.out.truncate(len0);
+            return false;
+        }
+        self.last_id = piece_id(self.k);
+        self.top_r = h1;
+        self.x = x1;
+        true
+    }
+}
+
+/// The strip edges that can be highest on one stretch between consecutive
+/// projected vertices, and the stretch's right end.
+///
+/// In the strip between the near column A and the far column B (vertices
+/// `A_n`, `B_n`), the projected vertices come in the order A_0 ≤ B_0 ≤ 0 <
+/// B_1 < A_1 < B_2 < A_2 < … up to `u = 1`. On the stretch `[B_n, A_n]`
+/// (`odd` false) these are the far column `B_n B_{n+1}`, the edge along `a`
+/// `A_n B_n`, and, when the diagonals lean inward, the diagonals of cells
+/// n − 1 and n; on `[A_n, B_{n+1}]` (`odd`; from 0 for n = 0) the far
+/// column and cell n's diagonal. The near column is already under the old
+/// horizon. Edge identities: 4n (far column), 4n + 1 (along a), 4n + 2
+/// (diagonal).
+fn stretch(
+    outward: bool,
+    na: &[Vertex],
+    fb: &[Vertex],
+    n: usize,
+    odd: bool,
+    segs: &mut [(Vertex, Vertex, i64); 4],
+) -> (usize, f64) {
+    let last = na.len().min(fb.len()) - 1;
+    let diag = |n: usize| -> (Vertex, Vertex, i64) {
+        let id = 4 * n as i64 + 2;
+        if outward {
+            (na[n], fb[n + 1], id)
+        } else {
+            (fb[n], na[n + 1], id)
+        }
+    };
+    if odd {
+        if n + 1 > last {
+            return (0, f64::INFINITY);
+        }
+        segs[0] = (fb[n], fb[n + 1], 4 * n as i64);
+        segs[1] = diag(n);
+        return (2, fb[n + 1].u);
+    }
+    let mut count = 0;
+    let mut push = |s| {
+        segs[count] = s;
+        count += 1;
+    };
+    push((fb[n], na[n], 4 * n as i64 + 1));
+    if n < last {
+        push((fb[n], fb[n + 1], 4 * n as i64));
+    }
+    if !outward {
+        if n < last {
+            push(diag(n));
+        }
+        push(diag(n - 1));
+    }
+    (count, na[n].u)
+}
+
+/// The new horizon over rows `n..ne` of a strip whose far column lies
+/// above the old horizon there, from `B_n` to `B_ne`, and each point's
+/// local term (`point(r, v)`: the highest the surface between the point and
+/// the near column comes, `−∞` when nothing there can rise above the
+/// point).
+///
+/// The near column is under the old horizon, so below the far column: no
+/// edge along `a` and no outward diagonal can top the far column, and the
+/// new horizon is the far column itself. Inward diagonals can: on
+/// `[B_r, A_r]` the diagonal of cell r − 1 (ending at `A_r`) against the
+/// higher of the far column and cell r's diagonal (both from `B_r`), which
+/// then runs on to `B_{r+1}`.
+fn rise(
+    walk: &mut Walk,
+    outward: bool,
+    na: &[Vertex],
+    fb: &[Vertex],
+    n: usize,
+    ne: usize,
+    point: &mut dyn FnMut(usize, f64),
+) {
+    if outward {
+        for (r, &b) in fb.iter().enumerate().take(ne).skip(n) {
+            point(r, f64::NEG_INFINITY);
+            walk.push(b);
+        }
+        walk.last_id = 4 * (ne as i64 - 1);
+        walk.top_r = fb[ne].v;
+    } else {
+        // Cell r − 1's diagonal at B_r.
+        let mut db = at(fb[n - 1], na[n], fb[n].u);
+        for r in n..ne {
+            let (b, a, b1, a1) = (fb[r], na[r], fb[r + 1], na[r + 1]);
+            point(r, db);
+            walk.push(Vertex {
+                u: b.u,
+                v: b.v.max(db),
+            });
+            let (fa, da) = (at(b, b1, a.u), at(b, a1, a.u));
+            let pa = fa.max(da);
+            if db > b.v {
+                let (dl, dr) = (db - b.v, pa - a.v);
+                let s = dl / (dl + dr);
+                walk.push(Vertex {
+                    u: b.u + s * (a.u - b.u),
+                    v: db + s * (a.v - db),
+                });
+            }
+            walk.last_id = 4 * r as i64 + if fa >= da { 0 } else { 2 };
+            db = at(b, a1, b1.u);
+        }
+        walk.top_r = fb[ne].v.max(db);
+    }
+    walk.x = fb[ne].u;
+}
+
+/// Decides column `m`'s points against `horizon` (columns 1..m−1) and
+/// writes the horizon of columns 1..m into `out`, in one pass over both.
+///
+/// Blocks of [`BLOCK`] rows whose strip lies wholly below the old horizon
+/// (the common case far from the light) copy the old horizon and shadow
+/// their points without looking at single edges.
+#[allow(clippy::too_many_arguments)]
+fn merge_strip(
+    oct: &Octant,
+    setup: &Setup,
+    m: usize,
+    near: f64,
+    horizon: &[Vertex],
+    na: &[Vertex],
+    fb: &[Vertex],
+    out: &mut Vec<Vertex>,
+    put: &mut dyn FnMut(usize, u8),
+) {
+    out.clear();
+    let a = oct.a0 + m as f64;
+    let lift = setup.lift / a;
+    let tol = setup.tol;
+    let end = horizon[horizon.len() - 1].u;
+    let last = na.len().min(fb.len()) - 1;
+    let col_base = oct.base + m as isize * oct.sm;
+    let index = |n: usize| (col_base + n as isize * oct.sn) as usize;
+    // Whether B_n is a point of this octant's interior (0 < b < a).
+    let interior = |n: usize| {
+        let b = n as f64 - oct.beta;
+        let margin = 1e-9 * a;
+        b > margin && b < a - margin
+    };
+    let mut walk = Walk {
+        horizon,
+        k: 0,
+        x: 0.0,
+        last_id: i64::MIN,
+        top_r: f64::NEG_INFINITY,
+        out,
+    };
+    let zero = Vertex { u: 0.0, v: 0.0 };
+    let mut segs = [(zero, zero, 0i64); 4];
+    // Points on the octant's axis (b = 0) and diagonal (b = a), or off
+    // them by rounding (10⁻¹² a, which moves the surface under the segment
+    // by under 10⁻¹¹ a times the largest step: both margins grow by that).
+    let on_line = 1e-12 * a;
+    let line_tol = tol.widened(1e-11 * a * (1.0 + setup.step));
+    // On the axis, the segment runs along the edges of row 0, whose grid
+    // points the old horizon holds at u = 0.
+    if oct.beta <= on_line {
+        let old = horizon[0].v;
+        put(
+            index(0),
+            verdict(old, near, f64::NEG_INFINITY, fb[0].v + lift, line_tol),
+        );
+    }
+    let (count, x1) = stretch(oct.outward, na, fb, 0, true, &mut segs);
+    walk.merge(&segs[..count], x1.min(end));
+    let mut n = 1;
+    while n <= last && walk.x < end {
+        // A block of rows n..ne wholly below the old horizon?
+        let ne = (n + BLOCK).min(last);
+        let mut strip_above = false;
+        if ne > n && fb[ne].u < end {
+            let (mut vmax, mut bmin) = (fb[n - 1].v, f64::INFINITY);
+            for r in n..=ne {
+                vmax = vmax.max(fb[r].v).max(na[r].v);
+                bmin = bmin.min(fb[r].v);
+            }
+            // The whole strip below the old horizon: copy it, and every
+            // point is in shadow.
+            if walk.copy_above(fb[ne].u, vmax + lift + tol.round) {
+                for r in n..ne {
+                    if interior(r) {
+                        put(index(r), 0);
+                    }
+                }
+                n = ne;
+                continue;
+            }
+            // The far column above the old horizon (and the part nearer
+            // than column 1): the strip alone makes the new horizon, and
+            // only the diagonal next to each point can shadow it.
+            let lit = tol.lit((bmin + lift).abs().max((vmax + lift).abs()));
+            strip_above = near + lit < bmin && walk.max_over(fb[ne].u) + lit < bmin;
+        }
+        if strip_above {
+            rise(&mut walk, oct.outward, na, fb, n, ne, &mut |r, local| {
+                if interior(r) {
+                    let none = f64::NEG_INFINITY;
+                    put(index(r), verdict(none, none, local, fb[r].v + lift, tol));
+                }
+            });
+            n = ne;
+            continue;
+        }
+        // Row by row: decide B_n, then the stretches [B_n, A_n] and
+        // [A_n, B_{n+1}].
+        for n in n..(n + DETAIL).min(last + 1) {
+            if walk.x >= end {
+                break;
+            }
+            if interior(n) {
+                walk.seek();
+                let old = walk.old_at(walk.x);
+                let local = if oct.outward {
+                    f64::NEG_INFINITY
+                } else {
+                    at(fb[n - 1], na[n], walk.x)
+                };
+                put(index(n), verdict(old, near, local, fb[n].v + lift, tol));
+            }
+            for odd in [false, true] {
+                let (count, x1) = stretch(oct.outward, na, fb, n, odd, &mut segs);
+                walk.merge(&segs[..count], x1.min(end));
+            }
+        }
+        n += DETAIL;
+    }
+    // Past the strip's last row: the old horizon alone.
+    walk.merge(&[], end);
+    if walk.out.last().is_none_or(|p| p.u < end) {
+        let v = walk.top_r;
+        walk.out.push(Vertex { u: end, v });
+    }
+    // A point on the octant's diagonal (b = a, u = 1): its segment runs
+    // along outward diagonals, whose grid points the old horizon holds at
+    // u = 1, or across inward ones, whose crossings it holds too, and
+    // crosses one more on the way to the near column.
+    let nd = (a + oct.beta).round();
+    if end == 1.0 && (nd - oct.beta - a).abs() <= on_line && nd >= 1.0 && nd as usize <= last {
+        let nd = nd as usize;
+        let local = if oct.outward {
+            f64::NEG_INFINITY
+        } else {
+            at(fb[nd - 1], na[nd], 1.0)
+        };
+        let old = horizon[horizon.len() - 1].v;
+        put(
+            index(nd),
+            verdict(old, near, local, fb[nd].v + lift, line_tol),
+        );
+    }
+}
+
+/// A point's answer from the highest the surface comes between it and the
+/// light, in three parts: the old horizon at its direction, the bound for
+/// the part nearer than column 1, and the strip up to its own column
+/// (`−∞` where nothing there can rise above it). 1 lit, 0 shadowed, or
+/// [`UNDECIDED`] within the margins `tol` (the near part is only a bound,
+/// so it can light a point but never shadow one).
+fn verdict(old: f64, near: f64, local: f64, vp: f64, tol: Margins) -> u8 {
+    let seen = old.max(local);
+    if seen.max(near) < vp - tol.lit(vp) {
+        1
+    } else if seen > vp + tol.round {
+        0
+    } else {
+        UNDECIDED
+    }
+}
+
+/// The largest height difference between neighbouring grid points along a
+/// row or a column: no triangle's slope along either axis is steeper.
+fn max_step(field: &HeightField) -> f64 {
+    use rayon::prelude::*;
+    let (w, h) = (field.width, field.height);
+    let z = &field.heights;
+    (0..h)
+        .into_par_iter()
+        .map(|r| {
+            let row = &z[r * w..(r + 1) * w];
+            let mut s = row
+                .windows(2)
+                .fold(0.0f32, |m, p| m.max((p[1] - p[0]).abs()));
+            if r + 1 < h {
+                let next = &z[(r + 1) * w..(r + 2) * w];
+                s = row
+                    .iter()
+                    .zip(next)
+                    .fold(s, |m, (a, b)| m.max((b - a).abs()));
+            }
+            s as f64
+        })
+        .reduce(|| 0.0, f64::max)
+}
+
+/// The sweep's mask for a point light at `light` (world metres) and
+/// targets `lift` metres above the ground: per grid point (row-major from
+/// the north row) 1 lit, 0 shadowed, or [`UNDECIDED`]. `None` when the
+/// light is not over the grid or not above the ground there, where the
+/// sweep's bounds do not hold.
+pub fn point_light_mask(field: &HeightField, light: [f64; 3], lift: f64) -> Option<Vec<u8>> {
+    use rayon::prelude::*;
+    use std::sync::atomic::{AtomicU8, Ordering};
+    let (lx, ly, zl) = (light[0] / field.sx, -light[1] / field.sy, light[2]);
+    let (w, h) = (field.width, field.height);
+    let inside = (0.0..=(w - 1) as f64).contains(&lx) && (0.0..=(h - 1) as f64).contains(&ly);
+    let above =
+        zl.partial_cmp(&(field.height_at(lx, ly) + 1e-6)) == Some(std::cmp::Ordering::Greater);
+    if !inside || !above || !lift.is_finite() || lift < 0.0 {
+        return None;
+    }
+    let (zmin, zmax) = (field.zmin as f64, field.zmax as f64);
+    let step = max_step(field);
+    let round = 1e-12 * (1.0 + zl.abs() + zmax.abs() + zmin.abs() + lift);
+    let setup = Setup {
+        heights: &field.heights,
+        zl,
+        lift,
+        tol: Margins {
+            round,
+            lit: round + 1e-8 * (1.0 + step),
+        },
+        step,
+    };
+    let mask: Vec<AtomicU8> = (0..w * h).map(|_| AtomicU8::new(UNDECIDED)).collect();
+    octants(lx, ly, w, h).par_iter().for_each(|oct| {
+        sweep(oct, &setup, &mut |i, value| {
+            mask[i].store(value, Ordering::Relaxed)
+        });
+    });
+    Some(mask.into_iter().map(AtomicU8::into_inner).collect())
+}
