@@ -759,11 +759,14 @@ pub fn point_light_mask(field: &HeightField, light: [f64; 3], lift: f64) -> Opti
         },
         step,
     };
-    let mask: Vec<AtomicU8> = (0..w * h).map(|_| AtomicU8::new(UNDECIDED)).collect();
+    let mask: Vec<AtomicU8> = (0..w * h)
+        .into_par_iter()
+        .map(|_| AtomicU8::new(UNDECIDED))
+        .collect();
     octants(lx, ly, w, h).par_iter().for_each(|oct| {
         sweep(oct, &setup, &mut |i, value| {
             mask[i].store(value, Ordering::Relaxed)
         });
     });
-    Some(mask.into_iter().map(AtomicU8::into_inner).collect())
+    Some(mask.into_par_iter().map(AtomicU8::into_inner).collect())
 }

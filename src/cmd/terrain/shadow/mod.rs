@@ -206,7 +206,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         _ => None,
     };
     let class = classify(&mask, &nodata, dem.width, range.as_ref());
-    let lit = class.iter().filter(|&&c| c == MaskCell::Lit).count();
+    let lit = class.par_iter().filter(|&&c| c == MaskCell::Lit).count();
     let mask_values = MaskValues {
         visible: args.visible_value,
         invisible: args.invisible_value,
