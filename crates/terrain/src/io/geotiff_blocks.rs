@@ -71,6 +71,30 @@ fn packed_blocks(
         .collect()
 }
 
+/// Offsets and byte counts of written blocks, for a directory's tags.
+type BlockPlaces<K> = (
+    Vec<<K as TiffKind>::OffsetType>,
+    Vec<<K as TiffKind>::OffsetType>,
+);
+
+/// Writes `blocks` in order into directory `d`'s data.
+fn write_blocks<W, K>(
+    d: &mut DirectoryEncoder<'_, W, K>,
+    blocks: &[Vec<u8>],
+) -> TiffResult<BlockPlaces<K>>
+where
+    W: Write + Seek,
+    K: TiffKind,
+{
+    let mut offsets = Vec::with_capacity(blocks.len());
+    let mut counts = Vec::with_capacity(blocks.len());
+    for packed in blocks {
+        offsets.push(K::convert_offset(d.write_data(&packed[..])?)?);
+        counts.push(K::convert_offset(packed.len() as u64)?);
+    }
+    Ok((offsets, counts))
+}
+
 /// The tags that describe one band of samples of type `C`.
 fn write_sample_tags<W, K, C>(
     d: &mut DirectoryEncoder<'_, W, K>,
@@ -122,12 +146,7 @@ where
             fix(s).put(raw);
         }
     })?;
-    let mut offsets = Vec::with_capacity(strips.len());
-    let mut counts = Vec::with_capacity(strips.len());
-    for packed in &strips {
-        offsets.push(K::convert_offset(d.write_data(&packed[..])?)?);
-        counts.push(K::convert_offset(packed.len() as u64)?);
-    }
+    let (offsets, counts) = write_blocks(d, &strips)?;
     write_sample_tags::<W, K, C>(d, width, height, compression)?;
     d.write_tag(Tag::RowsPerStrip, u32::try_from(rows)?)?;
     d.write_tag(Tag::StripOffsets, K::convert_slice(&offsets))?;
@@ -173,12 +192,7 @@ where
             }
         }
     })?;
-    let mut offsets = Vec::with_capacity(tiles.len());
-    let mut counts = Vec::with_capacity(tiles.len());
-    for packed in &tiles {
-        offsets.push(K::convert_offset(d.write_data(&packed[..])?)?);
-        counts.push(K::convert_offset(packed.len() as u64)?);
-    }
+    let (offsets, counts) = write_blocks(d, &tiles)?;
     write_sample_tags::<W, K, C>(d, width, height, compression)?;
     d.write_tag(Tag::TileWidth, tile.0)?;
     d.write_tag(Tag::TileLength, tile.1)?;
