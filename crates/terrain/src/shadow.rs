@@ -456,10 +456,6 @@ pub fn shadow_mask_with_progress(
     shadow_mask_for_targets(field, Some(pyramid), light, method, 0.0, progress)
 }
 
-/// Points a sweep leaves up to this many are marched cell by cell, which
-/// needs no quadtree; more go through the quadtree walk.
-const MARCHED_LEFTOVERS: usize = 1 << 16;
-
 /// [`shadow_mask_with_progress`] for targets `target_height` >= 0 metres
 /// above the ground at every grid point (gdal_viewshed's `-tz`): 1 where
 /// the segment from the target to the light meets no part of the surface.
@@ -486,9 +482,12 @@ pub fn shadow_mask_for_targets(
         (ShadowMethod::Fast, Light::Point(p)) => horizon::point_light_mask(field, *p, lift),
         _ => None,
     };
-    let few_left = swept
-        .as_ref()
-        .is_some_and(|m| m.par_iter().filter(|&&v| v == UNDECIDED).count() <= MARCHED_LEFTOVERS);
+    // The points a sweep leaves are marched cell by cell, which needs no
+    // quadtree, while there are fewer than about twice the grid's side: a
+    // march costs about a side's cells, a quadtree a few passes over all.
+    let few_left = swept.as_ref().is_some_and(|m| {
+        m.par_iter().filter(|&&v| v == UNDECIDED).count() <= 2 * (w + field.height)
+    });
     let built;
     let pyramid = match pyramid {
         _ if few_left || method == ShadowMethod::BruteForce => None,

@@ -201,3 +201,51 @@ fn ground_beside_the_light_is_bounded() {
     let dark = brute.iter().filter(|&&b| b == 0).count();
     assert!(dark > 1000, "{dark} points in shadow");
 }
+
+#[test]
+fn small_grids_and_stray_lights_match_brute_force() {
+    // Grids from 2 x 2 up, where octants have few columns or none, with
+    // lights anywhere over them at heights from just above the ground.
+    let mut rng = Pcg32::new(23);
+    for trial in 0..300 {
+        let (w, h) = (
+            2 + rng.next_u32() as usize % 7,
+            2 + rng.next_u32() as usize % 7,
+        );
+        let dem = dem(
+            w,
+            h,
+            1.0 + rng.next_f64(),
+            1.0 + rng.next_f64(),
+            |_, _, r| (8.0 * r.next_f32()).round(),
+        );
+        let field = HeightField::new(&dem).unwrap();
+        // Some lights on grid points; a light a rounding step off the grid
+        // is taken by the segment walk alone, and must match too.
+        let (mut gx, mut gy) = (
+            rng.next_f64() * (w - 1) as f64,
+            rng.next_f64() * (h - 1) as f64,
+        );
+        if trial % 3 == 0 {
+            (gx, gy) = (gx.round(), gy.round());
+        }
+        let above = [0.01, 1.0, 9.0][trial % 3];
+        let pos = [
+            gx * field.sx,
+            -gy * field.sy,
+            field.height_at(gx, gy) + above,
+        ];
+        let light = Light::Point(pos);
+        let lift = if trial % 2 == 0 { 0.0 } else { 0.5 };
+        let brute = shadow_mask_for_targets(
+            &field,
+            None,
+            &light,
+            ShadowMethod::BruteForce,
+            lift,
+            &|_| {},
+        );
+        let fast = shadow_mask_for_targets(&field, None, &light, ShadowMethod::Fast, lift, &|_| {});
+        assert_eq!(fast, brute, "{w}x{h}, light {pos:?}, targets {lift} m up");
+    }
+}
