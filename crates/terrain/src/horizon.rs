@@ -25,12 +25,19 @@
 //! column stays inside one triangle, or crosses one diagonal when the
 //! diagonals lean towards the octant's axis, so a point's answer is the
 //! horizon of the columns before it, that diagonal, and a bound for the
-//! part nearer than the second column. A point is decided only when its
-//! `v` clears all of these by a margin that covers rounding and the
-//! triangle test's tolerance; the rest (points on the octants' borders,
-//! next to the light, or within the margin) are left to the caller's exact
-//! segment test. Lights off the grid, or at or below the ground, are not
-//! swept at all.
+//! part nearer than the second column. Points on an octant's axis or
+//! diagonal, whose segments run along grid edges, are read off the horizon
+//! at `u = 0` or `u = 1`. A point is decided only when its `v` clears all
+//! of these by a margin that covers rounding and the triangle test's
+//! tolerance; the rest (points in the first two columns, within the
+//! margin, or off an octant's border by less than 10⁻⁹ of `a` but more than
+//! rounding) are left to the caller's exact segment test. Lights off the
+//! grid, or at or below the ground, are not swept at all.
+//!
+//! **Blocks.** Far from the light, most of a strip lies wholly below the
+//! old horizon (the horizon is copied and the points are in shadow), or
+//! its far column wholly above it (the strip alone is the new horizon).
+//! Blocks of rows are tested for both before rows are merged one by one.
 
 use crate::heightfield::HeightField;
 
