@@ -21,6 +21,17 @@ fn dem(w: usize, h: usize, sx: f64, sy: f64, f: impl Fn(usize, usize, &mut Pcg32
     dem
 }
 
+/// The mask of `method` for targets `lift` metres up, without progress.
+fn mask(
+    field: &HeightField,
+    pyramid: Option<&MaxMipmap>,
+    light: &Light,
+    method: ShadowMethod,
+    lift: f64,
+) -> Vec<u8> {
+    shadow_mask_for_targets(field, pyramid, light, method, lift, &|_| {})
+}
+
 fn surfaces() -> Vec<(&'static str, Dem)> {
     vec![
         (
@@ -93,14 +104,7 @@ fn decided_points_agree_with_brute_force_and_the_fast_mask_is_exact() {
             let light = Light::Point(pos);
             for lift in [0.0, 1.5] {
                 let what = format!("{name}, light {pos:?}, targets {lift} m up");
-                let brute = shadow_mask_for_targets(
-                    &field,
-                    None,
-                    &light,
-                    ShadowMethod::BruteForce,
-                    lift,
-                    &|_| {},
-                );
+                let brute = mask(&field, None, &light, ShadowMethod::BruteForce, lift);
                 let swept =
                     point_light_mask(&field, pos, lift).expect("the light is over the grid");
                 for (k, (&s, &b)) in swept.iter().zip(&brute).enumerate() {
@@ -124,14 +128,7 @@ fn decided_points_agree_with_brute_force_and_the_fast_mask_is_exact() {
                 // With a pyramid given and without one (the leftovers are
                 // marched).
                 for pyramid in [Some(&pyramid), None] {
-                    let fast = shadow_mask_for_targets(
-                        &field,
-                        pyramid,
-                        &light,
-                        ShadowMethod::Fast,
-                        lift,
-                        &|_| {},
-                    );
+                    let fast = mask(&field, pyramid, &light, ShadowMethod::Fast, lift);
                     let differ = fast.iter().zip(&brute).filter(|(a, b)| a != b).count();
                     assert_eq!(differ, 0, "{what}: the fast mask differs on {differ} cells");
                 }
@@ -183,13 +180,12 @@ fn ground_beside_the_light_is_bounded() {
     });
     let field = HeightField::new(&dem).unwrap();
     let pos = [lc as f64, -lr as f64, 10.0];
-    let brute = shadow_mask_for_targets(
+    let brute = mask(
         &field,
         None,
         &Light::Point(pos),
         ShadowMethod::BruteForce,
         0.0,
-        &|_| {},
     );
     let swept = point_light_mask(&field, pos, 0.0).expect("the light is over the grid");
     for (k, (&s, &b)) in swept.iter().zip(&brute).enumerate() {
@@ -237,15 +233,8 @@ fn small_grids_and_stray_lights_match_brute_force() {
         ];
         let light = Light::Point(pos);
         let lift = if trial % 2 == 0 { 0.0 } else { 0.5 };
-        let brute = shadow_mask_for_targets(
-            &field,
-            None,
-            &light,
-            ShadowMethod::BruteForce,
-            lift,
-            &|_| {},
-        );
-        let fast = shadow_mask_for_targets(&field, None, &light, ShadowMethod::Fast, lift, &|_| {});
+        let brute = mask(&field, None, &light, ShadowMethod::BruteForce, lift);
+        let fast = mask(&field, None, &light, ShadowMethod::Fast, lift);
         assert_eq!(fast, brute, "{w}x{h}, light {pos:?}, targets {lift} m up");
     }
 }
