@@ -347,3 +347,77 @@ fn rays_that_are_not_finite_hit_nothing_on_every_structure() {
         }
     }
 }
+
+/// Rays through the thin band outside a triangle's edges that the triangle
+/// tests also count as hits (`tri::MAX_EDGE_TOLERANCE`), on a soup of tiny
+/// triangles among large ones, so that most leaf and inner boxes are far
+/// larger than the triangles whose bands they must hold. The wide BVHs
+/// store each box as the union of its triangles' bands
+/// (`NodeBox::triangle_reach`), not padded by the box's own size, so these
+/// are the rays a box too tight would lose. From near and from 10⁴ times
+/// the model's size away, where the tests' rounding bounds, and so the
+/// band, are widest.
+#[test]
+fn rays_through_the_edge_tolerance_band_agree_with_brute_force() {
+    use raykit_core::tri::{Moller, TriangleTest};
+    let mut mesh = soup::soup(600, 71, 0.0005, 0.003, 1);
+    let large = soup::soup(12, 72, 0.2, 0.3, 1);
+    let base = mesh.positions.len() as u32;
+    mesh.positions.extend(&large.positions);
+    mesh.indices
+        .extend(large.indices.iter().map(|t| t.map(|i| i + base)));
+    let mesh = TriangleMesh::new(mesh.positions, mesh.indices);
+    let mut rng = Pcg32::new(73);
+    let (mut rays, mut aimed) = (Vec::new(), Vec::new());
+    let offsets = [1e-6f32, 1e-5, 1e-4, 1e-3, 3e-3];
+    let distances = [0.01f32, 1.0, 100.0, 1e4];
+    for i in 0..6000 {
+        let prim = rng.below(mesh.indices.len() as u32);
+        let [a, b, c] = mesh.triangle(prim as usize);
+        let delta = offsets[i % offsets.len()];
+        // A point just outside an edge (outward in the triangle's plane) or
+        // beyond a corner, `delta` of the edge's length away.
+        let target = if i % 4 == 0 {
+            a + (a - (a + b + c) / 3.0).normalize() * delta * (b - a).length()
+        } else {
+            let p = a + (b - a) * rng.next_f32();
+            let e = (b - a).normalize();
+            let away = (p - c) - e * (p - c).dot(e);
+            p + away.normalize() * delta * (b - a).length()
+        };
+        let dist = distances[(i / offsets.len()) % distances.len()];
+        let origin = target + rng.unit_vector() * dist;
+        rays.push(Ray::new(origin, target - origin));
+        aimed.push(prim);
+    }
+    // The band is met: brute force reports hits on the aimed triangle that
+    // the textbook test without tolerance does not.
+    let brute = build_accel(
+        AccelKind::Brute,
+        TestKind::Moller,
+        &mesh,
+        &BuildOptions::default(),
+    );
+    let band_hits = rays
+        .iter()
+        .zip(&aimed)
+        .filter(|(r, &p)| {
+            let [a, b, c] = mesh.triangle(p as usize);
+            let tri = Moller::precompute(a, b, c);
+            brute.intersect(r).is_some_and(|h| h.prim == p)
+                && Moller::intersect_strict(&tri, r, f32::INFINITY).is_none()
+        })
+        .count();
+    assert!(band_hits > 600, "only {band_hits} rays hit inside the band");
+    for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
+        for leaf in [1, 16] {
+            let opts = BuildOptions {
+                quality,
+                max_leaf_size: leaf,
+                packed_leaf_size: leaf,
+                ..BuildOptions::default()
+            };
+            check_kinds(&mesh, &rays, &opts, &[AccelKind::Bvh4, AccelKind::Bvh8]);
+        }
+    }
+}

@@ -13,8 +13,8 @@
 //! lies on a slab plane, is dropped (the axis then constrains nothing), so
 //! that case counts as a hit where [`NodeBox::entry`] may count a miss: the
 //! test accepts a superset of [`NodeBox::entry`]'s boxes and so stays
-//! conservative with respect to the triangle tests (the boxes are padded the
-//! same way, see [`NodeBox`]). The exit is widened by
+//! conservative with respect to the triangle tests (the boxes hold their
+//! triangles' tolerance bands, see [`NodeBox::triangle_reach`]). The exit is widened by
 //! [`NodeBox::ROBUST_EXIT`]. No fused multiply-add is used: its single
 //! rounding would change the distances and void that argument.
 //!

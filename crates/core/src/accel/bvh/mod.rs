@@ -39,6 +39,7 @@ mod bvh2;
 mod bvh8_flat;
 mod collapse;
 mod enter;
+mod fit;
 #[cfg(target_arch = "x86_64")]
 mod frustum;
 mod huge_pages;

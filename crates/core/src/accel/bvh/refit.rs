@@ -14,6 +14,7 @@
 //! built, and [`WideBvh::refit_or_rebuild`] rebuilds once it passes a limit
 //! ([`super::DEFAULT_MAX_DEGRADATION`]).
 
+use super::fit::{fit_boxes, leaf_reach, UnitReach};
 use super::node_width::NodeWidth;
 use super::refit_report::{RefitError, RefitReport};
 use super::wide_bvh::WideBvh;
@@ -108,90 +109,42 @@ pub(super) fn check_mesh(mesh: &TriangleMesh, tree: usize) -> Result<(), RefitEr
     })
 }
 
-/// The leaves' triangles recomputed from `mesh` (in parallel), then the
-/// boxes node by node from the last to the first: nodes are in pre-order
-/// (a child after its parent; built trees are, loaded ones are checked), so
-/// every child's box is known when its parent's slots are written.
+/// The leaves' triangles recomputed from `mesh` (in parallel, each pack's
+/// reach taken while its corners are at hand), then every box fitted to
+/// them ([`fit_boxes`]).
 fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &TriangleMesh) {
     let tris = mesh.num_triangles();
-    // Bounds per pack of four (packed leaves) or per triangle (single).
-    let mut unit_bounds: Vec<Aabb> = Vec::new();
-    let per_unit = match p.leaves {
+    let units = match &mut *p.leaves {
         Leaves::Packed(packs) => {
+            let mut bounds = Vec::new();
             packs
                 .packs_mut()
                 .par_iter_mut()
                 .with_min_len(1024)
                 .map(|pack| {
-                    let mut b = Aabb::EMPTY;
+                    let mut reach = Aabb::EMPTY;
                     for lane in 0..4 {
                         let prim = pack.prim[lane];
-                        if prim as usize >= tris {
-                            continue;
+                        if (prim as usize) < tris {
+                            let [v0, v1, v2] = mesh.triangle(prim as usize);
+                            pack.set(lane, &Moller::precompute(v0, v1, v2), prim);
+                            reach = reach.union(NodeBox::triangle_reach(v0, v1, v2));
                         }
-                        let [v0, v1, v2] = mesh.triangle(prim as usize);
-                        pack.set(lane, &Moller::precompute(v0, v1, v2), prim);
-                        b = b.union(Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2)));
                     }
-                    b
+                    reach
                 })
-                .collect_into_vec(&mut unit_bounds);
-            4
+                .collect_into_vec(&mut bounds);
+            UnitReach {
+                bounds,
+                per_unit: 4,
+            }
         }
         Leaves::Single(leaf_tris) => {
             leaf_tris.recompute(mesh);
-            leaf_tris
-                .prims(0, leaf_tris.len())
-                .par_iter()
-                .with_min_len(4096)
-                .map(|&prim| mesh.triangle_bounds(prim as usize))
-                .collect_into_vec(&mut unit_bounds);
-            1
+            leaf_reach(p.leaves, mesh)
         }
     };
-    let leaf_bounds = |c: Child4| {
-        let first = c.index as usize;
-        let units = (c.count as usize).div_ceil(per_unit);
-        unit_bounds[first..first + units]
-            .iter()
-            .fold(Aabb::EMPTY, |a, &b| a.union(b))
-    };
-    let area = |b: &Aabb| b.surface_area() as f64;
-    let mut bounds = vec![Aabb::EMPTY; p.nodes.len()];
-    let mut sah = 0.0;
-    for i in (0..p.nodes.len()).rev() {
-        let node = &mut p.nodes[i];
-        let mut nb = Aabb::EMPTY;
-        for slot in 0..N::WIDTH {
-            let c = node.children()[slot];
-            if c == Child4::EMPTY {
-                continue;
-            }
-            let cb = if c.count > 0 {
-                let b = leaf_bounds(c);
-                sah += area(&b) * c.count as f64;
-                b
-            } else {
-                debug_assert!(c.index as usize > i, "nodes in pre-order");
-                bounds[c.index as usize]
-            };
-            node.set_box(slot, &cb.into());
-            nb = nb.union(cb);
-        }
-        sah += area(&nb);
-        bounds[i] = nb;
-    }
-    let root = if p.root.count > 0 {
-        let b = leaf_bounds(p.root);
-        sah += area(&b) * p.root.count as f64;
-        b
-    } else if p.root == Child4::EMPTY || p.nodes.is_empty() {
-        Aabb::EMPTY
-    } else {
-        bounds[p.root.index as usize]
-    };
-    *p.root_box = NodeBox::from(root);
-    p.stats.sah_cost = sah / area(&root).max(f64::MIN_POSITIVE);
+    p.stats.sah_cost = fit_boxes(p.nodes, p.root, p.root_box, &units);
 }
 
 impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {

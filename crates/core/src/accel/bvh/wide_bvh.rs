@@ -36,8 +36,11 @@ mod walk;
 /// wide nodes directly or by collapsing the linear BVH's binary tree
 /// (`wide_tree.rs`).
 ///
-/// The boxes are padded exactly as [`super::Bvh2`]'s, so that box culling
-/// never disagrees with the triangle test. The box kernel is chosen once, at
+/// Each box holds the tolerance band of every triangle below it, the band
+/// in which the triangle tests also report hits, so that box culling never
+/// disagrees with the triangle test; it is the union of its triangles'
+/// bands (`fit.rs`), tighter than [`super::Bvh2`]'s boxes padded by their
+/// own extent. The box kernel is chosen once, at
 /// build, from the CPU's features (AVX-512, AVX2, SSE, scalar; `box_path.rs`),
 /// and the whole traversal is compiled for it. Traversal visits the entered
 /// children near to far: the nearest next, the others pushed with their

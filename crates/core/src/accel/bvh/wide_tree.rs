@@ -4,10 +4,12 @@
 //! ([`super::build::lbvh`]) collapsed into wide nodes ([`super::collapse`]); the
 //! leaves packed four triangles at a time over Möller (Embree's
 //! `triangle4`, Wald et al. 2014) or kept one triangle after the other for
-//! the other tests; and the shape figures of the wide tree.
+//! the other tests; the boxes fitted to their triangles' reach
+//! ([`super::fit`]); and the shape figures of the wide tree.
 
 use super::build::{build, clamped, BuildNode, BuildOptions, BuildQuality, BuildTree};
 use super::collapse::collapse;
+use super::fit::{fit_boxes, leaf_reach, UnitReach};
 use super::tri4::Tri4Leaves;
 use super::wide_build::build_direct;
 use super::wide_leaf::{wide_build_options, Leaves};
@@ -54,10 +56,10 @@ pub(crate) fn build_wide<N: WideSlots, T: TriangleTest>(
             (wide, root.bounds(), order, Some(root))
         }
     };
-    let root_box = root_box.into();
+    let mut root_box = root_box.into();
     let node_bytes = std::mem::size_of_val(&wide.nodes[..]);
     let triangle_refs = order.len();
-    let (_, leaves) = rayon::join(
+    let (_, (leaves, units)) = rayon::join(
         || binary.map(|root| free(root, 0)),
         || {
             if packed {
@@ -66,12 +68,22 @@ pub(crate) fn build_wide<N: WideSlots, T: TriangleTest>(
                         .iter_mut()
                         .flat_map(|n| n.children_mut().iter_mut()),
                 );
-                Leaves::Packed(Tri4Leaves::from_refs(mesh, &order, refs))
+                let (packs, bounds) = Tri4Leaves::from_refs(mesh, &order, refs);
+                let units = UnitReach {
+                    bounds,
+                    per_unit: 4,
+                };
+                (Leaves::Packed(packs), units)
             } else {
-                Leaves::Single(LeafTriangles::new(mesh, order))
+                let leaves = Leaves::Single(LeafTriangles::new(mesh, order));
+                let units = leaf_reach(&leaves, mesh);
+                (leaves, units)
             }
         },
     );
+    // The builders padded each box by its own extent; the tree keeps the
+    // tighter unions of its triangles' reach.
+    fit_boxes(&mut wide.nodes, wide.root, &mut root_box, &units);
     let leaf_bytes = match &leaves {
         Leaves::Packed(p) => p.bytes(),
         Leaves::Single(t) => t.bytes(),

@@ -20,6 +20,8 @@
 mod sse;
 
 use super::wide_node::Child4;
+use crate::aabb::Aabb;
+use crate::accel::node_box::NodeBox;
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
@@ -204,11 +206,13 @@ impl Tri4Leaves {
     /// packs are built in parallel straight from the mesh, with no
     /// intermediate array of all triangles (the packing took
     /// 115–150 ms of the full dragon's build on one thread, sequential).
-    pub fn from_refs<'a>(
+    /// Returns the packs and each pack's reach (`fit::pack_reach`), taken
+    /// while its corners are at hand.
+    pub(crate) fn from_refs<'a>(
         mesh: &TriangleMesh,
         order: &[u32],
         refs: impl Iterator<Item = &'a mut Child4>,
-    ) -> Self {
+    ) -> (Self, Vec<Aabb>) {
         let mut ranges: Vec<(u32, u32)> =
             Vec::with_capacity(order.len().div_ceil(4) + order.len() / 4);
         for leaf in refs.filter(|c| c.count > 0) {
@@ -219,22 +223,27 @@ impl Tri4Leaves {
             }
         }
         let mut packs = super::huge_pages::with_capacity(ranges.len());
+        let mut reach = Vec::with_capacity(ranges.len());
         ranges
             .par_iter()
             .with_min_len(1024)
             .map(|&(start, lanes)| {
-                let mut p = Tri4::EMPTY;
+                let (mut p, mut r) = (Tri4::EMPTY, Aabb::EMPTY);
                 for lane in 0..lanes as usize {
                     let prim = order[start as usize + lane];
                     let [a, b, c] = mesh.triangle(prim as usize);
                     p.set(lane, &Moller::precompute(a, b, c), prim);
+                    r = r.union(NodeBox::triangle_reach(a, b, c));
                 }
-                p
+                (p, r)
             })
-            .collect_into_vec(&mut packs);
-        Tri4Leaves {
-            packs: packs.into(),
-        }
+            .unzip_into_vecs(&mut packs, &mut reach);
+        (
+            Tri4Leaves {
+                packs: packs.into(),
+            },
+            reach,
+        )
     }
 
     /// The packs, for the packet traversal of [`super::packet`].
@@ -590,7 +599,7 @@ mod tests {
                 index: 0,
                 count: n as u32,
             };
-            let packed = Tri4Leaves::from_refs(&mesh, &order, std::iter::once(&mut root));
+            let (packed, _) = Tri4Leaves::from_refs(&mesh, &order, std::iter::once(&mut root));
             assert_eq!(root.index, 0);
             let mut prims = Vec::new();
             packed.prims(root, &mut prims);
