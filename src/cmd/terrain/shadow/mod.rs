@@ -27,9 +27,10 @@ use rayon::prelude::*;
 use std::path::Path;
 use std::process::ExitCode;
 
+/// The mask of one light, timed, with a progress bar; the fast method
+/// builds the min/max quadtree only if this light needs it.
 fn compute(
     field: &HeightField,
-    pyramid: Option<&MaxMipmap>,
     light: &Light,
     method: ShadowMethod,
     target_height: f64,
@@ -41,7 +42,7 @@ fn compute(
     );
     bar.set_message(label.to_string());
     let (mask, s) = timed(|| {
-        shadow_mask_for_targets(field, pyramid, light, method, target_height, &|n| {
+        shadow_mask_for_targets(field, None, light, method, target_height, &|n| {
             bar.inc(n as u64)
         })
     });
@@ -163,22 +164,13 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         }
     };
     let tz = args.target_height;
-    // The fast method builds the min/max quadtree only if this light needs
-    // it.
-    let (mask, secs) = compute(&field, None, &light, method, tz, "shadow mask");
+    let (mask, secs) = compute(&field, &light, method, tz, "shadow mask");
     if args.compare {
         let other = match method {
             ShadowMethod::Fast => ShadowMethod::BruteForce,
             ShadowMethod::BruteForce => ShadowMethod::Fast,
         };
-        let (m2, s2) = compute(
-            &field,
-            None,
-            &light,
-            other,
-            tz,
-            "shadow mask (second method)",
-        );
+        let (m2, s2) = compute(&field, &light, other, tz, "shadow mask (second method)");
         let differ = mask.iter().zip(&m2).filter(|(a, b)| a != b).count();
         let (fast_s, brute_s) = if method == ShadowMethod::Fast {
             (secs, s2)
