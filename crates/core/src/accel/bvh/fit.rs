@@ -13,13 +13,10 @@
 //! bands is the tightest box that holds them all, as Embree's boxes hold
 //! exactly their primitives (Wald et al. 2014).
 
-use super::tri4::Tri4;
-use super::wide_leaf::Leaves;
 use super::wide_node::{Child4, WideSlots};
 use crate::aabb::Aabb;
 use crate::accel::node_box::NodeBox;
 use crate::mesh::TriangleMesh;
-use crate::tri::TriangleTest;
 use rayon::prelude::*;
 
 /// The reach of a tree's leaf units, in leaf order: one box per pack of
@@ -29,46 +26,27 @@ pub(crate) struct UnitReach {
     pub per_unit: usize,
 }
 
-/// The reach of the triangles of `pack` that are in `mesh`.
-#[inline]
-pub(crate) fn pack_reach(pack: &Tri4, mesh: &TriangleMesh) -> Aabb {
-    let tris = mesh.num_triangles();
-    pack.prim
-        .iter()
-        .filter(|&&prim| (prim as usize) < tris)
-        .fold(Aabb::EMPTY, |b, &prim| b.union(triangle_reach(mesh, prim)))
-}
-
 /// The reach of triangle `prim` of `mesh`.
 #[inline]
-pub(crate) fn triangle_reach(mesh: &TriangleMesh, prim: u32) -> Aabb {
+fn triangle_reach(mesh: &TriangleMesh, prim: u32) -> Aabb {
     let [a, b, c] = mesh.triangle(prim as usize);
     NodeBox::triangle_reach(a, b, c)
 }
 
-/// The reach of every leaf unit of `leaves` over `mesh`, in parallel.
-pub(crate) fn leaf_reach<T: TriangleTest>(leaves: &Leaves<T>, mesh: &TriangleMesh) -> UnitReach {
+/// The reach of each triangle of `prims` (one-triangle leaves, in leaf
+/// order) over `mesh`, in parallel; packed leaves take their packs' reach
+/// while packing (`Tri4Leaves::from_refs`, the refit).
+pub(crate) fn triangle_units(prims: &[u32], mesh: &TriangleMesh) -> UnitReach {
     let mut bounds = Vec::new();
-    let per_unit = match leaves {
-        Leaves::Packed(packs) => {
-            packs
-                .packs()
-                .par_iter()
-                .with_min_len(1024)
-                .map(|pack| pack_reach(pack, mesh))
-                .collect_into_vec(&mut bounds);
-            4
-        }
-        Leaves::Single(tris) => {
-            tris.prims(0, tris.len())
-                .par_iter()
-                .with_min_len(4096)
-                .map(|&prim| triangle_reach(mesh, prim))
-                .collect_into_vec(&mut bounds);
-            1
-        }
-    };
-    UnitReach { bounds, per_unit }
+    prims
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&prim| triangle_reach(mesh, prim))
+        .collect_into_vec(&mut bounds);
+    UnitReach {
+        bounds,
+        per_unit: 1,
+    }
 }
 
 /// Store in every slot of `nodes` and in `root_box` the union of the reach
@@ -76,7 +54,7 @@ pub(crate) fn leaf_reach<T: TriangleTest>(leaves: &Leaves<T>, mesh: &TriangleMes
 /// pre-order (a child after its parent; built trees are, loaded ones are
 /// checked), so every child's box is known when its parent's slots are
 /// written. Returns the SAH cost of the new boxes relative to the root's
-/// (traversal and pack or triangle tests cost 1).
+/// (traversal and triangle tests cost 1).
 pub(crate) fn fit_boxes<N: WideSlots>(
     nodes: &mut [N],
     root: Child4,

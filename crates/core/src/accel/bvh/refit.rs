@@ -14,7 +14,7 @@
 //! built, and [`WideBvh::refit_or_rebuild`] rebuilds once it passes a limit
 //! ([`super::DEFAULT_MAX_DEGRADATION`]).
 
-use super::fit::{fit_boxes, leaf_reach, UnitReach};
+use super::fit::{fit_boxes, triangle_units, UnitReach};
 use super::node_width::NodeWidth;
 use super::refit_report::{RefitError, RefitReport};
 use super::wide_bvh::WideBvh;
@@ -141,7 +141,7 @@ fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &Trian
         }
         Leaves::Single(leaf_tris) => {
             leaf_tris.recompute(mesh);
-            leaf_reach(p.leaves, mesh)
+            triangle_units(leaf_tris.prims(0, leaf_tris.len()), mesh)
         }
     };
     p.stats.sah_cost = fit_boxes(p.nodes, p.root, p.root_box, &units);

@@ -40,9 +40,9 @@ mod walk;
 /// in which the triangle tests also report hits, so that box culling never
 /// disagrees with the triangle test; it is the union of its triangles'
 /// bands (`fit.rs`), tighter than [`super::Bvh2`]'s boxes padded by their
-/// own extent. The box kernel is chosen once, at
-/// build, from the CPU's features (AVX-512, AVX2, SSE, scalar; `box_path.rs`),
-/// and the whole traversal is compiled for it. Traversal visits the entered
+/// own extent. The box kernel is chosen once, at build, from the CPU's
+/// features (AVX-512, AVX2, SSE, scalar; `box_path.rs`), and the whole
+/// traversal is compiled for it. Traversal visits the entered
 /// children near to far: the nearest next, the others pushed with their
 /// entry distances on a fixed-size stack (farthest deepest) and skipped on
 /// pop when a nearer hit has been found since. Occlusion queries do not

@@ -9,7 +9,7 @@
 
 use super::build::{build, clamped, BuildNode, BuildOptions, BuildQuality, BuildTree};
 use super::collapse::collapse;
-use super::fit::{fit_boxes, leaf_reach, UnitReach};
+use super::fit::{fit_boxes, triangle_units, UnitReach};
 use super::tri4::Tri4Leaves;
 use super::wide_build::build_direct;
 use super::wide_leaf::{wide_build_options, Leaves};
@@ -75,9 +75,9 @@ pub(crate) fn build_wide<N: WideSlots, T: TriangleTest>(
                 };
                 (Leaves::Packed(packs), units)
             } else {
-                let leaves = Leaves::Single(LeafTriangles::new(mesh, order));
-                let units = leaf_reach(&leaves, mesh);
-                (leaves, units)
+                let tris = LeafTriangles::new(mesh, order);
+                let units = triangle_units(tris.prims(0, tris.len()), mesh);
+                (Leaves::Single(tris), units)
             }
         },
     );

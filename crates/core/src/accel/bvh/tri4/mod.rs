@@ -206,8 +206,9 @@ impl Tri4Leaves {
     /// packs are built in parallel straight from the mesh, with no
     /// intermediate array of all triangles (the packing took
     /// 115–150 ms of the full dragon's build on one thread, sequential).
-    /// Returns the packs and each pack's reach (`fit::pack_reach`), taken
-    /// while its corners are at hand.
+    /// Returns the packs and each pack's reach (the union of its
+    /// triangles' [`NodeBox::triangle_reach`], for `fit`), taken while its
+    /// corners are at hand.
     pub(crate) fn from_refs<'a>(
         mesh: &TriangleMesh,
         order: &[u32],
