@@ -23,9 +23,8 @@ use super::wide_node::Child4;
 use super::wide_parts::{PartsMut, PartsRef, WideNode, WideParts};
 use super::BuildOptions;
 use crate::aabb::Aabb;
-use crate::accel::node_box::NodeBox;
 use crate::mesh::TriangleMesh;
-use crate::tri::{Moller, TriangleTest};
+use crate::tri::TriangleTest;
 use rayon::prelude::*;
 
 /// The SAH cost of a wide tree from its stored (padded) boxes, relative to
@@ -109,9 +108,8 @@ pub(super) fn check_mesh(mesh: &TriangleMesh, tree: usize) -> Result<(), RefitEr
     })
 }
 
-/// The leaves' triangles recomputed from `mesh` (in parallel, each pack's
-/// reach taken while its corners are at hand), then every box fitted to
-/// them ([`fit_boxes`]).
+/// The leaves' triangles recomputed from `mesh` (in parallel, with each
+/// pack's reach), then every box fitted to them ([`fit_boxes`]).
 fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &TriangleMesh) {
     let tris = mesh.num_triangles();
     let units = match &mut *p.leaves {
@@ -126,9 +124,7 @@ fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &Trian
                     for lane in 0..4 {
                         let prim = pack.prim[lane];
                         if (prim as usize) < tris {
-                            let [v0, v1, v2] = mesh.triangle(prim as usize);
-                            pack.set(lane, &Moller::precompute(v0, v1, v2), prim);
-                            reach = reach.union(NodeBox::triangle_reach(v0, v1, v2));
+                            reach = reach.union(pack.load(lane, mesh, prim));
                         }
                     }
                     reach

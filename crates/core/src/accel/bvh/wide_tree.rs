@@ -45,18 +45,20 @@ pub(crate) fn build_wide<N: WideSlots, T: TriangleTest>(
     // collapsed from its binary tree, which is freed while the leaves are
     // made (on one thread it took 6-7 ms of the 1M-triangle terrain's
     // build).
-    let (mut wide, root_box, order, binary) = match options.quality {
+    // Their boxes, padded by each box's own extent, are replaced by the
+    // tighter unions of the triangles' reach once the leaves are made.
+    let (mut wide, order, binary) = match options.quality {
         BuildQuality::Sah | BuildQuality::High => {
-            let (wide, root_box, order) = build_direct::<N>(mesh, &clamped(options));
-            (wide, root_box, order, None)
+            let (wide, _, order) = build_direct::<N>(mesh, &clamped(options));
+            (wide, order, None)
         }
         BuildQuality::Fast => {
             let BuildTree { root, order } = build(mesh, options);
             let wide = collapse::<N>(&root, options.traversal_cost as f64);
-            (wide, root.bounds(), order, Some(root))
+            (wide, order, Some(root))
         }
     };
-    let mut root_box = root_box.into();
+    let mut root_box = NodeBox::default();
     let node_bytes = std::mem::size_of_val(&wide.nodes[..]);
     let triangle_refs = order.len();
     let (_, (leaves, units)) = rayon::join(
@@ -81,8 +83,6 @@ pub(crate) fn build_wide<N: WideSlots, T: TriangleTest>(
             }
         },
     );
-    // The builders padded each box by its own extent; the tree keeps the
-    // tighter unions of its triangles' reach.
     fit_boxes(&mut wide.nodes, wide.root, &mut root_box, &units);
     let leaf_bytes = match &leaves {
         Leaves::Packed(p) => p.bytes(),

@@ -74,6 +74,16 @@ impl Tri4 {
         self.prim[lane] = prim;
     }
 
+    /// Store mesh triangle `prim` of `mesh` in lane `lane`, and return its
+    /// reach ([`NodeBox::triangle_reach`]), taken while its corners are at
+    /// hand: the packing and the refit both fit boxes to it.
+    #[inline]
+    pub(crate) fn load(&mut self, lane: usize, mesh: &TriangleMesh, prim: u32) -> Aabb {
+        let [a, b, c] = mesh.triangle(prim as usize);
+        self.set(lane, &Moller::precompute(a, b, c), prim);
+        NodeBox::triangle_reach(a, b, c)
+    }
+
     /// The triangle in lane `lane`.
     pub fn get(&self, lane: usize) -> MollerTri {
         let at = |v: &[[f32; 4]; 3]| Vec3::new(v[0][lane], v[1][lane], v[2][lane]);
@@ -207,8 +217,7 @@ impl Tri4Leaves {
     /// intermediate array of all triangles (the packing took
     /// 115–150 ms of the full dragon's build on one thread, sequential).
     /// Returns the packs and each pack's reach (the union of its
-    /// triangles' [`NodeBox::triangle_reach`], for `fit`), taken while its
-    /// corners are at hand.
+    /// triangles' [`NodeBox::triangle_reach`], for `fit`).
     pub(crate) fn from_refs<'a>(
         mesh: &TriangleMesh,
         order: &[u32],
@@ -231,10 +240,7 @@ impl Tri4Leaves {
             .map(|&(start, lanes)| {
                 let (mut p, mut r) = (Tri4::EMPTY, Aabb::EMPTY);
                 for lane in 0..lanes as usize {
-                    let prim = order[start as usize + lane];
-                    let [a, b, c] = mesh.triangle(prim as usize);
-                    p.set(lane, &Moller::precompute(a, b, c), prim);
-                    r = r.union(NodeBox::triangle_reach(a, b, c));
+                    r = r.union(p.load(lane, mesh, order[start as usize + lane]));
                 }
                 (p, r)
             })
