@@ -36,18 +36,22 @@ pub(crate) struct HitColumns {
 }
 
 impl HitColumns {
-    /// The columns of `hits`, each turned into a row by `row` (in
-    /// parallel).
-    pub(crate) fn of<H: Sync>(hits: &[H], row: impl Fn(&H) -> Option<HitRow> + Sync) -> Self {
-        let n = hits.len();
-        let mut c = HitColumns {
+    /// The columns of `n` misses.
+    pub(crate) fn misses(n: usize) -> Self {
+        HitColumns {
             t: vec![f32::INFINITY; n],
             geometry: vec![INVALID_ID; n],
             instance: vec![INVALID_ID; n],
             prim: vec![INVALID_ID; n],
             uv: vec![0.0; 2 * n],
             normal: vec![0.0; 3 * n],
-        };
+        }
+    }
+
+    /// The columns of `hits`, each turned into a row by `row` (in
+    /// parallel).
+    pub(crate) fn of<H: Sync>(hits: &[H], row: impl Fn(&H) -> Option<HitRow> + Sync) -> Self {
+        let mut c = HitColumns::misses(hits.len());
         hits.par_iter()
             .zip(c.t.par_iter_mut())
             .zip(c.geometry.par_iter_mut())

@@ -1,53 +1,98 @@
-//! The order in which the rays of an image are traced: 4 × 4 pixel
-//! blocks. The wide BVHs trace eight or sixteen consecutive rays of a
-//! batch together as a packet (Wald et al. 2001); in 4 × 4 blocks a packet
-//! is a square of pixels, whose rays stay together deeper in the tree
-//! than a strip of one row does. raykit-render traces its primary rays
-//! in the same blocks.
-
-use rayon::prelude::*;
+//! The order in which the rays of a batch are traced: the rays of an image
+//! in 4 × 4 pixel blocks, a band of blocks per task.
+//!
+//! The wide BVHs trace eight or sixteen consecutive rays of a batch
+//! together as a packet (Wald et al. 2001); in 4 × 4 blocks a packet is a
+//! square of pixels, whose rays stay together deeper in the tree than a
+//! strip of one row does. raykit-render traces its primary rays in the same
+//! blocks. A band of four rows holds whole blocks, so each band is traced
+//! by one task that reads its rays straight from the caller's array and
+//! writes its answers straight into the result columns: no array of all
+//! the rays or of all the hits in traced order is made.
 
 /// Side of a block, pixels.
 const BLOCK: usize = 4;
 
-/// A permutation of the rays of a `width`-wide image into blocks.
-pub struct ImageOrder {
-    /// `order[k]`: the ray traced `k`-th.
-    pub order: Vec<u32>,
-    /// `position[i]`: where ray `i` is traced (the inverse of `order`).
-    pub position: Vec<u32>,
+/// Rays per task when the rays do not form an image.
+const GRAIN: usize = 4096;
+
+/// How a batch of `n` rays is cut into bands and ordered within each.
+pub struct Bands {
+    /// Rays per band (the last may hold fewer).
+    pub len: usize,
+    /// Image width, when the rays are traced in blocks.
+    width: Option<usize>,
 }
 
-impl ImageOrder {
-    /// The block order of `n` rays in rows of `width`, or `None` when they
-    /// do not form an image of at least one block.
-    pub fn new(n: usize, width: usize) -> Option<ImageOrder> {
-        if width < BLOCK || !n.is_multiple_of(width) || n / width < BLOCK || n > u32::MAX as usize {
-            return None;
+impl Bands {
+    /// Bands of four rows of blocks when `n` rays form rows of `width`
+    /// (at least one block); otherwise runs of consecutive rays.
+    pub fn new(n: usize, width: usize) -> Bands {
+        if width >= BLOCK && n.is_multiple_of(width) && n / width >= BLOCK && n <= u32::MAX as usize
+        {
+            Bands {
+                len: BLOCK * width,
+                width: Some(width),
+            }
+        } else {
+            Bands {
+                len: GRAIN,
+                width: None,
+            }
         }
-        let height = n / width;
-        let mut order = Vec::with_capacity(n);
-        for by in (0..height).step_by(BLOCK) {
-            for bx in (0..width).step_by(BLOCK) {
-                for y in by..(by + BLOCK).min(height) {
-                    for x in bx..(bx + BLOCK).min(width) {
-                        order.push((y * width + x) as u32);
-                    }
+    }
+
+    /// The positions within a band of `len` rays in the order they are
+    /// traced: block by block, each block row by row (the last band of an
+    /// image may have fewer than four rows); as they come otherwise.
+    pub fn order(&self, len: usize) -> Vec<u32> {
+        let Some(width) = self.width else {
+            return (0..len as u32).collect();
+        };
+        let rows = len / width;
+        let mut order = Vec::with_capacity(len);
+        for bx in (0..width).step_by(BLOCK) {
+            for y in 0..rows {
+                for x in bx..(bx + BLOCK).min(width) {
+                    order.push((y * width + x) as u32);
                 }
             }
         }
-        let mut position = vec![0u32; n];
-        for (k, &i) in order.iter().enumerate() {
-            position[i as usize] = k as u32;
-        }
-        Some(ImageOrder { order, position })
+        order
     }
+}
 
-    /// `traced` (in the order traced) back in the rays' own order.
-    pub fn restore<T: Copy + Send + Sync>(&self, traced: &[T]) -> Vec<T> {
-        self.position
-            .par_iter()
-            .map(|&k| traced[k as usize])
-            .collect()
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each band's order is a permutation of its positions, and within an
+    /// image whole 4 × 4 blocks come one after another.
+    #[test]
+    fn band_orders_are_permutations_of_whole_blocks() {
+        for (n, width) in [(64 * 48, 64), (10 * 6, 10), (7 * 9, 7), (1000, 0), (12, 3)] {
+            let bands = Bands::new(n, width);
+            let mut start = 0;
+            while start < n {
+                let len = bands.len.min(n - start);
+                let order = bands.order(len);
+                let mut seen = order.clone();
+                seen.sort_unstable();
+                assert_eq!(
+                    seen,
+                    (0..len as u32).collect::<Vec<_>>(),
+                    "n {n} width {width}"
+                );
+                if bands.width.is_some() && len == bands.len && width % BLOCK == 0 {
+                    for block in order.chunks(BLOCK * BLOCK) {
+                        let (x0, y0) = (block[0] as usize % width, block[0] as usize / width);
+                        for (k, &i) in block.iter().enumerate() {
+                            assert_eq!(i as usize, (y0 + k / BLOCK) * width + x0 + k % BLOCK);
+                        }
+                    }
+                }
+                start += len;
+            }
+        }
     }
 }

@@ -8,8 +8,8 @@
 use crate::arrays::{flat, rows};
 use crate::errors::persist_error;
 use crate::errors::value_error;
-use crate::hit_arrays::{matrix, HitColumns, HitRow};
-use crate::image_order::ImageOrder;
+use crate::hit_arrays::{matrix, HitColumns};
+use crate::image_order::Bands;
 use crate::threads::detached;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
@@ -78,20 +78,24 @@ fn ray(r: &[f32], tnear: f32, tfar: f32) -> Ray {
     )
 }
 
-/// The rays of the rows of `rays`, in `order` when given.
-fn make_rays(rays: &[f32], tnear: f32, tfar: f32, order: Option<&ImageOrder>) -> Vec<Ray> {
-    match order {
-        Some(o) => o
-            .order
-            .par_iter()
-            .with_min_len(GRAIN)
-            .map(|&i| ray(&rays[6 * i as usize..6 * i as usize + 6], tnear, tfar))
-            .collect(),
-        None => rays
-            .par_chunks_exact(6)
-            .with_min_len(GRAIN)
-            .map(|r| ray(r, tnear, tfar))
-            .collect(),
+/// The rays of a band starting at ray `start` of the rows of `rays`, in
+/// the band's traced `order`.
+fn band_rays(rays: &[f32], start: usize, order: &[u32], tnear: f32, tfar: f32) -> Vec<Ray> {
+    order
+        .iter()
+        .map(|&i| {
+            let at = 6 * (start + i as usize);
+            ray(&rays[at..at + 6], tnear, tfar)
+        })
+        .collect()
+}
+
+/// The traced order of each band of `bands`: the full bands' made once.
+fn band_order<'a>(bands: &Bands, full: &'a [u32], len: usize) -> std::borrow::Cow<'a, [u32]> {
+    if len == full.len() {
+        full.into()
+    } else {
+        bands.order(len).into()
     }
 }
 
@@ -108,23 +112,40 @@ impl Scene {
         (g as u32, prim - self.offsets[g])
     }
 
-    /// Nearest hits of the rows of `rays`, traced in image blocks when
-    /// the rays form rows of `width` (0: any order).
-    fn nearest(&self, built: &Built, rays: &[f32], width: usize) -> Vec<Option<Hit>> {
+    /// Nearest hits of the rows of `rays` as result columns, traced band
+    /// by band in image blocks when the rays form rows of `width` (0: any
+    /// order; [`Bands`]).
+    fn nearest(&self, built: &Built, rays: &[f32], width: usize) -> HitColumns {
         let n = rays.len() / 6;
+        let mut c = HitColumns::misses(n);
         let Some(a) = &built.accel else {
-            return vec![None; n];
+            return c;
         };
-        let order = ImageOrder::new(n, width);
-        let mut hits = vec![None; n];
-        a.intersect_batch(
-            &make_rays(rays, 0.0, f32::INFINITY, order.as_ref()),
-            &mut hits,
-        );
-        match order {
-            Some(o) => o.restore(&hits),
-            None => hits,
-        }
+        let bands = Bands::new(n, width);
+        let (len, full) = (bands.len, bands.order(bands.len));
+        c.t.par_chunks_mut(len)
+            .zip(c.geometry.par_chunks_mut(len))
+            .zip(c.prim.par_chunks_mut(len))
+            .zip(c.uv.par_chunks_mut(2 * len))
+            .zip(c.normal.par_chunks_mut(3 * len))
+            .enumerate()
+            .for_each(|(b, ((((t, g), p), uv), nrm))| {
+                let order = band_order(&bands, &full, t.len());
+                let traced = band_rays(rays, b * len, &order, 0.0, f32::INFINITY);
+                let mut hits = vec![None; traced.len()];
+                a.intersect_batch(&traced, &mut hits);
+                for (&i, h) in order.iter().zip(&hits) {
+                    let (Some(h), i) = (h, i as usize) else {
+                        continue;
+                    };
+                    let (geometry, prim) = self.split(h.prim);
+                    (t[i], g[i], p[i]) = (h.t, geometry, prim);
+                    uv[2 * i..2 * i + 2].copy_from_slice(&[h.u, h.v]);
+                    nrm[3 * i..3 * i + 3]
+                        .copy_from_slice(&built.normals[h.prim as usize].to_array());
+                }
+            });
+        c
     }
 }
 
@@ -326,23 +347,7 @@ impl Scene {
         Bound<'py, PyArray2<f32>>,
     )> {
         let (r, _) = rows(&rays, 6, "rays")?;
-        let c = detached(py, threads, || {
-            let built = self.read();
-            let hits = self.nearest(&built, r, width);
-            HitColumns::of(&hits, |h| {
-                h.map(|h| {
-                    let (geometry, prim) = self.split(h.prim);
-                    HitRow {
-                        t: h.t,
-                        geometry,
-                        instance: geometry,
-                        prim,
-                        uv: [h.u, h.v],
-                        normal: built.normals[h.prim as usize].to_array(),
-                    }
-                })
-            })
-        })?;
+        let c = detached(py, threads, || self.nearest(&self.read(), r, width))?;
         Ok((
             c.t.into_pyarray(py),
             c.geometry.into_pyarray(py),
@@ -368,11 +373,20 @@ impl Scene {
         let occluded = detached(py, threads, || {
             let mut occluded = vec![false; n];
             if let Some(a) = &self.read().accel {
-                let order = ImageOrder::new(n, width);
-                a.occluded_batch(&make_rays(r, tnear, tfar, order.as_ref()), &mut occluded);
-                if let Some(o) = order {
-                    occluded = o.restore(&occluded);
-                }
+                let bands = Bands::new(n, width);
+                let (len, full) = (bands.len, bands.order(bands.len));
+                occluded
+                    .par_chunks_mut(len)
+                    .enumerate()
+                    .for_each(|(b, out)| {
+                        let order = band_order(&bands, &full, out.len());
+                        let traced = band_rays(r, b * len, &order, tnear, tfar);
+                        let mut hit = vec![false; traced.len()];
+                        a.occluded_batch(&traced, &mut hit);
+                        for (&i, h) in order.iter().zip(hit) {
+                            out[i as usize] = h;
+                        }
+                    });
             }
             occluded
         })?;

@@ -155,6 +155,7 @@ fn group_distance2(p: Vec3, tris: &[[Vec3; 3]]) -> [f32; LANES] {
 /// returned mask, for the caller to answer with [`triangle_distance2`].
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
+#[allow(clippy::manual_clamp)] // `clamp` panics on a NaN bound
 fn distance2_lanes<const N: usize>(c: &[[[f32; N]; 3]; 3]) -> ([f32; N], u32) {
     let [a, b, cc] = c;
     let mut d2 = [0f32; N];
@@ -177,8 +178,8 @@ fn distance2_lanes<const N: usize>(c: &[[[f32; N]; 3]; 3]) -> ([f32; N], u32) {
         let va = d3 * d6 - d5 * d4;
         let denom = va + vb + vc;
         // The face, then each region overriding in reverse order of
-        // precedence. `max` then `min` rather than `clamp`, which panics on
-        // the NaN bounds of lanes that end up degenerate.
+        // precedence. `max` then `min` rather than `clamp`: the bounds of a
+        // lane that ends up degenerate are NaN.
         let fu = (vb / denom).max(0.0).min(1.0);
         let (mut u, mut v) = (fu, (vc / denom).max(0.0).min(1.0 - fu));
         let on_bc = va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0;
