@@ -36,6 +36,19 @@ pub(crate) struct HitColumns {
 }
 
 impl HitColumns {
+    /// Columns of `n` rows of zeros, for a caller that writes every row
+    /// (the memory is mapped as it is written).
+    pub(crate) fn zeroed(n: usize) -> Self {
+        HitColumns {
+            t: vec![0.0; n],
+            geometry: vec![0; n],
+            instance: vec![0; n],
+            prim: vec![0; n],
+            uv: vec![0.0; 2 * n],
+            normal: vec![0.0; 3 * n],
+        }
+    }
+
     /// The columns of `n` misses.
     pub(crate) fn misses(n: usize) -> Self {
         HitColumns {

@@ -8,7 +8,7 @@
 use crate::arrays::{flat, rows};
 use crate::errors::persist_error;
 use crate::errors::value_error;
-use crate::hit_arrays::{matrix, HitColumns};
+use crate::hit_arrays::{matrix, HitColumns, INVALID_ID};
 use crate::image_order::Bands;
 use crate::threads::detached;
 use numpy::ndarray::Array2;
@@ -117,10 +117,12 @@ impl Scene {
     /// order; [`Bands`]).
     fn nearest(&self, built: &Built, rays: &[f32], width: usize) -> HitColumns {
         let n = rays.len() / 6;
-        let mut c = HitColumns::misses(n);
         let Some(a) = &built.accel else {
-            return c;
+            return HitColumns::misses(n);
         };
+        // Zeroed columns cost nothing until the bands write them, each its
+        // own part, in parallel; misses are written with the hits.
+        let mut c = HitColumns::zeroed(n);
         let bands = Bands::new(n, width);
         let (len, full) = (bands.len, bands.order(bands.len));
         c.t.par_chunks_mut(len)
@@ -135,7 +137,9 @@ impl Scene {
                 let mut hits = vec![None; traced.len()];
                 a.intersect_batch(&traced, &mut hits);
                 for (&i, h) in order.iter().zip(&hits) {
-                    let (Some(h), i) = (h, i as usize) else {
+                    let i = i as usize;
+                    let Some(h) = h else {
+                        (t[i], g[i], p[i]) = (f32::INFINITY, INVALID_ID, INVALID_ID);
                         continue;
                     };
                     let (geometry, prim) = self.split(h.prim);
