@@ -61,38 +61,3 @@ impl Bands {
         order
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Each band's order is a permutation of its positions, and within an
-    /// image whole 4 × 4 blocks come one after another.
-    #[test]
-    fn band_orders_are_permutations_of_whole_blocks() {
-        for (n, width) in [(64 * 48, 64), (10 * 6, 10), (7 * 9, 7), (1000, 0), (12, 3)] {
-            let bands = Bands::new(n, width);
-            let mut start = 0;
-            while start < n {
-                let len = bands.len.min(n - start);
-                let order = bands.order(len);
-                let mut seen = order.clone();
-                seen.sort_unstable();
-                assert_eq!(
-                    seen,
-                    (0..len as u32).collect::<Vec<_>>(),
-                    "n {n} width {width}"
-                );
-                if bands.width.is_some() && len == bands.len && width % BLOCK == 0 {
-                    for block in order.chunks(BLOCK * BLOCK) {
-                        let (x0, y0) = (block[0] as usize % width, block[0] as usize / width);
-                        for (k, &i) in block.iter().enumerate() {
-                            assert_eq!(i as usize, (y0 + k / BLOCK) * width + x0 + k % BLOCK);
-                        }
-                    }
-                }
-                start += len;
-            }
-        }
-    }
-}
