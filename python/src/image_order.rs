@@ -10,6 +10,8 @@
 //! writes its answers straight into the result columns: no array of all
 //! the rays or of all the hits in traced order is made.
 
+use std::borrow::Cow;
+
 /// Side of a block, pixels.
 const BLOCK: usize = 4;
 
@@ -22,42 +24,53 @@ pub struct Bands {
     pub len: usize,
     /// Image width, when the rays are traced in blocks.
     width: Option<usize>,
+    /// The traced order of a full band.
+    full: Vec<u32>,
 }
 
 impl Bands {
     /// Bands of four rows of blocks when `n` rays form rows of `width`
     /// (at least one block); otherwise runs of consecutive rays.
     pub fn new(n: usize, width: usize) -> Bands {
-        if width >= BLOCK && n.is_multiple_of(width) && n / width >= BLOCK && n <= u32::MAX as usize
-        {
-            Bands {
-                len: BLOCK * width,
-                width: Some(width),
-            }
+        let image = width >= BLOCK
+            && n.is_multiple_of(width)
+            && n / width >= BLOCK
+            && n <= u32::MAX as usize;
+        let (len, width) = if image {
+            (BLOCK * width, Some(width))
         } else {
-            Bands {
-                len: GRAIN,
-                width: None,
-            }
-        }
+            (GRAIN, None)
+        };
+        let full = order_of(width, len);
+        Bands { len, width, full }
     }
 
     /// The positions within a band of `len` rays in the order they are
-    /// traced: block by block, each block row by row (the last band of an
-    /// image may have fewer than four rows); as they come otherwise.
-    pub fn order(&self, len: usize) -> Vec<u32> {
-        let Some(width) = self.width else {
-            return (0..len as u32).collect();
-        };
-        let rows = len / width;
-        let mut order = Vec::with_capacity(len);
-        for bx in (0..width).step_by(BLOCK) {
-            for y in 0..rows {
-                for x in bx..(bx + BLOCK).min(width) {
-                    order.push((y * width + x) as u32);
-                }
+    /// traced (the full bands' order is made once).
+    pub fn order(&self, len: usize) -> Cow<'_, [u32]> {
+        if len == self.full.len() {
+            Cow::Borrowed(&self.full)
+        } else {
+            Cow::Owned(order_of(self.width, len))
+        }
+    }
+}
+
+/// The traced order of a band of `len` rays: block by block, each block row
+/// by row, in an image of `width` (the last band of an image may have fewer
+/// than four rows); as they come otherwise.
+fn order_of(width: Option<usize>, len: usize) -> Vec<u32> {
+    let Some(width) = width else {
+        return (0..len as u32).collect();
+    };
+    let rows = len / width;
+    let mut order = Vec::with_capacity(len);
+    for bx in (0..width).step_by(BLOCK) {
+        for y in 0..rows {
+            for x in bx..(bx + BLOCK).min(width) {
+                order.push((y * width + x) as u32);
             }
         }
-        order
     }
+    order
 }

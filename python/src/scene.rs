@@ -90,15 +90,6 @@ fn band_rays(rays: &[f32], start: usize, order: &[u32], tnear: f32, tfar: f32) -
         .collect()
 }
 
-/// The traced order of each band of `bands`: the full bands' made once.
-fn band_order<'a>(bands: &Bands, full: &'a [u32], len: usize) -> std::borrow::Cow<'a, [u32]> {
-    if len == full.len() {
-        full.into()
-    } else {
-        bands.order(len).into()
-    }
-}
-
 impl Scene {
     /// The mesh and its structures, for reading (waits while a refit
     /// writes them).
@@ -124,7 +115,7 @@ impl Scene {
         // own part, in parallel; misses are written with the hits.
         let mut c = HitColumns::zeroed(n);
         let bands = Bands::new(n, width);
-        let (len, full) = (bands.len, bands.order(bands.len));
+        let len = bands.len;
         c.t.par_chunks_mut(len)
             .zip(c.geometry.par_chunks_mut(len))
             .zip(c.prim.par_chunks_mut(len))
@@ -132,7 +123,7 @@ impl Scene {
             .zip(c.normal.par_chunks_mut(3 * len))
             .enumerate()
             .for_each(|(b, ((((t, g), p), uv), nrm))| {
-                let order = band_order(&bands, &full, t.len());
+                let order = bands.order(t.len());
                 let traced = band_rays(rays, b * len, &order, 0.0, f32::INFINITY);
                 let mut hits = vec![None; traced.len()];
                 a.intersect_batch(&traced, &mut hits);
@@ -378,13 +369,12 @@ impl Scene {
             let mut occluded = vec![false; n];
             if let Some(a) = &self.read().accel {
                 let bands = Bands::new(n, width);
-                let (len, full) = (bands.len, bands.order(bands.len));
                 occluded
-                    .par_chunks_mut(len)
+                    .par_chunks_mut(bands.len)
                     .enumerate()
                     .for_each(|(b, out)| {
-                        let order = band_order(&bands, &full, out.len());
-                        let traced = band_rays(r, b * len, &order, tnear, tfar);
+                        let order = bands.order(out.len());
+                        let traced = band_rays(r, b * bands.len, &order, tnear, tfar);
                         let mut hit = vec![false; traced.len()];
                         a.occluded_batch(&traced, &mut hit);
                         for (&i, h) in order.iter().zip(hit) {

@@ -146,7 +146,7 @@ fn group_distance2(p: Vec3, tris: &[[Vec3; 3]]) -> [f32; LANES] {
     d2
 }
 
-/// [`triangle_distance2`] in `N` lanes without branches, so that each
+/// [`triangle_distance2`] in [`LANES`] lanes without branches, so that each
 /// lane-wise step compiles to one vector operation: lane `k` holds the
 /// corners `c[corner][axis][k]` of a triangle relative to its query point.
 /// Every region's candidate is computed and the one of Ericson's order
@@ -156,11 +156,11 @@ fn group_distance2(p: Vec3, tris: &[[Vec3; 3]]) -> [f32; LANES] {
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
 #[allow(clippy::manual_clamp)] // `clamp` panics on a NaN bound
-fn distance2_lanes<const N: usize>(c: &[[[f32; N]; 3]; 3]) -> ([f32; N], u32) {
+fn distance2_lanes(c: &[[[f32; LANES]; 3]; 3]) -> ([f32; LANES], u32) {
     let [a, b, cc] = c;
-    let mut d2 = [0f32; N];
+    let mut d2 = [0f32; LANES];
     let mut degenerate = 0u32;
-    for k in 0..N {
+    for k in 0..LANES {
         let (ax, ay, az) = (a[0][k], a[1][k], a[2][k]);
         let (abx, aby, abz) = (b[0][k] - ax, b[1][k] - ay, b[2][k] - az);
         let (acx, acy, acz) = (cc[0][k] - ax, cc[1][k] - ay, cc[2][k] - az);

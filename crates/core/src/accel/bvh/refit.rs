@@ -111,7 +111,6 @@ pub(super) fn check_mesh(mesh: &TriangleMesh, tree: usize) -> Result<(), RefitEr
 /// The leaves' triangles recomputed from `mesh` (in parallel, with each
 /// pack's reach), then every box fitted to them ([`fit_boxes`]).
 fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &TriangleMesh) {
-    let tris = mesh.num_triangles();
     let units = match &mut *p.leaves {
         Leaves::Packed(packs) => {
             let mut bounds = Vec::new();
@@ -119,16 +118,7 @@ fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &Trian
                 .packs_mut()
                 .par_iter_mut()
                 .with_min_len(1024)
-                .map(|pack| {
-                    let mut reach = Aabb::EMPTY;
-                    for lane in 0..4 {
-                        let prim = pack.prim[lane];
-                        if (prim as usize) < tris {
-                            reach = reach.union(pack.load(lane, mesh, prim));
-                        }
-                    }
-                    reach
-                })
+                .map(|pack| pack.reload(mesh))
                 .collect_into_vec(&mut bounds);
             UnitReach {
                 bounds,

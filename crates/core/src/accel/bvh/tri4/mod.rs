@@ -84,6 +84,21 @@ impl Tri4 {
         NodeBox::triangle_reach(a, b, c)
     }
 
+    /// Every used lane loaded again from `mesh` (its vertices moved; the
+    /// same triangles), returning the union of their reach: the refit's
+    /// step for one pack.
+    pub(crate) fn reload(&mut self, mesh: &TriangleMesh) -> Aabb {
+        let tris = mesh.num_triangles();
+        let mut reach = Aabb::EMPTY;
+        for lane in 0..4 {
+            let prim = self.prim[lane];
+            if (prim as usize) < tris {
+                reach = reach.union(self.load(lane, mesh, prim));
+            }
+        }
+        reach
+    }
+
     /// The triangle in lane `lane`.
     pub fn get(&self, lane: usize) -> MollerTri {
         let at = |v: &[[f32; 4]; 3]| Vec3::new(v[0][lane], v[1][lane], v[2][lane]);
