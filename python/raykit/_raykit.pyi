@@ -77,7 +77,7 @@ class InstancedScene:
         threads: int = 0,
     ) -> None: ...
     def cast_rays(
-        self, rays: npt.NDArray[np.float32], mask: int = ..., threads: int = 0
+        self, rays: npt.NDArray[np.float32], mask: int = ..., threads: int = 0, width: int = 0
     ) -> Tuple[
         npt.NDArray[np.float32],
         npt.NDArray[np.uint32],
@@ -93,6 +93,7 @@ class InstancedScene:
         tfar: float = ...,
         mask: int = ...,
         threads: int = 0,
+        width: int = 0,
     ) -> npt.NDArray[np.bool_]: ...
     def count_intersections(
         self, rays: npt.NDArray[np.float32], mask: int = ..., threads: int = 0

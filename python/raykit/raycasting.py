@@ -301,7 +301,9 @@ class RaycastingScene:
         flat, lead = _arrays.rows(rays, "rays", 6)
         mask = _check_mask(mask, "mask")
         if self.instanced:
-            t, g, inst, p, uv, n = self._built().cast_rays(flat, mask, _arrays.threads(nthreads))
+            t, g, inst, p, uv, n = self._built().cast_rays(
+                flat, mask, _arrays.threads(nthreads), _image_width(lead)
+            )
         else:
             t, g, p, uv, n = self._built().cast_rays(flat, _arrays.threads(nthreads), _image_width(lead))
             if mask == 0:
@@ -333,7 +335,9 @@ class RaycastingScene:
             raise ValueError(f"tnear and tfar must be numbers, got {tnear} and {tfar}")
         mask = _check_mask(mask, "mask")
         if self.instanced:
-            hit = self._built().test_occlusions(flat, tnear, tfar, mask, _arrays.threads(nthreads))
+            hit = self._built().test_occlusions(
+                flat, tnear, tfar, mask, _arrays.threads(nthreads), _image_width(lead)
+            )
         else:
             hit = self._built().test_occlusions(flat, tnear, tfar, _arrays.threads(nthreads), _image_width(lead))
             hit &= mask != 0

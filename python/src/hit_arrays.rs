@@ -5,24 +5,10 @@
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
 use pyo3::prelude::*;
-use rayon::prelude::*;
-
-/// Rays per rayon task when filling the columns.
-const GRAIN: usize = 4096;
 
 /// The value of `geometry_ids` and `primitive_ids` for a ray that hits
 /// nothing (Open3D's `RaycastingScene.INVALID_ID`).
 pub const INVALID_ID: u32 = u32::MAX;
-
-/// One ray's nearest hit as the columns hold it.
-pub(crate) struct HitRow {
-    pub(crate) t: f32,
-    pub(crate) geometry: u32,
-    pub(crate) instance: u32,
-    pub(crate) prim: u32,
-    pub(crate) uv: [f32; 2],
-    pub(crate) normal: [f32; 3],
-}
 
 /// The nearest hits of `n` rays, one column per field; a miss has `t`
 /// inf, [`INVALID_ID`] ids and zero uvs and normal.
@@ -59,28 +45,6 @@ impl HitColumns {
             uv: vec![0.0; 2 * n],
             normal: vec![0.0; 3 * n],
         }
-    }
-
-    /// The columns of `hits`, each turned into a row by `row` (in
-    /// parallel).
-    pub(crate) fn of<H: Sync>(hits: &[H], row: impl Fn(&H) -> Option<HitRow> + Sync) -> Self {
-        let mut c = HitColumns::misses(hits.len());
-        hits.par_iter()
-            .zip(c.t.par_iter_mut())
-            .zip(c.geometry.par_iter_mut())
-            .zip(c.instance.par_iter_mut())
-            .zip(c.prim.par_iter_mut())
-            .zip(c.uv.par_chunks_exact_mut(2))
-            .zip(c.normal.par_chunks_exact_mut(3))
-            .with_min_len(GRAIN)
-            .for_each(|((((((h, t), g), inst), p), uv), nrm)| {
-                if let Some(r) = row(h) {
-                    (*t, *g, *inst, *p) = (r.t, r.geometry, r.instance, r.prim);
-                    uv.copy_from_slice(&r.uv);
-                    nrm.copy_from_slice(&r.normal);
-                }
-            });
-        c
     }
 }
 

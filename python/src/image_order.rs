@@ -10,6 +10,8 @@
 //! writes its answers straight into the result columns: no array of all
 //! the rays or of all the hits in traced order is made.
 
+use raykit_core::{Ray, Vec3};
+use rayon::prelude::*;
 use std::borrow::Cow;
 
 /// Side of a block, pixels.
@@ -73,4 +75,52 @@ fn order_of(width: Option<usize>, len: usize) -> Vec<u32> {
         }
     }
     order
+}
+
+/// The ray in row `r` of `[ox, oy, oz, dx, dy, dz]` over `[tnear, tfar]`.
+fn ray(r: &[f32], tnear: f32, tfar: f32) -> Ray {
+    Ray::segment(
+        Vec3::new(r[0], r[1], r[2]),
+        Vec3::new(r[3], r[4], r[5]),
+        tnear,
+        tfar,
+    )
+}
+
+/// The rays of a band starting at ray `start` of the rows of `rays`, in
+/// the band's traced `order`.
+pub fn band_rays(rays: &[f32], start: usize, order: &[u32], tnear: f32, tfar: f32) -> Vec<Ray> {
+    order
+        .iter()
+        .map(|&i| {
+            let at = 6 * (start + i as usize);
+            ray(&rays[at..at + 6], tnear, tfar)
+        })
+        .collect()
+}
+
+/// Per row of `rays` (`n` rows of `[ox, oy, oz, dx, dy, dz]` over
+/// `[tnear, tfar]`): whether `occluded` finds it blocked, traced band by
+/// band ([`Bands`], in image blocks when the rows form rows of `width`).
+pub fn occlusion_by_bands(
+    rays: &[f32],
+    n: usize,
+    width: usize,
+    (tnear, tfar): (f32, f32),
+    occluded: impl Fn(&[Ray], &mut [bool]) + Sync,
+) -> Vec<bool> {
+    let mut out = vec![false; n];
+    let bands = Bands::new(n, width);
+    out.par_chunks_mut(bands.len)
+        .enumerate()
+        .for_each(|(b, out)| {
+            let order = bands.order(out.len());
+            let traced = band_rays(rays, b * bands.len, &order, tnear, tfar);
+            let mut hit = vec![false; traced.len()];
+            occluded(&traced, &mut hit);
+            for (&i, h) in order.iter().zip(hit) {
+                out[i as usize] = h;
+            }
+        });
+    out
 }

@@ -5,13 +5,14 @@
 
 use crate::arrays::rows;
 use crate::errors::value_error;
-use crate::hit_arrays::{column, laid_out, matrix, HitColumns, HitRow};
+use crate::hit_arrays::{column, laid_out, matrix, HitColumns, INVALID_ID};
+use crate::image_order::{band_rays, occlusion_by_bands, Bands};
 use crate::threads::detached;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use raykit_core::accel::BuildOptions;
 use raykit_core::glam::{Affine3A, Vec3A};
-use raykit_core::instancing::{InstancedScene as CoreScene, SceneBuilder, SceneHit};
+use raykit_core::instancing::{InstancedScene as CoreScene, SceneBuilder};
 use raykit_core::{Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 
@@ -41,18 +42,6 @@ fn make_rays(r: &[f32], tnear: f32, tfar: f32) -> Vec<Ray> {
         .collect()
 }
 
-/// A scene hit as the result columns hold it.
-fn row(h: &SceneHit) -> HitRow {
-    HitRow {
-        t: h.t,
-        geometry: h.geometry,
-        instance: h.instance,
-        prim: h.prim,
-        uv: [h.u, h.v],
-        normal: h.normal.to_array(),
-    }
-}
-
 /// The affine map of a row-major `(3, 4)` matrix `[R | t]`.
 fn affine(m: &[f64]) -> Affine3A {
     let col = |j: usize| Vec3A::new(m[j] as f32, m[4 + j] as f32, m[8 + j] as f32);
@@ -64,6 +53,42 @@ fn affine(m: &[f64]) -> Affine3A {
 #[pyclass(module = "raykit._raykit", frozen)]
 pub struct InstancedScene {
     scene: CoreScene,
+}
+
+impl InstancedScene {
+    /// Nearest hits of the `n` rows of `rays` as result columns, traced
+    /// band by band ([`Bands`]: in image blocks when the rays form rows of
+    /// `width`), each band writing its own part of the columns.
+    fn nearest(&self, rays: &[f32], n: usize, mask: u32, width: usize) -> HitColumns {
+        let mut c = HitColumns::zeroed(n);
+        let bands = Bands::new(n, width);
+        let len = bands.len;
+        c.t.par_chunks_mut(len)
+            .zip(c.geometry.par_chunks_mut(len))
+            .zip(c.instance.par_chunks_mut(len))
+            .zip(c.prim.par_chunks_mut(len))
+            .zip(c.uv.par_chunks_mut(2 * len))
+            .zip(c.normal.par_chunks_mut(3 * len))
+            .enumerate()
+            .for_each(|(b, (((((t, g), inst), p), uv), nrm))| {
+                let order = bands.order(t.len());
+                let traced = band_rays(rays, b * len, &order, 0.0, f32::INFINITY);
+                let mut hits = vec![None; traced.len()];
+                self.scene.intersect_batch(&traced, mask, &mut hits);
+                for (&i, h) in order.iter().zip(&hits) {
+                    let i = i as usize;
+                    let Some(h) = h else {
+                        (t[i], g[i], inst[i], p[i]) =
+                            (f32::INFINITY, INVALID_ID, INVALID_ID, INVALID_ID);
+                        continue;
+                    };
+                    (t[i], g[i], inst[i], p[i]) = (h.t, h.geometry, h.instance, h.prim);
+                    uv[2 * i..2 * i + 2].copy_from_slice(&[h.u, h.v]);
+                    nrm[3 * i..3 * i + 3].copy_from_slice(&h.normal.to_array());
+                }
+            });
+        c
+    }
 }
 
 #[pymethods]
@@ -120,8 +145,9 @@ impl InstancedScene {
     /// Nearest hits of `(n, 6)` float32 rays seen by `mask`: `(t_hit,
     /// geometry_ids, instance_ids, primitive_ids, primitive_uvs,
     /// primitive_normals)`, the normal in world space; a miss has `t_hit`
-    /// inf, `INVALID_ID` ids and zero uvs and normal.
-    #[pyo3(signature = (rays, mask=u32::MAX, threads=0))]
+    /// inf, `INVALID_ID` ids and zero uvs and normal. `width`: the rays are
+    /// the rows of an image this wide (traced in pixel blocks; 0: any).
+    #[pyo3(signature = (rays, mask=u32::MAX, threads=0, width=0))]
     #[allow(clippy::type_complexity)]
     fn cast_rays<'py>(
         &self,
@@ -129,6 +155,7 @@ impl InstancedScene {
         rays: PyReadonlyArray2<'py, f32>,
         mask: u32,
         threads: i64,
+        width: usize,
     ) -> PyResult<(
         Bound<'py, PyArray1<f32>>,
         Bound<'py, PyArray1<u32>>,
@@ -138,12 +165,7 @@ impl InstancedScene {
         Bound<'py, PyArray2<f32>>,
     )> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let c = detached(py, threads, || {
-            let mut hits: Vec<Option<SceneHit>> = vec![None; n];
-            self.scene
-                .intersect_batch(&make_rays(r, 0.0, f32::INFINITY), mask, &mut hits);
-            HitColumns::of(&hits, |h| h.as_ref().map(row))
-        })?;
+        let c = detached(py, threads, || self.nearest(r, n, mask, width))?;
         Ok((
             c.t.into_pyarray(py),
             c.geometry.into_pyarray(py),
@@ -155,8 +177,9 @@ impl InstancedScene {
     }
 
     /// Whether each `(n, 6)` float32 ray meets a triangle seen by `mask`
-    /// with `t` in `[tnear, tfar]`.
-    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, mask=u32::MAX, threads=0))]
+    /// with `t` in `[tnear, tfar]`; `width` as for `cast_rays`.
+    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, mask=u32::MAX, threads=0, width=0))]
+    #[allow(clippy::too_many_arguments)]
     fn test_occlusions<'py>(
         &self,
         py: Python<'py>,
@@ -165,13 +188,13 @@ impl InstancedScene {
         tfar: f32,
         mask: u32,
         threads: i64,
+        width: usize,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
         let occluded = detached(py, threads, || {
-            let mut occluded = vec![false; n];
-            self.scene
-                .occluded_batch(&make_rays(r, tnear, tfar), mask, &mut occluded);
-            occluded
+            occlusion_by_bands(r, n, width, (tnear, tfar), |rays, out| {
+                self.scene.occluded_batch(rays, mask, out)
+            })
         })?;
         Ok(occluded.into_pyarray(py))
     }
@@ -228,15 +251,14 @@ impl InstancedScene {
                 .ray_hits_batch(&make_rays(r, 0.0, f32::INFINITY), mask, max_hits)
         })?;
         let (splits, ray_ids, hits) = laid_out(&lists);
-        let rows: Vec<HitRow> = hits.into_iter().map(row).collect();
         Ok((
             splits.into_pyarray(py),
             ray_ids.into_pyarray(py),
-            column(py, &rows, |h| h.t),
-            column(py, &rows, |h| h.geometry),
-            column(py, &rows, |h| h.instance),
-            column(py, &rows, |h| h.prim),
-            matrix(py, rows.iter().flat_map(|h| h.uv).collect(), 2),
+            column(py, &hits, |h| h.t),
+            column(py, &hits, |h| h.geometry),
+            column(py, &hits, |h| h.instance),
+            column(py, &hits, |h| h.prim),
+            matrix(py, hits.iter().flat_map(|h| [h.u, h.v]).collect(), 2),
         ))
     }
 

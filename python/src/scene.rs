@@ -9,7 +9,7 @@ use crate::arrays::{flat, rows};
 use crate::errors::persist_error;
 use crate::errors::value_error;
 use crate::hit_arrays::{matrix, HitColumns, INVALID_ID};
-use crate::image_order::Bands;
+use crate::image_order::{band_rays, occlusion_by_bands, Bands};
 use crate::threads::detached;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
@@ -65,28 +65,6 @@ fn face_normals(mesh: &TriangleMesh) -> Vec<Vec3> {
         .into_par_iter()
         .with_min_len(GRAIN)
         .map(|i| mesh.face_normal(i).normalize_or_zero())
-        .collect()
-}
-
-/// The ray in row `r` of `[ox, oy, oz, dx, dy, dz]` over `[tnear, tfar]`.
-fn ray(r: &[f32], tnear: f32, tfar: f32) -> Ray {
-    Ray::segment(
-        Vec3::new(r[0], r[1], r[2]),
-        Vec3::new(r[3], r[4], r[5]),
-        tnear,
-        tfar,
-    )
-}
-
-/// The rays of a band starting at ray `start` of the rows of `rays`, in
-/// the band's traced `order`.
-fn band_rays(rays: &[f32], start: usize, order: &[u32], tnear: f32, tfar: f32) -> Vec<Ray> {
-    order
-        .iter()
-        .map(|&i| {
-            let at = 6 * (start + i as usize);
-            ray(&rays[at..at + 6], tnear, tfar)
-        })
         .collect()
 }
 
@@ -365,24 +343,11 @@ impl Scene {
         width: usize,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let occluded = detached(py, threads, || {
-            let mut occluded = vec![false; n];
-            if let Some(a) = &self.read().accel {
-                let bands = Bands::new(n, width);
-                occluded
-                    .par_chunks_mut(bands.len)
-                    .enumerate()
-                    .for_each(|(b, out)| {
-                        let order = bands.order(out.len());
-                        let traced = band_rays(r, b * bands.len, &order, tnear, tfar);
-                        let mut hit = vec![false; traced.len()];
-                        a.occluded_batch(&traced, &mut hit);
-                        for (&i, h) in order.iter().zip(hit) {
-                            out[i as usize] = h;
-                        }
-                    });
-            }
-            occluded
+        let occluded = detached(py, threads, || match &self.read().accel {
+            Some(a) => occlusion_by_bands(r, n, width, (tnear, tfar), |rays, out| {
+                a.occluded_batch(rays, out)
+            }),
+            None => vec![false; n],
         })?;
         Ok(occluded.into_pyarray(py))
     }

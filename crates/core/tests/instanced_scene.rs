@@ -12,7 +12,7 @@ use instancing_support::{
 };
 use raykit_core::accel::BuildOptions;
 use raykit_core::glam::{Affine3A, DVec3, Mat3, Vec3};
-use raykit_core::instancing::{SceneBuilder, SceneError, MASK_ALL};
+use raykit_core::instancing::{InstancedScene, SceneBuilder, SceneError, MASK_ALL};
 use raykit_core::{Ray, TriangleMesh};
 
 /// The bunny and the teapot (open meshes), each placed several times with
@@ -120,6 +120,82 @@ fn batch_queries_answer_as_the_single_ray_ones() {
         assert_eq!(counts[k], scene.count_hits(r, MASK_ALL));
         assert_eq!(lists[k], scene.ray_hits(r, MASK_ALL, 5));
     }
+}
+
+/// A pinhole camera's rays: `side`² rays from one eye `away` diagonals of
+/// `bounds` from its centre, looking at it, in image order; the image
+/// plane at distance 1 is `field` wide.
+fn camera_rays(bounds: &raykit_core::Aabb, side: usize, field: f32, away: f32) -> Vec<Ray> {
+    let centre = bounds.center();
+    let eye = centre + Vec3::new(0.3, 0.4, 1.0).normalize() * (away * bounds.diagonal());
+    let forward = (centre - eye).normalize();
+    let right = forward.cross(Vec3::Y).normalize();
+    let up = right.cross(forward);
+    (0..side * side)
+        .map(|p| {
+            let x = ((p % side) as f32 + 0.5) / side as f32 - 0.5;
+            let y = ((p / side) as f32 + 0.5) / side as f32 - 0.5;
+            Ray::new(eye, (forward + field * (x * right + y * up)).normalize())
+        })
+        .collect()
+}
+
+#[test]
+fn rays_from_one_eye_traced_instance_by_instance_answer_as_single_rays() {
+    // Rays leaving one point are traced instance by instance through each
+    // geometry's packets; each must find what the single-ray walk finds.
+    // At equal t the two may keep different instances (coincident faces):
+    // then the batch's hit must be its instance's own nearest hit. A narrow
+    // field finds the instances by one cone, a wide one ray by ray.
+    let placed = real_scene(30, 8);
+    let scene = placed.scene();
+    for (field, away) in [(0.6, 2.0), (4.0, 0.4)] {
+        let rays = camera_rays(&placed.bounds(), 96, field, away);
+        batch_against_single_rays(&placed, &scene, &rays);
+    }
+}
+
+#[test]
+fn random_rays_entering_few_instance_boxes_are_traced_instance_by_instance() {
+    // Rays from many points that enter few instance boxes each (here the
+    // bunny's, a teapot far away) are traced instance by instance too.
+    let bunny = shared_obj("bunny_3674.obj");
+    let far = Affine3A::from_translation(Vec3::X * 50.0 * bunny.bounds().diagonal());
+    let placed = Placed {
+        meshes: vec![bunny.clone(), shared_obj("teapot_992.obj")],
+        instances: vec![(0, Affine3A::IDENTITY, u32::MAX), (1, far, u32::MAX)],
+    };
+    let scene = placed.scene();
+    batch_against_single_rays(&placed, &scene, &rays(&bunny.bounds(), 6000, 21));
+}
+
+/// The batch answers of `rays` against the single-ray ones.
+fn batch_against_single_rays(placed: &Placed, scene: &InstancedScene, rays: &[Ray]) {
+    let mut hits = vec![None; rays.len()];
+    let mut occ = vec![false; rays.len()];
+    scene.intersect_batch(rays, MASK_ALL, &mut hits);
+    scene.occluded_batch(rays, MASK_ALL, &mut occ);
+    let mut seen = 0;
+    for (k, r) in rays.iter().enumerate() {
+        let single = scene.intersect(r, MASK_ALL);
+        assert_eq!(occ[k], scene.occluded(r, MASK_ALL), "ray {k}");
+        assert_eq!(occ[k], single.is_some(), "ray {k}");
+        match (hits[k], single) {
+            (Some(b), Some(s)) if b != s => {
+                assert_eq!(b.t, s.t, "ray {k}");
+                let one = Placed {
+                    meshes: placed.meshes.clone(),
+                    instances: vec![placed.instances[b.instance as usize]],
+                };
+                let own = one.scene().intersect(r, MASK_ALL).expect("its own hit");
+                assert_eq!((own.t, own.prim), (b.t, b.prim), "ray {k}");
+            }
+            (b, s) => assert_eq!(b, s, "ray {k}"),
+        }
+        seen += usize::from(single.is_some());
+    }
+    // The rays find the scene and miss it too.
+    assert!(seen > rays.len() / 100 && seen < rays.len(), "{seen}");
 }
 
 #[test]

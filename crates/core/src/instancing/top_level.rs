@@ -16,6 +16,7 @@ use crate::accel::BuildOptions;
 use crate::query::all_hits::slab8;
 use crate::query::surface_bvh::widen;
 use crate::ray::Ray;
+use glam::Vec3;
 
 /// Children per node.
 const WIDTH: usize = 8;
@@ -135,12 +136,9 @@ impl TopLevelBvh {
     pub(crate) fn walk(
         &self,
         ray: &Ray,
-        mut reach: impl FnMut() -> f32,
-        mut visit: impl FnMut(u32) -> bool,
+        reach: impl FnMut() -> f32,
+        visit: impl FnMut(u32) -> bool,
     ) {
-        if self.nodes.is_empty() || !ray.is_valid() {
-            return;
-        }
         let mut small = [(0u32, 0u32, 0f32); SMALL_STACK];
         let mut big = Vec::new();
         let stack: &mut [(u32, u32, f32)] = if self.stack_need <= SMALL_STACK {
@@ -149,6 +147,58 @@ impl TopLevelBvh {
             big.resize(self.stack_need, (0, 0, 0.0));
             &mut big
         };
+        self.walk_on(stack, ray, reach, visit);
+    }
+
+    /// Every instance in a leaf whose box and whose ancestors' boxes all
+    /// pass `keep(min, max)`, in no particular order: a walk for a
+    /// bounding volume of many rays (a cone, a frustum) instead of one ray.
+    pub(crate) fn each_kept(&self, keep: impl Fn(Vec3, Vec3) -> bool, mut visit: impl FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            for k in 0..WIDTH {
+                if node.child[k] == EMPTY {
+                    continue;
+                }
+                let min = Vec3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
+                let max = Vec3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
+                if !keep(min, max) {
+                    continue;
+                }
+                let (child, count) = (node.child[k], node.count[k]);
+                if count > 0 {
+                    for &inst in &self.order[child as usize..(child + count) as usize] {
+                        visit(inst);
+                    }
+                } else {
+                    stack.push(child);
+                }
+            }
+        }
+    }
+
+    /// A stack that [`TopLevelBvh::walk_on`] can use, for a caller that
+    /// walks many rays.
+    pub(crate) fn stack(&self) -> Vec<(u32, u32, f32)> {
+        vec![(0, 0, 0.0); self.stack_need.max(1)]
+    }
+
+    /// [`TopLevelBvh::walk`] on `stack` (from [`TopLevelBvh::stack`]).
+    #[inline]
+    pub(crate) fn walk_on(
+        &self,
+        stack: &mut [(u32, u32, f32)],
+        ray: &Ray,
+        mut reach: impl FnMut() -> f32,
+        mut visit: impl FnMut(u32) -> bool,
+    ) {
+        if self.nodes.is_empty() || !ray.is_valid() {
+            return;
+        }
         stack[0] = (0, 0, ray.tnear);
         let mut sp = 1;
         while sp > 0 {
