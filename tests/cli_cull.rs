@@ -146,7 +146,12 @@ fn the_rays_mode_keeps_the_box_and_reports_its_search() {
     assert_eq!(r["parts_removed"], SPHERES, "{r}");
     let x = &r["stats"]["rays"];
     assert_eq!(x["converged"], true, "{r}");
-    assert!(x["rays_per_removed"].as_u64().unwrap() > 0, "{r}");
+    let k = x["rays_per_removed"].as_u64().unwrap();
+    assert!(k > 0, "{r}");
+    let f = x["escape_fraction_95"].as_f64().unwrap();
+    // About 3 / k: the rule of three.
+    let three = f * k as f64;
+    assert!(three > 2.9 && three < 3.1, "{r}");
     let culled = raykit_io::load_mesh(&output).unwrap();
     assert_eq!(triangle_set(&culled), triangle_set(&shell));
     let names: Vec<&str> = culled.parts.iter().map(|p| p.name.as_str()).collect();

@@ -154,6 +154,15 @@ pub struct RayStats {
     /// positive area survived (the least over them; the frontier's got more),
     /// besides the views and the shared directions.
     pub rays_per_removed: u64,
+    /// How sure the removals are: a removed triangle from which at least
+    /// this fraction of (point, direction) samples escape (points uniform
+    /// on it, directions uniform over the sphere) would have been found with
+    /// probability 95% by the `k` = [`RayStats::rays_per_removed`] rays it
+    /// survived: `1 - 0.05^(1/k)`, about `3 / k`. Rarer escapes, through
+    /// narrower openings, may still be missed. `None` when no triangle of
+    /// positive area is removed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub escape_fraction_95: Option<f64>,
     /// Zero-area triangles (no face to see; removed).
     pub degenerate: usize,
     /// Width of the beam an escape needs (0: a single ray), model units.
@@ -322,11 +331,12 @@ pub fn visible_by_rays_with_progress(
         }
     }
     stats.rays_per_triangle = stats.rays as f64 / n as f64;
-    stats.rays_per_removed = (0..n)
+    let least = (0..n)
         .filter(|&t| !visible[t] && !degenerate[t])
         .map(|t| own_rays[t])
-        .min()
-        .unwrap_or(0);
+        .min();
+    stats.rays_per_removed = least.unwrap_or(0);
+    stats.escape_fraction_95 = least.map(|k| 1.0 - 0.05f64.powf(1.0 / k.max(1) as f64));
     (visible, stats)
 }
 

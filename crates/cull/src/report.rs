@@ -148,8 +148,7 @@ impl CullReport {
         if let Some(x) = &s.rays {
             say!(
                 "rays: {} seen by {} views of {}x{}, {} by escape rays and shared directions in {} rounds \
-                 ({}; last round added {}); {} rays, {:.0} per triangle; every removed triangle survived \
-                 at least {} escape rays of its own; {} zero-area triangles removed",
+                 ({}; last round added {}); {} rays, {:.0} per triangle; {}; {} zero-area triangles removed",
                 x.by_views,
                 x.viewpoints,
                 x.image,
@@ -164,7 +163,15 @@ impl CullReport {
                 x.last_round_added,
                 x.rays,
                 x.rays_per_triangle,
-                x.rays_per_removed,
+                x.escape_fraction_95.map_or(
+                    "no triangle of positive area removed".to_string(),
+                    |f| format!(
+                        "every removed triangle survived at least {} escape rays of its own (one \
+                         escaping through {f:.1e} of its point and direction samples would have been \
+                         found with 95% probability)",
+                        x.rays_per_removed
+                    )
+                ),
                 x.degenerate
             );
         }

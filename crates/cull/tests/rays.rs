@@ -77,6 +77,13 @@ fn a_closed_shell_keeps_exactly_the_shell() {
     assert_eq!(s.last_round_added, 0);
     assert_eq!(s.by_views + s.by_escape_rays, 6 * 6 * 2 * 6);
     assert!(s.rays_per_removed > 0);
+    // The 95% bound against the rule of three, -ln(0.05) / k.
+    let k = s.rays_per_removed as f64;
+    let f = s.escape_fraction_95.expect("triangles are removed");
+    assert!(
+        (f * k / 0.05f64.ln().abs() - 1.0).abs() < 0.01,
+        "{f} for {k} rays"
+    );
 }
 
 #[test]

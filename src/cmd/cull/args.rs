@@ -40,7 +40,9 @@ pub enum ModeArg {
   triangles near visible ones getting 4 times more, until two rounds in a row find nothing new\n\
   (converged) or --rounds run out (the report says which).\n\
   Every kept triangle rests on a ray that escaped; a removed one survived the rays the report\n\
-  states (rays_per_removed: each removed triangle's own escape rays, the least over them).\n\
+  states (rays_per_removed: each removed triangle's own escape rays, the least over them;\n\
+  escape_fraction_95: a triangle escaping through at least this fraction of its point and direction\n\
+  samples would have been found with 95% probability; rarer escapes may be missed).\n\
   --min-opening W demands that an escape pass as a beam W x the bounding-box diagonal wide, so that\n\
   hairline cracks between CAD faces do not count (the output says which definition was used).\n\
   Not yet the default: its search does not converge on large assemblies within minutes, so it can\n\
@@ -66,7 +68,8 @@ Prints triangles and parts before, after and removed, and the times; --report FI
 on stdout instead of the summary) writes a JSON report: input, output, by, mode, confirm,\n\
 resolution, min_opening, triangles_in/out/removed, parts_in/out/removed, load_s, cull_s, save_s,\n\
 and stats (the library's CullStats: the grid modes' grid, field and step times; the rays mode's\n\
-`rays`: views, rounds, rays, rays_per_triangle, rays_per_removed, converged, each round's log).\n\n\
+`rays`: views, rounds, rays, rays_per_triangle, rays_per_removed, escape_fraction_95, converged,\n\
+each round's log).\n\n\
 --evaluate also runs the ray-traced ground truth on the input, independent of the rays mode (its\n\
 own seeds, renders from 10,000+ viewpoints at two bounding radii (the rays mode's eyes are at\n\
 three), random directions per face, a Pluecker triangle test instead of Moeller-Trumbore), sample counts doubled\n\

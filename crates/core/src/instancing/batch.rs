@@ -109,8 +109,9 @@ impl InstancedScene {
     /// Rays from one point: when a cone round them is narrow and holds few
     /// instances ([`MOST_INSTANCES_IN_CONE`]), the top level is walked once
     /// with it and each instance inside gets every ray (its own root
-    /// rejects the rays that pass by); otherwise it is walked per ray. Either way the nearer instances come first, so their
-    /// hits cut the rays before the farther ones are traced. Rays from
+    /// rejects the rays that pass by); otherwise it is walked per ray.
+    /// Either way the nearer instances come first, so their hits cut the
+    /// rays before the farther ones are traced. Rays from
     /// many points get no such order, so they are traced instance by
     /// instance only when they enter few boxes each
     /// ([`MOST_BOXES_PER_RAY`], judged first on [`SAMPLED_RAYS`] rays);
