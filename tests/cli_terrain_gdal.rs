@@ -356,6 +356,14 @@ fn agrees_with_gdal_viewshed_over_the_curved_earth() {
          {flat_pct:.2}% flat (-cc 0), {curved_pct:.2}% curved (-cc 0.85714); the curvature changes {effect:.2}%",
         dem.width, dem.height
     );
+    // The warp leaves no data round the tile; there, and only there, both
+    // masks hold --nodata-value.
+    let missing = dem.heights.iter().filter(|h| h.is_nan()).count();
+    assert!(missing > 0, "the warped tile should have no-data cells");
+    for (i, h) in dem.heights.iter().enumerate() {
+        assert_eq!(flat[i] == 254, h.is_nan(), "flat mask, cell {i}");
+        assert_eq!(curved[i] == 254, h.is_nan(), "curved mask, cell {i}");
+    }
     // The curvature matters here, and both tools apply it alike.
     assert!(effect > 1.0, "the curvature changed only {effect:.2}%");
     assert!(flat_pct < 3.0, "{flat_pct:.2}%");

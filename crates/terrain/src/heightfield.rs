@@ -100,40 +100,86 @@ pub struct HeightField {
     pub zmax: f32,
 }
 
+/// The lowest and highest height of `heights` that are not NaN, and whether
+/// any is NaN; eight lanes at a time, so that the loop compiles to vector
+/// operations.
+fn valid_range(heights: &[f32]) -> (f32, f32, bool) {
+    const LANES: usize = 8;
+    let (mut lo, mut hi) = ([f32::INFINITY; LANES], [f32::NEG_INFINITY; LANES]);
+    let mut nan = [false; LANES];
+    let lanes = heights.chunks_exact(LANES);
+    let rest = lanes.remainder();
+    for h in lanes {
+        for k in 0..LANES {
+            lo[k] = lo[k].min(h[k]);
+            hi[k] = hi[k].max(h[k]);
+            nan[k] |= h[k].is_nan();
+        }
+    }
+    let mut out = (f32::INFINITY, f32::NEG_INFINITY, false);
+    for (k, &h) in rest.iter().enumerate() {
+        lo[k] = lo[k].min(h);
+        hi[k] = hi[k].max(h);
+        nan[k] |= h.is_nan();
+    }
+    for k in 0..LANES {
+        out = (out.0.min(lo[k]), out.1.max(hi[k]), out.2 || nan[k]);
+    }
+    out
+}
+
 impl HeightField {
     /// The surface of `dem`; no-data samples become the lowest height.
     /// Needs at least 2 × 2 grid points with at least one valid height.
     pub fn new(dem: &Dem) -> Result<HeightField, String> {
+        Self::with_heights(dem, dem.heights.clone()).map_err(|(e, _)| e)
+    }
+
+    /// [`HeightField::new`] with `dem`'s heights moved into the surface
+    /// instead of copied (a 4096² DEM holds 64 MiB of them), leaving
+    /// `dem.heights` empty; on an error they stay in `dem`.
+    pub fn take(dem: &mut Dem) -> Result<HeightField, String> {
+        let heights = std::mem::take(&mut dem.heights);
+        Self::with_heights(dem, heights).map_err(|(e, heights)| {
+            dem.heights = heights;
+            e
+        })
+    }
+
+    /// The surface of `dem`'s grid over `heights` (`dem`'s own), no-data
+    /// samples replaced in place by the lowest height; on an error, the
+    /// message and `heights` untouched.
+    fn with_heights(dem: &Dem, mut heights: Vec<f32>) -> Result<HeightField, (String, Vec<f32>)> {
         if dem.width < 2 || dem.height < 2 {
-            return Err(format!(
+            let e = format!(
                 "a height field needs at least 2x2 samples, got {}x{}",
                 dem.width, dem.height
-            ));
+            );
+            return Err((e, heights));
         }
         use rayon::prelude::*;
-        let (zmin, zmax) = dem
-            .heights
-            .par_iter()
-            .filter(|h| !h.is_nan())
-            .fold(
-                || (f32::INFINITY, f32::NEG_INFINITY),
-                |(lo, hi), &h| (lo.min(h), hi.max(h)),
-            )
-            .reduce(
-                || (f32::INFINITY, f32::NEG_INFINITY),
-                |a, b| (a.0.min(b.0), a.1.max(b.1)),
-            );
+        // Lowest and highest valid height, and whether any is missing.
+        let (zmin, zmax, missing) = heights.par_chunks(1 << 16).map(valid_range).reduce(
+            || (f32::INFINITY, f32::NEG_INFINITY, false),
+            |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 || b.2),
+        );
         if zmin > zmax {
-            return Err("the DEM has no valid height (every sample is no-data)".into());
+            let e = "the DEM has no valid height (every sample is no-data)".to_string();
+            return Err((e, heights));
         }
-        let heights = dem
-            .heights
-            .par_iter()
-            .map(|&h| if h.is_nan() { zmin } else { h })
-            .collect();
         let (sx, sy) = dem.cell_size_m();
         if !(sx > 0.0 && sy > 0.0 && sx.is_finite() && sy.is_finite()) {
-            return Err(format!("cell size must be positive, got {sx} x {sy}"));
+            return Err((
+                format!("cell size must be positive, got {sx} x {sy}"),
+                heights,
+            ));
+        }
+        if missing {
+            heights.par_iter_mut().for_each(|h| {
+                if h.is_nan() {
+                    *h = zmin
+                }
+            });
         }
         Ok(HeightField {
             width: dem.width,
@@ -319,4 +365,48 @@ pub fn slab(ray: &GridRay, lo: [f64; 3], hi: [f64; 3], tmin: f64, tmax: f64) -> 
         }
     }
     Some((t0, t1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The surface's height range, and the filling of no-data samples,
+    /// against a plain loop, on grids of one or several parallel chunks
+    /// whose sizes are no multiple of the lanes; `take` moves the heights
+    /// and gives them back on an error.
+    #[test]
+    fn range_and_filling_match_a_plain_loop() {
+        let mut rng = raykit_core::rng::Pcg32::new(9);
+        for (w, h) in [(2, 2), (3, 7), (301, 257), (517, 300)] {
+            let heights: Vec<f32> = (0..w * h)
+                .map(|_| {
+                    if rng.next_u32().is_multiple_of(13) {
+                        f32::NAN
+                    } else {
+                        rng.range_f32(-400.0, 3000.0)
+                    }
+                })
+                .collect();
+            let valid = heights.iter().filter(|h| !h.is_nan());
+            let lo = valid
+                .clone()
+                .fold(f32::INFINITY, |a, &b| if b < a { b } else { a });
+            let hi = valid.fold(f32::NEG_INFINITY, |a, &b| if b > a { b } else { a });
+            let mut dem = Dem::from_heights(w, h, heights.clone());
+            let copied = HeightField::new(&dem).unwrap();
+            let field = HeightField::take(&mut dem).unwrap();
+            assert!(dem.heights.is_empty(), "{w}x{h}: the heights moved");
+            for f in [&copied, &field] {
+                assert_eq!((f.zmin, f.zmax), (lo, hi), "{w}x{h}");
+                for (i, (&got, &given)) in f.heights.iter().zip(&heights).enumerate() {
+                    let want = if given.is_nan() { lo } else { given };
+                    assert_eq!(got, want, "{w}x{h}, sample {i}");
+                }
+            }
+        }
+        let mut empty = Dem::from_heights(3, 3, vec![f32::NAN; 9]);
+        assert!(HeightField::take(&mut empty).is_err());
+        assert_eq!(empty.heights.len(), 9, "the heights are given back");
+    }
 }

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 
 use raykit_terrain::io::{
     load_dem, read_geotiff, read_hgt, read_png, read_raw, read_ter, write_dem_geotiff,
-    write_geotiff_f32, write_geotiff_u8, DemError, LoadOptions, RawSpec, RawType,
+    write_geotiff_f32, write_geotiff_f32_with, write_geotiff_u8, DemError, GeoTiffLayout,
+    LoadOptions, RawSpec, RawType, TiffCompression,
 };
 use raykit_terrain::{Dem, GeoRef};
 
@@ -357,6 +358,55 @@ fn geotiff_round_trip_f32_keeps_data_and_georef() {
     assert_eq!(back.nodata, Some(-9999.0));
     let ifd = Ifd::parse(&std::fs::read(&out).unwrap());
     assert_eq!(ifd.ascii(42113).as_deref(), Some("-9999"));
+}
+
+/// Uncompressed float strips (gdalwarp's default layout) are read straight
+/// into place, strip by strip in parallel: the same heights as the `tiff`
+/// crate's decoding of the tiled, compressed source, no-data included, with
+/// a last strip shorter than the others.
+#[test]
+fn geotiff_plain_float_strips_read_as_decoded() {
+    let dir = TempDir::new("plain-strips");
+    let src = read_geotiff(terrain_file("lidar_dem_400.tif")).unwrap();
+    // The tile's rows five times over, less three: strips of about a
+    // megabyte, the last one short.
+    let rows = 5 * 400 - 3;
+    let mut heights: Vec<f32> = src
+        .heights
+        .iter()
+        .copied()
+        .cycle()
+        .take(400 * rows)
+        .collect();
+    heights[3] = f32::NAN;
+    heights[400 * (rows - 1) + 11] = f32::NAN;
+    let layout = GeoTiffLayout {
+        compression: TiffCompression::None,
+        tile: None,
+    };
+    let out = dir.join("plain.tif");
+    write_geotiff_f32_with(
+        &out,
+        400,
+        rows,
+        &heights,
+        &src.georef,
+        Some(-9999.0),
+        &layout,
+    )
+    .unwrap();
+    let ifd = Ifd::parse(&std::fs::read(&out).unwrap());
+    assert_eq!(ifd.uints(259), Some(vec![1]), "uncompressed");
+    let (strips, per_strip) = (ifd.uints(273).unwrap(), ifd.uints(278).unwrap());
+    assert!(strips.len() > 2, "{} strips", strips.len());
+    assert!(
+        rows % per_strip[0] as usize != 0,
+        "the last strip should be short"
+    );
+    let back = read_geotiff(&out).unwrap();
+    assert_eq!((back.width, back.height), (400, rows));
+    assert_same_heights(&back.heights, &heights);
+    assert_eq!(back.georef, src.georef);
 }
 
 #[test]

@@ -19,19 +19,24 @@ use super::geotiff_layout::TiffCompression;
 /// A sample type the tiled writer can lay out as bytes (in the machine's
 /// byte order, which the `tiff` crate's header declares).
 pub trait TileSample: Copy {
-    /// Append the sample's bytes to `out`.
-    fn put(self, out: &mut Vec<u8>);
+    /// Append the bytes of `samples` to `out`.
+    fn put_all(samples: impl Iterator<Item = Self>, out: &mut Vec<u8>);
 }
 
 impl TileSample for u8 {
-    fn put(self, out: &mut Vec<u8>) {
-        out.push(self);
+    #[inline]
+    fn put_all(samples: impl Iterator<Item = Self>, out: &mut Vec<u8>) {
+        out.extend(samples);
     }
 }
 
 impl TileSample for f32 {
-    fn put(self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.to_ne_bytes());
+    #[inline]
+    fn put_all(samples: impl Iterator<Item = Self>, out: &mut Vec<u8>) {
+        out.reserve(4 * samples.size_hint().0);
+        for s in samples {
+            out.extend_from_slice(&s.to_ne_bytes());
+        }
     }
 }
 
@@ -142,9 +147,10 @@ where
     let strips = packed_blocks(height.div_ceil(rows), compression, |k, raw| {
         let first = k * rows;
         let end = (first + rows).min(height);
-        for &s in &data[first * width..end * width] {
-            fix(s).put(raw);
-        }
+        C::Inner::put_all(
+            data[first * width..end * width].iter().map(|&s| fix(s)),
+            raw,
+        );
     })?;
     let (offsets, counts) = write_blocks(d, &strips)?;
     write_sample_tags::<W, K, C>(d, width, height, compression)?;
@@ -179,17 +185,20 @@ where
     let (across, down) = (width.div_ceil(tw), height.div_ceil(th));
     let tiles = packed_blocks(across * down, compression, |k, raw| {
         let (tx, ty) = (k % across, k / across);
+        let (col, inside) = (tx * tw, tw.min(width - tx * tw));
         for r in 0..th {
             let row = ty * th + r;
-            for c in 0..tw {
-                let col = tx * tw + c;
-                let s = if row < height && col < width {
-                    fix(data[row * width + col])
-                } else {
-                    pad
-                };
-                s.put(raw);
-            }
+            // The tile's part of the row, then padding past the grid.
+            let part = if row < height {
+                &data[row * width + col..row * width + col + inside]
+            } else {
+                &[]
+            };
+            let samples = part.iter().map(|&s| fix(s));
+            C::Inner::put_all(
+                samples.chain(std::iter::repeat_n(pad, tw - part.len())),
+                raw,
+            );
         }
     })?;
     let (offsets, counts) = write_blocks(d, &tiles)?;

@@ -48,7 +48,8 @@ pub const TAG_GDAL_NODATA: u16 = 42113;
 pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
     let path = path.as_ref();
     let mut file = File::open(path).map_err(|e| DemError::open(path, &e))?;
-    let ifd_at = check_header(path, &mut file)?;
+    let (ifd_at, little_endian) = check_header(path, &mut file)?;
+    let strips_file = file.try_clone().map_err(|e| DemError::open(path, &e))?;
     file.seek(SeekFrom::Start(0))
         .map_err(|e| DemError::at_byte(path, 0, format!("seek failed: {e}")))?;
     let limits = {
@@ -116,10 +117,31 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
         }
     };
 
-    let data = dec
-        .read_image()
-        .map_err(|e| DemError::new(path, "image data", format!("cannot decode samples: {e}")))?;
-    let heights = to_heights(data, nodata);
+    let plain = little_endian && cfg!(target_endian = "little") && bits == 32 && format == 3;
+    let heights = match plain
+        .then(|| plain_strips(path, &mut dec, &strips_file, width, height))
+        .transpose()?
+        .flatten()
+    {
+        Some(mut heights) => {
+            if let Some(nd) = nodata.filter(|nd| !nd.is_nan()) {
+                let nd32 = nodata_as_f32(nd);
+                use rayon::prelude::*;
+                heights.par_iter_mut().for_each(|s| {
+                    if *s == nd32 {
+                        *s = f32::NAN
+                    }
+                });
+            }
+            heights
+        }
+        None => {
+            let data = dec.read_image().map_err(|e| {
+                DemError::new(path, "image data", format!("cannot decode samples: {e}"))
+            })?;
+            to_heights(data, nodata)
+        }
+    };
     if heights.len() != width * height {
         return Err(DemError::new(
             path,
@@ -139,8 +161,9 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
     })
 }
 
-/// Checks the 8-byte TIFF header and returns the first IFD's offset.
-fn check_header(path: &Path, file: &mut File) -> Result<u64, DemError> {
+/// Checks the TIFF header (8 bytes, 16 for BigTIFF): the first IFD's
+/// offset, and whether the file is little-endian.
+fn check_header(path: &Path, file: &mut File) -> Result<(u64, bool), DemError> {
     let mut head = [0u8; 16];
     let mut n = 0;
     while n < head.len() {
@@ -190,19 +213,21 @@ fn check_header(path: &Path, file: &mut File) -> Result<u64, DemError> {
     match u16_at(2, le) {
         42 => {
             let b = [head[4], head[5], head[6], head[7]];
-            Ok(if le {
+            let at = if le {
                 u32::from_le_bytes(b)
             } else {
                 u32::from_be_bytes(b)
-            } as u64)
+            };
+            Ok((at as u64, le))
         }
         43 => {
             let b: [u8; 8] = head[8..16].try_into().unwrap_or_default();
-            Ok(if le {
+            let at = if le {
                 u64::from_le_bytes(b)
             } else {
                 u64::from_be_bytes(b)
-            })
+            };
+            Ok((at, le))
         }
         v => Err(DemError::at_byte(
             path,
@@ -210,6 +235,84 @@ fn check_header(path: &Path, file: &mut File) -> Result<u64, DemError> {
             format!("TIFF version {v}; expected 42 (TIFF) or 43 (BigTIFF)"),
         )),
     }
+}
+
+/// The samples of an image stored as uncompressed strips of native-endian
+/// 32-bit samples in one plane (gdalwarp's and gdal_translate's default
+/// layout), read from `file` straight into place, the strips in parallel;
+/// none for any other layout, which the `tiff` crate decodes. A strip that
+/// the file ends inside is an error naming its offset.
+fn plain_strips<R: Read + Seek>(
+    path: &Path,
+    dec: &mut Decoder<R>,
+    file: &File,
+    width: usize,
+    height: usize,
+) -> Result<Option<Vec<f32>>, DemError> {
+    let is = |dec: &mut Decoder<R>, tag: Tag, default: u64, want: u64| {
+        Ok::<_, DemError>(unsigned(path, dec, tag)?.unwrap_or(default) == want)
+    };
+    if !is(dec, Tag::Compression, 1, 1)?
+        || !is(dec, Tag::Predictor, 1, 1)?
+        || !is(dec, Tag::PlanarConfiguration, 1, 1)?
+        || find(path, dec, Tag::TileWidth.to_u16())?.is_some()
+    {
+        return Ok(None);
+    }
+    let list = |dec: &mut Decoder<R>, tag: Tag| match find(path, dec, tag.to_u16())? {
+        None => Ok(None),
+        Some(v) => v
+            .into_u64_vec()
+            .map(Some)
+            .map_err(|e| tag_err(path, tag.to_u16(), e)),
+    };
+    let (Some(offsets), Some(counts)) = (
+        list(dec, Tag::StripOffsets)?,
+        list(dec, Tag::StripByteCounts)?,
+    ) else {
+        return Ok(None);
+    };
+    let rows = unsigned(path, dec, Tag::RowsPerStrip)?
+        .unwrap_or(height as u64)
+        .clamp(1, height as u64) as usize;
+    let strip = rows * width;
+    let strips = height.div_ceil(rows);
+    let fits = offsets.len() == strips
+        && counts.len() == strips
+        && (0..strips).all(|k| counts[k] >= 4 * (strip.min(width * height - k * strip)) as u64);
+    if !fits {
+        return Ok(None);
+    }
+    let mut heights = vec![0f32; width * height];
+    use rayon::prelude::*;
+    heights
+        .par_chunks_mut(strip)
+        .zip(offsets.par_iter())
+        .try_for_each(|(samples, &at)| {
+            // SAFETY: any four bytes are a valid f32, and the byte view
+            // covers exactly the samples' memory.
+            let bytes = unsafe {
+                std::slice::from_raw_parts_mut(samples.as_mut_ptr().cast::<u8>(), 4 * samples.len())
+            };
+            read_at(file, bytes, at).map_err(|e| {
+                DemError::at_byte(path, at, format!("cannot read the strip there: {e}"))
+            })
+        })?;
+    Ok(Some(heights))
+}
+
+/// Fills `buf` from `file` at byte `at`.
+#[cfg(unix)]
+fn read_at(file: &File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
+    std::os::unix::fs::FileExt::read_exact_at(file, buf, at)
+}
+
+/// Fills `buf` from `file` at byte `at`.
+#[cfg(not(unix))]
+fn read_at(file: &File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
+    let mut f = file.try_clone()?;
+    f.seek(SeekFrom::Start(at))?;
+    f.read_exact(buf)
 }
 
 fn tag_err(path: &Path, tag: u16, e: impl std::fmt::Display) -> DemError {

@@ -20,7 +20,7 @@ use raykit_lab::measure::timed;
 use raykit_terrain::curvature::curvature_corrected;
 use raykit_terrain::georef::MapWorld;
 use raykit_terrain::io::layout_from_creation_options;
-use raykit_terrain::mask_cells::{classify, MaskCell, MaskValues, Range, PREVIEW_PALETTE};
+use raykit_terrain::mask_cells::{MaskClasses, MaskValues, Range, PREVIEW_PALETTE};
 use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
 use raykit_terrain::{HeightField, MaxMipmap};
 use rayon::prelude::*;
@@ -99,7 +99,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     crate::paths::ensure_not_input(&args.out, &[input])?;
     crate::paths::ensure_not_input(&preview, &[input])?;
     let (dem, load_s) = timed(|| dem_arg::load(&args.dem));
-    let dem = dem?;
+    let mut dem = dem?;
     // The light's grid position, for the curvature and the distances.
     let light_grid = match &args.light {
         Some(s) => {
@@ -108,18 +108,25 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         }
         None => None,
     };
+    // Where the DEM has no data: none when it has data everywhere.
+    let nodata: Option<Vec<bool>> = dem
+        .heights
+        .par_iter()
+        .any(|h| h.is_nan())
+        .then(|| dem.heights.par_iter().map(|h| h.is_nan()).collect());
+    // The DEM's heights move into the surface (its grid and georeferencing
+    // stay), unless the curvature makes new ones.
     let field = match light_grid {
         Some((c, r)) if args.curvature_coefficient != 0.0 => {
             HeightField::new(&curvature_corrected(&dem, c, r, args.curvature_coefficient))
         }
-        _ => HeightField::new(&dem),
+        _ => HeightField::take(&mut dem),
     }
     .map_err(|e| anyhow::anyhow!("{}: {e}", args.dem))?;
     let method = match args.method {
         Method::Fast => ShadowMethod::Fast,
         Method::Brute => ShadowMethod::BruteForce,
     };
-    let nodata: Vec<bool> = dem.heights.par_iter().map(|h| h.is_nan()).collect();
     eprintln!(
         "{}: {}x{} grid points, cells {:.2} x {:.2} m, load {:.0} ms",
         args.dem,
@@ -133,6 +140,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     if let Some(spec) = &args.sun_path {
         let (pyramid, pyr_s) = timed(|| MaxMipmap::new(&field));
         eprintln!("min/max quadtree {:.0} ms", pyr_s * 1e3);
+        let nodata = nodata.unwrap_or_else(|| vec![false; field.heights.len()]);
         return sun_path(
             &args, spec, &dem, &field, &pyramid, method, &nodata, &preview, &layout,
         );
@@ -197,32 +205,35 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         }),
         _ => None,
     };
-    let class = classify(&mask, &nodata, dem.width, range.as_ref());
-    let lit = class.par_iter().filter(|&&c| c == MaskCell::Lit).count();
     let mask_values = MaskValues {
         visible: args.visible_value,
         invisible: args.invisible_value,
         out_of_range: args.out_of_range_value,
         nodata: nv,
     };
+    let rasters = MaskClasses {
+        mask: &mask,
+        nodata: nodata.as_deref(),
+        width: dem.width,
+        range: range.as_ref(),
+    }
+    .rasters(&mask_values);
     // The GeoTIFF and the preview, side by side.
     let (tif, png) = rayon::join(
         || {
-            let values: Vec<u8> = class.par_iter().map(|c| c.value(&mask_values)).collect();
             raykit_terrain::io::write_geotiff_u8_with(
                 &args.out,
                 dem.width,
                 dem.height,
-                &values,
+                &rasters.values,
                 &dem.georef,
                 Some(nv as f64),
                 &layout,
             )
         },
         || {
-            let index: Vec<u8> = class.par_iter().map(|c| c.preview_index()).collect();
             let (w, h) = (dem.width as u32, dem.height as u32);
-            raykit_io::write_png_indexed(&preview, w, h, &PREVIEW_PALETTE, &index)
+            raykit_io::write_png_indexed(&preview, w, h, &PREVIEW_PALETTE, &rasters.preview)
                 .with_context(|| format!("writing {}", preview.display()))
         },
     );
@@ -231,7 +242,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     eprintln!(
         "{:?}: {:.1}% of the grid points lit, {:.3} s ({}) -> {} ({}) and {}",
         light,
-        100.0 * lit as f64 / mask.len() as f64,
+        100.0 * rasters.lit as f64 / mask.len() as f64,
         secs,
         match method {
             ShadowMethod::Fast => "fast",
