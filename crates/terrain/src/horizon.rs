@@ -722,19 +722,52 @@ fn max_step(field: &HeightField) -> f64 {
         .into_par_iter()
         .map(|r| {
             let row = &z[r * w..(r + 1) * w];
-            let mut s = row
-                .windows(2)
-                .fold(0.0f32, |m, p| m.max((p[1] - p[0]).abs()));
+            let mut s = largest_difference(&row[..w - 1], &row[1..]);
             if r + 1 < h {
-                let next = &z[(r + 1) * w..(r + 2) * w];
-                s = row
-                    .iter()
-                    .zip(next)
-                    .fold(s, |m, (a, b)| m.max((b - a).abs()));
+                s = s.max(largest_difference(row, &z[(r + 1) * w..(r + 2) * w]));
             }
             s as f64
         })
         .reduce(|| 0.0, f64::max)
+}
+
+/// The largest `|b[i] − a[i]|` (the slices are equally long and hold no
+/// NaN), eight lanes at a time so that the loop compiles to vector
+/// operations.
+fn largest_difference(a: &[f32], b: &[f32]) -> f32 {
+    const LANES: usize = 8;
+    let mut m = [0f32; LANES];
+    let (pa, pb) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
+    let (ra, rb) = (pa.remainder(), pb.remainder());
+    for (x, y) in pa.zip(pb) {
+        for k in 0..LANES {
+            let d = (y[k] - x[k]).abs();
+            m[k] = if d > m[k] { d } else { m[k] };
+        }
+    }
+    let mut out = ra
+        .iter()
+        .zip(rb)
+        .fold(0f32, |acc, (x, y)| acc.max((y - x).abs()));
+    for v in m {
+        out = out.max(v);
+    }
+    out
+}
+
+/// The mask's cells, for the octants' sweeps to write in parallel.
+#[derive(Clone, Copy)]
+struct SharedCells(*mut u8);
+
+// SAFETY: the cells are written only through atomic stores while shared.
+unsafe impl Sync for SharedCells {}
+unsafe impl Send for SharedCells {}
+
+impl SharedCells {
+    /// The address of cell `i`.
+    fn at(self, i: usize) -> *mut u8 {
+        self.0.wrapping_add(i)
+    }
 }
 
 /// The sweep's mask for a point light at `light` (world metres) and
@@ -766,14 +799,47 @@ pub fn point_light_mask(field: &HeightField, light: [f64; 3], lift: f64) -> Opti
         },
         step,
     };
-    let mask: Vec<AtomicU8> = (0..w * h)
-        .into_par_iter()
-        .map(|_| AtomicU8::new(UNDECIDED))
-        .collect();
+    let mut mask = vec![UNDECIDED; w * h];
+    // Octants that share an axis or a diagonal may both write its points,
+    // so while they run every write is atomic.
+    let cells = SharedCells(mask.as_mut_ptr());
     octants(lx, ly, w, h).par_iter().for_each(|oct| {
         sweep(oct, &setup, &mut |i, value| {
-            mask[i].store(value, Ordering::Relaxed)
+            assert!(i < w * h);
+            // SAFETY: `i` is within the mask, which outlives the sweep and
+            // is only written through these atomic stores until it ends.
+            unsafe { AtomicU8::from_ptr(cells.at(i)) }.store(value, Ordering::Relaxed)
         });
     });
-    Some(mask.into_par_iter().map(AtomicU8::into_inner).collect())
+    Some(mask)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The steepest step between grid neighbours against a plain loop over
+    /// every pair, on grids whose rows are no multiple of the lanes.
+    #[test]
+    fn max_step_is_the_steepest_neighbour_difference() {
+        let mut rng = raykit_core::rng::Pcg32::new(21);
+        for (w, h) in [(2, 2), (9, 3), (37, 29), (130, 17)] {
+            let heights: Vec<f32> = (0..w * h).map(|_| rng.range_f32(-50.0, 900.0)).collect();
+            let dem = crate::Dem::from_heights(w, h, heights.clone());
+            let field = HeightField::new(&dem).unwrap();
+            let mut want = 0f32;
+            for r in 0..h {
+                for c in 0..w {
+                    let z = heights[r * w + c];
+                    if c + 1 < w {
+                        want = want.max((heights[r * w + c + 1] - z).abs());
+                    }
+                    if r + 1 < h {
+                        want = want.max((heights[(r + 1) * w + c] - z).abs());
+                    }
+                }
+            }
+            assert_eq!(max_step(&field), want as f64, "{w}x{h}");
+        }
+    }
 }

@@ -252,7 +252,9 @@ mod tests {
         let (w, h) = (301, 257);
         let mut rng = raykit_core::rng::Pcg32::new(3);
         let mask: Vec<u8> = (0..w * h).map(|_| (rng.next_u32() & 1) as u8).collect();
-        let nodata: Vec<bool> = (0..w * h).map(|_| rng.next_u32().is_multiple_of(17)).collect();
+        let nodata: Vec<bool> = (0..w * h)
+            .map(|_| rng.next_u32().is_multiple_of(17))
+            .collect();
         let range = Range {
             light_grid: (120.5, 90.25),
             cell: (2.0, 3.0),
