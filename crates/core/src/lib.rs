@@ -49,7 +49,6 @@ pub mod aabb;
 pub mod accel;
 pub mod camera;
 pub mod hit;
-pub mod huge_pages;
 pub mod icosphere;
 pub mod instancing;
 pub mod light;

@@ -799,8 +799,7 @@ pub fn point_light_mask(field: &HeightField, light: [f64; 3], lift: f64) -> Opti
         },
         step,
     };
-    // In huge pages, as the heights: columns are written a page per point.
-    let mut mask = raykit_core::huge_pages::filled(w * h, UNDECIDED);
+    let mut mask = vec![UNDECIDED; w * h];
     // Octants that share an axis or a diagonal may both write its points,
     // so while they run every write is atomic.
     let cells = SharedCells(mask.as_mut_ptr());

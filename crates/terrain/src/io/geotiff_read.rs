@@ -283,9 +283,7 @@ fn plain_strips<R: Read + Seek>(
     if !fits {
         return Ok(None);
     }
-    // In huge pages: the horizon sweep reads columns of the row-major grid,
-    // a 4 KiB page per point.
-    let mut heights = raykit_core::huge_pages::filled(width * height, 0f32);
+    let mut heights = vec![0f32; width * height];
     use rayon::prelude::*;
     heights
         .par_chunks_mut(strip)

@@ -42,6 +42,7 @@ mod enter;
 mod fit;
 #[cfg(target_arch = "x86_64")]
 mod frustum;
+mod huge_pages;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 mod mapped;

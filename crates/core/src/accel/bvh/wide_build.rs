@@ -282,7 +282,7 @@ impl Build<'_> {
                 .collect();
             c.nodes
                 .reserve(subs.iter().map(|(_, s)| s.nodes.len()).sum());
-            crate::huge_pages::advise(&mut c.nodes);
+            super::huge_pages::advise(&mut c.nodes);
             subs.into_iter().map(|(r, sub)| c.append(r, sub)).collect()
         } else {
             kids.iter()

@@ -88,7 +88,7 @@ pub(crate) fn zeroed<W: Words>(n: usize) -> Vec<W> {
             std::alloc::handle_alloc_error(layout);
         }
         let mut v = Vec::from_raw_parts(p, 0, n);
-        crate::huge_pages::advise(&mut v);
+        super::huge_pages::advise(&mut v);
         v.set_len(n);
         v
     }

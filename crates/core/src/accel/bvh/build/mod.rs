@@ -273,7 +273,7 @@ const CHUNK: usize = 16 * 1024;
 /// parallel; the bounds are exact, so the result does not depend on how the
 /// work is split).
 pub(crate) fn prim_refs(mesh: &TriangleMesh) -> (Vec<PrimRef>, RangeInfo) {
-    let mut refs = crate::huge_pages::with_capacity(mesh.num_triangles());
+    let mut refs = super::huge_pages::with_capacity(mesh.num_triangles());
     (0..mesh.num_triangles())
         .into_par_iter()
         .with_min_len(4096)

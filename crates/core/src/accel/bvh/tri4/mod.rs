@@ -247,7 +247,7 @@ impl Tri4Leaves {
                 ranges.push((start as u32, (first + count - start).min(4) as u32));
             }
         }
-        let mut packs = crate::huge_pages::with_capacity(ranges.len());
+        let mut packs = super::huge_pages::with_capacity(ranges.len());
         let mut reach = Vec::with_capacity(ranges.len());
         ranges
             .par_iter()

@@ -1,8 +1,7 @@
-//! Transparent huge pages for large arrays: the BVH builds' references,
-//! leaf packs and wide nodes, and a terrain's heights and masks, are asked
-//! to be backed by 2 MiB pages before they are first written, as Embree's
-//! allocator asks for its build arrays (`madvise(MADV_HUGEPAGE)`, Wald et
-//! al. 2014).
+//! Transparent huge pages for the build's large arrays: the
+//! references, the leaf packs and the wide nodes are asked to be backed by
+//! 2 MiB pages before they are first written, as Embree's allocator asks
+//! for its build arrays (`madvise(MADV_HUGEPAGE)`, Wald et al. 2014).
 //!
 //! Each first write to a 4 KiB page of a fresh allocation is a page fault;
 //! the 1M-triangle terrain's build took about 15,000 of them per build
@@ -10,9 +9,9 @@
 //! pages, about 45 per build. Advised, nine builds of ours took 28,000
 //! faults instead of 156,000 (the mesh's generation included), and the
 //! build against Embree MEDIUM gained in three alternated rounds on the
-//! AMD Zen 3 host; the traced tree also takes fewer TLB entries, as does a
-//! height grid read a column at a time. A hint: where the kernel offers no
-//! huge pages (or on other systems) nothing changes.
+//! AMD Zen 3 host; the traced tree also takes fewer TLB
+//! entries. A hint: where the kernel offers no huge pages (or on other
+//! systems) nothing changes.
 
 /// Arrays smaller than this are left alone (they span under two huge
 /// pages).
@@ -35,7 +34,7 @@ fn huge_range(start: usize, end: usize) -> Option<(usize, usize)> {
 /// Ask for huge pages under the spare capacity of `v` (from its length to
 /// its capacity, shrunk to whole 2 MiB pages), which nothing has written
 /// yet when the vector was just allocated.
-pub fn advise<T>(v: &mut Vec<T>) {
+pub(crate) fn advise<T>(v: &mut Vec<T>) {
     let size = std::mem::size_of::<T>();
     let start = v.as_mut_ptr().wrapping_add(v.len()) as usize;
     let end = (v.as_mut_ptr() as usize).wrapping_add(v.capacity() * size);
@@ -54,17 +53,9 @@ pub fn advise<T>(v: &mut Vec<T>) {
 }
 
 /// An empty vector with room for `n` elements, advised as [`advise`] says.
-pub fn with_capacity<T>(n: usize) -> Vec<T> {
+pub(crate) fn with_capacity<T>(n: usize) -> Vec<T> {
     let mut v = Vec::with_capacity(n);
     advise(&mut v);
-    v
-}
-
-/// `n` copies of `value`, in memory advised as [`advise`] says before it
-/// is first written.
-pub fn filled<T: Clone>(n: usize, value: T) -> Vec<T> {
-    let mut v = with_capacity(n);
-    v.resize(n, value);
     v
 }
 
