@@ -237,11 +237,12 @@ fn check_header(path: &Path, file: &mut File) -> Result<(u64, bool), DemError> {
     }
 }
 
-/// The samples of an image stored as uncompressed strips of native-endian
-/// 32-bit samples in one plane (gdalwarp's and gdal_translate's default
-/// layout), read from `file` straight into place, the strips in parallel;
-/// none for any other layout, which the `tiff` crate decodes. A strip that
-/// the file ends inside is an error naming its offset.
+/// The samples of an image of 32-bit floats in the machine's byte order,
+/// stored as uncompressed strips in one plane (gdalwarp's and
+/// gdal_translate's default layout), read from `file` straight into place,
+/// the strips in parallel; none for any other layout, which the `tiff`
+/// crate decodes. A strip that the file ends inside is an error naming its
+/// offset.
 fn plain_strips<R: Read + Seek>(
     path: &Path,
     dec: &mut Decoder<R>,
@@ -249,12 +250,13 @@ fn plain_strips<R: Read + Seek>(
     width: usize,
     height: usize,
 ) -> Result<Option<Vec<f32>>, DemError> {
-    let is = |dec: &mut Decoder<R>, tag: Tag, default: u64, want: u64| {
-        Ok::<_, DemError>(unsigned(path, dec, tag)?.unwrap_or(default) == want)
+    // No compression, no predictor, one plane: each tag absent or 1.
+    let plain = |dec: &mut Decoder<R>, tag: Tag| {
+        Ok::<_, DemError>(unsigned(path, dec, tag)?.unwrap_or(1) == 1)
     };
-    if !is(dec, Tag::Compression, 1, 1)?
-        || !is(dec, Tag::Predictor, 1, 1)?
-        || !is(dec, Tag::PlanarConfiguration, 1, 1)?
+    if !plain(dec, Tag::Compression)?
+        || !plain(dec, Tag::Predictor)?
+        || !plain(dec, Tag::PlanarConfiguration)?
         || find(path, dec, Tag::TileWidth.to_u16())?.is_some()
     {
         return Ok(None);
