@@ -10,6 +10,7 @@
 //! writes its answers straight into the result columns: no array of all
 //! the rays or of all the hits in traced order is made.
 
+use crate::hit_arrays::{HitColumns, INVALID_ID};
 use raykit_core::{Ray, Vec3};
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -123,4 +124,55 @@ pub fn occlusion_by_bands(
             }
         });
     out
+}
+
+/// One ray's nearest hit as the result columns hold it.
+#[derive(Clone, Copy, Debug)]
+pub struct HitRow {
+    pub t: f32,
+    pub geometry: u32,
+    pub instance: u32,
+    pub prim: u32,
+    pub uv: [f32; 2],
+    pub normal: [f32; 3],
+}
+
+/// Nearest hits of the `n` rows of `rays` (`[ox, oy, oz, dx, dy, dz]` over
+/// `[0, ∞)`) as result columns, traced band by band ([`Bands`], in image
+/// blocks when the rows form rows of `width`): `nearest` answers a band's
+/// rays in traced order, and each band writes its own part of the columns.
+/// The columns start zeroed, which costs nothing until a band writes them;
+/// misses are written with the hits.
+pub fn nearest_by_bands(
+    rays: &[f32],
+    n: usize,
+    width: usize,
+    nearest: impl Fn(&[Ray]) -> Vec<Option<HitRow>> + Sync,
+) -> HitColumns {
+    let mut c = HitColumns::zeroed(n);
+    let bands = Bands::new(n, width);
+    let len = bands.len;
+    c.t.par_chunks_mut(len)
+        .zip(c.geometry.par_chunks_mut(len))
+        .zip(c.instance.par_chunks_mut(len))
+        .zip(c.prim.par_chunks_mut(len))
+        .zip(c.uv.par_chunks_mut(2 * len))
+        .zip(c.normal.par_chunks_mut(3 * len))
+        .enumerate()
+        .for_each(|(b, (((((t, g), inst), p), uv), nrm))| {
+            let order = bands.order(t.len());
+            let traced = band_rays(rays, b * len, &order, 0.0, f32::INFINITY);
+            for (&i, h) in order.iter().zip(nearest(&traced)) {
+                let i = i as usize;
+                let Some(h) = h else {
+                    (t[i], g[i], inst[i], p[i]) =
+                        (f32::INFINITY, INVALID_ID, INVALID_ID, INVALID_ID);
+                    continue;
+                };
+                (t[i], g[i], inst[i], p[i]) = (h.t, h.geometry, h.instance, h.prim);
+                uv[2 * i..2 * i + 2].copy_from_slice(&h.uv);
+                nrm[3 * i..3 * i + 3].copy_from_slice(&h.normal);
+            }
+        });
+    c
 }

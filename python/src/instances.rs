@@ -5,8 +5,8 @@
 
 use crate::arrays::rows;
 use crate::errors::value_error;
-use crate::hit_arrays::{column, laid_out, matrix, HitColumns, INVALID_ID};
-use crate::image_order::{band_rays, occlusion_by_bands, Bands};
+use crate::hit_arrays::{column, laid_out, matrix, HitColumns};
+use crate::image_order::{nearest_by_bands, occlusion_by_bands, HitRow};
 use crate::threads::detached;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -57,37 +57,25 @@ pub struct InstancedScene {
 
 impl InstancedScene {
     /// Nearest hits of the `n` rows of `rays` as result columns, traced
-    /// band by band ([`Bands`]: in image blocks when the rays form rows of
-    /// `width`), each band writing its own part of the columns.
+    /// band by band (in image blocks when the rays form rows of `width`;
+    /// [`nearest_by_bands`]).
     fn nearest(&self, rays: &[f32], n: usize, mask: u32, width: usize) -> HitColumns {
-        let mut c = HitColumns::zeroed(n);
-        let bands = Bands::new(n, width);
-        let len = bands.len;
-        c.t.par_chunks_mut(len)
-            .zip(c.geometry.par_chunks_mut(len))
-            .zip(c.instance.par_chunks_mut(len))
-            .zip(c.prim.par_chunks_mut(len))
-            .zip(c.uv.par_chunks_mut(2 * len))
-            .zip(c.normal.par_chunks_mut(3 * len))
-            .enumerate()
-            .for_each(|(b, (((((t, g), inst), p), uv), nrm))| {
-                let order = bands.order(t.len());
-                let traced = band_rays(rays, b * len, &order, 0.0, f32::INFINITY);
-                let mut hits = vec![None; traced.len()];
-                self.scene.intersect_batch(&traced, mask, &mut hits);
-                for (&i, h) in order.iter().zip(&hits) {
-                    let i = i as usize;
-                    let Some(h) = h else {
-                        (t[i], g[i], inst[i], p[i]) =
-                            (f32::INFINITY, INVALID_ID, INVALID_ID, INVALID_ID);
-                        continue;
-                    };
-                    (t[i], g[i], inst[i], p[i]) = (h.t, h.geometry, h.instance, h.prim);
-                    uv[2 * i..2 * i + 2].copy_from_slice(&[h.u, h.v]);
-                    nrm[3 * i..3 * i + 3].copy_from_slice(&h.normal.to_array());
-                }
-            });
-        c
+        nearest_by_bands(rays, n, width, |traced| {
+            let mut hits = vec![None; traced.len()];
+            self.scene.intersect_batch(traced, mask, &mut hits);
+            hits.iter()
+                .map(|h| {
+                    h.map(|h| HitRow {
+                        t: h.t,
+                        geometry: h.geometry,
+                        instance: h.instance,
+                        prim: h.prim,
+                        uv: [h.u, h.v],
+                        normal: h.normal.to_array(),
+                    })
+                })
+                .collect()
+        })
     }
 }
 

@@ -9,7 +9,7 @@ use crate::arrays::{flat, rows};
 use crate::errors::persist_error;
 use crate::errors::value_error;
 use crate::hit_arrays::{matrix, HitColumns, INVALID_ID};
-use crate::image_order::{band_rays, occlusion_by_bands, Bands};
+use crate::image_order::{nearest_by_bands, occlusion_by_bands, HitRow};
 use crate::threads::detached;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
@@ -83,42 +83,31 @@ impl Scene {
 
     /// Nearest hits of the rows of `rays` as result columns, traced band
     /// by band in image blocks when the rays form rows of `width` (0: any
-    /// order; [`Bands`]).
+    /// order; [`nearest_by_bands`]).
     fn nearest(&self, built: &Built, rays: &[f32], width: usize) -> HitColumns {
         let n = rays.len() / 6;
         let Some(a) = &built.accel else {
             return HitColumns::misses(n);
         };
-        // Zeroed columns cost nothing until the bands write them, each its
-        // own part, in parallel; misses are written with the hits.
-        let mut c = HitColumns::zeroed(n);
-        let bands = Bands::new(n, width);
-        let len = bands.len;
-        c.t.par_chunks_mut(len)
-            .zip(c.geometry.par_chunks_mut(len))
-            .zip(c.prim.par_chunks_mut(len))
-            .zip(c.uv.par_chunks_mut(2 * len))
-            .zip(c.normal.par_chunks_mut(3 * len))
-            .enumerate()
-            .for_each(|(b, ((((t, g), p), uv), nrm))| {
-                let order = bands.order(t.len());
-                let traced = band_rays(rays, b * len, &order, 0.0, f32::INFINITY);
-                let mut hits = vec![None; traced.len()];
-                a.intersect_batch(&traced, &mut hits);
-                for (&i, h) in order.iter().zip(&hits) {
-                    let i = i as usize;
-                    let Some(h) = h else {
-                        (t[i], g[i], p[i]) = (f32::INFINITY, INVALID_ID, INVALID_ID);
-                        continue;
-                    };
-                    let (geometry, prim) = self.split(h.prim);
-                    (t[i], g[i], p[i]) = (h.t, geometry, prim);
-                    uv[2 * i..2 * i + 2].copy_from_slice(&[h.u, h.v]);
-                    nrm[3 * i..3 * i + 3]
-                        .copy_from_slice(&built.normals[h.prim as usize].to_array());
-                }
-            });
-        c
+        nearest_by_bands(rays, n, width, |traced| {
+            let mut hits = vec![None; traced.len()];
+            a.intersect_batch(traced, &mut hits);
+            hits.iter()
+                .map(|h| {
+                    h.map(|h| {
+                        let (geometry, prim) = self.split(h.prim);
+                        HitRow {
+                            t: h.t,
+                            geometry,
+                            instance: INVALID_ID,
+                            prim,
+                            uv: [h.u, h.v],
+                            normal: built.normals[h.prim as usize].to_array(),
+                        }
+                    })
+                })
+                .collect()
+        })
     }
 }
 
