@@ -1,5 +1,6 @@
 //! `raykit terrain shadow` end to end: the GeoTIFF mask carries the DEM's
-//! georeferencing and equals the library's brute-force mask; `--compare`
+//! georeferencing and equals the library's brute-force mask, and its
+//! preview shows each cell's class in its colour; `--compare`
 //! finds no difference; `--sun-path` on a flat DEM gives every cell the
 //! day's full daylight (counted independently from the solar formula);
 //! bad arguments name the flag.
@@ -9,6 +10,7 @@ mod cli;
 
 use cli::{raykit, s, text};
 use raykit_terrain::io::{load_dem, read_geotiff, LoadOptions};
+use raykit_terrain::mask_cells::MaskCell;
 use raykit_terrain::shadow::{shadow_mask, Light, ShadowMethod};
 use raykit_terrain::{HeightField, MaxMipmap};
 use std::path::PathBuf;
@@ -50,8 +52,19 @@ fn point_light_mask_keeps_the_georeferencing_and_equals_brute_force() {
         "{}",
         text(&o.stderr)
     );
-    assert!(dir.path().join("mask.png").is_file());
     let mask = read_geotiff(&out).unwrap();
+    // The preview shows each cell's class in its colour.
+    let preview = image::open(dir.path().join("mask.png")).unwrap().to_rgb8();
+    assert_eq!(preview.dimensions(), (dem.width as u32, dem.height as u32));
+    for (p, &v) in preview.pixels().zip(&mask.heights) {
+        let class = match v as u8 {
+            1 => MaskCell::Lit,
+            0 => MaskCell::Shadow,
+            255 => MaskCell::NoData,
+            other => panic!("mask value {other}"),
+        };
+        assert_eq!(p.0, class.preview(), "value {v}");
+    }
     assert_eq!((mask.width, mask.height), (dem.width, dem.height));
     assert_eq!(mask.georef.origin_x, dem.georef.origin_x);
     assert_eq!(mask.georef.origin_y, dem.georef.origin_y);

@@ -58,7 +58,13 @@ pub fn write_png_indexed(
             palette.len()
         )));
     }
-    if let Some(i) = pixels.iter().position(|&p| p as usize >= palette.len()) {
+    // The largest index first (a loop that compiles to vector operations),
+    // the offending pixel only when there is one.
+    let largest = pixels.iter().fold(0u8, |m, &p| m.max(p));
+    if let Some(i) = (largest as usize >= palette.len())
+        .then(|| pixels.iter().position(|&p| p as usize >= palette.len()))
+        .flatten()
+    {
         return Err(bad(format!(
             "pixel {i} is colour {} of a {}-colour palette",
             pixels[i],

@@ -230,18 +230,152 @@ fn at(p: Vertex, q: Vertex, x: f64) -> f64 {
     }
 }
 
-/// The projected vertices of octant column `m`, rows `0..rows` (fewer at
-/// the grid's edge), into `out`.
-fn column(oct: &Octant, setup: &Setup, m: usize, rows: usize, out: &mut Vec<Vertex>) {
-    out.clear();
-    let inv = 1.0 / (oct.a0 + m as f64);
-    let start = oct.base + m as isize * oct.sm;
-    for n in 0..rows.min(oct.rows) {
-        let z = setup.heights[(start + n as isize * oct.sn) as usize] as f64;
-        out.push(Vertex {
-            u: (n as f64 - oct.beta) * inv,
-            v: (z - setup.zl) * inv,
-        });
+/// The larger of two values that are never NaN: one comparison, where
+/// `f64::max` also checks both for NaN.
+#[inline]
+fn hi(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The smaller of two values that are never NaN.
+#[inline]
+fn lo(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Columns of one octant a block at a time: their heights, read in the
+/// grid's storage order, and the answers for their points, written back in
+/// that order when the block is done. Columns along the grid's rows (an
+/// octant whose main axis is y) lie along memory; across them, one column
+/// touches a cache line and a page per point, so a block of [`BLOCK_COLUMNS`]
+/// reads and writes each line once.
+struct ColumnBlock {
+    /// The block's first column and its number of columns.
+    m0: usize,
+    len: usize,
+    /// Rows held per column, and the distance between columns in the
+    /// buffers (padded, so that the columns do not share cache sets).
+    rows: usize,
+    stride: usize,
+    heights: Vec<f32>,
+    /// Per point: 0, 1, [`UNDECIDED`], or [`UNSET`] when not written.
+    answers: Vec<u8>,
+}
+
+/// The `len` heights from grid index `first` on, one `step` (±1) apart, as
+/// a slice in storage order (the lowest index first).
+fn run(heights: &[f32], first: usize, len: usize, step: isize) -> &[f32] {
+    if step > 0 {
+        &heights[first..first + len]
+    } else {
+        &heights[first + 1 - len..=first]
+    }
+}
+
+/// Columns per [`ColumnBlock`].
+const BLOCK_COLUMNS: usize = 16;
+
+/// An answer not written by the sweep.
+const UNSET: u8 = u8::MAX;
+
+impl ColumnBlock {
+    fn new() -> ColumnBlock {
+        ColumnBlock {
+            m0: 0,
+            len: 0,
+            rows: 0,
+            stride: 0,
+            heights: Vec::new(),
+            answers: Vec::new(),
+        }
+    }
+
+    /// The grid index of row `n` of octant column `m`.
+    fn index(oct: &Octant, m: usize, n: usize) -> usize {
+        (oct.base + m as isize * oct.sm + n as isize * oct.sn) as usize
+    }
+
+    /// Reads the block of columns from `m0`: a run of the grid's storage
+    /// at a time, a row of the block where columns lie across memory, or a
+    /// column where they lie along it.
+    fn load(&mut self, oct: &Octant, setup: &Setup, m0: usize) {
+        self.m0 = m0;
+        self.len = BLOCK_COLUMNS.min(oct.columns - m0);
+        self.rows = rows_for(oct, m0 + self.len - 1).min(oct.rows);
+        self.stride = self.rows.next_multiple_of(16) + 16;
+        let (len, rows, stride) = (self.len, self.rows, self.stride);
+        self.heights.resize(len * stride, 0.0);
+        let heights = &setup.heights;
+        if oct.sm.abs() == 1 {
+            for n in 0..rows {
+                let first = Self::index(oct, m0, n);
+                for (i, &z) in run(heights, first, len, oct.sm).iter().enumerate() {
+                    let j = if oct.sm > 0 { i } else { len - 1 - i };
+                    self.heights[j * stride + n] = z;
+                }
+            }
+        } else {
+            for j in 0..len {
+                let first = Self::index(oct, m0 + j, 0);
+                let col = &mut self.heights[j * stride..j * stride + rows];
+                col.copy_from_slice(run(heights, first, rows, oct.sn));
+                if oct.sn < 0 {
+                    col.reverse();
+                }
+            }
+        }
+        self.answers.clear();
+        self.answers.resize(len * stride, UNSET);
+    }
+
+    /// Hands the answers written since the last load to `put(index, value)`,
+    /// in the grid's storage order.
+    fn flush(&mut self, oct: &Octant, put: &mut impl FnMut(usize, u8)) {
+        let across = oct.sm.abs() == 1;
+        let (major, minor, outer, inner) = if across {
+            (oct.sn, oct.sm, self.rows, self.len)
+        } else {
+            (oct.sm, oct.sn, self.len, self.rows)
+        };
+        let first = Self::index(oct, self.m0, 0) as isize;
+        for o in 0..outer {
+            let start = first + o as isize * major;
+            for i in 0..inner {
+                let (j, n) = if across { (i, o) } else { (o, i) };
+                let value = self.answers[j * self.stride + n];
+                if value != UNSET {
+                    put((start + i as isize * minor) as usize, value);
+                }
+            }
+        }
+    }
+
+    /// The projected vertices of octant column `m`, rows `0..rows` (fewer
+    /// at the grid's edge), into `out`; the column must lie in the block.
+    fn column(&self, oct: &Octant, setup: &Setup, m: usize, rows: usize, out: &mut Vec<Vertex>) {
+        out.clear();
+        let inv = 1.0 / (oct.a0 + m as f64);
+        let start = (m - self.m0) * self.stride;
+        let heights = &self.heights[start..start + rows.min(oct.rows)];
+        for (n, &z) in heights.iter().enumerate() {
+            out.push(Vertex {
+                u: (n as f64 - oct.beta) * inv,
+                v: (z as f64 - setup.zl) * inv,
+            });
+        }
+    }
+
+    /// Records the answer for row `n` of column `m`, which lies in the block.
+    fn answer(&mut self, m: usize, n: usize, value: u8) {
+        self.answers[(m - self.m0) * self.stride + n] = value;
     }
 }
 
@@ -274,23 +408,38 @@ fn near_bound(oct: &Octant, setup: &Setup) -> f64 {
 
 /// Sweeps one octant, writing 1 (lit), 0 (shadowed) or [`UNDECIDED`] for its
 /// interior points through `put(index, value)`.
-fn sweep(oct: &Octant, setup: &Setup, put: &mut dyn FnMut(usize, u8)) {
+fn sweep(oct: &Octant, setup: &Setup, put: &mut impl FnMut(usize, u8)) {
     let near = near_bound(oct, setup);
+    let mut block = ColumnBlock::new();
     let mut near_col = Vec::new();
     let mut far_col = Vec::new();
     // The horizon of columns 1..m−1, starting from column 1's polyline
     // clipped to [0, 1].
-    column(oct, setup, 1, rows_for(oct, 1), &mut near_col);
+    block.load(oct, setup, 1);
+    block.column(oct, setup, 1, rows_for(oct, 1), &mut near_col);
     let mut horizon = clip_polyline(&near_col);
     let mut next = Vec::new();
     for m in 2..oct.columns {
-        column(oct, setup, m, rows_for(oct, m), &mut far_col);
+        if m == block.m0 + block.len {
+            block.flush(oct, put);
+            block.load(oct, setup, m);
+        }
+        block.column(oct, setup, m, rows_for(oct, m), &mut far_col);
         merge_strip(
-            oct, setup, m, near, &horizon, &near_col, &far_col, &mut next, put,
+            oct,
+            setup,
+            m,
+            near,
+            &horizon,
+            &near_col,
+            &far_col,
+            &mut next,
+            &mut |n, value| block.answer(m, n, value),
         );
         std::mem::swap(&mut horizon, &mut next);
         std::mem::swap(&mut near_col, &mut far_col);
     }
+    block.flush(oct, put);
 }
 
 /// A column's polyline clipped to `u ∈ [0, 1]`.
@@ -361,11 +510,11 @@ impl Walk<'_> {
     fn merge(&mut self, segs: &[(Vertex, Vertex, i64)], x1: f64) {
         let vmax = segs
             .iter()
-            .fold(f64::NEG_INFINITY, |acc, s| acc.max(s.0.v).max(s.1.v));
+            .fold(f64::NEG_INFINITY, |acc, s| hi(hi(acc, s.0.v), s.1.v));
         while self.x < x1 {
             self.seek();
             let (hp, hq) = (self.horizon[self.k], self.horizon[self.k + 1]);
-            let xe = x1.min(hq.u);
+            let xe = lo(x1, hq.u);
             let (hl, hr) = (at(hp, hq, self.x), at(hp, hq, xe));
             let mut lines = [Line {
                 id: piece_id(self.k),
@@ -373,7 +522,7 @@ impl Walk<'_> {
                 r: hr,
             }; 5];
             let mut count = 1;
-            if vmax >= hl.min(hr) {
+            if vmax >= lo(hl, hr) {
                 for &(p, q, id) in segs {
                     lines[count] = Line {
                         id,
@@ -402,9 +551,9 @@ impl Walk<'_> {
         let mut hmax = self.old_at(self.x);
         while self.horizon[self.k + 1].u < x1 {
             self.k += 1;
-            hmax = hmax.max(self.horizon[self.k].v);
+            hmax = hi(hmax, self.horizon[self.k].v);
         }
-        hmax = hmax.max(self.old_at(x1));
+        hmax = hi(hmax, self.old_at(x1));
         self.k = k0;
         hmax
     }
@@ -513,7 +662,7 @@ fn rise(
     fb: &[Vertex],
     n: usize,
     ne: usize,
-    point: &mut dyn FnMut(usize, f64),
+    mut point: impl FnMut(usize, f64),
 ) {
     if outward {
         for (r, &b) in fb.iter().enumerate().take(ne).skip(n) {
@@ -530,10 +679,10 @@ fn rise(
             point(r, db);
             walk.push(Vertex {
                 u: b.u,
-                v: b.v.max(db),
+                v: hi(b.v, db),
             });
             let (fa, da) = (at(b, b1, a.u), at(b, a1, a.u));
-            let pa = fa.max(da);
+            let pa = hi(fa, da);
             if db > b.v {
                 let (dl, dr) = (db - b.v, pa - a.v);
                 let s = dl / (dl + dr);
@@ -545,13 +694,14 @@ fn rise(
             walk.last_id = 4 * r as i64 + if fa >= da { 0 } else { 2 };
             db = at(b, a1, b1.u);
         }
-        walk.top_r = fb[ne].v.max(db);
+        walk.top_r = hi(fb[ne].v, db);
     }
     walk.x = fb[ne].u;
 }
 
-/// Decides column `m`'s points against `horizon` (columns 1..m−1) and
-/// writes the horizon of columns 1..m into `out`, in one pass over both.
+/// Decides column `m`'s points against `horizon` (columns 1..m−1), through
+/// `put(row, value)`, and writes the horizon of columns 1..m into `out`, in
+/// one pass over both.
 ///
 /// Blocks of [`BLOCK`] rows whose strip lies wholly below the old horizon
 /// (the common case far from the light) copy the old horizon and shadow
@@ -566,7 +716,7 @@ fn merge_strip(
     na: &[Vertex],
     fb: &[Vertex],
     out: &mut Vec<Vertex>,
-    put: &mut dyn FnMut(usize, u8),
+    put: &mut impl FnMut(usize, u8),
 ) {
     out.clear();
     let a = oct.a0 + m as f64;
@@ -574,8 +724,6 @@ fn merge_strip(
     let tol = setup.tol;
     let end = horizon[horizon.len() - 1].u;
     let last = na.len().min(fb.len()) - 1;
-    let col_base = oct.base + m as isize * oct.sm;
-    let index = |n: usize| (col_base + n as isize * oct.sn) as usize;
     // Whether B_n is a point of this octant's interior (0 < b < a).
     let interior = |n: usize| {
         let b = n as f64 - oct.beta;
@@ -602,12 +750,12 @@ fn merge_strip(
     if oct.beta <= on_line {
         let old = horizon[0].v;
         put(
-            index(0),
+            0,
             verdict(old, near, f64::NEG_INFINITY, fb[0].v + lift, line_tol),
         );
     }
     let (count, x1) = stretch(oct.outward, na, fb, 0, true, &mut segs);
-    walk.merge(&segs[..count], x1.min(end));
+    walk.merge(&segs[..count], lo(x1, end));
     let mut n = 1;
     while n <= last && walk.x < end {
         // A block of rows n..ne wholly below the old horizon?
@@ -616,15 +764,15 @@ fn merge_strip(
         if ne > n && fb[ne].u < end {
             let (mut vmax, mut bmin) = (fb[n - 1].v, f64::INFINITY);
             for r in n..=ne {
-                vmax = vmax.max(fb[r].v).max(na[r].v);
-                bmin = bmin.min(fb[r].v);
+                vmax = hi(hi(vmax, fb[r].v), na[r].v);
+                bmin = lo(bmin, fb[r].v);
             }
             // The whole strip below the old horizon: copy it, and every
             // point is in shadow.
             if walk.copy_above(fb[ne].u, vmax + lift + tol.round) {
                 for r in n..ne {
                     if interior(r) {
-                        put(index(r), 0);
+                        put(r, 0);
                     }
                 }
                 n = ne;
@@ -637,10 +785,10 @@ fn merge_strip(
             strip_above = near + lit < bmin && walk.max_over(fb[ne].u) + lit < bmin;
         }
         if strip_above {
-            rise(&mut walk, oct.outward, na, fb, n, ne, &mut |r, local| {
+            rise(&mut walk, oct.outward, na, fb, n, ne, |r, local| {
                 if interior(r) {
                     let none = f64::NEG_INFINITY;
-                    put(index(r), verdict(none, none, local, fb[r].v + lift, tol));
+                    put(r, verdict(none, none, local, fb[r].v + lift, tol));
                 }
             });
             n = ne;
@@ -660,11 +808,11 @@ fn merge_strip(
                 } else {
                     at(fb[n - 1], na[n], walk.x)
                 };
-                put(index(n), verdict(old, near, local, fb[n].v + lift, tol));
+                put(n, verdict(old, near, local, fb[n].v + lift, tol));
             }
             for odd in [false, true] {
                 let (count, x1) = stretch(oct.outward, na, fb, n, odd, &mut segs);
-                walk.merge(&segs[..count], x1.min(end));
+                walk.merge(&segs[..count], lo(x1, end));
             }
         }
         n += DETAIL;
@@ -688,10 +836,7 @@ fn merge_strip(
             at(fb[nd - 1], na[nd], 1.0)
         };
         let old = horizon[horizon.len() - 1].v;
-        put(
-            index(nd),
-            verdict(old, near, local, fb[nd].v + lift, line_tol),
-        );
+        put(nd, verdict(old, near, local, fb[nd].v + lift, line_tol));
     }
 }
 
@@ -702,8 +847,8 @@ fn merge_strip(
 /// [`UNDECIDED`] within the margins `tol` (the near part is only a bound,
 /// so it can light a point but never shadow one).
 fn verdict(old: f64, near: f64, local: f64, vp: f64, tol: Margins) -> u8 {
-    let seen = old.max(local);
-    if seen.max(near) < vp - tol.lit(vp) {
+    let seen = hi(old, local);
+    if hi(seen, near) < vp - tol.lit(vp) {
         1
     } else if seen > vp + tol.round {
         0

@@ -79,11 +79,9 @@ pub const PREVIEW_PALETTE: [[u8; 3]; 4] = [
 
 /// The classes of a mask's grid points (row-major, `width` wide): no data
 /// where `nodata` is set, then out of range where `range` says so, then lit
-/// where `mask` is 1, else in shadow.
+/// where the mask is 1, else in shadow.
 #[derive(Clone, Copy, Debug)]
 pub struct MaskClasses<'a> {
-    /// The shadow mask, 1 where lit.
-    pub mask: &'a [u8],
     /// Where the DEM has no data; none when it has data everywhere.
     pub nodata: Option<&'a [bool]>,
     /// Grid points per row.
@@ -92,46 +90,88 @@ pub struct MaskClasses<'a> {
     pub range: Option<&'a Range>,
 }
 
-/// What a mask is written as: each grid point's value, its preview palette
-/// index ([`PREVIEW_PALETTE`]) and the number of lit points.
+/// How a mask's preview is coloured.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Preview {
+    /// The written values index this palette (the classes present are
+    /// written as different values).
+    ByValue(Vec<[u8; 3]>),
+    /// These palette indices ([`PREVIEW_PALETTE`]), row-major.
+    Indices(Vec<u8>),
+}
+
+/// What a mask's written values leave to say: how its preview is
+/// coloured, and the number of lit points.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MaskRasters {
-    /// The values written, row-major.
-    pub values: Vec<u8>,
-    /// The preview's palette indices, row-major.
-    pub preview: Vec<u8>,
+    /// The preview's colouring.
+    pub preview: Preview,
     /// Grid points lit.
     pub lit: usize,
 }
 
 impl MaskClasses<'_> {
-    /// The class of grid point `i`.
+    /// The class of grid point `i` of `mask`.
     #[inline]
-    pub fn at(&self, i: usize) -> MaskCell {
-        let out_of_range = |i: usize| match self.range {
-            Some(r) => {
-                let (lc, lr) = r.light_grid;
-                let (c, row) = ((i % self.width) as f64, (i / self.width) as f64);
-                ((c - lc) * r.cell.0).hypot((row - lr) * r.cell.1) > r.max_distance
-            }
-            None => false,
-        };
+    pub fn at(&self, mask: &[u8], i: usize) -> MaskCell {
         if self.nodata.is_some_and(|n| n[i]) {
             MaskCell::NoData
-        } else if out_of_range(i) {
+        } else if self.out_of_range(i) {
             MaskCell::OutOfRange
-        } else if self.mask[i] == 1 {
+        } else if mask[i] == 1 {
             MaskCell::Lit
         } else {
             MaskCell::Shadow
         }
     }
 
-    /// Every grid point's value under `values`, its preview index and the
-    /// lit count, in one parallel pass over the grid: each point's class
-    /// as a three-bit code (no data, out of range, lit) looked up in a
-    /// table of eight, so that the loop has no branches.
-    pub fn rasters(&self, values: &MaskValues) -> MaskRasters {
+    /// Whether grid point `i` lies beyond the maximum distance.
+    fn out_of_range(&self, i: usize) -> bool {
+        self.range.is_some_and(|r| {
+            let (lc, lr) = r.light_grid;
+            let (c, row) = ((i % self.width) as f64, (i / self.width) as f64);
+            ((c - lc) * r.cell.0).hypot((row - lr) * r.cell.1) > r.max_distance
+        })
+    }
+
+    /// The classes that can occur: lit and shadow always, out of range
+    /// with a range, no data with a no-data mask.
+    fn present(&self) -> Vec<MaskCell> {
+        let mut classes = vec![MaskCell::Lit, MaskCell::Shadow];
+        if self.range.is_some() {
+            classes.push(MaskCell::OutOfRange);
+        }
+        if self.nodata.is_some() {
+            classes.push(MaskCell::NoData);
+        }
+        classes
+    }
+
+    /// A preview palette indexed by the written value, when the classes
+    /// that can occur are written as different values: each class's value
+    /// holds its colour ([`MaskCell::preview`]), other entries black.
+    pub fn preview_palette(&self, values: &MaskValues) -> Option<Vec<[u8; 3]>> {
+        let present = self.present();
+        let mut palette = vec![None; 256];
+        for class in present {
+            let entry = &mut palette[class.value(values) as usize];
+            if entry.is_some() {
+                return None;
+            }
+            *entry = Some(class.preview());
+        }
+        let len = palette.iter().rposition(Option::is_some)? + 1;
+        Some(palette[..len].iter().map(|c| c.unwrap_or([0; 3])).collect())
+    }
+
+    /// Replaces every grid point of `mask` (1 where lit) by its value under
+    /// `values`, in one parallel pass over the grid, and returns the lit
+    /// count and the preview's colouring: by value where
+    /// [`MaskClasses::preview_palette`] has a palette, else by indices made
+    /// in the same pass. Each point's class is a three-bit code (no data,
+    /// out of range, lit) looked up in a table of eight, so that the loop
+    /// has no branches; the values overwrite the mask, which saves a grid.
+    pub fn write_values(&self, mask: &mut [u8], values: &MaskValues) -> MaskRasters {
         use rayon::prelude::*;
         const CHUNK: usize = 1 << 16;
         // The class of each code, in `at`'s order of precedence.
@@ -148,41 +188,51 @@ impl MaskClasses<'_> {
         };
         let value: [u8; 8] = std::array::from_fn(|c| class(c).value(values));
         let index: [u8; 8] = std::array::from_fn(|c| class(c).preview_index());
-        let n = self.mask.len();
-        let (mut out, mut preview) = (vec![0u8; n], vec![0u8; n]);
-        let lit = out
+        let palette = self.preview_palette(values);
+        let mut preview = match palette {
+            Some(_) => None,
+            None => Some(vec![0u8; mask.len()]),
+        };
+        let previews: Vec<Option<&mut [u8]>> = match preview.as_mut() {
+            Some(p) => p.chunks_mut(CHUNK).map(Some).collect(),
+            None => mask.chunks(CHUNK).map(|_| None).collect(),
+        };
+        let lit = mask
             .par_chunks_mut(CHUNK)
-            .zip(preview.par_chunks_mut(CHUNK))
+            .zip(previews)
             .enumerate()
-            .map(|(k, (out, preview))| {
+            .map(|(k, (cells, preview))| {
                 let first = k * CHUNK;
-                let mask = &self.mask[first..first + out.len()];
-                let mut codes: Vec<u8> = mask.iter().map(|&m| u8::from(m == 1)).collect();
+                let mut codes: Vec<u8> = cells.iter().map(|&m| u8::from(m == 1)).collect();
                 if let Some(nodata) = self.nodata {
-                    let nodata = &nodata[first..first + out.len()];
+                    let nodata = &nodata[first..first + cells.len()];
                     for (c, &nd) in codes.iter_mut().zip(nodata) {
                         *c |= u8::from(nd) << 2;
                     }
                 }
                 if self.range.is_some() {
                     for (j, c) in codes.iter_mut().enumerate() {
-                        *c |= u8::from(self.at(first + j) == MaskCell::OutOfRange) << 1;
+                        *c |= u8::from(self.out_of_range(first + j)) << 1;
+                    }
+                }
+                if let Some(preview) = preview {
+                    for (p, &c) in preview.iter_mut().zip(&codes) {
+                        *p = index[c as usize];
                     }
                 }
                 let mut lit = 0;
-                for ((o, p), &c) in out.iter_mut().zip(preview.iter_mut()).zip(&codes) {
+                for (o, &c) in cells.iter_mut().zip(&codes) {
                     lit += usize::from(c == 1);
                     *o = value[c as usize];
-                    *p = index[c as usize];
                 }
                 lit
             })
             .sum();
-        MaskRasters {
-            values: out,
-            preview,
-            lit,
-        }
+        let preview = match (palette, preview) {
+            (Some(palette), _) => Preview::ByValue(palette),
+            (None, indices) => Preview::Indices(indices.unwrap_or_default()),
+        };
+        MaskRasters { preview, lit }
     }
 }
 
@@ -208,27 +258,28 @@ mod tests {
         }
     }
 
-    /// Classes and rasters of a `width`-wide grid against the brute force.
-    fn check(width: usize, mask: &[u8], nodata: &[bool], range: &Range) {
+    /// Classes, values, preview and lit count of a `width`-wide grid
+    /// against the brute force, under `values`.
+    fn check(width: usize, mask: &[u8], nodata: &[bool], range: &Range, values: &MaskValues) {
         let classes = MaskClasses {
-            mask,
             nodata: Some(nodata),
             width,
             range: Some(range),
         };
-        let values = MaskValues {
-            visible: 7,
-            invisible: 3,
-            out_of_range: 9,
-            nodata: 255,
-        };
-        let rasters = classes.rasters(&values);
+        let mut written = mask.to_vec();
+        let rasters = classes.write_values(&mut written, values);
+        let by_value = classes.preview_palette(values).is_some();
+        assert_eq!(matches!(rasters.preview, Preview::ByValue(_)), by_value);
         let mut lit = 0;
         for i in 0..mask.len() {
             let want = expected(i, width, mask, nodata, range);
-            assert_eq!(classes.at(i), want, "cell {i}");
-            assert_eq!(rasters.values[i], want.value(&values), "cell {i}");
-            assert_eq!(rasters.preview[i], want.preview_index(), "cell {i}");
+            assert_eq!(classes.at(mask, i), want, "cell {i}");
+            assert_eq!(written[i], want.value(values), "cell {i}");
+            let colour = match &rasters.preview {
+                Preview::ByValue(palette) => palette[written[i] as usize],
+                Preview::Indices(indices) => PREVIEW_PALETTE[indices[i] as usize],
+            };
+            assert_eq!(colour, want.preview(), "cell {i}");
             lit += usize::from(want == MaskCell::Lit);
         }
         assert_eq!(rasters.lit, lit);
@@ -242,12 +293,30 @@ mod tests {
             cell: (1.0, 1.0),
             max_distance: 1.5,
         };
-        check(
-            3,
-            &[1, 0, 1, 1, 0, 0],
-            &[false, false, false, true, false, false],
-            &range,
-        );
+        // Four different values: the values index the preview's palette.
+        let distinct = MaskValues {
+            visible: 7,
+            invisible: 3,
+            out_of_range: 9,
+            nodata: 255,
+        };
+        // Out of range and shadow share a value (0, as by default), so the
+        // preview needs its own indices.
+        let shared = MaskValues {
+            visible: 255,
+            invisible: 0,
+            out_of_range: 0,
+            nodata: 1,
+        };
+        for values in [&distinct, &shared] {
+            check(
+                3,
+                &[1, 0, 1, 1, 0, 0],
+                &[false, false, false, true, false, false],
+                &range,
+                values,
+            );
+        }
         // A grid of several parallel chunks, mask and no-data at random.
         let (w, h) = (301, 257);
         let mut rng = raykit_core::rng::Pcg32::new(3);
@@ -260,6 +329,43 @@ mod tests {
             cell: (2.0, 3.0),
             max_distance: 400.0,
         };
-        check(w, &mask, &nodata, &range);
+        for values in [&distinct, &shared] {
+            check(w, &mask, &nodata, &range, values);
+        }
+    }
+
+    /// Values shared only by classes that cannot occur still index the
+    /// palette: without a range, out of range may share shadow's value.
+    #[test]
+    fn preview_palette_needs_different_values_for_the_classes_present() {
+        let values = MaskValues {
+            visible: 1,
+            invisible: 0,
+            out_of_range: 0,
+            nodata: 255,
+        };
+        let range = Range {
+            light_grid: (0.0, 0.0),
+            cell: (1.0, 1.0),
+            max_distance: 1.0,
+        };
+        let nodata = [false];
+        let classes = |nodata, range| MaskClasses {
+            nodata,
+            width: 1,
+            range,
+        };
+        let lit_shadow = [MaskCell::Shadow.preview(), MaskCell::Lit.preview()];
+        assert_eq!(
+            classes(None, None).preview_palette(&values),
+            Some(lit_shadow.to_vec())
+        );
+        let with_nodata = classes(Some(&nodata[..]), None)
+            .preview_palette(&values)
+            .unwrap();
+        assert_eq!(with_nodata.len(), 256);
+        assert_eq!(with_nodata[..2], lit_shadow);
+        assert_eq!(with_nodata[255], MaskCell::NoData.preview());
+        assert_eq!(classes(None, Some(&range)).preview_palette(&values), None);
     }
 }

@@ -20,7 +20,7 @@ use raykit_lab::measure::timed;
 use raykit_terrain::curvature::curvature_corrected;
 use raykit_terrain::georef::MapWorld;
 use raykit_terrain::io::layout_from_creation_options;
-use raykit_terrain::mask_cells::{MaskClasses, MaskValues, Range, PREVIEW_PALETTE};
+use raykit_terrain::mask_cells::{MaskClasses, MaskValues, Preview, Range, PREVIEW_PALETTE};
 use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
 use raykit_terrain::{HeightField, MaxMipmap};
 use rayon::prelude::*;
@@ -109,11 +109,21 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         None => None,
     };
     // Where the DEM has no data: none when it has data everywhere.
+    // Both passes go a chunk at a time with plain loops, which compile to
+    // vector operations.
+    const CHUNK: usize = 1 << 16;
     let nodata: Option<Vec<bool>> = dem
         .heights
-        .par_iter()
-        .any(|h| h.is_nan())
-        .then(|| dem.heights.par_iter().map(|h| h.is_nan()).collect());
+        .par_chunks(CHUNK)
+        .any(|c| c.iter().fold(false, |any, h| any | h.is_nan()))
+        .then(|| {
+            let mut nodata = vec![false; dem.heights.len()];
+            nodata
+                .par_chunks_mut(CHUNK)
+                .zip(dem.heights.par_chunks(CHUNK))
+                .for_each(|(n, h)| n.iter_mut().zip(h).for_each(|(n, h)| *n = h.is_nan()));
+            nodata
+        });
     // The DEM's heights move into the surface (its grid and georeferencing
     // stay), unless the curvature makes new ones.
     let field = match light_grid {
@@ -211,13 +221,18 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         out_of_range: args.out_of_range_value,
         nodata: nv,
     };
-    let rasters = MaskClasses {
-        mask: &mask,
+    let classes = MaskClasses {
         nodata: nodata.as_deref(),
         width: dem.width,
         range: range.as_ref(),
-    }
-    .rasters(&mask_values);
+    };
+    let cells = mask.len();
+    let mut values = mask;
+    let rasters = classes.write_values(&mut values, &mask_values);
+    let (palette, indices) = match &rasters.preview {
+        Preview::ByValue(palette) => (&palette[..], &values),
+        Preview::Indices(indices) => (&PREVIEW_PALETTE[..], indices),
+    };
     // The GeoTIFF and the preview, side by side.
     let (tif, png) = rayon::join(
         || {
@@ -225,7 +240,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
                 &args.out,
                 dem.width,
                 dem.height,
-                &rasters.values,
+                &values,
                 &dem.georef,
                 Some(nv as f64),
                 &layout,
@@ -233,7 +248,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         },
         || {
             let (w, h) = (dem.width as u32, dem.height as u32);
-            raykit_io::write_png_indexed(&preview, w, h, &PREVIEW_PALETTE, &rasters.preview)
+            raykit_io::write_png_indexed(&preview, w, h, palette, indices)
                 .with_context(|| format!("writing {}", preview.display()))
         },
     );
@@ -242,7 +257,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     eprintln!(
         "{:?}: {:.1}% of the grid points lit, {:.3} s ({}) -> {} ({}) and {}",
         light,
-        100.0 * rasters.lit as f64 / mask.len() as f64,
+        100.0 * rasters.lit as f64 / cells as f64,
         secs,
         match method {
             ShadowMethod::Fast => "fast",
