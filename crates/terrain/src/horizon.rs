@@ -38,6 +38,12 @@
 //! old horizon (the horizon is copied and the points are in shadow), or
 //! its far column wholly above it (the strip alone is the new horizon).
 //! Blocks of rows are tested for both before rows are merged one by one.
+//!
+//! **Memory order.** Half the octants run their columns across the
+//! row-major grid, one cache line and one page per point. Each octant reads
+//! its columns sixteen at a time, in the grid's storage order, into a small
+//! buffer, and keeps their answers there until the sixteen are swept
+//! (`ColumnBlock`).
 
 use crate::heightfield::HeightField;
 
