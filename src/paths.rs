@@ -1,7 +1,8 @@
-//! Guards on output paths: an output never replaces an input.
+//! Guards on output paths: an output never replaces an input, and two
+//! outputs of one command never share a file.
 
 use anyhow::{bail, Result};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Fail when `out` names the same file as one of `inputs` (after resolving
 /// links and relative paths), so a command can never overwrite its input.
@@ -20,9 +21,57 @@ pub fn ensure_not_input(out: &Path, inputs: &[&Path]) -> Result<()> {
     Ok(())
 }
 
+/// The file `path` names, with links and relative parts resolved as far as
+/// it or its folder exists.
+fn resolved(path: &Path) -> PathBuf {
+    if let Ok(real) = path.canonicalize() {
+        return real;
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    match (parent.canonicalize(), path.file_name()) {
+        (Ok(dir), Some(name)) => dir.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// Fail when two outputs of one command (`what_a` and `what_b`, named as
+/// their flags) would be written to the same file, where one would
+/// silently replace the other.
+pub fn ensure_distinct(a: &Path, b: &Path, what_a: &str, what_b: &str) -> Result<()> {
+    if resolved(a) == resolved(b) {
+        bail!(
+            "{what_a} {} and {what_b} {} name the same file: give {what_b} another path",
+            a.display(),
+            b.display()
+        );
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn two_outputs_naming_one_file_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("m.png");
+        let via_dot = dir.path().join(".").join("m.png");
+        assert!(ensure_distinct(&a, &via_dot, "--out", "--preview").is_err());
+        assert!(ensure_distinct(&a, &dir.path().join("m.tif"), "--out", "--preview").is_ok());
+        // Existing files, and a path through a link to the folder.
+        std::fs::write(&a, b"x").unwrap();
+        assert!(ensure_distinct(&a, &via_dot, "--out", "--preview").is_err());
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("link");
+            std::os::unix::fs::symlink(dir.path(), &link).unwrap();
+            assert!(ensure_distinct(&a, &link.join("m.png"), "--out", "--preview").is_err());
+        }
+    }
 
     #[test]
     fn same_file_through_another_path_is_refused() {

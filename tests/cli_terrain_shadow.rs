@@ -3,7 +3,8 @@
 //! preview shows each cell's class in its colour; `--compare`
 //! finds no difference; `--sun-path` on a flat DEM gives every cell the
 //! day's full daylight (counted independently from the solar formula);
-//! bad arguments name the flag.
+//! bad arguments name the flag; the default no-data value steps aside for
+//! the mask values.
 
 #[path = "support/cli.rs"]
 mod cli;
@@ -177,4 +178,65 @@ fn bad_arguments_name_the_flag() {
         s(&dem),
     ]);
     assert!(!o.status.success());
+    // Nor does the preview replace the GeoTIFF: `--out m.png` would put both
+    // at m.png.
+    let png_out = dir.path().join("m.png");
+    let o = raykit(&[
+        "terrain",
+        "shadow",
+        s(&dem),
+        "--sun",
+        "135,20",
+        "--out",
+        s(&png_out),
+    ]);
+    assert!(
+        !o.status.success() && text(&o.stderr).contains("--preview"),
+        "{}",
+        text(&o.stderr)
+    );
+    assert!(!png_out.exists());
+}
+
+#[test]
+fn the_default_nodata_value_steps_aside_for_the_mask_values() {
+    // gdal_viewshed's -vv 255: the no-data value moves to 254, unless given.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.tif");
+    let dem = ter();
+    for (extra, nodata) in [
+        (vec![], 255.0),
+        (vec!["--vv", "255"], 254.0),
+        (vec!["--vv", "255", "--iv", "254"], 253.0),
+        (vec!["--vv", "255", "--nodata-value", "7"], 7.0),
+    ] {
+        let mut a = vec!["terrain", "shadow", s(&dem), "--sun", "135,20"];
+        a.extend(extra.iter().copied());
+        a.extend(["--out", s(&out)]);
+        let o = raykit(&a);
+        assert!(o.status.success(), "{extra:?}: {}", text(&o.stderr));
+        assert_eq!(
+            read_geotiff(&out).unwrap().nodata,
+            Some(nodata),
+            "{extra:?}"
+        );
+    }
+    let o = raykit(&[
+        "terrain",
+        "shadow",
+        s(&dem),
+        "--sun",
+        "135,20",
+        "--vv",
+        "255",
+        "--nodata-value",
+        "255",
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        !o.status.success() && text(&o.stderr).contains("--nodata-value 255"),
+        "{}",
+        text(&o.stderr)
+    );
 }

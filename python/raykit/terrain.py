@@ -75,9 +75,11 @@ def shadow(
     Exactly one of ``sun=(azimuth, elevation)`` in degrees (azimuth
     clockwise from north) and ``light=(x, y, h)``: a point light at map
     position (x, y), ``h`` metres above the ground there (or at elevation
-    ``h`` with ``light_elevation=True``). ``method``: ``"fast"`` (min/max
-    quadtree) or ``"brute"`` (each segment marched cell by cell); both are
-    exact and give identical masks.
+    ``h`` with ``light_elevation=True``). ``method``: ``"fast"`` (a point
+    light over the grid: a horizon sweep outward from the light, with the
+    segment test for the points it leaves; the sun: each segment through
+    the min/max quadtree) or ``"brute"`` (each segment marched cell by
+    cell); both are exact and give identical masks.
 
     Returns ``(rows, cols)`` uint8: 1 lit, 0 in shadow, 255 no data, as
     ``raykit terrain shadow`` writes its GeoTIFF.

@@ -77,8 +77,17 @@ fn dem(heights: &PyReadonlyArray2<'_, f32>, t: Transform, geographic: bool) -> P
     Ok(dem)
 }
 
-fn field_of(dem: &Dem) -> PyResult<HeightField> {
-    HeightField::new(dem).map_err(value_error)
+/// The DEM of a `(rows, cols)` height grid placed by `transform`, and its
+/// surface, which takes the DEM's copy of the heights: one copy of the
+/// caller's array, not two (the DEM keeps its grid and georeferencing).
+fn surface(
+    heights: &PyReadonlyArray2<'_, f32>,
+    t: Transform,
+    geographic: bool,
+) -> PyResult<(Dem, HeightField)> {
+    let mut dem = dem(heights, t, geographic)?;
+    let field = HeightField::take(&mut dem).map_err(value_error)?;
+    Ok((dem, field))
 }
 
 /// Map position → world metres of the field (x east, y north), refused
@@ -130,8 +139,7 @@ pub fn shadow<'py>(
             )))
         }
     };
-    let dem = dem(&heights, transform, geographic)?;
-    let field = field_of(&dem)?;
+    let (dem, field) = surface(&heights, transform, geographic)?;
     let light = match (sun, light) {
         (Some((az, el)), None) => {
             if light_elevation {
@@ -164,14 +172,22 @@ pub fn shadow<'py>(
         }
         _ => return Err(value_error("give exactly one of sun, light")),
     };
+    let given = heights.as_slice().expect("C-contiguous, as dem() checked");
     let mask = detached(py, threads, || {
         // The quadtree is built only if the light needs it.
         let mut mask = shadow_mask_for_targets(&field, None, &light, method, 0.0, &|_| {});
-        for (m, h) in mask.iter_mut().zip(&dem.heights) {
-            if h.is_nan() {
-                *m = 255;
-            }
-        }
+        use rayon::prelude::*;
+        // No data where the caller's heights are NaN, a chunk at a time.
+        const CHUNK: usize = 1 << 16;
+        mask.par_chunks_mut(CHUNK)
+            .zip(given.par_chunks(CHUNK))
+            .for_each(|(m, h)| {
+                for (m, h) in m.iter_mut().zip(h) {
+                    if h.is_nan() {
+                        *m = 255;
+                    }
+                }
+            });
         mask
     })?;
     let mask = Array2::from_shape_vec((dem.height, dem.width), mask).expect("one per sample");
@@ -225,8 +241,7 @@ pub fn cast<'py>(
             )))
         }
     };
-    let dem = dem(&heights, transform, geographic)?;
-    let field = field_of(&dem)?;
+    let (dem, field) = surface(&heights, transform, geographic)?;
     let camera = TerrainCamera {
         eye: to_world(&dem, &field, eye),
         target: to_world(&dem, &field, target),

@@ -95,6 +95,18 @@ def test_shadow_agrees_with_rays_on_the_same_triangles():
     assert differ <= 0.003 * mask.size, differ
 
 
+def test_no_data_is_255_exactly_where_the_heights_are_nan():
+    # A grid of several parallel chunks, no-data scattered, a point light
+    # and the sun: the cells written 255 are the NaN heights, no others.
+    rng = np.random.default_rng(5)
+    h = rng.uniform(0.0, 30.0, (301, 257)).astype(np.float32)
+    h[rng.random(h.shape) < 0.03] = np.nan
+    for kw in (dict(light=(128.0, -150.0, 20.0)), dict(sun=(135.0, 25.0))):
+        mask = raykit.terrain.shadow(h, (1, 0, 0, 0, -1, 0), **kw)
+        np.testing.assert_array_equal(mask == 255, np.isnan(h))
+        assert set(np.unique(mask[~np.isnan(h)])) <= {0, 1}
+
+
 def test_transforms_and_bad_grids():
     h = np.zeros((5, 6), np.float32)
     h[2, 3] = 10.0

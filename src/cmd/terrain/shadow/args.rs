@@ -22,7 +22,7 @@ segment from the surface there to the light meets no other part of the surface. 
 are in the DEM's own units (metres for projected rasters, degrees for SRTM .hgt).\n\n\
 Output values (gdal_viewshed's -vv, -iv, -ov, -a_nodata): --visible-value (default 1),\n\
 --invisible-value (0), --out-of-range-value (0) for cells beyond --max-distance, --nodata-value\n\
-(255) where the DEM has no data. The GeoTIFF is DEFLATE-compressed in strips unless --co says\n\
+(255, or the highest value the others leave free) where the DEM has no data. The GeoTIFF is DEFLATE-compressed in strips unless --co says\n\
 otherwise (--co COMPRESS=DEFLATE|LZW|PACKBITS|NONE, --co TILED=YES, --co BLOCKXSIZE=N).\n\
 Unlike gdal_viewshed, the output always covers the whole DEM, and the curvature coefficient is 0\n\
 (a flat earth, exact for the declared surface) unless given; gdal_viewshed's default is 0.85714.\n\
@@ -32,7 +32,7 @@ raykit terrain shadow dem.tif --light 429452,5150685,10 --vv 255 --tz 2 --md 500
 --co TILED=YES --out viewshed.tif\n  \
 raykit terrain shadow N57E011.hgt --sun 135,20 --out sun.tif --preview sun.png\n  \
 raykit terrain shadow dem.tif --sun-path 2026-06-21,45.5,-93.2 --out hours.tif\n  \
-raykit terrain shadow fractal:2048 --light 10000,-10000,50 --compare --out m.tif")]
+raykit terrain shadow fractal:2048 --light 10000,10000,50 --compare --out m.tif")]
 pub struct ShadowArgs {
     /// DEM: GeoTIFF, SRTM .hgt, Terragen .ter, 16-bit PNG, or fractal:SIZE[:SEED].
     pub(super) dem: String,
@@ -90,9 +90,10 @@ pub struct ShadowArgs {
     #[arg(long, visible_alias = "ov", default_value_t = 0, value_name = "0-255")]
     pub(super) out_of_range_value: u8,
     /// Mask value, declared as the GeoTIFF's nodata, where the DEM has no data
-    /// (gdal_viewshed's -a_nodata).
-    #[arg(long, default_value_t = 255, value_name = "0-255")]
-    pub(super) nodata_value: u8,
+    /// (gdal_viewshed's -a_nodata); default 255, or the highest value the
+    /// other values leave free.
+    #[arg(long, value_name = "0-255")]
+    pub(super) nodata_value: Option<u8>,
     /// GeoTIFF creation option KEY=VALUE, repeatable (gdal's -co):
     /// COMPRESS=DEFLATE|LZW|PACKBITS|NONE (default DEFLATE), TILED=YES|NO,
     /// BLOCKXSIZE=N, BLOCKYSIZE=N (tile size, default 256).

@@ -80,7 +80,20 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     if !args.curvature_coefficient.is_finite() {
         bail!("--curvature-coefficient must be a finite number");
     }
-    let nv = args.nodata_value;
+    // Values GDAL must not read as no data: lit, shadow, and out of range
+    // when there is a range.
+    let taken = |v: u8| {
+        v == args.visible_value
+            || v == args.invisible_value
+            || (args.max_distance.is_some() && v == args.out_of_range_value)
+    };
+    let nv = match args.nodata_value {
+        Some(nv) => nv,
+        None => (0..=255u8)
+            .rev()
+            .find(|&v| !taken(v))
+            .expect("three values leave one of 256 free"),
+    };
     if nv == args.visible_value || nv == args.invisible_value {
         bail!(
             "--nodata-value {nv} equals --visible-value or --invisible-value: GDAL would read those cells as no data"
@@ -98,6 +111,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     let input = Path::new(&args.dem);
     crate::paths::ensure_not_input(&args.out, &[input])?;
     crate::paths::ensure_not_input(&preview, &[input])?;
+    crate::paths::ensure_distinct(&args.out, &preview, "--out", "--preview")?;
     let (dem, load_s) = timed(|| dem_arg::load(&args.dem));
     let mut dem = dem?;
     // The light's grid position, for the curvature and the distances.
