@@ -51,9 +51,39 @@ pub fn ensure_distinct(a: &Path, b: &Path, what_a: &str, what_b: &str) -> Result
     Ok(())
 }
 
+/// Fail when the folder `path` would be written into does not exist, so a
+/// command stops before its work rather than after it (`what` names the
+/// flag).
+pub fn ensure_folder(path: &Path, what: &str) -> Result<()> {
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        bail!(
+            "{what} {}: the folder {} does not exist",
+            path.display(),
+            folder.display()
+        );
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_missing_folder_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(ensure_folder(&dir.path().join("m.tif"), "--out").is_ok());
+        assert!(ensure_folder(Path::new("m.tif"), "--out").is_ok());
+        let missing = dir.path().join("nowhere").join("m.png");
+        let e = ensure_folder(&missing, "--preview")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--preview") && e.contains("nowhere"), "{e}");
+    }
 
     #[test]
     fn two_outputs_naming_one_file_are_refused() {

@@ -196,6 +196,25 @@ fn bad_arguments_name_the_flag() {
         text(&o.stderr)
     );
     assert!(!png_out.exists());
+    // A preview that cannot be written stops the command before the GeoTIFF
+    // is written.
+    let o = raykit(&[
+        "terrain",
+        "shadow",
+        s(&dem),
+        "--sun",
+        "135,20",
+        "--out",
+        s(&out),
+        "--preview",
+        "/no/such/folder/m.png",
+    ]);
+    assert!(
+        !o.status.success() && text(&o.stderr).contains("/no/such/folder"),
+        "{}",
+        text(&o.stderr)
+    );
+    assert!(!out.exists());
 }
 
 #[test]

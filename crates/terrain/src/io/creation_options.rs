@@ -36,8 +36,8 @@ pub fn layout_from_creation_options(options: &[String]) -> Result<GeoTiffLayout,
                     _ => return Err(format!("--co '{option}': expected TILED=YES or TILED=NO")),
                 }
             }
-            "BLOCKXSIZE" => bx = Some(block(option, value)?),
-            "BLOCKYSIZE" => by = Some(block(option, value)?),
+            "BLOCKXSIZE" => bx = Some((option, value)),
+            "BLOCKYSIZE" => by = Some((option, value)),
             _ => {
                 return Err(format!(
                     "--co '{option}': unknown creation option '{key}'; expected one of {KEYS}"
@@ -49,9 +49,16 @@ pub fn layout_from_creation_options(options: &[String]) -> Result<GeoTiffLayout,
         return Err("--co BLOCKXSIZE and BLOCKYSIZE need --co TILED=YES".to_string());
     }
     let (dx, dy) = GeoTiffLayout::DEFAULT_TILE;
+    let side = |given: Option<(&String, &str)>, default| match given {
+        Some((option, value)) => block(option, value),
+        None => Ok(default),
+    };
     let layout = GeoTiffLayout {
         compression,
-        tile: tiled.then(|| (bx.unwrap_or(dx), by.unwrap_or(dy))),
+        tile: match tiled {
+            true => Some((side(bx, dx)?, side(by, dy)?)),
+            false => None,
+        },
     };
     layout.check().map_err(|m| format!("--co: {m}"))?;
     Ok(layout)
@@ -64,5 +71,45 @@ fn block(option: &str, value: &str) -> Result<u32, String> {
         _ => Err(format!(
             "--co '{option}': expected a multiple of 16 from 16 to 65536"
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(options: &[&str]) -> Result<GeoTiffLayout, String> {
+        let options: Vec<String> = options.iter().map(|o| o.to_string()).collect();
+        layout_from_creation_options(&options)
+    }
+
+    /// GDAL's meanings: DEFLATE strips by default here, keys and values
+    /// case-insensitive, tiles 256 unless sized, block sizes only with tiles.
+    #[test]
+    fn options_follow_gdal_and_errors_name_the_option() {
+        let strips = parse(&[]).unwrap();
+        assert_eq!(
+            (strips.compression, strips.tile),
+            (TiffCompression::Deflate, None)
+        );
+        let tiles = parse(&["compress=lzw", "TILED=yes", "BLOCKXSIZE=512"]).unwrap();
+        assert_eq!(
+            (tiles.compression, tiles.tile),
+            (TiffCompression::Lzw, Some((512, 256)))
+        );
+        for (options, needle) in [
+            (&["BLOCKYSIZE=100"][..], "need --co TILED=YES"),
+            (
+                &["TILED=YES", "BLOCKYSIZE=100"][..],
+                "'BLOCKYSIZE=100': expected a multiple of 16",
+            ),
+            (&["TILED=MAYBE"][..], "TILED=YES or TILED=NO"),
+            (&["COMPRESS=JPEG"][..], "unknown compression 'JPEG'"),
+            (&["FOO=1"][..], "unknown creation option 'FOO'"),
+            (&["TILED"][..], "'TILED': expected KEY=VALUE"),
+        ] {
+            let e = parse(options).unwrap_err();
+            assert!(e.contains(needle), "{options:?}: {e}");
+        }
     }
 }

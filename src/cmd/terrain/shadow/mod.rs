@@ -112,6 +112,8 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     crate::paths::ensure_not_input(&args.out, &[input])?;
     crate::paths::ensure_not_input(&preview, &[input])?;
     crate::paths::ensure_distinct(&args.out, &preview, "--out", "--preview")?;
+    crate::paths::ensure_folder(&args.out, "--out")?;
+    crate::paths::ensure_folder(&preview, "--preview")?;
     let (dem, load_s) = timed(|| dem_arg::load(&args.dem));
     let mut dem = dem?;
     // The light's grid position, for the curvature and the distances.
