@@ -14,7 +14,7 @@ use raykit_terrain::io::{load_dem, read_geotiff, LoadOptions};
 use raykit_terrain::mask_cells::MaskCell;
 use raykit_terrain::shadow::{shadow_mask, Light, ShadowMethod};
 use raykit_terrain::{HeightField, MaxMipmap};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 fn ter() -> PathBuf {
     let root = std::env::var_os("RAYKIT_SHARED_DATA")
@@ -131,6 +131,17 @@ fn bad_arguments_name_the_flag() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("m.tif");
     let dem = ter();
+    // The command fails, naming `needle`.
+    let refused = |args: &[&str], needle: &str| {
+        let mut a = vec!["terrain", "shadow"];
+        a.extend(args);
+        let o = raykit(&a);
+        assert!(
+            !o.status.success() && text(&o.stderr).contains(needle),
+            "{args:?}: {}",
+            text(&o.stderr)
+        );
+    };
     for (args, needle) in [
         (vec!["--light", "1,2"], "--light"),
         (vec!["--light", "0,0,5"], "outside the DEM"),
@@ -142,79 +153,38 @@ fn bad_arguments_name_the_flag() {
             "--light-elevation",
         ),
     ] {
-        let mut a = vec!["terrain", "shadow", s(&dem)];
+        let mut a = vec![s(&dem)];
         a.extend(args.iter().copied());
         a.extend(["--out", s(&out)]);
-        let o = raykit(&a);
-        assert!(!o.status.success(), "{args:?} succeeded");
-        assert!(
-            text(&o.stderr).contains(needle),
-            "{args:?}: {}",
-            text(&o.stderr)
-        );
+        refused(&a, needle);
     }
-    let o = raykit(&[
-        "terrain",
-        "shadow",
+    let (dem, out) = (s(&dem), s(&out));
+    refused(
+        &["/no/such/dem.tif", "--sun", "1,1", "--out", out],
         "/no/such/dem.tif",
-        "--sun",
-        "1,1",
-        "--out",
-        s(&out),
-    ]);
-    assert!(
-        !o.status.success() && text(&o.stderr).contains("/no/such/dem.tif"),
-        "{}",
-        text(&o.stderr)
     );
     // The output never replaces the input.
-    let o = raykit(&[
-        "terrain",
-        "shadow",
-        s(&dem),
-        "--sun",
-        "1,1",
-        "--out",
-        s(&dem),
-    ]);
-    assert!(!o.status.success());
+    refused(&[dem, "--sun", "1,1", "--out", dem], "also an input");
     // Nor does the preview replace the GeoTIFF: `--out m.png` would put both
     // at m.png.
     let png_out = dir.path().join("m.png");
-    let o = raykit(&[
-        "terrain",
-        "shadow",
-        s(&dem),
-        "--sun",
-        "135,20",
-        "--out",
-        s(&png_out),
-    ]);
-    assert!(
-        !o.status.success() && text(&o.stderr).contains("--preview"),
-        "{}",
-        text(&o.stderr)
-    );
+    refused(&[dem, "--sun", "135,20", "--out", s(&png_out)], "--preview");
     assert!(!png_out.exists());
     // A preview that cannot be written stops the command before the GeoTIFF
     // is written.
-    let o = raykit(&[
-        "terrain",
-        "shadow",
-        s(&dem),
-        "--sun",
-        "135,20",
-        "--out",
-        s(&out),
-        "--preview",
-        "/no/such/folder/m.png",
-    ]);
-    assert!(
-        !o.status.success() && text(&o.stderr).contains("/no/such/folder"),
-        "{}",
-        text(&o.stderr)
+    refused(
+        &[
+            dem,
+            "--sun",
+            "135,20",
+            "--out",
+            out,
+            "--preview",
+            "/no/such/folder/m.png",
+        ],
+        "/no/such/folder",
     );
-    assert!(!out.exists());
+    assert!(!Path::new(out).exists());
 }
 
 #[test]
