@@ -22,8 +22,9 @@ segment from the surface there to the light meets no other part of the surface. 
 are in the DEM's own units (metres for projected rasters, degrees for SRTM .hgt).\n\n\
 Output values (gdal_viewshed's -vv, -iv, -ov, -a_nodata): --visible-value (default 1),\n\
 --invisible-value (0), --out-of-range-value (0) for cells beyond --max-distance, --nodata-value\n\
-(255, or the highest value the others leave free) where the DEM has no data. The GeoTIFF is DEFLATE-compressed in strips unless --co says\n\
-otherwise (--co COMPRESS=DEFLATE|LZW|PACKBITS|NONE, --co TILED=YES, --co BLOCKXSIZE=N).\n\
+(255, or the highest value the others leave free) where the DEM has no data. The GeoTIFF is\n\
+DEFLATE-compressed in strips unless --co says otherwise (--co COMPRESS=DEFLATE|LZW|PACKBITS|NONE,\n\
+--co TILED=YES, --co BLOCKXSIZE=N).\n\
 Unlike gdal_viewshed, the output always covers the whole DEM, and the curvature coefficient is 0\n\
 (a flat earth, exact for the declared surface) unless given; gdal_viewshed's default is 0.85714.\n\
 The long options have gdal-like aliases: --vv, --iv, --ov, --tz, --md, --cc.\n\n\
