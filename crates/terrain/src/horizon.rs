@@ -263,6 +263,7 @@ fn lo(a: f64, b: f64) -> f64 {
 /// octant whose main axis is y) lie along memory; across them, one column
 /// touches a cache line and a page per point, so a block of [`BLOCK_COLUMNS`]
 /// reads and writes each line once.
+#[derive(Default)]
 struct ColumnBlock {
     /// The block's first column and its number of columns.
     m0: usize,
@@ -293,17 +294,6 @@ const BLOCK_COLUMNS: usize = 16;
 const UNSET: u8 = u8::MAX;
 
 impl ColumnBlock {
-    fn new() -> ColumnBlock {
-        ColumnBlock {
-            m0: 0,
-            len: 0,
-            rows: 0,
-            stride: 0,
-            heights: Vec::new(),
-            answers: Vec::new(),
-        }
-    }
-
     /// The grid index of row `n` of octant column `m`.
     fn index(oct: &Octant, m: usize, n: usize) -> usize {
         (oct.base + m as isize * oct.sm + n as isize * oct.sn) as usize
@@ -416,7 +406,7 @@ fn near_bound(oct: &Octant, setup: &Setup) -> f64 {
 /// interior points through `put(index, value)`.
 fn sweep(oct: &Octant, setup: &Setup, put: &mut impl FnMut(usize, u8)) {
     let near = near_bound(oct, setup);
-    let mut block = ColumnBlock::new();
+    let mut block = ColumnBlock::default();
     let mut near_col = Vec::new();
     let mut far_col = Vec::new();
     // The horizon of columns 1..m−1, starting from column 1's polyline

@@ -164,13 +164,31 @@ impl MaskClasses<'_> {
         Some(palette[..len].iter().map(|c| c.unwrap_or([0; 3])).collect())
     }
 
+    /// The class codes of `cells`, the grid points from `first` on of a
+    /// mask (1 where lit): bit 0 lit, bit 1 out of range, bit 2 no data.
+    fn codes(&self, first: usize, cells: &[u8]) -> Vec<u8> {
+        let mut codes: Vec<u8> = cells.iter().map(|&m| u8::from(m == 1)).collect();
+        if let Some(nodata) = self.nodata {
+            let nodata = &nodata[first..first + cells.len()];
+            for (c, &nd) in codes.iter_mut().zip(nodata) {
+                *c |= u8::from(nd) << 2;
+            }
+        }
+        if self.range.is_some() {
+            for (j, c) in codes.iter_mut().enumerate() {
+                *c |= u8::from(self.out_of_range(first + j)) << 1;
+            }
+        }
+        codes
+    }
+
     /// Replaces every grid point of `mask` (1 where lit) by its value under
     /// `values`, in one parallel pass over the grid, and returns the lit
     /// count and the preview's colouring: by value where
     /// [`MaskClasses::preview_palette`] has a palette, else by indices made
-    /// in the same pass. Each point's class is a three-bit code (no data,
-    /// out of range, lit) looked up in a table of eight, so that the loop
-    /// has no branches; the values overwrite the mask, which saves a grid.
+    /// in a pass before. Each point's class is a three-bit code (no data,
+    /// out of range, lit) looked up in a table of eight, so that the loops
+    /// have no branches; the values overwrite the mask, which saves a grid.
     pub fn write_values(&self, mask: &mut [u8], values: &MaskValues) -> MaskRasters {
         use rayon::prelude::*;
         const CHUNK: usize = 1 << 16;
@@ -186,40 +204,29 @@ impl MaskClasses<'_> {
                 MaskCell::Shadow
             }
         };
+        let preview = match self.preview_palette(values) {
+            Some(palette) => Preview::ByValue(palette),
+            None => {
+                let index: [u8; 8] = std::array::from_fn(|c| class(c).preview_index());
+                let mut indices = vec![0u8; mask.len()];
+                indices
+                    .par_chunks_mut(CHUNK)
+                    .zip(mask.par_chunks(CHUNK))
+                    .enumerate()
+                    .for_each(|(k, (out, cells))| {
+                        for (p, c) in out.iter_mut().zip(self.codes(k * CHUNK, cells)) {
+                            *p = index[c as usize];
+                        }
+                    });
+                Preview::Indices(indices)
+            }
+        };
         let value: [u8; 8] = std::array::from_fn(|c| class(c).value(values));
-        let index: [u8; 8] = std::array::from_fn(|c| class(c).preview_index());
-        let palette = self.preview_palette(values);
-        let mut preview = match palette {
-            Some(_) => None,
-            None => Some(vec![0u8; mask.len()]),
-        };
-        let previews: Vec<Option<&mut [u8]>> = match preview.as_mut() {
-            Some(p) => p.chunks_mut(CHUNK).map(Some).collect(),
-            None => mask.chunks(CHUNK).map(|_| None).collect(),
-        };
         let lit = mask
             .par_chunks_mut(CHUNK)
-            .zip(previews)
             .enumerate()
-            .map(|(k, (cells, preview))| {
-                let first = k * CHUNK;
-                let mut codes: Vec<u8> = cells.iter().map(|&m| u8::from(m == 1)).collect();
-                if let Some(nodata) = self.nodata {
-                    let nodata = &nodata[first..first + cells.len()];
-                    for (c, &nd) in codes.iter_mut().zip(nodata) {
-                        *c |= u8::from(nd) << 2;
-                    }
-                }
-                if self.range.is_some() {
-                    for (j, c) in codes.iter_mut().enumerate() {
-                        *c |= u8::from(self.out_of_range(first + j)) << 1;
-                    }
-                }
-                if let Some(preview) = preview {
-                    for (p, &c) in preview.iter_mut().zip(&codes) {
-                        *p = index[c as usize];
-                    }
-                }
+            .map(|(k, cells)| {
+                let codes = self.codes(k * CHUNK, cells);
                 let mut lit = 0;
                 for (o, &c) in cells.iter_mut().zip(&codes) {
                     lit += usize::from(c == 1);
@@ -228,10 +235,6 @@ impl MaskClasses<'_> {
                 lit
             })
             .sum();
-        let preview = match (palette, preview) {
-            (Some(palette), _) => Preview::ByValue(palette),
-            (None, indices) => Preview::Indices(indices.unwrap_or_default()),
-        };
         MaskRasters { preview, lit }
     }
 }
