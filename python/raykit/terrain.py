@@ -79,7 +79,10 @@ def shadow(
     light over the grid: a horizon sweep outward from the light, with the
     segment test for the points it leaves; the sun: each segment through
     the min/max quadtree) or ``"brute"`` (each segment marched cell by
-    cell); both are exact and give identical masks.
+    cell); both are exact and give identical masks. A grid point is lit
+    when its segment to the light neither crosses the surface nor leaves
+    either end into the ground (a light with ``h = 0`` sees along slopes,
+    not through the hill it stands on).
 
     Returns ``(rows, cols)`` uint8: 1 lit, 0 in shadow, 255 no data, as
     ``raykit terrain shadow`` writes its GeoTIFF.

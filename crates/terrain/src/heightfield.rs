@@ -367,6 +367,19 @@ pub fn slab(ray: &GridRay, lo: [f64; 3], hi: [f64; 3], tmin: f64, tmax: f64) -> 
     Some((t0, t1))
 }
 
+/// The index of the cell (or node, at `scale` cells per node) that a ray
+/// at coordinate `x` moving with direction `d` is in: the floor, except on a
+/// boundary, where the direction decides.
+pub(crate) fn index_along(x: f64, d: f64, scale: f64) -> i64 {
+    let q = x / scale;
+    let f = q.floor();
+    if q == f && d < 0.0 {
+        f as i64 - 1
+    } else {
+        f as i64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -31,8 +31,11 @@
 //! of these by a margin that covers rounding and the triangle test's
 //! tolerance; the rest (points in the first two columns, within the
 //! margin, or off an octant's border by less than 10⁻⁹ of `a` but more than
-//! rounding) are left to the caller's exact segment test. Lights off the
-//! grid, or at or below the ground, are not swept at all.
+//! rounding) are left to the caller's exact segment test. The part nearer
+//! than the second column is bounded by its highest corner where that is
+//! below the light, and always by its steepest rise from the light's
+//! ground point, which serves a light on the ground. Lights off the grid,
+//! or below the ground, are not swept at all.
 //!
 //! **Blocks.** Far from the light, most of a strip lies wholly below the
 //! old horizon (the horizon is copied and the points are in shadow), or
@@ -45,6 +48,7 @@
 //! buffer, and keeps their answers there until the sixteen are swept
 //! (`ColumnBlock`).
 
+use crate::ground::place_light;
 use crate::heightfield::HeightField;
 
 /// A mask cell the sweep left to the exact segment test.
@@ -126,6 +130,8 @@ fn octants(lx: f64, ly: f64, width: usize, height: usize) -> Vec<Octant> {
 struct Setup<'a> {
     heights: &'a [f32],
     zl: f64,
+    /// The surface's height under the light.
+    ground: f64,
     lift: f64,
     /// Margins within which an answer is left to the exact test.
     tol: Margins,
@@ -382,24 +388,57 @@ fn rows_for(oct: &Octant, m: usize) -> usize {
 }
 
 /// An upper bound on `v` over the part of the octant nearer than column 1
-/// (`a ≤ a0 + 1`, `b ≤ a`), from the highest corner of the cells there
-/// (columns −1 to 1, the first on or behind the light; rows 0 to 3); `+∞`
-/// when that corner is not below the light.
+/// (`a ≤ a0 + 1`, `b ≤ a`), the smaller of two (`+∞` when neither holds):
+/// - from the highest corner of the cells there (columns −1 to 1, the first
+///   on or behind the light; rows 0 to 3), when it is below the light;
+/// - from the surface's slope: along the straight way from the light's
+///   ground point to any point there, the surface rises at most as fast as
+///   the steepest of those cells' triangles rises along the octant's
+///   directions, `g_a + max(0, g_b)` per unit `a`, so that
+///   `v ≤ G + (z_ground − z_L) / (a0 + 1)`. This one also bounds a light on
+///   or just above the ground, where the first is `+∞`.
 fn near_bound(oct: &Octant, setup: &Setup) -> f64 {
+    let z = |m: isize, n: isize| -> Option<f64> {
+        let i = oct.base + m * oct.sm + n * oct.sn;
+        (n < oct.rows as isize && i >= 0 && (i as usize) < setup.heights.len())
+            .then(|| setup.heights[i as usize] as f64)
+    };
     let mut zmax = f64::NEG_INFINITY;
     for m in -1isize..=1 {
-        for n in 0..4.min(oct.rows) {
-            let i = oct.base + m * oct.sm + n as isize * oct.sn;
-            if i >= 0 && (i as usize) < setup.heights.len() {
-                zmax = zmax.max(setup.heights[i as usize] as f64);
-            }
+        for n in 0..4 {
+            zmax = zmax.max(z(m, n).unwrap_or(f64::NEG_INFINITY));
         }
     }
-    if zmax < setup.zl {
+    let corner = if zmax < setup.zl {
         (zmax - setup.zl) / (oct.a0 + 1.0)
     } else {
         f64::INFINITY
+    };
+    // The cells between columns m − 1 and m for m = 0, 1 (column −1 and
+    // column 0's cells on the grid: `octants` keeps the light's own cell in
+    // it) and rows n to n + 1 for n = 0..3 where the grid has them.
+    let mut steepest = f64::NEG_INFINITY;
+    for m in 0isize..=1 {
+        for n in 0isize..3 {
+            let (Some(z00), Some(z10), Some(z01), Some(z11)) =
+                (z(m - 1, n), z(m, n), z(m - 1, n + 1), z(m, n + 1))
+            else {
+                continue;
+            };
+            // Rises along a (rows n and n + 1) and along b (columns m − 1
+            // and m); each triangle has one of each, paired by the diagonal.
+            let (a0, a1, b0, b1) = (z10 - z00, z11 - z01, z01 - z00, z11 - z10);
+            let up = |g: f64| hi(g, 0.0);
+            let cell = if oct.outward {
+                hi(a0 + up(b1), a1 + up(b0))
+            } else {
+                hi(a0 + up(b0), a1 + up(b1))
+            };
+            steepest = hi(steepest, cell);
+        }
     }
+    let sloped = steepest + (setup.ground - setup.zl) / (oct.a0 + 1.0);
+    lo(corner, sloped)
 }
 
 /// Sweeps one octant, writing 1 (lit), 0 (shadowed) or [`UNDECIDED`] for its
@@ -913,18 +952,22 @@ impl SharedCells {
 
 /// The sweep's mask for a point light at `light` (world metres) and
 /// targets `lift` metres above the ground: per grid point (row-major from
-/// the north row) 1 lit, 0 shadowed, or [`UNDECIDED`]. `None` when the
-/// light is not over the grid or not above the ground there, where the
+/// the north row) 1 lit, 0 shadowed, or [`UNDECIDED`]. A light on the
+/// ground is placed as the masks place it ([`place_light`]). `None` when
+/// the light is not over the grid or is below the ground there, where the
 /// sweep's bounds do not hold.
 pub fn point_light_mask(field: &HeightField, light: [f64; 3], lift: f64) -> Option<Vec<u8>> {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicU8, Ordering};
+    let light = place_light(field, light);
     let (lx, ly, zl) = (light[0] / field.sx, -light[1] / field.sy, light[2]);
     let (w, h) = (field.width, field.height);
     let inside = (0.0..=(w - 1) as f64).contains(&lx) && (0.0..=(h - 1) as f64).contains(&ly);
-    let above =
-        zl.partial_cmp(&(field.height_at(lx, ly) + 1e-6)) == Some(std::cmp::Ordering::Greater);
-    if !inside || !above || !lift.is_finite() || lift < 0.0 {
+    if !inside || !lift.is_finite() || lift < 0.0 {
+        return None;
+    }
+    let ground = field.height_at(lx, ly);
+    if zl.partial_cmp(&ground) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let (zmin, zmax) = (field.zmin as f64, field.zmax as f64);
@@ -933,6 +976,7 @@ pub fn point_light_mask(field: &HeightField, light: [f64; 3], lift: f64) -> Opti
     let setup = Setup {
         heights: &field.heights,
         zl,
+        ground,
         lift,
         tol: Margins {
             round,

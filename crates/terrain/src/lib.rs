@@ -16,6 +16,7 @@ pub mod curvature;
 pub mod dem;
 pub mod fractal;
 pub mod georef;
+pub mod ground;
 pub mod heightfield;
 pub mod horizon;
 pub mod io;

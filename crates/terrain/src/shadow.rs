@@ -1,6 +1,8 @@
 //! Terrain shadow masks (Min 2008): for every grid point, is the light
 //! visible from the surface point there? One segment per grid point to the
-//! light, tested against the declared surface ([`crate::heightfield`]).
+//! light, tested against the declared surface ([`crate::heightfield`]): in
+//! shadow when it crosses the surface between its ends or leaves either end
+//! into the ground ([`crate::ground`]).
 //!
 //! Two exact algorithms give identical masks:
 //! - [`ShadowMethod::BruteForce`]: Min's (2008) method, each segment marched
@@ -12,7 +14,8 @@
 //!   at the first node the segment passes wholly *below* (it must then
 //!   cross the surface, since both of its ends are on or above it).
 
-use crate::heightfield::{GridRay, HeightField, Steps};
+use crate::ground::{ground_under_light, leaves_into_ground, place_light};
+use crate::heightfield::{index_along, GridRay, HeightField, Steps};
 use crate::horizon::{self, UNDECIDED};
 use crate::march::march;
 use crate::pyramid::MaxMipmap;
@@ -142,7 +145,7 @@ pub fn occluded_with_hint(
     occluded_from(
         field,
         Some(pyramid),
-        light,
+        &placed(field, light),
         col,
         row,
         0.0,
@@ -168,6 +171,10 @@ fn occluded_from(
     steps: &mut Steps,
 ) -> bool {
     let (ray, tmax) = segment(field, light, col, row, lift);
+    if leaves_an_end_into_the_ground(field, light, &ray, col, row, lift) {
+        steps.cells += 1;
+        return true;
+    }
     match (method, pyramid) {
         (ShadowMethod::BruteForce, _) => march(field, &ray, END_EPS, tmax, steps).is_some(),
         (ShadowMethod::Fast, None) => field
@@ -192,14 +199,6 @@ fn occluded_from(
             // The early exit needs the far end on or above the surface.
             let end = ray.at(t1);
             let end_above = end[2] >= field.height_at(end[0], end[1]);
-            // The segment sinks into the ground at its grid point and ends
-            // strictly above the surface: it must come back up through it.
-            // (A lifted start is above the ground and cannot sink into it.)
-            let end_clear = end[2] > field.height_at(end[0], end[1]) + BELOW_EPS;
-            if lift == 0.0 && end_clear && dips_below(field, &ray, col, row) {
-                steps.cells += 1;
-                return true;
-            }
             if let Some(b) = *hint {
                 if proves(field, pyramid, &ray, t0, t1, end_above, &b, steps) {
                     return true;
@@ -231,39 +230,54 @@ fn march_below(field: &HeightField, ray: &GridRay, t0: f64, t1: f64, steps: &mut
             h.iter().copied().fold(f32::MAX, f32::min) as f64,
         );
         let low = (ray.o[2] + ta * dz).min(ray.o[2] + tb * dz);
-        low <= hi + 1e-6 + 1e-8 * (hi - lo + slope)
+        low <= hi + slack(hi, lo, slope)
     })
     .is_some()
 }
 
-/// Whether the segment from grid point (`col`, `row`) starts *into* the
-/// ground: in the triangle it leaves through, the surface rises faster
-/// along the segment than the segment does. Ambiguous starts (along a cell
-/// edge or diagonal, or straight up) answer false.
-fn dips_below(field: &HeightField, ray: &GridRay, col: usize, row: usize) -> bool {
-    let [dx, dy, dz] = ray.d;
-    if dx == 0.0 || dy == 0.0 || dx == dy {
-        return false;
+/// How far above the highest corner of a cell, or node, with corners from
+/// `lo` to `hi` a segment of `slope` (metres per cell) must pass to miss its
+/// triangles: the triangle test accepts hits up to 10⁻⁹ cells outside a
+/// triangle, where its plane may stand higher and the segment lower than
+/// over the cell.
+#[inline]
+fn slack(hi: f64, lo: f64, slope: f64) -> f64 {
+    1e-6 + 1e-8 * (hi - lo + slope)
+}
+
+/// Whether the segment leaves the grid point (`col`, `row`) or a light on
+/// the ground into the ground, which makes the point shadowed
+/// ([`crate::ground`]). A lifted start is above the ground and cannot.
+fn leaves_an_end_into_the_ground(
+    field: &HeightField,
+    light: &Light,
+    ray: &GridRay,
+    col: usize,
+    row: usize,
+    lift: f64,
+) -> bool {
+    if lift == 0.0 && leaves_into_ground(field, col as f64, row as f64, ray.d) {
+        return true;
     }
-    let (cw, ch) = field.cells();
-    let (ci, cj) = (
-        index_along(col as f64, dx, 1.0),
-        index_along(row as f64, dy, 1.0),
-    );
-    if ci < 0 || cj < 0 || ci >= cw as i64 || cj >= ch as i64 {
+    // From the surface point under the light, which the placement raised
+    // by a rounding margin, so that a segment straight down to its own
+    // grid point does not count.
+    let Light::Point(w) = *light else {
         return false;
-    }
-    let (c, r) = (ci as usize, cj as usize);
-    // The grid point is this corner of the cell; the upper triangle is
-    // u >= v (see heightfield.rs).
-    let upper = match (col - c, row - r) {
-        (0, 0) | (1, 1) => dy < dx,
-        (1, 0) => true,
-        _ => false,
     };
-    let plane = field.cell_plane(c, r, upper);
-    let rise = plane.du * dx + plane.dv * dy;
-    dz < rise - 1e-9 * (dz.abs() + rise.abs()) - 1e-12
+    ground_under_light(field, w).is_some_and(|h| {
+        let back = [-ray.d[0], -ray.d[1], ray.o[2] - h];
+        leaves_into_ground(field, w[0] / field.sx, -w[1] / field.sy, back)
+    })
+}
+
+/// The light as the masks test it: a point light on the ground placed just
+/// above it ([`place_light`]).
+fn placed(field: &HeightField, light: &Light) -> Light {
+    match *light {
+        Light::Point(w) => Light::Point(place_light(field, w)),
+        sun => sun,
+    }
 }
 
 /// Whether blocker `b` blocks this segment too.
@@ -302,19 +316,6 @@ fn proves(
     }
 }
 
-/// The index of the cell (or node, at `scale` cells per node) that a ray
-/// at coordinate `x` moving with direction `d` is in: the floor, except on a
-/// boundary, where the direction decides.
-fn index_along(x: f64, d: f64, scale: f64) -> i64 {
-    let q = x / scale;
-    let f = q.floor();
-    if q == f && d < 0.0 {
-        f as i64 - 1
-    } else {
-        f as i64
-    }
-}
-
 /// The fast test: a stackless walk of the min/max quadtree that starts in
 /// the grid point's own cell at level 0 and moves along the segment,
 /// climbing a level after every node it leaves and descending where the
@@ -335,6 +336,7 @@ fn bottom_up(
     steps: &mut Steps,
 ) -> Option<Blocker> {
     let [dx, dy, dz] = ray.d;
+    let slope = dz.abs() / dx.hypot(dy).max(1e-300);
     let (cw, ch) = field.cells();
     let (cw, ch) = (cw as i64, ch as i64);
     // The cell the segment enters from its grid point.
@@ -372,10 +374,21 @@ fn bottom_up(
         let exit = exit_x.min(exit_y).min(t1).max(t);
         let (za, zb) = (ray.o[2] + t * dz, ray.o[2] + exit * dz);
         let [zmax, zmin] = lv.max_min[k];
+        let (zmax, zmin) = (zmax as f64, zmin as f64);
         // Plain comparisons: no NaN can occur here.
         let (lo, hi) = if za < zb { (za, zb) } else { (zb, za) };
-        if lo <= zmax as f64 + 1e-9 {
-            if early_exit && hi < zmin as f64 - BELOW_EPS {
+        // A flat node's triangles all lie in one horizontal plane, which
+        // the segment misses when it passes above it over the whole node by
+        // more than the triangle test's reach beyond a cell (10⁻⁹ cells at
+        // the segment's slope) and rounding; this settles segments that
+        // skim a flat from a light on it.
+        let clear = if zmax == zmin {
+            lo > zmax + 1e-8 * slope + 1e-13 * (1.0 + zmax.abs() + dz.abs())
+        } else {
+            lo > zmax + slack(zmax, zmin, slope)
+        };
+        if !clear {
+            if early_exit && hi < zmin - BELOW_EPS {
                 return Some(Blocker {
                     level,
                     i,
@@ -458,7 +471,8 @@ pub fn shadow_mask_with_progress(
 
 /// [`shadow_mask_with_progress`] for targets `target_height` >= 0 metres
 /// above the ground at every grid point (gdal_viewshed's `-tz`): 1 where
-/// the segment from the target to the light meets no part of the surface.
+/// the segment from the target to the light neither crosses the surface
+/// nor leaves either end into the ground ([`crate::ground`]).
 /// A negative or non-finite height counts as 0. Without a `pyramid`, the
 /// fast method builds one only where it needs one: for a sun, or a point
 /// light the sweep cannot take or leaves many points of.
@@ -476,6 +490,7 @@ pub fn shadow_mask_for_targets(
         0.0
     };
     let w = field.width;
+    let light = &placed(field, light);
     // A point light over the grid is swept first; the segment test answers
     // the points the sweep leaves.
     let swept = match (method, light) {

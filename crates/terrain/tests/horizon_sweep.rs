@@ -81,6 +81,12 @@ fn lights(field: &HeightField) -> Vec<(f64, f64, f64)> {
         (1.0, 1.0, 40.0),
         (0.997, 0.03, 3.0),
         (0.5, 1.0, 0.7),
+        // On the ground: on a grid point, on a grid line, anywhere, and
+        // within a rounding step of it.
+        ((w / 3.0).round() / w, (h / 4.0).round() / h, 0.0),
+        (0.618, 50.0 / h, 0.0),
+        (0.291, 0.733, 0.0),
+        (0.8, 0.4, 1e-8),
     ];
     for _ in 0..6 {
         let height = [0.5, 4.0, 25.0, 400.0][rng.next_u32() as usize % 4];
@@ -99,6 +105,7 @@ fn decided_points_agree_with_brute_force_and_the_fast_mask_is_exact() {
             (field.height - 1) as f64 * field.sy,
         );
         let (mut decided, mut total, mut lit, mut dark) = (0usize, 0usize, 0usize, 0usize);
+        let (mut ground_decided, mut ground_total) = (0usize, 0usize);
         for (fx, fy, above) in lights(&field) {
             let pos = light_above_ground(&field, fx * wx, -fy * wy, above).unwrap();
             let light = Light::Point(pos);
@@ -125,6 +132,10 @@ fn decided_points_agree_with_brute_force_and_the_fast_mask_is_exact() {
                     }
                 }
                 total += swept.len();
+                if above < 1e-6 {
+                    ground_total += swept.len();
+                    ground_decided += swept.iter().filter(|&&s| s != UNDECIDED).count();
+                }
                 // With a pyramid given and without one (the leftovers are
                 // marched).
                 for pyramid in [Some(&pyramid), None] {
@@ -134,9 +145,15 @@ fn decided_points_agree_with_brute_force_and_the_fast_mask_is_exact() {
                 }
             }
         }
-        // The sweep must decide nearly everything, or the comparison above
-        // tests the fallback instead; and both answers must occur.
+        // The sweep must decide nearly everything, lights on the ground
+        // included, or the comparison above tests the fallback instead; and
+        // both answers must occur.
         let share = decided as f64 / total as f64;
+        let ground_share = ground_decided as f64 / ground_total as f64;
+        assert!(
+            ground_share > 0.75,
+            "{name}: the sweep decided {ground_share:.3} of the points for lights on the ground"
+        );
         assert!(
             share > 0.85,
             "{name}: the sweep decided {share:.3} of the points"
@@ -153,8 +170,10 @@ fn lights_the_sweep_cannot_take_are_refused() {
     let (_, dem) = surfaces().remove(0);
     let field = HeightField::new(&dem).unwrap();
     let ground = light_above_ground(&field, 100.0, -100.0, 0.0).unwrap();
-    // At the ground, below it, off the grid, or with a bad target height.
-    assert!(point_light_mask(&field, ground, 0.0).is_none());
+    // Below the ground, off the grid, or with a bad target height; a light
+    // on the ground, or within a rounding step below it, is swept.
+    assert!(point_light_mask(&field, ground, 0.0).is_some());
+    assert!(point_light_mask(&field, [ground[0], ground[1], ground[2] - 1e-8], 0.0).is_some());
     assert!(point_light_mask(&field, [ground[0], ground[1], ground[2] - 5.0], 0.0).is_none());
     assert!(point_light_mask(&field, [-10.0, -100.0, 500.0], 0.0).is_none());
     assert!(point_light_mask(&field, [100.0, 10.0, 500.0], 0.0).is_none());
@@ -201,7 +220,7 @@ fn ground_beside_the_light_is_bounded() {
 #[test]
 fn small_grids_and_stray_lights_match_brute_force() {
     // Grids from 2 x 2 up, where octants have few columns or none, with
-    // lights anywhere over them at heights from just above the ground.
+    // lights anywhere over them at heights from the ground up.
     let mut rng = Pcg32::new(23);
     for trial in 0..300 {
         let (w, h) = (
@@ -225,7 +244,7 @@ fn small_grids_and_stray_lights_match_brute_force() {
         if trial % 3 == 0 {
             (gx, gy) = (gx.round(), gy.round());
         }
-        let above = [0.01, 1.0, 9.0][trial % 3];
+        let above = [0.0, 0.01, 1.0, 9.0][trial % 4];
         let pos = [
             gx * field.sx,
             -gy * field.sy,

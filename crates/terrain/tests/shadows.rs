@@ -157,3 +157,63 @@ fn fast_equals_brute_force_on_the_shared_dems() {
         );
     }
 }
+
+/// A grid of `w` × `h` points, 1 m cells, with height `f(col, row)`.
+fn surface(w: usize, h: usize, f: impl Fn(f32, f32) -> f32) -> HeightField {
+    let heights = (0..w * h)
+        .map(|k| f((k % w) as f32, (k / w) as f32))
+        .collect();
+    HeightField::new(&Dem::from_heights(w, h, heights)).unwrap()
+}
+
+/// Both methods' masks, which must agree, against `expected(col, row)`.
+fn masks_match(field: &HeightField, light: &Light, expected: impl Fn(usize, usize) -> bool) {
+    same_masks(field, light, "analytic surface");
+    let pyramid = MaxMipmap::new(field);
+    let mask = shadow_mask(field, &pyramid, light, ShadowMethod::Fast);
+    let w = field.width;
+    let wrong: Vec<(usize, usize)> = (0..mask.len())
+        .map(|k| (k % w, k / w))
+        .filter(|&(c, r)| (mask[r * w + c] == 1) != expected(c, r))
+        .collect();
+    assert!(
+        wrong.is_empty(),
+        "{light:?}: {} cells wrong, the first at (col, row) {:?}",
+        wrong.len(),
+        &wrong[..wrong.len().min(5)]
+    );
+}
+
+#[test]
+fn a_light_on_the_ground_does_not_see_through_its_hill() {
+    // A ridge along the rows, its top on column 50 and both flanks planar:
+    // from a light on the west flank, segments to the west flank lie in
+    // its plane (lit: they touch the surface without crossing it), and
+    // segments to the east flank pass under the top, so that they leave
+    // the light into the ground (in shadow). From a light on the top, both
+    // flanks fall away in their planes: everything is lit.
+    let field = surface(101, 41, |x, _| 10.0 - (x - 50.0).abs());
+    for (x, y) in [(45.0, -10.0), (44.3, -17.6), (30.5, -20.0), (50.0, -3.0)] {
+        let light = Light::Point(light_above_ground(&field, x, y, 0.0).unwrap());
+        masks_match(&field, &light, |c, _| c <= 50 || x == 50.0);
+    }
+}
+
+#[test]
+fn a_slope_facing_away_from_a_low_sun_is_in_shadow() {
+    // A plane falling 10 m per cell to the east under a sun 10° up in the
+    // west-south-west: its segments leave every point into the ground and
+    // stay below the plane to the grid's border. Only the border points
+    // whose segments leave the grid at once (the west column, the south
+    // row) have no triangle to leave through and stay lit. Facing the sun
+    // instead, the plane is lit everywhere.
+    let (w, h) = (61, 37);
+    let sun = Light::Sun {
+        azimuth_deg: 240.0,
+        elevation_deg: 10.0,
+    };
+    let away = surface(w, h, |x, _| 1000.0 - 10.0 * x);
+    masks_match(&away, &sun, |c, r| c == 0 || r == h - 1);
+    let facing = surface(w, h, |x, _| 1000.0 + 10.0 * x);
+    masks_match(&facing, &sun, |_, _| true);
+}

@@ -18,7 +18,9 @@ pub enum Method {
 #[derive(Args)]
 #[command(after_help = "Exactly one of --light, --sun, --sun-path.\n\n\
 The surface is the DEM's grid points joined as two triangles per cell. A grid point is lit when the\n\
-segment from the surface there to the light meets no other part of the surface. Map coordinates\n\
+segment from the surface there to the light neither crosses the surface nor leaves either end into\n\
+the ground: a light on the ground (H = 0) sees along slopes but not through the hill it stands on,\n\
+and a slope facing away from the sun is in shadow. Map coordinates\n\
 are in the DEM's own units (metres for projected rasters, degrees for SRTM .hgt).\n\n\
 Output values (gdal_viewshed's -vv, -iv, -ov, -a_nodata): --visible-value (default 1),\n\
 --invisible-value (0), --out-of-range-value (0) for cells beyond --max-distance, --nodata-value\n\
