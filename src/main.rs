@@ -2,6 +2,7 @@
 //! done by the library crates.
 
 mod cmd;
+mod error_message;
 mod instanced_arg;
 mod paths;
 
@@ -69,7 +70,7 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("raykit: error: {e:#}");
+            eprintln!("raykit: error: {}", error_message::error_message(&e));
             ExitCode::FAILURE
         }
     }

@@ -1,12 +1,16 @@
-//! Guards on output paths: an output never replaces an input, and two
-//! outputs of one command never share a file.
+//! Guards on output paths: an output's folder exists before the work
+//! starts, an output never replaces an input, and two outputs of one
+//! command never share a file.
 
 use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
 
-/// Fail when `out` names the same file as one of `inputs` (after resolving
-/// links and relative paths), so a command can never overwrite its input.
-pub fn ensure_not_input(out: &Path, inputs: &[&Path]) -> Result<()> {
+/// Fail when the folder of `out` does not exist, so that a command stops
+/// before its work rather than after it, or when `out` names the same file
+/// as one of `inputs` (after resolving links and relative paths), so that a
+/// command can never overwrite its input.
+pub fn ensure_output(out: &Path, inputs: &[&Path]) -> Result<()> {
+    ensure_folder(out)?;
     let Ok(out_real) = out.canonicalize() else {
         return Ok(()); // the output does not exist yet
     };
@@ -55,14 +59,12 @@ pub fn ensure_distinct(a: &Path, b: &Path, what_a: &str, what_b: &str) -> Result
     Ok(())
 }
 
-/// Fail when the folder `path` would be written into does not exist, so a
-/// command stops before its work rather than after it (`what` names the
-/// flag).
-pub fn ensure_folder(path: &Path, what: &str) -> Result<()> {
+/// Fail when the folder `path` would be written into does not exist.
+fn ensure_folder(path: &Path) -> Result<()> {
     let folder = folder_of(path);
     if !folder.is_dir() {
         bail!(
-            "{what} {}: the folder {} does not exist",
+            "cannot write {}: the folder {} does not exist",
             path.display(),
             folder.display()
         );
@@ -77,13 +79,11 @@ mod tests {
     #[test]
     fn a_missing_folder_is_named() {
         let dir = tempfile::tempdir().unwrap();
-        assert!(ensure_folder(&dir.path().join("m.tif"), "--out").is_ok());
-        assert!(ensure_folder(Path::new("m.tif"), "--out").is_ok());
+        assert!(ensure_output(&dir.path().join("m.tif"), &[]).is_ok());
+        assert!(ensure_output(Path::new("m.tif"), &[]).is_ok());
         let missing = dir.path().join("nowhere").join("m.png");
-        let e = ensure_folder(&missing, "--preview")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("--preview") && e.contains("nowhere"), "{e}");
+        let e = ensure_output(&missing, &[]).unwrap_err().to_string();
+        assert!(e.contains("m.png") && e.contains("nowhere"), "{e}");
     }
 
     #[test]
@@ -110,9 +110,9 @@ mod tests {
         let a = dir.path().join("a.bin");
         std::fs::write(&a, b"x").unwrap();
         let same = dir.path().join(".").join("a.bin");
-        assert!(ensure_not_input(&same, &[&a]).is_err());
-        assert!(ensure_not_input(&dir.path().join("b.bin"), &[&a]).is_ok());
+        assert!(ensure_output(&same, &[&a]).is_err());
+        assert!(ensure_output(&dir.path().join("b.bin"), &[&a]).is_ok());
         std::fs::write(dir.path().join("b.bin"), b"y").unwrap();
-        assert!(ensure_not_input(&dir.path().join("b.bin"), &[&a]).is_ok());
+        assert!(ensure_output(&dir.path().join("b.bin"), &[&a]).is_ok());
     }
 }

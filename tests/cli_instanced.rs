@@ -280,7 +280,7 @@ fn instanced_runs_refuse_what_they_cannot_answer() {
         s(&out),
     ]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("takes one --mesh"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("answers on one mesh"), "{}", stderr(&o));
     let o = raykit(&[
         "trace",
         "--mesh",

@@ -353,8 +353,11 @@ fn ray_queries_match_brute_force() {
         } else {
             std::array::from_fn(|_| rng.next() - 0.5)
         };
+        // Some with a finite interval, some over the whole line.
         let (tnear, tfar) = if i % 3 == 0 {
             (0.1 * rng.next(), 0.5 + rng.next())
+        } else if i % 5 == 1 {
+            (f64::NEG_INFINITY, f64::INFINITY)
         } else {
             (0.0, f64::INFINITY)
         };
@@ -379,7 +382,7 @@ fn ray_queries_match_brute_force() {
     );
     let brute: Vec<_> = rays.iter().map(|r| brute_crossings(&tris, r)).collect();
 
-    let run = |args: &[&str]| -> Vec<u8> {
+    let run_with_stats = |args: &[&str]| -> (Vec<u8>, serde_json::Value) {
         let out = dir.path().join("o.bin");
         let mut all = vec!["query"];
         all.extend_from_slice(args);
@@ -389,8 +392,9 @@ fn ray_queries_match_brute_force() {
         let st = stats_line(&o);
         assert_eq!(st["rays"], rays.len());
         assert!(st["per_s"].as_f64().is_some(), "{st}");
-        std::fs::read(out).unwrap()
+        (std::fs::read(out).unwrap(), st)
     };
+    let run = |args: &[&str]| run_with_stats(args).0;
 
     let counts = run(&["count"]);
     assert_eq!(counts.len(), 4 * rays.len());
@@ -411,7 +415,23 @@ fn ray_queries_match_brute_force() {
     );
 
     let cap = 3;
-    let lists = run(&["all-hits", "--max-hits", &cap.to_string()]);
+    let (lists, st) = run_with_stats(&["all-hits", "--max-hits", &cap.to_string()]);
+    // The rays cut to the cap are those with more crossings than it.
+    let over = (0..rays.len())
+        .filter(|&i| read_u32(&counts, 4 * i) as usize > cap)
+        .count();
+    assert!(over > 0, "some rays should cross more than {cap} times");
+    assert_eq!(st["truncated"], over, "{st}");
+    // --max-hits 0 keeps every hit: each list as long as the ray's count.
+    let (every, st) = run_with_stats(&["all-hits", "--max-hits", "0"]);
+    assert_eq!(st["truncated"], 0, "{st}");
+    let mut at = 0;
+    for i in 0..rays.len() {
+        let n = read_u32(&every, at);
+        assert_eq!(n, read_u32(&counts, 4 * i), "ray {i}");
+        at += 4 + 8 * n as usize;
+    }
+    assert_eq!(at, every.len());
     let mut at = 0;
     for (i, (r, (sure, maybe))) in rays.iter().zip(&brute).enumerate() {
         let n = read_u32(&lists, at) as usize;
@@ -537,4 +557,35 @@ fn bad_points_are_refused_or_answered_with_nan() {
         !e.contains("panicked") && e.contains("r.bin") && e.contains("32"),
         "{e}"
     );
+}
+
+#[test]
+fn outputs_are_checked_before_the_work_and_flags_that_do_not_apply_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = bunny();
+    let points = dir.path().join("p.bin");
+    write_f32s(&points, [0.0f32; 6]);
+    // `query distance` from MESH to OUT with EXTRA arguments, which fails.
+    let refused = |mesh: &str, out: &Path, extra: &[&str]| {
+        let mut all = vec!["query", "distance", "--mesh", mesh, "--points", s(&points)];
+        all.extend_from_slice(&["--out", s(out)]);
+        all.extend_from_slice(extra);
+        let o = raykit(&all);
+        assert!(!o.status.success(), "{all:?} should fail");
+        stderr(&o)
+    };
+    // A missing output folder is named before anything is loaded.
+    let missing = dir.path().join("nowhere").join("o.bin");
+    let e = refused(s(&mesh), &missing, &[]);
+    assert!(e.contains("nowhere") && e.contains("does not exist"), "{e}");
+    // --max-hits is for all-hits only.
+    let out = dir.path().join("o.bin");
+    let e = refused(s(&mesh), &out, &["--max-hits", "5"]);
+    assert!(e.contains("--max-hits") && e.contains("all-hits"), "{e}");
+    assert!(!out.exists());
+    // A missing mesh is said once, not with its cause repeated.
+    let e = refused("no-such-mesh.obj", &out, &[]);
+    assert!(e.contains("no-such-mesh.obj"), "{e}");
+    let cause = "No such file or directory";
+    assert_eq!(e.matches(cause).count(), 1, "{e}");
 }

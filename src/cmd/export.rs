@@ -34,7 +34,7 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
             args.out.display()
         ),
     };
-    crate::paths::ensure_not_input(&args.out, &[std::path::Path::new(&args.scene)])?;
+    crate::paths::ensure_output(&args.out, &[std::path::Path::new(&args.scene)])?;
     let scene = scene_arg::load(&args.scene)?;
     raykit_io::write_atomic(&args.out, |w| {
         raykit_io::write_gltf_scene(w, &scene.mesh, scene.camera.as_ref(), &scene.lights, binary)

@@ -27,7 +27,7 @@ pub struct MergeTilesArgs {
 /// Read, check and assemble the parts.
 pub fn run(args: MergeTilesArgs) -> Result<ExitCode> {
     let inputs: Vec<&Path> = args.parts.iter().map(PathBuf::as_path).collect();
-    crate::paths::ensure_not_input(&args.out, &inputs)?;
+    crate::paths::ensure_output(&args.out, &inputs)?;
     let (width, height, rgb) = merge_png_parts(&inputs).map_err(|e| match e {
         MergeError::Read(e) => anyhow::Error::from(e),
         MergeError::Parts(m) => anyhow::Error::msg(m),

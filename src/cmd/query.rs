@@ -68,25 +68,31 @@ inside           per point, whether it is inside: its generalized winding number
 et al. 2013; far triangles grouped by Barill et al. 2018's fast approximation)\n                   \
 is at least 1/2, which is right on open and self-intersecting meshes too\n  \
 count            per ray, the number of triangles it crosses within [tnear, tfar]\n  \
-all-hits         per ray, every hit within [tnear, tfar], nearest first\n\n\
+all-hits         per ray, every hit within [tnear, tfar], nearest first\n\
+A ray through an edge or a corner that triangles share is counted, and listed, once for each\n\
+of them that its test reports, so a count is no inside/outside parity there (`inside` is).\n\n\
 Files (little-endian):\n  \
 point file (--points): per point 3 f32 x y z (12 bytes)\n  \
-ray file (--rays): the ray file of `raykit rays` and `raykit trace`\n  \
-distance, signed-distance: one f32 per point (NaN for a NaN point)\n  \
+ray file (--rays): the ray file of `raykit rays` and `raykit trace` (t counts lengths of the\n    \
+ray's direction)\n  \
+distance, signed-distance: one f32 per point (NaN for a point that is not finite)\n  \
 inside: one byte per point (1 = inside)\n  \
 closest: per point f32 x y z distance, u32 triangle (20 bytes; NaN and 4294967295\n    \
-when there is no answer)\n  \
+when there is no answer: a point that is not finite, or an empty mesh)\n  \
 count: one u32 per ray\n  \
 all-hits: per ray a u32 n, then n pairs f32 t, u32 triangle, nearest first\n\n\
 Prints one JSON line of statistics on stderr:\n\
-{\"query\", \"mesh_triangles\", \"points\" or \"rays\", \"answered\", \"hits\" (count, all-hits),\n\
-\"inside\" (inside),\n\
+{\"query\", \"mesh_triangles\", \"points\" or \"rays\", \"answered\" (points or rays with a finite\n\
+answer or at least one hit), \"hits\" (count, all-hits), \"truncated\" (all-hits: rays with more\n\
+hits than --max-hits), \"inside\" (inside),\n\
 \"load_ms\", \"build_ms\", \"query_ms\", \"per_s\", \"threads\"} (query_ms excludes loading and building;\n\
 per_s is points or rays per second).\n\n\
 Several --mesh (or --instanced), for count and all-hits: an instanced scene under a two-level\n\
 BVH (each file a geometry placed once; a glTF file one geometry per mesh, one instance per node).\n\
 count is unchanged; all-hits gives per ray a u32 n, then n records f32 t, u32 triangle,\n\
-u32 geometry, u32 instance (16 bytes), nearest first. The JSON line adds the scene's figures.")]
+u32 geometry, u32 instance (16 bytes), nearest first. The JSON line gives the scene's figures\n\
+(geometries, instances, stored_triangles, instanced_triangles, scene_bytes, inputs) in place of\n\
+mesh_triangles.")]
 pub struct QueryArgs {
     /// The query (see below).
     #[arg(value_enum)]
@@ -108,12 +114,30 @@ pub struct QueryArgs {
     /// Output file.
     #[arg(long)]
     out: PathBuf,
-    /// all-hits: keep at most this many hits per ray (the nearest).
-    #[arg(long, default_value_t = 64)]
-    max_hits: u32,
+    /// all-hits: keep at most this many hits per ray, the nearest (0 = all
+    /// of them) [default: 64].
+    #[arg(long)]
+    max_hits: Option<u32>,
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+}
+
+/// The hits kept per ray for `--max-hits` (0: all of them).
+fn hit_cap(max_hits: Option<u32>) -> usize {
+    match max_hits.unwrap_or(64) {
+        0 => usize::MAX,
+        m => m as usize,
+    }
+}
+
+/// Cut every list to `cap` entries; the number of lists that were longer.
+fn cut_to<T>(lists: &mut [Vec<T>], cap: usize) -> usize {
+    lists
+        .iter_mut()
+        .filter(|l| l.len() > cap)
+        .map(|l| l.truncate(cap))
+        .count()
 }
 
 /// Write `out` atomically with `write`.
@@ -130,16 +154,23 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
         (false, _, _) => bail!("`query {}` reads points: give --points FILE", q.name()),
         (true, _, _) => bail!("`query {}` reads rays: give --rays FILE", q.name()),
     };
+    if args.max_hits.is_some() && q != Query::AllHits {
+        bail!(
+            "--max-hits is for `query all-hits`, not `query {}`",
+            q.name()
+        );
+    }
     if args.instanced || args.mesh.len() > 1 {
         if !q.takes_rays() {
             bail!(
-                "`query {}` takes one --mesh; several meshes (an instanced scene) answer count and all-hits",
+                "`query {}` answers on one mesh, not an instanced scene: several --mesh and \
+                 --instanced are for count and all-hits",
                 q.name()
             );
         }
         return run_instanced(&args, input);
     }
-    crate::paths::ensure_not_input(&args.out, &[input, Path::new(&args.mesh[0])])?;
+    crate::paths::ensure_output(&args.out, &[input, Path::new(&args.mesh[0])])?;
     let pool = pool(args.threads)?;
     let threads = pool.current_num_threads();
     let (scene, load_s) = timed(|| scene_arg::load(&args.mesh[0]));
@@ -157,8 +188,13 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
         })
     });
     let n = points.len() + rays.len();
-    let cap = args.max_hits as usize;
-    let (answers, query_s) = pool.install(|| timed(|| bvh.answer(q.kind(), &points, &rays, cap)));
+    let cap = hit_cap(args.max_hits);
+    let (mut answers, query_s) =
+        pool.install(|| timed(|| bvh.answer(q.kind(), &points, &rays, cap.saturating_add(1))));
+    let truncated = match &mut answers {
+        raykit_core::query::Answers::HitLists(lists) => Some(cut_to(lists, cap)),
+        _ => None,
+    };
     write_out(&args.out, |w| write_answers(w, &answers))?;
     let (answered, hits, inside_count) =
         (answers.answered(&points), answers.hits(), answers.inside());
@@ -174,6 +210,9 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
     obj.insert("answered".into(), json!(answered));
     if let Some(h) = hits {
         obj.insert("hits".into(), json!(h));
+    }
+    if let Some(t) = truncated {
+        obj.insert("truncated".into(), json!(t));
     }
     if let Some(c) = inside_count {
         obj.insert("inside".into(), json!(c));
@@ -200,17 +239,18 @@ fn run_instanced(args: &QueryArgs, input: &Path) -> Result<ExitCode> {
     let q = args.query;
     let mut inputs: Vec<&Path> = vec![input];
     inputs.extend(args.mesh.iter().map(Path::new));
-    crate::paths::ensure_not_input(&args.out, &inputs)?;
+    crate::paths::ensure_output(&args.out, &inputs)?;
     let pool = pool(args.threads)?;
     let threads = pool.current_num_threads();
+    let rays = raykit_io::read_rays(input)?;
     let loaded = pool.install(|| {
         crate::instanced_arg::load(&args.mesh, &raykit_core::accel::BuildOptions::default())
     })?;
-    let rays = raykit_io::read_rays(input)?;
     let scene = &loaded.scene;
     let mask = raykit_core::instancing::MASK_ALL;
     let n = rays.len();
     let (answered, hits, query_s);
+    let mut truncated = None;
     if q == Query::Count {
         let mut counts = vec![0u32; n];
         query_s = pool.install(|| timed(|| scene.count_hits_batch(&rays, mask, &mut counts)).1);
@@ -218,8 +258,10 @@ fn run_instanced(args: &QueryArgs, input: &Path) -> Result<ExitCode> {
         hits = counts.iter().map(|&c| u64::from(c)).sum::<u64>();
         write_out(&args.out, |w| write_u32s(w, &counts))?;
     } else {
-        let cap = args.max_hits as usize;
-        let (lists, s) = pool.install(|| timed(|| scene.ray_hits_batch(&rays, mask, cap)));
+        let cap = hit_cap(args.max_hits);
+        let (mut lists, s) =
+            pool.install(|| timed(|| scene.ray_hits_batch(&rays, mask, cap.saturating_add(1))));
+        truncated = Some(cut_to(&mut lists, cap));
         query_s = s;
         answered = lists.iter().filter(|l| !l.is_empty()).count();
         hits = lists.iter().map(|l| l.len() as u64).sum();
@@ -246,6 +288,9 @@ fn run_instanced(args: &QueryArgs, input: &Path) -> Result<ExitCode> {
         stats.as_object_mut(),
         crate::instanced_arg::stats_json(&loaded),
     ) {
+        if let Some(t) = truncated {
+            o.insert("truncated".into(), json!(t));
+        }
         o.extend(extra);
     }
     eprintln!("{stats}");

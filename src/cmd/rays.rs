@@ -40,7 +40,7 @@ pub fn run(args: RaysArgs) -> Result<ExitCode> {
     if args.size == 0 || args.size > 16384 {
         bail!("--size must be between 1 and 16384, got {}", args.size);
     }
-    crate::paths::ensure_not_input(&args.out, &[std::path::Path::new(&args.mesh)])?;
+    crate::paths::ensure_output(&args.out, &[std::path::Path::new(&args.mesh)])?;
     let scene = scene_arg::load(&args.mesh)?;
     let mesh = &scene.mesh;
     let bounds = mesh.bounds();

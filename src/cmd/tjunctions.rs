@@ -97,7 +97,7 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
             args.output.display()
         );
     }
-    crate::paths::ensure_not_input(&args.output, &[args.input.as_path()])?;
+    crate::paths::ensure_output(&args.output, &[args.input.as_path()])?;
     let opts = TJunctionOptions {
         tolerance: args.tolerance,
         ulps: args.ulps,
@@ -183,7 +183,7 @@ fn kd_cut(
         build_s * 1e3
     );
     if let Some(path) = &args.cut_out {
-        crate::paths::ensure_not_input(path, &[args.input.as_path()])?;
+        crate::paths::ensure_output(path, &[args.input.as_path()])?;
         raykit_io::save_mesh(path, &cut.mesh)
             .with_context(|| format!("cannot write {}", path.display()))?;
         eprintln!("wrote the cut mesh to {}", path.display());

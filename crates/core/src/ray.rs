@@ -93,13 +93,14 @@ impl Ray {
         }
     }
 
-    /// True when origin, direction and interval are finite numbers (tfar may be
-    /// +inf) and the direction is not zero.
+    /// True when origin and direction are finite, the direction is not zero,
+    /// and the interval is a non-empty range of numbers (tnear may be -inf,
+    /// the whole line behind the origin, and tfar +inf).
     pub fn is_valid(&self) -> bool {
         self.origin.is_finite()
             && self.dir.is_finite()
             && self.dir != Vec3::ZERO
-            && self.tnear.is_finite()
+            && self.tnear < f32::INFINITY
             && !self.tfar.is_nan()
             && self.tnear <= self.tfar
     }

@@ -156,6 +156,39 @@ fn rays_from_one_eye_traced_instance_by_instance_answer_as_single_rays() {
 }
 
 #[test]
+fn lines_through_one_eye_find_the_instances_behind_it() {
+    // A bunny ahead of the eye and one behind it: rays from the eye over
+    // the whole line (tnear = -inf) meet the one behind first (t < 0),
+    // which no cone round the rays' forward halves holds.
+    let bunny = shared_obj("bunny_3674.obj");
+    let b = bunny.bounds();
+    let step = Vec3::X * 3.0 * b.diagonal();
+    let placed = Placed {
+        meshes: vec![bunny.clone()],
+        instances: vec![
+            (0, Affine3A::IDENTITY, u32::MAX),
+            (0, Affine3A::from_translation(2.0 * step), u32::MAX),
+        ],
+    };
+    let scene = placed.scene();
+    let eye = b.center() + step;
+    let lines: Vec<Ray> = (0..64 * 64)
+        .map(|p| {
+            let (x, y) = ((p % 64) as f32 / 63.0 - 0.5, (p / 64) as f32 / 63.0 - 0.5);
+            let dir = -Vec3::X + 0.4 * Vec3::new(0.0, y, x);
+            Ray::segment(eye, dir, f32::NEG_INFINITY, f32::INFINITY)
+        })
+        .collect();
+    batch_against_single_rays(&placed, &scene, &lines);
+    let behind = lines
+        .iter()
+        .filter_map(|r| scene.intersect(r, MASK_ALL))
+        .filter(|h| h.t < 0.0)
+        .count();
+    assert!(behind > 100, "{behind} hits behind the eye");
+}
+
+#[test]
 fn random_rays_entering_few_instance_boxes_are_traced_instance_by_instance() {
     // Rays from many points that enter few instance boxes each (here the
     // bunny's, a teapot far away) are traced instance by instance too.

@@ -12,7 +12,8 @@ use raykit_core::rng::Pcg32;
 use raykit_core::tri::TestKind;
 use raykit_core::{Hit, Ray, TriangleMesh, Vec3};
 
-/// Random rays through the mesh's box, some with finite `tfar`; kept when
+/// Random rays through the mesh's box, some with finite `tfar`, some
+/// reaching back to `tnear = -inf`; kept when
 /// no `f64` crossing lies within `1e-4` (barycentric) of an edge, where an
 /// `f32` test may count a crossing on both neighbours or neither.
 fn clear_rays(mesh: &TriangleMesh, n: usize, seed: u64) -> Vec<(Ray, Vec<Crossing64>)> {
@@ -24,10 +25,11 @@ fn clear_rays(mesh: &TriangleMesh, n: usize, seed: u64) -> Vec<(Ray, Vec<Crossin
         let o = rng.in_box(b.min - pad, b.max + pad);
         let target = rng.in_box(b.min, b.max);
         let dir = target - o;
-        let ray = if out.len() % 3 == 0 {
-            Ray::segment(o, dir, 0.0, rng.range_f32(0.2, 1.5))
-        } else {
-            Ray::new(o, dir)
+        let ray = match out.len() % 6 {
+            0 | 3 => Ray::segment(o, dir, 0.0, rng.range_f32(0.2, 1.5)),
+            // The whole line, behind the origin too.
+            1 => Ray::segment(o, dir, f32::NEG_INFINITY, f32::INFINITY),
+            _ => Ray::new(o, dir),
         };
         let want = ray_hits_brute(mesh, &ray);
         if want.iter().all(|c| c.margin > 1e-4) {

@@ -1,6 +1,10 @@
 //! Atomic file output: write to a temporary file in the destination folder,
 //! then rename it over the destination. A failed or interrupted write leaves
 //! the destination untouched (old contents or absent) and no temporary file.
+//! A destination that is a link has the file it names replaced, and keeps
+//! being a link; a file the old one's permissions. A destination that is no
+//! regular file (a device such as `/dev/null`, a pipe) is written in place:
+//! renaming over it would replace it.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
@@ -47,6 +51,21 @@ pub fn write_atomic_file<E>(
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), E>,
     io_error: impl Fn(io::Error) -> E,
 ) -> Result<(), E> {
+    let target = resolve_links(path).map_err(&io_error)?;
+    let path = target.as_path();
+    let existing = fs::metadata(path).ok();
+    if existing
+        .as_ref()
+        .is_some_and(|m| !m.is_file() && !m.is_dir())
+    {
+        let file = OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(&io_error)?;
+        let mut w = BufWriter::with_capacity(1 << 20, file);
+        write(&mut w)?;
+        return w.flush().map_err(&io_error);
+    }
     let name = path.file_name().ok_or_else(|| {
         io_error(io::Error::new(
             io::ErrorKind::InvalidInput,
@@ -73,6 +92,9 @@ pub fn write_atomic_file<E>(
         path: tmp,
         armed: true,
     };
+    if let Some(m) = existing.filter(|m| m.is_file()) {
+        fs::set_permissions(&guard.path, m.permissions()).map_err(&io_error)?;
+    }
     let mut w = BufWriter::with_capacity(1 << 20, file);
     write(&mut w)?;
     let file: File = w.into_inner().map_err(|e| io_error(e.into_error()))?;
@@ -81,6 +103,29 @@ pub fn write_atomic_file<E>(
     fs::rename(&guard.path, path).map_err(&io_error)?;
     guard.armed = false;
     Ok(())
+}
+
+/// `path` with its links followed: the file a chain of links names, which
+/// need not exist yet (a dangling link's target is created). A loop of
+/// links is an error.
+fn resolve_links(path: &Path) -> io::Result<PathBuf> {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        match fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let to = fs::read_link(&p)?;
+                p = match p.parent() {
+                    Some(dir) if to.is_relative() => dir.join(to),
+                    _ => to,
+                };
+            }
+            _ => return Ok(p),
+        }
+    }
+    Err(io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!("{}: too many levels of links", path.display()),
+    ))
 }
 
 fn with_path(e: io::Error, path: &Path) -> io::Error {
@@ -132,6 +177,44 @@ mod tests {
         });
         assert!(r.is_err());
         assert!(entries(dir.path()).is_empty());
+    }
+
+    /// A link keeps being a link, the file it names gets the contents; a
+    /// file keeps its permissions; a pipe is written into, not replaced.
+    #[cfg(unix)]
+    #[test]
+    fn links_permissions_and_pipes_survive() {
+        use std::os::unix::fs::{FileTypeExt, PermissionsExt};
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("target.bin");
+        fs::write(&target, b"old").unwrap();
+        fs::set_permissions(&target, fs::Permissions::from_mode(0o640)).unwrap();
+        let link = dir.path().join("link.bin");
+        std::os::unix::fs::symlink("target.bin", &link).unwrap();
+        write_atomic(&link, |w| w.write_all(b"new")).unwrap();
+        assert!(fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(fs::read(&target).unwrap(), b"new");
+        let mode = fs::metadata(&target).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o640);
+        assert_eq!(entries(dir.path()), vec!["link.bin", "target.bin"]);
+
+        let fifo = dir.path().join("fifo");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap();
+        assert!(made.success(), "mkfifo failed");
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || fs::read(fifo).unwrap())
+        };
+        write_atomic(&fifo, |w| w.write_all(b"through the pipe")).unwrap();
+        assert_eq!(reader.join().unwrap(), b"through the pipe");
+        assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+        assert_eq!(entries(dir.path()), vec!["fifo", "link.bin", "target.bin"]);
     }
 
     #[test]

@@ -28,9 +28,9 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
             args.output.display()
         );
     }
-    crate::paths::ensure_not_input(&args.output, &[args.input.as_path()])?;
+    crate::paths::ensure_output(&args.output, &[args.input.as_path()])?;
     if let Some(r) = &args.report {
-        crate::paths::ensure_not_input(r, &[args.input.as_path(), args.output.as_path()])?;
+        crate::paths::ensure_output(r, &[args.input.as_path(), args.output.as_path()])?;
     }
     let mode = if args.paper {
         ModeArg::Paper

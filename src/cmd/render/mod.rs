@@ -104,7 +104,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let mut setup = setup?;
     let frames = animation_frames(&setup.camera, &args.out, args.orbit, args.frames)?;
     for f in &frames {
-        crate::paths::ensure_not_input(&f.out, &[std::path::Path::new(&args.scene.scene)])?;
+        crate::paths::ensure_output(&f.out, &[std::path::Path::new(&args.scene.scene)])?;
     }
     let window = window.unwrap_or(raykit_render::Tile::whole(args.width, args.height));
     let samples = window.pixels() * args.spp as u64 * frames.len() as u64;

@@ -22,7 +22,7 @@ pub fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
                 args.test
             )
         })?;
-    crate::paths::ensure_not_input(
+    crate::paths::ensure_output(
         &args.out,
         &[&args.rays, std::path::Path::new(&args.mesh[0])],
     )?;
@@ -72,6 +72,7 @@ pub fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
             "kernel_ms": kernel_s * 1e3,
             "rays": rays.len(),
             "mrays": rays.len() as f64 / trace_s / 1e6,
+            "per_s": rays.len() as f64 / trace_s,
             "kernel_mrays": rays.len() as f64 / kernel_s / 1e6,
         })
     );

@@ -30,7 +30,7 @@ pub fn run_instanced(args: TraceArgs) -> Result<ExitCode> {
     }
     let mut inputs: Vec<&std::path::Path> = vec![&args.rays];
     inputs.extend(args.mesh.iter().map(std::path::Path::new));
-    crate::paths::ensure_not_input(&args.out, &inputs)?;
+    crate::paths::ensure_output(&args.out, &inputs)?;
     let pool = pool(args.threads)?;
     let threads = pool.current_num_threads();
     let opts = args.build.options();
@@ -61,6 +61,7 @@ pub fn run_instanced(args: TraceArgs) -> Result<ExitCode> {
         "trace_ms": trace_s * 1e3,
         "rays": rays.len(),
         "mrays": rays.len() as f64 / trace_s / 1e6,
+        "per_s": rays.len() as f64 / trace_s,
         "threads": threads,
     });
     if let (Some(o), serde_json::Value::Object(extra)) = (

@@ -55,7 +55,7 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
             .unwrap_or(raykit_lab::args::build_args::DEFAULT_ACCEL),
         &args.test,
     )?;
-    crate::paths::ensure_not_input(
+    crate::paths::ensure_output(
         &args.out,
         &[&args.rays, std::path::Path::new(&args.mesh[0])],
     )?;
@@ -114,6 +114,7 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
             "trace_ms": trace_s * 1e3,
             "rays": rays.len(),
             "mrays": rays.len() as f64 / trace_s / 1e6,
+            "per_s": rays.len() as f64 / trace_s,
             "threads": threads,
         })
     );

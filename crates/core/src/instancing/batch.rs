@@ -127,7 +127,9 @@ impl InstancedScene {
                 (eye.clamp(b.min, b.max) - eye).length_squared().to_bits()
             })
         };
-        let one_origin = rays.iter().all(|r| r.origin == eye);
+        // A cone holds the rays' forward halves only: rays that also reach
+        // behind their origin (tnear < 0) are walked one by one.
+        let one_origin = rays.iter().all(|r| r.origin == eye && r.tnear >= 0.0);
         if let Some(cone) = one_origin.then(|| RayCone::around(rays)).flatten() {
             let mut kept = Vec::new();
             self.top.each_kept(

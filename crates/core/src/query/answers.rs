@@ -122,12 +122,15 @@ impl SurfaceBvh {
 
 impl Answers {
     /// Points or rays with an answer: a finite distance, a finite point
-    /// (inside), a closest point, at least one hit.
+    /// (inside), a closest point at a finite distance, at least one hit.
     pub fn answered(&self, points: &[Vec3]) -> usize {
         match self {
             Answers::Distances(d) => d.iter().filter(|x| x.is_finite()).count(),
             Answers::Inside(_) => points.iter().filter(|p| p.is_finite()).count(),
-            Answers::Closest(c) => c.iter().filter(|c| c.is_some()).count(),
+            Answers::Closest(c) => c
+                .iter()
+                .filter(|c| c.is_some_and(|c| c.distance.is_finite()))
+                .count(),
             Answers::Counts(c) => c.iter().filter(|&&c| c > 0).count(),
             Answers::HitLists(l) => l.iter().filter(|l| !l.is_empty()).count(),
         }

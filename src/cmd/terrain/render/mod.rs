@@ -9,7 +9,7 @@ pub use args::TerrainRenderArgs;
 use args::{check_args, BackendArg, CasterArg};
 
 use super::dem_arg;
-use crate::paths::ensure_not_input;
+use crate::paths::ensure_output;
 use anyhow::{anyhow, bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_gpu::{GpuCaster, GpuContext, GpuTerrain};
@@ -102,7 +102,7 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
         inputs.push(d);
     }
     for p in out_paths.iter().chain(heat_paths.iter().flatten()) {
-        ensure_not_input(p, &inputs)?;
+        ensure_output(p, &inputs)?;
     }
     let pool = pool(args.threads)?;
 

@@ -109,11 +109,9 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         .clone()
         .unwrap_or_else(|| args.out.with_extension("png"));
     let input = Path::new(&args.dem);
-    crate::paths::ensure_not_input(&args.out, &[input])?;
-    crate::paths::ensure_not_input(&preview, &[input])?;
+    crate::paths::ensure_output(&args.out, &[input])?;
+    crate::paths::ensure_output(&preview, &[input])?;
     crate::paths::ensure_distinct(&args.out, &preview, "--out", "--preview")?;
-    crate::paths::ensure_folder(&args.out, "--out")?;
-    crate::paths::ensure_folder(&preview, "--preview")?;
     let (dem, load_s) = timed(|| dem_arg::load(&args.dem));
     let mut dem = dem?;
     // The light's grid position, for the curvature and the distances.
