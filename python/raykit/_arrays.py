@@ -78,10 +78,16 @@ def indices(a, name: str) -> np.ndarray:
     return np.require(a, dtype=np.uint32, requirements=["C", "A"])
 
 
+#: The most threads a call may ask for (as the extension checks).
+MAX_THREADS = 4096
+
+
 def threads(n) -> int:
     """A thread count: 0 or None for all cores."""
     if n is None:
         return 0
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
         raise ValueError(f"threads must be an integer (0 for all cores), got {n!r}")
+    if not 0 <= n <= MAX_THREADS:
+        raise ValueError(f"threads must be between 0 (all cores) and {MAX_THREADS}, got {n}")
     return int(n)

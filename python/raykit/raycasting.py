@@ -31,6 +31,7 @@ results of such a scene carry ``instance_ids`` beside ``geometry_ids``
 
 from __future__ import annotations
 
+import inspect
 import math
 import os
 
@@ -377,6 +378,10 @@ class RaycastingScene:
         ``instance_ids`` gives each hit's instance.
         """
         flat, _ = _arrays.rows(rays, "rays", 6)
+        if max_hits is not None and (
+            isinstance(max_hits, bool) or not isinstance(max_hits, (int, np.integer))
+        ):
+            raise ValueError(f"max_hits must be a whole number or None, got {max_hits!r}")
         cap = np.iinfo(np.uint64).max if max_hits is None else int(max_hits)
         if cap < 0:
             raise ValueError(f"max_hits must be >= 0, got {max_hits}")
@@ -446,8 +451,10 @@ class RaycastingScene:
         The sign comes from the generalized winding number (Jacobson et al.
         2013, with Barill et al.'s 2018 fast approximation), not from one
         ray's parity as in Open3D: it is right on meshes with holes,
-        duplicated triangles or overlapping parts, where parity flips.
-        ``nsamples`` (Open3D's number of rays) is accepted and must be odd,
+        duplicated triangles or overlapping parts, where parity flips. It
+        counts the faces' orientation, so the faces must be consistently
+        oriented (outward normals); flipped faces, which parity ignores,
+        change it. ``nsamples`` (Open3D's number of rays) is accepted and must be odd,
         but is not needed.
         """
         _check_nsamples(nsamples)
@@ -644,17 +651,35 @@ def _look_at(center, eye, up) -> np.ndarray:
     return extrinsic
 
 
+def _signature(*names: str) -> inspect.Signature:
+    kind = inspect.Parameter.POSITIONAL_OR_KEYWORD
+    return inspect.Signature([inspect.Parameter(n, kind) for n in names])
+
+
+# Open3D's two forms of create_rays_pinhole.
+_PINHOLE_MATRICES = _signature("intrinsic_matrix", "extrinsic_matrix", "width_px", "height_px")
+_PINHOLE_FOV = _signature("fov_deg", "center", "eye", "up", "width_px", "height_px")
+
+
 def _pinhole(*args, **kwargs) -> np.ndarray:
-    names_k = ("intrinsic_matrix", "extrinsic_matrix", "width_px", "height_px")
-    names_f = ("fov_deg", "center", "eye", "up", "width_px", "height_px")
-    if "fov_deg" in kwargs or (args and np.ndim(_arrays.to_numpy(args[0])) == 0):
-        bound = dict(zip(names_f, args), **kwargs)
+    by_fov = "fov_deg" in kwargs or (args and np.ndim(_arrays.to_numpy(args[0])) == 0)
+    form = _PINHOLE_FOV if by_fov else _PINHOLE_MATRICES
+    unknown = sorted(set(kwargs) - set(form.parameters))
+    if unknown:
+        raise TypeError(f"create_rays_pinhole{form}: unexpected keyword argument(s) {unknown}")
+    try:
+        bound = form.bind(*args, **kwargs).arguments
+    except TypeError as e:
+        raise TypeError(f"create_rays_pinhole{form}: {e}") from None
+    if by_fov:
         width, height = int(bound["width_px"]), int(bound["height_px"])
-        focal = 0.5 * width / math.tan(math.radians(float(bound["fov_deg"])) * 0.5)
+        fov = float(bound["fov_deg"])
+        if not 0.0 < fov < 180.0:
+            raise ValueError(f"fov_deg must be between 0 and 180 degrees, got {fov}")
+        focal = 0.5 * width / math.tan(math.radians(fov) * 0.5)
         intrinsic = np.array([[focal, 0, 0.5 * width], [0, focal, 0.5 * height], [0, 0, 1]])
         extrinsic = _look_at(bound["center"], bound["eye"], bound["up"])
     else:
-        bound = dict(zip(names_k, args), **kwargs)
         width, height = int(bound["width_px"]), int(bound["height_px"])
         intrinsic = np.asarray(_arrays.to_numpy(bound["intrinsic_matrix"]), dtype=np.float64)
         extrinsic = np.asarray(_arrays.to_numpy(bound["extrinsic_matrix"]), dtype=np.float64)
@@ -668,7 +693,10 @@ def _pinhole(*args, **kwargs) -> np.ndarray:
     origin = -rotation.T @ translation
     x, y = np.meshgrid(np.arange(width) + 0.5, np.arange(height) + 0.5)
     pixels = np.stack([x, y, np.ones_like(x)], axis=-1)
-    camera = pixels @ np.linalg.inv(intrinsic).T
+    try:
+        camera = pixels @ np.linalg.inv(intrinsic).T
+    except np.linalg.LinAlgError:
+        raise ValueError(f"the intrinsic matrix is singular: {intrinsic.tolist()}") from None
     directions = camera @ rotation
     rays = np.empty((height, width, 6), dtype=np.float32)
     rays[..., :3] = origin

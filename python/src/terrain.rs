@@ -150,6 +150,11 @@ pub fn shadow<'py>(
                     "sun: the elevation must be between 0 and 90 degrees, got {el}"
                 )));
             }
+            if !az.is_finite() {
+                return Err(value_error(format!(
+                    "sun: the azimuth must be a finite number of degrees, got {az}"
+                )));
+            }
             Light::Sun {
                 azimuth_deg: az,
                 elevation_deg: el,
@@ -157,10 +162,15 @@ pub fn shadow<'py>(
         }
         (None, Some((x, y, h))) => {
             let [wx, wy] = world_of(&dem, &field, x, y, "light")?;
+            if !h.is_finite() {
+                return Err(value_error(format!(
+                    "light ({x}, {y}, {h}): the height must be a finite number"
+                )));
+            }
             let z = if light_elevation {
                 h
             } else {
-                if h.is_nan() || h < 0.0 {
+                if h < 0.0 {
                     return Err(value_error(format!(
                         "light ({x}, {y}, {h}): the height above the ground must be >= 0 \
                          (use light_elevation=True for an absolute elevation)"

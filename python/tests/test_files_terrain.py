@@ -132,6 +132,15 @@ def test_transforms_and_bad_grids():
         raykit.terrain.shadow(h)
     with pytest.raises(ValueError, match="elevation must be between 0 and 90"):
         raykit.terrain.shadow(h, sun=(90, 95))
+    with pytest.raises(ValueError, match="azimuth must be a finite"):
+        raykit.terrain.shadow(h, sun=(np.nan, 20))
+    for height in (np.nan, np.inf):
+        with pytest.raises(ValueError, match="height must be a finite"):
+            raykit.terrain.shadow(h, light=(2, -2, height))
+        with pytest.raises(ValueError, match="height must be a finite"):
+            raykit.terrain.viewshed(h, observer=(2, -2), observer_height=height, observer_elevation=True)
+    with pytest.raises(ValueError, match="outside -90 to 90"):
+        raykit.terrain.shadow(h, (1, 0, 1000, 0, -1, 2000), sun=(135, 20), geographic=True)
     with pytest.raises(ValueError, match="lies outside the DEM"):
         raykit.terrain.shadow(h, light=(100, 100, 5))
     with pytest.raises(ValueError, match="at least 2x2"):

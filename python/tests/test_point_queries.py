@@ -90,6 +90,24 @@ def test_closest_points_match_brute_force_and_open3d(bunny):
         assert ans[key].dtype == theirs[key].numpy().dtype, key
 
 
+def test_huge_meshes_give_finite_right_answers(bunny):
+    # Coordinates of 1e10 overflowed the f32 products of the closest-point
+    # test (a panic) and the far field of the winding number (inf, NaN).
+    v, t, _ = bunny
+    big = v.astype(np.float64) * 1e10
+    s = scene_of(big, t)
+    pts = sample_points(big.astype(np.float32), 60, 4)
+    want = closest_brute(big.astype(np.float32), t, pts)
+    got = s.compute_distance(pts)
+    np.testing.assert_allclose(got, want, rtol=1e-5)
+    assert np.isfinite(s.compute_closest_points(pts)["points"]).all()
+    # The winding number is the same at any scale.
+    w_big = s.compute_winding_number(pts)
+    w = scene_of(v, t).compute_winding_number((pts.astype(np.float64) / 1e10).astype(np.float32))
+    assert np.isfinite(w_big).all()
+    np.testing.assert_allclose(w_big, w, atol=2e-3)
+
+
 def test_several_geometries_and_shapes(bunny):
     v, f, _ = bunny
     s = raykit.RaycastingScene()

@@ -227,6 +227,25 @@ def test_every_structure_and_test_and_thread_count_agree(bunny):
     assert scene_of(v, f).stats()["nodes"] > 0
 
 
+def test_constructor_and_pinhole_arguments_are_checked():
+    for n in (-1, 10**9, 10**30):
+        with pytest.raises(ValueError, match="threads must be between"):
+            raykit.RaycastingScene(nthreads=n)
+    pinhole = raykit.RaycastingScene.create_rays_pinhole
+    args = dict(fov_deg=60, center=[0, 0, 0], eye=[0, 0, 1], up=[0, 1, 0], width_px=4, height_px=3)
+    assert pinhole(**args).shape == (3, 4, 6)
+    for missing in ("up", "width_px"):
+        with pytest.raises(TypeError, match=missing):
+            pinhole(**{k: v for k, v in args.items() if k != missing})
+    with pytest.raises(TypeError, match="centre"):
+        pinhole(centre=[0, 0, 0], **{k: v for k, v in args.items() if k != "center"})
+    for fov in (0, 180, -5):
+        with pytest.raises(ValueError, match="fov_deg"):
+            pinhole(**dict(args, fov_deg=fov))
+    with pytest.raises(ValueError, match="singular"):
+        pinhole(np.zeros((3, 3)), np.eye(4), 4, 3)
+
+
 def test_pinhole_rays_match_open3d():
     rng = np.random.default_rng(11)
     for _ in range(5):

@@ -20,19 +20,32 @@ fn parity_inside(bvh: &SurfaceBvh, p: Vec3, dir: Vec3) -> bool {
 
 #[test]
 fn fast_winding_number_matches_the_exact_sum() {
+    // Points within `reach` of the origin; the large meshes (and their far
+    // points) overflowed f32 in the far field's powers of the distance.
     let meshes = [
-        ("closed sphere", sphere(4)),
-        ("open sphere", without(&sphere(4), |c| c.y > 0.5)),
+        ("closed sphere", sphere(4), 2.0),
+        ("open sphere", without(&sphere(4), |c| c.y > 0.5), 2.0),
         (
             "random soup",
             transformed(&random_soup(2000, 4), 2.0, Vec3::splat(-1.0)),
+            2.0,
+        ),
+        (
+            "closed sphere × 1e6",
+            transformed(&sphere(4), 1e6, Vec3::ZERO),
+            2e7,
+        ),
+        (
+            "open sphere × 1e12",
+            transformed(&without(&sphere(4), |c| c.y > 0.5), 1e12, Vec3::ZERO),
+            2e12,
         ),
     ];
     let mut rng = Pcg32::new(9);
-    for (name, mesh) in &meshes {
+    for (name, mesh, reach) in &meshes {
         let bvh = SurfaceBvh::build(mesh);
         let pts: Vec<Vec3> = (0..300)
-            .map(|_| rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)))
+            .map(|_| rng.in_box(Vec3::splat(-reach), Vec3::splat(*reach)))
             .collect();
         let mut batch = vec![0.0; pts.len()];
         bvh.winding_numbers(&pts, &mut batch);
@@ -40,7 +53,7 @@ fn fast_winding_number_matches_the_exact_sum() {
             let want = winding_number_brute(mesh, p.as_dvec3());
             let exact = bvh.winding_number_with(*p, f32::INFINITY) as f64;
             let fast = bvh.winding_number(*p) as f64;
-            assert_eq!(wb as f64, fast);
+            assert_eq!(wb as f64, fast, "{name} at {p}");
             assert!(
                 (exact - want).abs() < 1e-3,
                 "{name}: exact sum {exact} vs {want} at {p}"

@@ -167,6 +167,19 @@ impl HeightField {
             let e = "the DEM has no valid height (every sample is no-data)".to_string();
             return Err((e, heights));
         }
+        let g = &dem.georef;
+        if g.geographic {
+            let (north, south) = (g.origin_y, g.origin_y + g.pixel_height * dem.height as f64);
+            if !((-90.0..=90.0).contains(&north) && (-90.0..=90.0).contains(&south)) {
+                return Err((
+                    format!(
+                        "geographic rows span latitudes {north} to {south}, outside -90 to 90 \
+                         (is the raster in degrees?)"
+                    ),
+                    heights,
+                ));
+            }
+        }
         let (sx, sy) = dem.cell_size_m();
         if !(sx > 0.0 && sy > 0.0 && sx.is_finite() && sy.is_finite()) {
             return Err((

@@ -41,7 +41,8 @@ pub struct ClosestPoint {
 /// Ericson's closest point on triangle `(a, b, c)` to the origin, written
 /// once for `f32` and `f64`: returns `(u, v)` with the point `a + u·(b-a) +
 /// v·(c-a)`. A degenerate triangle (no positive area within rounding) takes
-/// the closest point of its three edges.
+/// the closest point of its three edges. Where the products of the corners'
+/// dot products overflow, `(u, v)` may be NaN.
 macro_rules! closest_uv {
     ($name:ident, $v:ty, $f:ty) => {
         #[inline(always)]
@@ -76,7 +77,12 @@ macro_rules! closest_uv {
                 return (1.0 - w, w);
             }
             let denom = va + vb + vc;
-            if denom.is_nan() || denom <= 0.0 {
+            if !denom.is_finite() {
+                // The products overflowed (corners beyond about 1e9 in
+                // f32): no answer here, for the caller to solve wider.
+                return (<$f>::NAN, <$f>::NAN);
+            }
+            if denom <= 0.0 {
                 // Degenerate: the best of the three edges.
                 let seg = |s: $v, e: $v| -> $f {
                     let d = e - s;
@@ -116,6 +122,13 @@ closest_uv!(closest_uv64, DVec3, f64);
 pub(crate) fn triangle_distance2(p: Vec3, tri: &[Vec3; 3]) -> (f32, f32, f32) {
     let (a, b, c) = (tri[0] - p, tri[1] - p, tri[2] - p);
     let (u, v) = closest_uv32(a, b, c);
+    if !(u.is_finite() && v.is_finite()) {
+        // The f32 products overflowed: the same steps in f64.
+        let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+        let (u, v) = closest_uv64(a, b, c);
+        let q = a + (b - a) * u + (c - a) * v;
+        return (q.length_squared() as f32, u as f32, v as f32);
+    }
     let q = a + (b - a) * u + (c - a) * v;
     (q.length_squared(), u, v)
 }
@@ -151,8 +164,9 @@ fn group_distance2(p: Vec3, tris: &[[Vec3; 3]]) -> [f32; LANES] {
 /// corners `c[corner][axis][k]` of a triangle relative to its query point.
 /// Every region's candidate is computed and the one of Ericson's order
 /// selected, so each distance is [`triangle_distance2`]'s bit for bit.
-/// Degenerate triangles are not solved: their lanes' bits are set in the
-/// returned mask, for the caller to answer with [`triangle_distance2`].
+/// Degenerate triangles, and triangles whose products overflow, are not
+/// solved: their lanes' bits are set in the returned mask, for the caller
+/// to answer with [`triangle_distance2`].
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
 #[allow(clippy::manual_clamp)] // `clamp` panics on a NaN bound
@@ -205,7 +219,11 @@ fn distance2_lanes(c: &[[[f32; LANES]; 3]; 3]) -> ([f32; LANES], u32) {
             az + abz * u + acz * v,
         );
         d2[k] = qx * qx + qy * qy + qz * qz;
-        let solved = at_a || at_b || on_ab || at_c || on_ac || on_bc || denom > 0.0;
+        // Overflowed products (an infinite or NaN `denom`, a NaN region
+        // answer) go to the scalar kernel too, which solves them in f64.
+        let solved = (at_a || at_b || on_ab || at_c || on_ac || on_bc)
+            || (denom > 0.0 && denom < f32::INFINITY);
+        let solved = solved && d2[k].is_finite();
         degenerate |= u32::from(!solved) << k;
     }
     (d2, degenerate)

@@ -10,8 +10,9 @@ use rayon::prelude::*;
 const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
 /// The far-field data of each node's eight children (structure of arrays,
-/// parallel to the nodes): area-weighted centroid, radius about it, and the
-/// summed area vector.
+/// parallel to the nodes): area-weighted centroid, radius `R` about it, and
+/// the expansion's moments over powers of `R` (the area vector over `R²`,
+/// `T` over `R³`, `C` over `R⁴`), which keeps them near 1 at any scale.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub(crate) struct SlotMoments {
@@ -35,7 +36,7 @@ impl Moments {
 
     /// The moments of every child of every node, in `f64` from the
     /// triangles below it (each triangle is summed once per level above
-    /// it), stored in `f32`.
+    /// it), stored in `f32` over the powers of the child's radius.
     #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
     pub(super) fn build(nodes: &[SurfaceNode], leaf_tris: &[[Vec3; 3]]) -> Moments {
         let nodes = nodes
@@ -97,18 +98,26 @@ impl Moments {
                             }
                         }
                     }
-                    for i in 0..3 {
-                        m.center[i][k] = center[i] as f32;
-                        m.normal[i][k] = nsum[i] as f32;
-                        for j in 0..3 {
-                            m.tensor[i][j][k] = tensor[i][j] as f32;
-                        }
-                        for jk in 0..6 {
-                            m.hessian[i][jk][k] = hessian[i][jk] as f32;
-                        }
-                    }
                     // Rounded up so the f32 centre stays within the radius.
                     m.radius[k] = (r2.sqrt() * (1.0 + 1e-6)) as f32;
+                    // Each order stored over its power of the radius, so
+                    // that large meshes stay within f32 (a zero radius has
+                    // zero moments).
+                    let r = match m.radius[k] as f64 {
+                        r if r > 0.0 && r.is_finite() => r,
+                        _ => 1.0,
+                    };
+                    let (r2, r3, r4) = (r * r, r * r * r, r * r * r * r);
+                    for i in 0..3 {
+                        m.center[i][k] = center[i] as f32;
+                        m.normal[i][k] = (nsum[i] / r2) as f32;
+                        for j in 0..3 {
+                            m.tensor[i][j][k] = (tensor[i][j] / r3) as f32;
+                        }
+                        for jk in 0..6 {
+                            m.hessian[i][jk][k] = (hessian[i][jk] / r4) as f32;
+                        }
+                    }
                 }
                 m
             })

@@ -145,39 +145,46 @@ fn far_fields(m: &SlotMoments, q: Vec3, beta2: f32, far: &mut [bool; WIDTH]) -> 
         let d2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
         let is_far = d2 > m.radius[k] * m.radius[k] * beta2;
         far[k] = is_far;
-        let inv2 = 1.0 / d2;
-        let inv3 = inv2 * inv2.sqrt();
-        let inv5 = inv3 * inv2;
-        // Zeroth and first order: N·x / r³ + (tr T) / r³ - 3 xᵀTx / r⁵.
-        let dot = x[0] * m.normal[0][k] + x[1] * m.normal[1][k] + x[2] * m.normal[2][k];
+        // In the unit direction `n = x / r` and the ratio `ρ = R / r` of
+        // the child's radius to the distance, with the moments stored over
+        // powers of `R`: products of powers of `x` would overflow f32 for
+        // points far from large meshes, and `1/r⁷` underflow.
+        let inv1 = (1.0 / d2).sqrt();
+        let n = [x[0] * inv1, x[1] * inv1, x[2] * inv1];
+        let rho = m.radius[k] * inv1;
+        let (rho2, rho3) = (rho * rho, rho * rho * rho);
+        let rho4 = rho2 * rho2;
+        // Zeroth and first order: N·n / r² + (tr T - 3 nᵀTn) / r³, the
+        // moments here over R² and R³.
+        let dot = n[0] * m.normal[0][k] + n[1] * m.normal[1][k] + n[2] * m.normal[2][k];
         let trace = t[0][0][k] + t[1][1][k] + t[2][2][k];
-        let tx = |i: usize| t[i][0][k] * x[0] + t[i][1][k] * x[1] + t[i][2][k] * x[2];
-        let xtx = x[0] * tx(0) + x[1] * tx(1) + x[2] * tx(2);
+        let tn = |i: usize| t[i][0][k] * n[0] + t[i][1][k] * n[1] + t[i][2][k] * n[2];
+        let ntn = n[0] * tn(0) + n[1] * tn(1) + n[2] * tn(2);
         // Second order: ½ Σ C_ijk ∂j∂k f_i, with
-        // ∂j∂k f_i = -3(δij x_k + δik x_j + δjk x_i) / r⁵ + 15 x_i x_j x_k / r⁷;
-        // `C_i` is stored as `xx, yy, zz, xy, xz, yz`.
+        // ∂j∂k f_i = (-3(δij n_k + δik n_j + δjk n_i) + 15 n_i n_j n_k) / r⁴;
+        // `C_i` is stored over R⁴ as `xx, yy, zz, xy, xz, yz`.
         let c = |i: usize, jk: usize| h[i][jk][k];
-        // Σ_ij C_iij x_j: row i of C_i against x.
-        let diag = c(0, 0) * x[0]
-            + c(0, 3) * x[1]
-            + c(0, 4) * x[2]
-            + c(1, 3) * x[0]
-            + c(1, 1) * x[1]
-            + c(1, 5) * x[2]
-            + c(2, 4) * x[0]
-            + c(2, 5) * x[1]
-            + c(2, 2) * x[2];
+        // Σ_ij C_iij n_j: row i of C_i against n.
+        let diag = c(0, 0) * n[0]
+            + c(0, 3) * n[1]
+            + c(0, 4) * n[2]
+            + c(1, 3) * n[0]
+            + c(1, 1) * n[1]
+            + c(1, 5) * n[2]
+            + c(2, 4) * n[0]
+            + c(2, 5) * n[1]
+            + c(2, 2) * n[2];
         let tr = |i: usize| c(i, 0) + c(i, 1) + c(i, 2);
-        let tr_x = x[0] * tr(0) + x[1] * tr(1) + x[2] * tr(2);
+        let tr_n = n[0] * tr(0) + n[1] * tr(1) + n[2] * tr(2);
         let quad = |i: usize| {
-            c(i, 0) * x[0] * x[0]
-                + c(i, 1) * x[1] * x[1]
-                + c(i, 2) * x[2] * x[2]
-                + 2.0 * (c(i, 3) * x[0] * x[1] + c(i, 4) * x[0] * x[2] + c(i, 5) * x[1] * x[2])
+            c(i, 0) * n[0] * n[0]
+                + c(i, 1) * n[1] * n[1]
+                + c(i, 2) * n[2] * n[2]
+                + 2.0 * (c(i, 3) * n[0] * n[1] + c(i, 4) * n[0] * n[2] + c(i, 5) * n[1] * n[2])
         };
-        let cubic = x[0] * quad(0) + x[1] * quad(1) + x[2] * quad(2);
-        let second = 0.5 * (-3.0 * inv5 * (2.0 * diag + tr_x) + 15.0 * inv5 * inv2 * cubic);
-        let term = (dot + trace) * inv3 - 3.0 * xtx * inv5 + second;
+        let cubic = n[0] * quad(0) + n[1] * quad(1) + n[2] * quad(2);
+        let second = 0.5 * (-3.0 * (2.0 * diag + tr_n) + 15.0 * cubic) * rho4;
+        let term = dot * rho2 + (trace - 3.0 * ntn) * rho3 + second;
         // Near and unused lanes (whose terms may be infinite) give zero.
         terms[k] = if is_far { term } else { 0.0 };
     }
