@@ -51,8 +51,8 @@ pub fn write_atomic_file<E>(
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), E>,
     io_error: impl Fn(io::Error) -> E,
 ) -> Result<(), E> {
-    let target = resolve_links(path).map_err(&io_error)?;
-    let path = target.as_path();
+    // Opened through `path` itself, so that links the kernel resolves
+    // (`/dev/stdout` to a pipe) still work.
     let existing = fs::metadata(path).ok();
     if existing
         .as_ref()
@@ -66,6 +66,8 @@ pub fn write_atomic_file<E>(
         write(&mut w)?;
         return w.flush().map_err(&io_error);
     }
+    let target = resolve_links(path).map_err(&io_error)?;
+    let path = target.as_path();
     let name = path.file_name().ok_or_else(|| {
         io_error(io::Error::new(
             io::ErrorKind::InvalidInput,
