@@ -101,7 +101,10 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
     if let Some(d) = &args.drape {
         inputs.push(d);
     }
+    // The folders are made (a fly-through's frames go into a new one), or
+    // refused, before the work.
     for p in out_paths.iter().chain(heat_paths.iter().flatten()) {
+        ensure_parent(p)?;
         ensure_output(p, &inputs)?;
     }
     let pool = pool(args.threads)?;
