@@ -9,9 +9,10 @@ import numpy as np
 from . import _raykit
 
 
-def load_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def load_mesh(path: str | bytes | os.PathLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Load a triangle mesh: OBJ (+MTL), PLY (ASCII or binary, also
-    ``.ply.gz``), STL, OFF, glTF or GLB, chosen by the extension.
+    ``.ply.gz``), STL, OFF, glTF or GLB, chosen by the extension. ``path``
+    is a ``str``, ``bytes`` or ``os.PathLike``, as ``open`` takes.
 
     Returns ``(vertices, triangles, parts)``: ``(n, 3)`` float32 positions
     (glTF node transforms applied), ``(m, 3)`` uint32 corner indices and
@@ -23,4 +24,4 @@ def load_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, np.ndarr
     file and the line, byte offset or JSON element, as ``raykit`` prints
     them.
     """
-    return _raykit.load_mesh(os.fspath(path))
+    return _raykit.load_mesh(os.fsdecode(path))

@@ -4,6 +4,8 @@ method, and a BVH over the same surface as triangles."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 import rasterio
@@ -25,6 +27,9 @@ def test_load_mesh_matches_trimesh(data):
         np.testing.assert_allclose(v[f], ref.vertices[ref.faces], rtol=1e-6, atol=1e-6 * ref.scale)
     v, f, parts = raykit.load_mesh(str(data / "meshes" / "2CylinderEngine.glb"))
     assert parts.max() > 10  # one part per glTF node
+    # A bytes path, as open() takes it, gives the same mesh.
+    vb, fb, pb = raykit.load_mesh(os.fsencode(data / "meshes" / "2CylinderEngine.glb"))
+    assert np.array_equal(vb, v) and np.array_equal(fb, f) and np.array_equal(pb, parts)
 
 
 def test_load_mesh_errors_name_the_file(tmp_path):

@@ -353,7 +353,7 @@ fn rays_that_are_not_finite_hit_nothing_on_every_structure() {
 /// triangles among large ones, so that most leaf and inner boxes are far
 /// larger than the triangles whose bands they must hold. The wide BVHs
 /// store each box as the union of its triangles' bands
-/// (`NodeBox::triangle_reach`), not padded by the box's own size, so these
+/// (`TriangleTest::reach`), not padded by the box's own size, so these
 /// are the rays a box too tight would lose. From near and from 10⁴ times
 /// the model's size away, where the tests' rounding bounds, and so the
 /// band, are widest.
@@ -409,6 +409,101 @@ fn rays_through_the_edge_tolerance_band_agree_with_brute_force() {
         })
         .count();
     assert!(band_hits > 600, "only {band_hits} rays hit inside the band");
+    for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
+        for leaf in [1, 16] {
+            let opts = BuildOptions {
+                quality,
+                max_leaf_size: leaf,
+                packed_leaf_size: leaf,
+                ..BuildOptions::default()
+            };
+            check_kinds(&mesh, &rays, &opts, &[AccelKind::Bvh4, AccelKind::Bvh8]);
+        }
+    }
+}
+
+/// A triangle's band lies in its own plane, so the box of a triangle square
+/// to an axis stays flat on that axis (`TriangleTest::reach`). Rays
+/// through the band of tiny axis-square triangles (some thin, half of them
+/// 10³ triangle sizes from the origin) among large ones: grazing the plane
+/// at 10⁻⁵ to 10⁻¹ radians or crossing it at random angles, from near and far. A box with
+/// no room across the plane for the tests' rounding would lose some.
+#[test]
+fn rays_through_the_band_of_axis_square_triangles_agree_with_brute_force() {
+    use raykit_core::tri::{Moller, TriangleTest};
+    let mut rng = Pcg32::new(91);
+    let axes = [
+        (Vec3::X, Vec3::Y, Vec3::Z),
+        (Vec3::Y, Vec3::Z, Vec3::X),
+        (Vec3::Z, Vec3::X, Vec3::Y),
+    ];
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
+    for i in 0..600 {
+        let (_, e1, e2) = axes[i % 3];
+        let shift = if i % 2 == 0 { 0.0 } else { 1.0 };
+        let corner = rng.in_box(Vec3::ZERO, Vec3::ONE) + Vec3::splat(shift);
+        let size = rng.range_f32(0.0005, 0.003);
+        let base = positions.len() as u32;
+        positions.extend([
+            corner,
+            corner + e1 * size,
+            corner + e2 * size * rng.range_f32(0.02, 1.0),
+        ]);
+        indices.push([base, base + 1, base + 2]);
+    }
+    let large = soup::soup(12, 92, 0.2, 0.3, 1);
+    let base = positions.len() as u32;
+    positions.extend(&large.positions);
+    indices.extend(large.indices.iter().map(|t| t.map(|i| i + base)));
+    let mesh = TriangleMesh::new(positions, indices);
+    let (mut rays, mut aimed) = (Vec::new(), Vec::new());
+    let offsets = [1e-6f32, 1e-5, 1e-4, 1e-3, 3e-3];
+    let distances = [0.01f32, 1.0, 100.0, 1e4];
+    let grazes = [1e-5f32, 1e-4, 1e-3, 1e-2, 1e-1];
+    for i in 0..6000 {
+        let prim = rng.below(600) as usize;
+        let (normal, e1, e2) = axes[prim % 3];
+        let [a, b, c] = mesh.triangle(prim);
+        let delta = offsets[i % offsets.len()];
+        // Just outside an edge (outward in the plane) or beyond a corner.
+        let target = if i % 4 == 0 {
+            a + (a - (a + b + c) / 3.0).normalize() * delta * (b - a).length()
+        } else {
+            let p = a + (b - a) * rng.next_f32();
+            let e = (b - a).normalize();
+            let away = (p - c) - e * (p - c).dot(e);
+            p + away.normalize() * delta * (b - a).length()
+        };
+        let dir = if i % 3 == 0 {
+            rng.unit_vector()
+        } else {
+            let angle = rng.range_f32(0.0, std::f32::consts::TAU);
+            let along = e1 * angle.cos() + e2 * angle.sin();
+            let side = if i % 2 == 0 { 1.0 } else { -1.0 };
+            along + normal * side * grazes[(i / 3) % grazes.len()]
+        };
+        let dist = distances[(i / offsets.len()) % distances.len()];
+        let origin = target - dir.normalize() * dist;
+        rays.push(Ray::new(origin, target - origin));
+        aimed.push(prim as u32);
+    }
+    let brute = build_accel(
+        AccelKind::Brute,
+        TestKind::Moller,
+        &mesh,
+        &BuildOptions::default(),
+    );
+    let band_hits = rays
+        .iter()
+        .zip(&aimed)
+        .filter(|(r, &p)| {
+            let [a, b, c] = mesh.triangle(p as usize);
+            let tri = Moller::precompute(a, b, c);
+            brute.intersect(r).is_some_and(|h| h.prim == p)
+                && Moller::intersect_strict(&tri, r, f32::INFINITY).is_none()
+        })
+        .count();
+    assert!(band_hits > 500, "only {band_hits} rays hit inside the band");
     for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
         for leaf in [1, 16] {
             let opts = BuildOptions {
