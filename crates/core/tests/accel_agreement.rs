@@ -348,6 +348,64 @@ fn rays_that_are_not_finite_hit_nothing_on_every_structure() {
     }
 }
 
+/// A point just outside an edge of triangle `prim` (outward in its plane)
+/// or, with `corner`, beyond its first corner, `delta` of the first edge's
+/// length away.
+fn beside_edge(
+    mesh: &TriangleMesh,
+    prim: usize,
+    delta: f32,
+    corner: bool,
+    rng: &mut Pcg32,
+) -> Vec3 {
+    let [a, b, c] = mesh.triangle(prim);
+    if corner {
+        a + (a - (a + b + c) / 3.0).normalize() * delta * (b - a).length()
+    } else {
+        let p = a + (b - a) * rng.next_f32();
+        let e = (b - a).normalize();
+        let away = (p - c) - e * (p - c).dot(e);
+        p + away.normalize() * delta * (b - a).length()
+    }
+}
+
+/// How many of `rays` brute force (Möller) reports on their `aimed`
+/// triangle where the textbook test without tolerance misses it: rays
+/// that meet the tolerance band.
+fn band_hits(mesh: &TriangleMesh, rays: &[Ray], aimed: &[u32]) -> usize {
+    use raykit_core::tri::{Moller, TriangleTest};
+    let brute = build_accel(
+        AccelKind::Brute,
+        TestKind::Moller,
+        mesh,
+        &BuildOptions::default(),
+    );
+    rays.iter()
+        .zip(aimed)
+        .filter(|(r, &p)| {
+            let [a, b, c] = mesh.triangle(p as usize);
+            let tri = Moller::precompute(a, b, c);
+            brute.intersect(r).is_some_and(|h| h.prim == p)
+                && Moller::intersect_strict(&tri, r, f32::INFINITY).is_none()
+        })
+        .count()
+}
+
+/// Every builder and leaf size of `Bvh4` and `Bvh8` against brute force.
+fn check_wide_builds(mesh: &TriangleMesh, rays: &[Ray]) {
+    for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
+        for leaf in [1, 16] {
+            let opts = BuildOptions {
+                quality,
+                max_leaf_size: leaf,
+                packed_leaf_size: leaf,
+                ..BuildOptions::default()
+            };
+            check_kinds(mesh, rays, &opts, &[AccelKind::Bvh4, AccelKind::Bvh8]);
+        }
+    }
+}
+
 /// Rays through the thin band outside a triangle's edges that the triangle
 /// tests also count as hits (`tri::MAX_EDGE_TOLERANCE`), on a soup of tiny
 /// triangles among large ones, so that most leaf and inner boxes are far
@@ -359,7 +417,6 @@ fn rays_that_are_not_finite_hit_nothing_on_every_structure() {
 /// band, are widest.
 #[test]
 fn rays_through_the_edge_tolerance_band_agree_with_brute_force() {
-    use raykit_core::tri::{Moller, TriangleTest};
     let mut mesh = soup::soup(600, 71, 0.0005, 0.003, 1);
     let large = soup::soup(12, 72, 0.2, 0.3, 1);
     let base = mesh.positions.len() as u32;
@@ -373,53 +430,16 @@ fn rays_through_the_edge_tolerance_band_agree_with_brute_force() {
     let distances = [0.01f32, 1.0, 100.0, 1e4];
     for i in 0..6000 {
         let prim = rng.below(mesh.indices.len() as u32);
-        let [a, b, c] = mesh.triangle(prim as usize);
         let delta = offsets[i % offsets.len()];
-        // A point just outside an edge (outward in the triangle's plane) or
-        // beyond a corner, `delta` of the edge's length away.
-        let target = if i % 4 == 0 {
-            a + (a - (a + b + c) / 3.0).normalize() * delta * (b - a).length()
-        } else {
-            let p = a + (b - a) * rng.next_f32();
-            let e = (b - a).normalize();
-            let away = (p - c) - e * (p - c).dot(e);
-            p + away.normalize() * delta * (b - a).length()
-        };
+        let target = beside_edge(&mesh, prim as usize, delta, i % 4 == 0, &mut rng);
         let dist = distances[(i / offsets.len()) % distances.len()];
         let origin = target + rng.unit_vector() * dist;
         rays.push(Ray::new(origin, target - origin));
         aimed.push(prim);
     }
-    // The band is met: brute force reports hits on the aimed triangle that
-    // the textbook test without tolerance does not.
-    let brute = build_accel(
-        AccelKind::Brute,
-        TestKind::Moller,
-        &mesh,
-        &BuildOptions::default(),
-    );
-    let band_hits = rays
-        .iter()
-        .zip(&aimed)
-        .filter(|(r, &p)| {
-            let [a, b, c] = mesh.triangle(p as usize);
-            let tri = Moller::precompute(a, b, c);
-            brute.intersect(r).is_some_and(|h| h.prim == p)
-                && Moller::intersect_strict(&tri, r, f32::INFINITY).is_none()
-        })
-        .count();
-    assert!(band_hits > 600, "only {band_hits} rays hit inside the band");
-    for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
-        for leaf in [1, 16] {
-            let opts = BuildOptions {
-                quality,
-                max_leaf_size: leaf,
-                packed_leaf_size: leaf,
-                ..BuildOptions::default()
-            };
-            check_kinds(&mesh, &rays, &opts, &[AccelKind::Bvh4, AccelKind::Bvh8]);
-        }
-    }
+    let met = band_hits(&mesh, &rays, &aimed);
+    assert!(met > 600, "only {met} rays hit inside the band");
+    check_wide_builds(&mesh, &rays);
 }
 
 /// A triangle's band lies in its own plane, so the box of a triangle square
@@ -430,7 +450,6 @@ fn rays_through_the_edge_tolerance_band_agree_with_brute_force() {
 /// no room across the plane for the tests' rounding would lose some.
 #[test]
 fn rays_through_the_band_of_axis_square_triangles_agree_with_brute_force() {
-    use raykit_core::tri::{Moller, TriangleTest};
     let mut rng = Pcg32::new(91);
     let axes = [
         (Vec3::X, Vec3::Y, Vec3::Z),
@@ -463,17 +482,8 @@ fn rays_through_the_band_of_axis_square_triangles_agree_with_brute_force() {
     for i in 0..6000 {
         let prim = rng.below(600) as usize;
         let (normal, e1, e2) = axes[prim % 3];
-        let [a, b, c] = mesh.triangle(prim);
         let delta = offsets[i % offsets.len()];
-        // Just outside an edge (outward in the plane) or beyond a corner.
-        let target = if i % 4 == 0 {
-            a + (a - (a + b + c) / 3.0).normalize() * delta * (b - a).length()
-        } else {
-            let p = a + (b - a) * rng.next_f32();
-            let e = (b - a).normalize();
-            let away = (p - c) - e * (p - c).dot(e);
-            p + away.normalize() * delta * (b - a).length()
-        };
+        let target = beside_edge(&mesh, prim, delta, i % 4 == 0, &mut rng);
         let dir = if i % 3 == 0 {
             rng.unit_vector()
         } else {
@@ -487,32 +497,7 @@ fn rays_through_the_band_of_axis_square_triangles_agree_with_brute_force() {
         rays.push(Ray::new(origin, target - origin));
         aimed.push(prim as u32);
     }
-    let brute = build_accel(
-        AccelKind::Brute,
-        TestKind::Moller,
-        &mesh,
-        &BuildOptions::default(),
-    );
-    let band_hits = rays
-        .iter()
-        .zip(&aimed)
-        .filter(|(r, &p)| {
-            let [a, b, c] = mesh.triangle(p as usize);
-            let tri = Moller::precompute(a, b, c);
-            brute.intersect(r).is_some_and(|h| h.prim == p)
-                && Moller::intersect_strict(&tri, r, f32::INFINITY).is_none()
-        })
-        .count();
-    assert!(band_hits > 500, "only {band_hits} rays hit inside the band");
-    for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
-        for leaf in [1, 16] {
-            let opts = BuildOptions {
-                quality,
-                max_leaf_size: leaf,
-                packed_leaf_size: leaf,
-                ..BuildOptions::default()
-            };
-            check_kinds(&mesh, &rays, &opts, &[AccelKind::Bvh4, AccelKind::Bvh8]);
-        }
-    }
+    let met = band_hits(&mesh, &rays, &aimed);
+    assert!(met > 500, "only {met} rays hit inside the band");
+    check_wide_builds(&mesh, &rays);
 }
