@@ -588,4 +588,10 @@ fn outputs_are_checked_before_the_work_and_flags_that_do_not_apply_are_refused()
     assert!(e.contains("no-such-mesh.obj"), "{e}");
     let cause = "No such file or directory";
     assert_eq!(e.matches(cause).count(), 1, "{e}");
+    // A thread count no machine has is refused at once, not attempted.
+    let e = refused(s(&mesh), &out, &["--threads", "100000"]);
+    assert!(
+        e.contains("--threads 100000") && e.contains("at most 4096"),
+        "{e}"
+    );
 }

@@ -118,7 +118,7 @@ pub struct QueryArgs {
     /// of them) [default: 64].
     #[arg(long)]
     max_hits: Option<u32>,
-    /// Worker threads (0 = one per core).
+    /// Worker threads (0 = one per core; at most 4096).
     #[arg(long, default_value_t = 0)]
     threads: usize,
 }

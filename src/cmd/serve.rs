@@ -72,7 +72,7 @@ pub struct ServeArgs {
     /// Allow `POST /api/scene` to load mesh files from this directory (otherwise builtin: only).
     #[arg(long)]
     scene_dir: Option<PathBuf>,
-    /// Render threads (0 = one per core).
+    /// Render threads (0 = one per core; at most 4096).
     #[arg(long, default_value_t = 0)]
     threads: usize,
     /// Stop by itself after this many seconds (for scripts); otherwise run until Ctrl-C.
@@ -105,7 +105,7 @@ impl ServeArgs {
 pub fn run(args: ServeArgs) -> Result<ExitCode> {
     if args.threads > 0 {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(args.threads)
+            .num_threads(raykit_lab::measure::check_threads(args.threads)?)
             .build_global()
             .context("cannot start the thread pool")?;
     }

@@ -57,7 +57,7 @@ pub struct TJunctionsArgs {
     /// one exposes).
     #[arg(long, default_value_t = 4)]
     max_rounds: usize,
-    /// Worker threads (0 = one per core).
+    /// Worker threads (0 = one per core; at most 4096).
     #[arg(long, default_value_t = 0)]
     threads: usize,
     /// Print the report as JSON on stdout instead of the summary.

@@ -3,10 +3,26 @@
 use anyhow::{Context, Result};
 use std::time::Instant;
 
-/// A rayon pool with `threads` workers (0 = one per core).
+/// The most worker threads a command starts (`--threads`): far beyond any
+/// machine's cores, and short of what stalls a process spawning threads.
+pub const MAX_THREADS: usize = 4096;
+
+/// `threads` as `--threads` takes it: 0 (one per core) to [`MAX_THREADS`].
+pub fn check_threads(threads: usize) -> Result<usize> {
+    if threads > MAX_THREADS {
+        anyhow::bail!(
+            "--threads {threads}: at most {MAX_THREADS} worker threads (0 = one per core, {} here)",
+            std::thread::available_parallelism().map_or(1, |n| n.get())
+        );
+    }
+    Ok(threads)
+}
+
+/// A rayon pool with `threads` workers (0 = one per core), refused above
+/// [`MAX_THREADS`].
 pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
+        .num_threads(check_threads(threads)?)
         .build()
         .context("cannot start the thread pool")
 }

@@ -153,7 +153,7 @@ pub struct RenderArgs {
     /// Ray/triangle test (`raykit info tests`).
     #[arg(long, default_value = "moller")]
     pub(super) test: String,
-    /// Worker threads (0 = one per core).
+    /// Worker threads (0 = one per core; at most 4096).
     #[arg(long, default_value_t = 0)]
     pub(super) threads: usize,
     /// Output image: `.png` (8-bit sRGB) or `.exr` (linear float). With

@@ -43,7 +43,7 @@ pub struct TraceArgs {
     /// Answer "is anything hit" (shadow rays) instead of the nearest hit.
     #[arg(long)]
     pub(super) occlusion: bool,
-    /// Worker threads (0 = one per core).
+    /// Worker threads (0 = one per core; at most 4096).
     #[arg(long, default_value_t = 0)]
     pub(super) threads: usize,
     /// Trace each ray through the one-ray API (`Accel::intersect` /

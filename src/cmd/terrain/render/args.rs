@@ -117,7 +117,7 @@ pub struct TerrainRenderArgs {
     /// Frames of the fly-through.
     #[arg(long, default_value_t = 60, requires = "path")]
     pub(super) frames: u32,
-    /// Worker threads (0 = one per core).
+    /// Worker threads (0 = one per core; at most 4096).
     #[arg(long, default_value_t = 0)]
     pub(super) threads: usize,
 }
