@@ -411,7 +411,7 @@ fn check_wide_builds(mesh: &TriangleMesh, rays: &[Ray]) {
 /// triangles among large ones, so that most leaf and inner boxes are far
 /// larger than the triangles whose bands they must hold. The wide BVHs
 /// store each box as the union of its triangles' bands
-/// (`TriangleTest::reach`), not padded by the box's own size, so these
+/// (`NodeBox::triangle_reach`), not padded by the box's own size, so these
 /// are the rays a box too tight would lose. From near and from 10⁴ times
 /// the model's size away, where the tests' rounding bounds, and so the
 /// band, are widest.
@@ -442,12 +442,13 @@ fn rays_through_the_edge_tolerance_band_agree_with_brute_force() {
     check_wide_builds(&mesh, &rays);
 }
 
-/// A triangle's band lies in its own plane, so the box of a triangle square
-/// to an axis stays flat on that axis (`TriangleTest::reach`). Rays
-/// through the band of tiny axis-square triangles (some thin, half of them
-/// 10³ triangle sizes from the origin) among large ones: grazing the plane
-/// at 10⁻⁵ to 10⁻¹ radians or crossing it at random angles, from near and far. A box with
-/// no room across the plane for the tests' rounding would lose some.
+/// The band of a triangle square to an axis, whose box is thinnest across
+/// its plane (`NodeBox::triangle_reach`). Rays through the band of tiny
+/// axis-square triangles (some thin, half of them 10³ triangle sizes from
+/// the origin) among large ones: grazing the plane at 10⁻⁵ to 10⁻¹ radians
+/// or crossing it at random angles, from near and far. The Plücker test's
+/// band is a tube around the triangle, not a band in its plane: a box flat
+/// across the plane loses some of its hits here.
 #[test]
 fn rays_through_the_band_of_axis_square_triangles_agree_with_brute_force() {
     let mut rng = Pcg32::new(91);

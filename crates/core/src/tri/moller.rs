@@ -87,7 +87,6 @@
 //! boundary; `t` is within `1e-5 t + 1.5` such units.
 
 use super::{TriHit, TriangleTest, MAX_EDGE_TOLERANCE};
-use crate::aabb::Aabb;
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -358,12 +357,6 @@ impl TriangleTest for Moller {
     }
 
     #[inline]
-    /// The band lies in the plane: the test widens the barycentrics of
-    /// the point where the ray meets it.
-    fn reach(a: Vec3, b: Vec3, c: Vec3) -> Aabb {
-        super::reach::in_plane(a, b, c)
-    }
-
     fn prepare(ray: &Ray) -> f32 {
         PREPARE_FACTOR * max_abs(ray.dir)
     }

@@ -94,7 +94,6 @@
 //! `t` is within `1e-5 t + 1.0` such units.
 
 use super::{TriHit, TriangleTest, MAX_EDGE_TOLERANCE};
-use crate::aabb::Aabb;
 use crate::ray::Ray;
 use glam::{DVec3, Vec3};
 
@@ -305,12 +304,6 @@ impl TriangleTest for Projection {
     }
 
     #[inline]
-    /// The band lies in the plane: the test widens the barycentrics of
-    /// the point where the ray meets it.
-    fn reach(a: Vec3, b: Vec3, c: Vec3) -> Aabb {
-        super::reach::in_plane(a, b, c)
-    }
-
     fn prepare(_ray: &Ray) {}
 
     #[inline]
