@@ -129,11 +129,12 @@ const THIN: f32 = 1.0 / 4096.0;
 pub(crate) fn triangle_distance2(p: Vec3, tri: &[Vec3; 3]) -> (f32, f32, f32) {
     let (a, b, c) = (tri[0] - p, tri[1] - p, tri[2] - p);
     let (ab, ac) = (b - a, c - a);
-    let thin = !(ab.cross(ac).length_squared() > THIN * ab.length_squared() * ac.length_squared());
-    let (u, v) = if thin {
-        (f32::NAN, f32::NAN)
-    } else {
+    // Not thin: false for thin triangles and for NaN or overflow.
+    let wide = ab.cross(ac).length_squared() > THIN * ab.length_squared() * ac.length_squared();
+    let (u, v) = if wide {
         closest_uv32(a, b, c)
+    } else {
+        (f32::NAN, f32::NAN)
     };
     if !(u.is_finite() && v.is_finite()) {
         // A thin triangle, whose face region f32 cannot tell from its
@@ -208,7 +209,7 @@ fn distance2_lanes(c: &[[[f32; LANES]; 3]; 3]) -> ([f32; LANES], u32) {
         // `denom` is `|ab × ac|²` (Lagrange's identity).
         let aa = abx * abx + aby * aby + abz * abz;
         let cc = acx * acx + acy * acy + acz * acz;
-        let thin = !(denom > THIN * aa * cc);
+        let wide = denom > THIN * aa * cc;
         // The face, then each region overriding in reverse order of
         // precedence. `max` then `min` rather than `clamp`: the bounds of a
         // lane that ends up degenerate are NaN.
@@ -241,7 +242,7 @@ fn distance2_lanes(c: &[[[f32; LANES]; 3]; 3]) -> ([f32; LANES], u32) {
         // answer) go to the scalar kernel too, which solves them in f64.
         let solved = (at_a || at_b || on_ab || at_c || on_ac || on_bc)
             || (denom > 0.0 && denom < f32::INFINITY);
-        let solved = solved && !thin && d2[k].is_finite();
+        let solved = solved && wide && d2[k].is_finite();
         degenerate |= u32::from(!solved) << k;
     }
     (d2, degenerate)
