@@ -308,3 +308,32 @@ fn bad_inputs_name_the_file_and_fail_cleanly() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("bvh2"), "{}", stderr(&o));
 }
+
+/// A ray file of no rays is a batch of size zero: `trace` (nearest hits,
+/// occlusion, several meshes) and `query count` all write outputs of zero
+/// records and report zero rays at a rate of 0, not NaN.
+#[test]
+fn an_empty_ray_file_gives_empty_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = teapot();
+    let rays = dir.path().join("none.bin");
+    std::fs::write(&rays, []).unwrap();
+    let out = dir.path().join("o.bin");
+    let runs: [&[&str]; 4] = [
+        &["trace", "--mesh", s(&mesh)],
+        &["trace", "--occlusion", "--mesh", s(&mesh)],
+        &["trace", "--mesh", s(&mesh), "--mesh", s(&mesh)],
+        &["query", "count", "--mesh", s(&mesh)],
+    ];
+    for args in runs {
+        let _ = std::fs::remove_file(&out);
+        let mut all = args.to_vec();
+        all.extend(["--rays", s(&rays), "--out", s(&out)]);
+        let o = raykit(&all);
+        let e = stderr(&o);
+        assert!(o.status.success(), "{args:?}: {e}");
+        assert_eq!(std::fs::read(&out).unwrap().len(), 0, "{args:?}");
+        let stats: serde_json::Value = serde_json::from_str(e.lines().last().unwrap()).unwrap();
+        assert_eq!(stats["per_s"], 0.0, "{args:?}: {e}");
+    }
+}

@@ -7,7 +7,7 @@ use raykit_core::query::{QueryKind, SurfaceBvh};
 use raykit_core::{Ray, Vec3};
 use raykit_io::{write_answers, write_scene_hit_lists, write_u32s};
 use raykit_lab::args::scene_arg;
-use raykit_lab::measure::{pool, timed};
+use raykit_lab::measure::{per_second, pool, timed};
 use serde_json::json;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -220,14 +220,7 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
     obj.insert("load_ms".into(), json!(load_s * 1e3));
     obj.insert("build_ms".into(), json!(build_s * 1e3));
     obj.insert("query_ms".into(), json!(query_s * 1e3));
-    obj.insert(
-        "per_s".into(),
-        json!(if query_s > 0.0 {
-            n as f64 / query_s
-        } else {
-            0.0
-        }),
-    );
+    obj.insert("per_s".into(), json!(per_second(n, query_s)));
     obj.insert("threads".into(), json!(threads));
     eprintln!("{stats}");
     Ok(ExitCode::SUCCESS)
@@ -267,11 +260,7 @@ fn run_instanced(args: &QueryArgs, input: &Path) -> Result<ExitCode> {
         hits = lists.iter().map(|l| l.len() as u64).sum();
         write_out(&args.out, |w| write_scene_hit_lists(w, &lists))?;
     }
-    let per_s = if query_s > 0.0 {
-        n as f64 / query_s
-    } else {
-        0.0
-    };
+    let per_s = per_second(n, query_s);
     let mut stats = json!({
         "query": q.name(),
         "instanced": true,

@@ -34,6 +34,16 @@ pub fn timed<R>(f: impl FnOnce() -> R) -> (R, f64) {
     (r, start.elapsed().as_secs_f64())
 }
 
+/// Items per second for `n` items in `seconds`: 0 for no items (or no
+/// measurable time), so that the JSON stats lines never hold NaN.
+pub fn per_second(n: usize, seconds: f64) -> f64 {
+    if n == 0 || seconds <= 0.0 {
+        0.0
+    } else {
+        n as f64 / seconds
+    }
+}
+
 /// Median, minimum and maximum of a non-empty sample.
 pub fn median_min_max(samples: &[f64]) -> (f64, f64, f64) {
     let mut s = samples.to_vec();

@@ -2,12 +2,12 @@
 
 use super::args::TraceArgs;
 use super::brute_check::check_against_brute;
-use anyhow::{anyhow, bail, Result};
+use anyhow::{anyhow, Result};
 use raykit_core::tri::TestKind;
 use raykit_gpu::{GpuScene, GpuTracer};
 use raykit_lab::args::backend::{gpu_accel, open_gpu};
 use raykit_lab::args::scene_arg;
-use raykit_lab::measure::{pool, timed};
+use raykit_lab::measure::{per_second, pool, timed};
 use serde_json::json;
 use std::process::ExitCode;
 
@@ -31,9 +31,6 @@ pub fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
     let (scene, load_s) = timed(|| scene_arg::load(&args.mesh[0]));
     let mesh = scene?.mesh;
     let rays = raykit_io::read_rays(&args.rays)?;
-    if rays.is_empty() {
-        bail!("{}: the ray file holds no rays", args.rays.display());
-    }
     let opts = args.build.options();
     let gpu = |e: raykit_gpu::GpuError| anyhow!("{e}");
     let scene = pool
@@ -71,9 +68,9 @@ pub fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
             "trace_ms": trace_s * 1e3,
             "kernel_ms": kernel_s * 1e3,
             "rays": rays.len(),
-            "mrays": rays.len() as f64 / trace_s / 1e6,
-            "per_s": rays.len() as f64 / trace_s,
-            "kernel_mrays": rays.len() as f64 / kernel_s / 1e6,
+            "mrays": per_second(rays.len(), trace_s) / 1e6,
+            "per_s": per_second(rays.len(), trace_s),
+            "kernel_mrays": per_second(rays.len(), kernel_s) / 1e6,
         })
     );
     let Some(k) = args.verify else {

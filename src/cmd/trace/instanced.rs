@@ -4,7 +4,7 @@
 use super::args::TraceArgs;
 use anyhow::{bail, Result};
 use raykit_lab::args::backend::Backend;
-use raykit_lab::measure::{pool, timed};
+use raykit_lab::measure::{per_second, pool, timed};
 use serde_json::json;
 use std::process::ExitCode;
 
@@ -36,9 +36,6 @@ pub fn run_instanced(args: TraceArgs) -> Result<ExitCode> {
     let opts = args.build.options();
     let input = pool.install(|| crate::instanced_arg::load(&args.mesh, &opts))?;
     let rays = raykit_io::read_rays(&args.rays)?;
-    if rays.is_empty() {
-        bail!("{}: the ray file holds no rays", args.rays.display());
-    }
     let scene = &input.scene;
     let mask = raykit_core::instancing::MASK_ALL;
     let trace_s;
@@ -60,8 +57,8 @@ pub fn run_instanced(args: TraceArgs) -> Result<ExitCode> {
         "build_ms": input.build_s * 1e3,
         "trace_ms": trace_s * 1e3,
         "rays": rays.len(),
-        "mrays": rays.len() as f64 / trace_s / 1e6,
-        "per_s": rays.len() as f64 / trace_s,
+        "mrays": per_second(rays.len(), trace_s) / 1e6,
+        "per_s": per_second(rays.len(), trace_s),
         "threads": threads,
     });
     if let (Some(o), serde_json::Value::Object(extra)) = (

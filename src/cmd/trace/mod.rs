@@ -15,7 +15,7 @@ use raykit_core::accel::{build_accel, AccelKind};
 use raykit_core::tri::TestKind;
 use raykit_lab::args::backend::Backend;
 use raykit_lab::args::scene_arg;
-use raykit_lab::measure::{pool, timed};
+use raykit_lab::measure::{per_second, pool, timed};
 use serde_json::json;
 use std::process::ExitCode;
 
@@ -64,9 +64,6 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
     let (scene, load_s) = timed(|| scene_arg::load(&args.mesh[0]));
     let mesh = scene?.mesh;
     let rays = raykit_io::read_rays(&args.rays)?;
-    if rays.is_empty() {
-        bail!("{}: the ray file holds no rays", args.rays.display());
-    }
     let opts = args.build.options();
     let (accel, build_s) = pool.install(|| timed(|| build_accel(kind, test, &mesh, &opts)));
     let (hits, occluded);
@@ -113,8 +110,8 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
             "build_ms": build_s * 1e3,
             "trace_ms": trace_s * 1e3,
             "rays": rays.len(),
-            "mrays": rays.len() as f64 / trace_s / 1e6,
-            "per_s": rays.len() as f64 / trace_s,
+            "mrays": per_second(rays.len(), trace_s) / 1e6,
+            "per_s": per_second(rays.len(), trace_s),
             "threads": threads,
         })
     );
