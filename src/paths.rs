@@ -59,7 +59,11 @@ pub fn ensure_distinct(a: &Path, b: &Path, what_a: &str, what_b: &str) -> Result
     Ok(())
 }
 
-/// Fail when the folder `path` would be written into does not exist.
+/// Fail when the folder `path` would be written into does not exist or
+/// does not take new files (read-only, or a file system such as /proc):
+/// the outputs are written as new files there and renamed, so a command
+/// with several outputs learns before its work, not after its first
+/// output, that one cannot be written.
 fn ensure_folder(path: &Path) -> Result<()> {
     let folder = folder_of(path);
     if !folder.is_dir() {
@@ -69,12 +73,41 @@ fn ensure_folder(path: &Path) -> Result<()> {
             folder.display()
         );
     }
+    let probe = folder.join(format!(".raykit-probe.{}", std::process::id()));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+        }
+        // A probe left by an earlier run of this process id: the folder
+        // takes files.
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+        Err(e) => bail!(
+            "cannot write {}: the folder {} does not take new files ({e})",
+            path.display(),
+            folder.display()
+        ),
+    }
     Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_folder_that_takes_no_files_is_named() {
+        let e = ensure_output(Path::new("/proc/m.tif"), &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("/proc") && e.contains("does not take new files"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn a_missing_folder_is_named() {

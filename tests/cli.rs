@@ -337,3 +337,61 @@ fn an_empty_ray_file_gives_empty_outputs() {
         assert_eq!(stats["per_s"], 0.0, "{args:?}: {e}");
     }
 }
+
+/// Two outputs of one command on one file, or an output in a folder that
+/// takes no files, fail before the work, and no output is written.
+#[test]
+fn colliding_or_unwritable_outputs_fail_before_any_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = teapot();
+    let out = dir.path().join("kept.obj");
+    let png = dir.path().join("t.png");
+    let runs: [(Vec<&str>, &Path, &str); 4] = [
+        (
+            vec!["cull", s(&mesh), s(&out), "--report", s(&out)],
+            &out,
+            "name the same file",
+        ),
+        (
+            vec!["cull", s(&mesh), s(&out), "--report", "/proc/r.json"],
+            &out,
+            "does not take new files",
+        ),
+        (
+            vec![
+                "terrain",
+                "render",
+                "fractal:65",
+                "--out",
+                s(&png),
+                "--heatmap",
+                s(&png),
+            ],
+            &png,
+            "name the same file",
+        ),
+        (
+            vec![
+                "terrain",
+                "render",
+                "fractal:65",
+                "--out",
+                s(&png),
+                "--heatmap",
+                "/proc/h.png",
+            ],
+            &png,
+            "does not take new files",
+        ),
+    ];
+    for (args, written, needle) in runs {
+        let o = raykit(&args);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(
+            e.contains(needle) && !e.contains("panicked"),
+            "{args:?}: {e}"
+        );
+        assert!(!written.exists(), "{args:?} wrote {}", written.display());
+    }
+}

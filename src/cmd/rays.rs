@@ -37,8 +37,9 @@ pub struct RaysArgs {
 
 /// Generate and write the ray set.
 pub fn run(args: RaysArgs) -> Result<ExitCode> {
-    if args.size == 0 || args.size > 16384 {
-        bail!("--size must be between 1 and 16384, got {}", args.size);
+    let max = raykit_io::MAX_IMAGE_SIDE;
+    if args.size == 0 || args.size > max {
+        bail!("--size must be between 1 and {max}, got {}", args.size);
     }
     crate::paths::ensure_output(&args.out, &[std::path::Path::new(&args.mesh)])?;
     let scene = scene_arg::load(&args.mesh)?;

@@ -19,7 +19,7 @@ use crate::gltf_glb::{is_glb, split_glb};
 use crate::gltf_image::ImageCache;
 use crate::gltf_scene::{check_scene_indices, SceneCollector};
 use crate::gltf_support::{check_required, unsupported_warnings};
-use crate::uri::{data_uri_payload, percent_decode};
+use crate::uri::{data_uri_payload, external_file, read_external};
 use crate::validate::finish;
 use ::gltf::mesh::Mode;
 use ::gltf::{Document, Semantic};
@@ -256,15 +256,14 @@ fn load_buffers<'a>(
                 })?)
             }
             ::gltf::buffer::Source::Uri(uri) => {
-                let file = dir.join(percent_decode(uri));
-                Cow::Owned(std::fs::read(&file).map_err(|e| {
-                    LoadError::new(
-                        path,
-                        ErrorKind::Io,
-                        Location::Json(format!("buffers[{i}].uri")),
-                        format!("cannot read {}: {e}", file.display()),
-                    )
-                })?)
+                let at = || Location::Json(format!("buffers[{i}].uri"));
+                let file = external_file(dir, uri)
+                    .map_err(|m| LoadError::new(path, ErrorKind::Malformed, at(), m))?;
+                // The buffer is its first byteLength bytes.
+                Cow::Owned(
+                    read_external(&file, buf.length() as u64)
+                        .map_err(|m| LoadError::new(path, ErrorKind::Io, at(), m))?,
+                )
             }
         };
         if data.len() < buf.length() {

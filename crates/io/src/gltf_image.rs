@@ -5,7 +5,10 @@
 //! warning naming the file, the image index and its URI, and no texture.
 
 use crate::texture_image::{decode_texture, Rows};
-use crate::uri::{data_uri_payload, percent_decode};
+use crate::uri::{data_uri_payload, external_file, read_external};
+
+/// Most bytes read of an image file a glTF file names.
+const MAX_IMAGE_FILE: u64 = 1 << 30;
 use ::gltf::json::Root;
 use raykit_core::Texture;
 use std::borrow::Cow;
@@ -92,9 +95,8 @@ fn load_image(
             }
             None => {
                 let dir = path.parent().unwrap_or(Path::new(""));
-                let file = dir.join(percent_decode(uri));
-                let b = std::fs::read(&file)
-                    .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+                let file = external_file(dir, uri)?;
+                let b = read_external(&file, MAX_IMAGE_FILE)?;
                 (Cow::Owned(b), file.display().to_string())
             }
         },

@@ -11,6 +11,10 @@ use std::path::Path;
 /// `tEXt` keyword of a part's placement.
 pub const PART_KEYWORD: &str = "raykit-part";
 
+/// Longest side of a picture that raykit renders (and so of a picture its
+/// parts may claim).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
 /// Where a part sits: a rectangle of a `full_width` × `full_height` picture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ImagePart {
@@ -67,9 +71,12 @@ impl ImagePart {
         })
     }
 
-    /// Whether the rectangle is non-empty and lies inside the picture.
+    /// Whether the rectangle is non-empty and lies inside the picture, whose
+    /// sides are at most [`MAX_IMAGE_SIDE`].
     pub fn fits(&self) -> bool {
-        self.width > 0
+        self.full_width <= MAX_IMAGE_SIDE
+            && self.full_height <= MAX_IMAGE_SIDE
+            && self.width > 0
             && self.height > 0
             && self.x as u64 + self.width as u64 <= self.full_width as u64
             && self.y as u64 + self.height as u64 <= self.full_height as u64
@@ -141,7 +148,7 @@ pub fn read_png_part(path: &Path) -> Result<(ImagePart, Vec<u8>), LoadError> {
     })?;
     if !part.fits() || (part.width, part.height) != (width, height) {
         return Err(malformed(format!(
-            "the image is {width}x{height}, but its placement says {text} (it must be that size and lie inside the picture)"
+            "the image is {width}x{height}, but its placement says {text} (it must be that size and lie inside the picture, of sides at most {MAX_IMAGE_SIDE})"
         )));
     }
     let mut rgb = vec![0u8; reader.output_buffer_size().unwrap_or(0)];
@@ -161,6 +168,20 @@ pub fn read_png_part(path: &Path) -> Result<(ImagePart, Vec<u8>), LoadError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A placement that claims a picture larger than raykit renders does
+    /// not fit, however it lies inside it, so merging never allocates it.
+    #[test]
+    fn pictures_beyond_the_largest_side_do_not_fit() {
+        let claim = |w: u32, h: u32| {
+            ImagePart::parse(&format!("x=0 y=12 width=32 height=12 of {w}x{h}")).unwrap()
+        };
+        assert!(claim(32, 24).fits());
+        assert!(claim(MAX_IMAGE_SIDE, 24).fits());
+        assert!(!claim(MAX_IMAGE_SIDE + 1, 24).fits());
+        assert!(!claim(32, u32::MAX).fits());
+        assert!(!claim(u32::MAX, u32::MAX).fits());
+    }
 
     #[test]
     fn a_part_round_trips_and_plain_pngs_are_refused() {

@@ -59,7 +59,7 @@ pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
 pub use gltf_instances::{load_gltf_instances, parse_gltf_instances, GltfInstance, GltfInstances};
 pub use image_merge::{merge_png_parts, MergeError};
-pub use image_part::{read_png_part, write_png_part, ImagePart, PART_KEYWORD};
+pub use image_part::{read_png_part, write_png_part, ImagePart, MAX_IMAGE_SIDE, PART_KEYWORD};
 pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
 pub use png::{write_png, write_png_indexed};
 pub use query_files::{

@@ -1,6 +1,9 @@
 //! The URI forms glTF buffers use: `data:` URIs with base64 payloads and
 //! percent-encoded relative file paths. Also base64 encoding for the writer.
 
+use std::io::Read;
+use std::path::{Component, Path, PathBuf};
+
 /// Decode standard base64 (padding optional, whitespace ignored).
 /// `Err` holds the offset of the first invalid character.
 pub(crate) fn base64_decode(s: &[u8]) -> Result<Vec<u8>, usize> {
@@ -88,6 +91,48 @@ pub(crate) fn percent_decode(s: &str) -> String {
         i += 1;
     }
     String::from_utf8_lossy(&out).into_owned()
+}
+
+/// The file that a glTF file's external `uri` names: a relative path,
+/// percent-decoded, beside or below `dir` (the glTF file's folder). URIs
+/// with a scheme (`http:`, `file:`), absolute paths and paths with `..`
+/// are refused, so that a glTF file (one a server was handed, say) brings
+/// in no file from elsewhere.
+pub(crate) fn external_file(dir: &Path, uri: &str) -> Result<PathBuf, String> {
+    let rel = percent_decode(uri);
+    if rel.is_empty() {
+        return Err("the uri is empty".into());
+    }
+    if let Some((scheme, _)) = rel.split_once(':') {
+        if !scheme.contains('/') {
+            return Err(format!(
+                "uri \"{uri}\" has a scheme ({scheme}:); only data: URIs and relative file paths are read"
+            ));
+        }
+    }
+    for part in Path::new(&rel).components() {
+        if !matches!(part, Component::Normal(_) | Component::CurDir) {
+            return Err(format!(
+                "uri \"{uri}\" leaves the glTF file's folder; only files beside or below it are read"
+            ));
+        }
+    }
+    Ok(dir.join(rel))
+}
+
+/// At most `max` bytes of `file`, which must be a regular file (not a
+/// device, pipe or folder, whose reads need not end).
+pub(crate) fn read_external(file: &Path, max: u64) -> Result<Vec<u8>, String> {
+    let cannot = |e: std::io::Error| format!("cannot read {}: {e}", file.display());
+    let meta = std::fs::metadata(file).map_err(cannot)?;
+    if !meta.is_file() {
+        return Err(format!("{} is not a regular file", file.display()));
+    }
+    let mut out = Vec::new();
+    std::fs::File::open(file)
+        .and_then(|f| f.take(max).read_to_end(&mut out))
+        .map_err(cannot)?;
+    Ok(out)
 }
 
 #[cfg(test)]

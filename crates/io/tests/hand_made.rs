@@ -171,3 +171,56 @@ fn missing_mtl_falls_back_to_default_material_without_warning() {
     );
     assert_eq!(m.tri_material, vec![0]);
 }
+
+/// A glTF file's external buffers must lie beside or below it: absolute
+/// paths, `..` and URIs with a scheme are refused by name, a device is not
+/// read, and only the first byteLength bytes of a longer file are used.
+#[test]
+fn gltf_external_files_stay_in_the_files_folder() {
+    let text = std::fs::read_to_string(local("transforms.gltf")).unwrap();
+    assert!(
+        text.contains("\"uri\": \"transforms.bin\""),
+        "fixture layout changed"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let inner = dir.path().join("scene");
+    std::fs::create_dir_all(inner.join("sub")).unwrap();
+    std::fs::copy(local("transforms.bin"), dir.path().join("outside.bin")).unwrap();
+    let with_uri = |uri: &str| {
+        let p = inner.join("t.gltf");
+        std::fs::write(
+            &p,
+            text.replace("\"transforms.bin\"", &format!("\"{uri}\"")),
+        )
+        .unwrap();
+        load(&p)
+    };
+    let outside = dir.path().join("outside.bin");
+    for (uri, needle) in [
+        ("../outside.bin", "leaves the glTF file's folder"),
+        (outside.to_str().unwrap(), "leaves the glTF file's folder"),
+        ("sub/..%2F../outside.bin", "leaves the glTF file's folder"),
+        ("file:///etc/passwd", "has a scheme"),
+        ("/dev/zero", "leaves the glTF file's folder"),
+        ("sub", "is not a regular file"),
+    ] {
+        let e = with_uri(uri).unwrap_err();
+        assert_eq!(
+            e.location(),
+            &Location::Json("buffers[0].uri".into()),
+            "{uri}"
+        );
+        assert!(e.to_string().contains(needle), "{uri}: {e}");
+    }
+    // Beside and below the file it loads, and a longer file gives the same mesh.
+    let want = load(&local("transforms.gltf")).unwrap().mesh;
+    let mut longer = std::fs::read(local("transforms.bin")).unwrap();
+    std::fs::write(inner.join("sub/b.bin"), &longer).unwrap();
+    assert_eq!(
+        with_uri("sub/b.bin").unwrap().mesh.positions,
+        want.positions
+    );
+    longer.extend_from_slice(&[7u8; 100]);
+    std::fs::write(inner.join("b.bin"), &longer).unwrap();
+    assert_eq!(with_uri("./b.bin").unwrap().mesh.positions, want.positions);
+}

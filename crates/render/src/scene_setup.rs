@@ -180,6 +180,12 @@ pub fn setup(mut scene: Scene, args: &SceneOptions, aspect: f32) -> Result<Rende
     } else if let Some(target) = args.target {
         camera.target = target;
     }
+    if camera.eye == camera.target {
+        bail!(
+            "the camera's eye and target are the same point {}: it looks nowhere (--eye, --target)",
+            camera.eye
+        );
+    }
     let mut lights = Vec::new();
     for spec in &args.light {
         lights

@@ -84,7 +84,9 @@ fn project(
     let rx1 = (px(x1) + 1.0).min(w).ceil() as u32;
     let ry0 = (py(y1) - 1.0).max(0.0).floor() as u32;
     let ry1 = (py(y0) + 1.0).min(h).ceil() as u32;
-    Some([rx0, ry0, rx1, ry1])
+    // Corners whose projections are not finite (heights or a camera beyond
+    // f64's range) give no rectangle rather than an inverted one.
+    (rx0 < rx1 && ry0 < ry1).then_some([rx0, ry0, rx1, ry1])
 }
 
 /// The frame's boxes: the quadtree traversed once from the root with

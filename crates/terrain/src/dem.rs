@@ -115,6 +115,18 @@ impl Dem {
             })
     }
 
+    /// The first infinite height as (column, row, height), scanning rows
+    /// from the top: a sample no surface can stand on (a float64 sample
+    /// beyond the float32 range reads as one).
+    pub fn first_infinite(&self) -> Option<(usize, usize, f32)> {
+        let i = self.heights.iter().position(|h| h.is_infinite())?;
+        Some((
+            i % self.width.max(1),
+            i / self.width.max(1),
+            self.heights[i],
+        ))
+    }
+
     /// Replace no-data samples (NaN) by `value` (e.g. the lowest height),
     /// so the surface is defined everywhere; returns how many were filled.
     pub fn fill_nodata(&mut self, value: f32) -> usize {

@@ -167,6 +167,16 @@ impl HeightField {
             let e = "the DEM has no valid height (every sample is no-data)".to_string();
             return Err((e, heights));
         }
+        if zmin.is_infinite() || zmax.is_infinite() {
+            let i = heights.iter().position(|h| h.is_infinite()).unwrap_or(0);
+            let e = format!(
+                "height {} at row {}, column {} is not finite; heights must be finite, or NaN for no data",
+                heights[i],
+                i / dem.width,
+                i % dem.width
+            );
+            return Err((e, heights));
+        }
         let g = &dem.georef;
         if g.geographic {
             let (north, south) = (g.origin_y, g.origin_y + g.pixel_height * dem.height as f64);
@@ -181,9 +191,12 @@ impl HeightField {
             }
         }
         let (sx, sy) = dem.cell_size_m();
-        if !(sx > 0.0 && sy > 0.0 && sx.is_finite() && sy.is_finite()) {
+        // Beyond these, positions and view rays over the grid lose their
+        // meaning in f64 (products of coordinates underflow or overflow).
+        let sane = |c: f64| (1e-9..=1e9).contains(&c);
+        if !(sane(sx) && sane(sy)) {
             return Err((
-                format!("cell size must be positive, got {sx} x {sy}"),
+                format!("cell size must be between 1e-9 and 1e9 m, got {sx} x {sy}"),
                 heights,
             ));
         }

@@ -264,3 +264,25 @@ fn the_three_casters_agree_on_views_of_the_shared_dems() {
         }
     }
 }
+
+/// A surface needs finite heights and cells of a sane size: an infinite
+/// height is refused at its cell (NaN stays no data), and so are cells
+/// too small or too large for the casters' arithmetic.
+#[test]
+fn infinite_heights_and_absurd_cells_are_refused() {
+    let mut dem = hills(9, 7, 3);
+    dem.heights[2] = f32::NAN;
+    assert!(HeightField::new(&dem).is_ok());
+    dem.heights[9 * 4 + 5] = f32::NEG_INFINITY;
+    let e = HeightField::new(&dem).err().unwrap();
+    assert!(
+        e.contains("row 4, column 5") && e.contains("not finite"),
+        "{e}"
+    );
+    for size in [1e-200, 0.0, 1e12, f64::INFINITY] {
+        let mut dem = hills(9, 7, 3);
+        dem.georef.pixel_width = size;
+        let e = HeightField::new(&dem).err().unwrap();
+        assert!(e.contains("cell size"), "{size}: {e}");
+    }
+}

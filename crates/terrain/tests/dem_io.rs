@@ -588,6 +588,33 @@ fn geotiff_pixel_is_point_transformation_and_int_nodata() {
     assert_names_file_and_position(&err, &rot, "tag 34264");
 }
 
+/// A tiled GeoTIFF whose TileWidth is not a multiple of 16 (TIFF 6.0) is
+/// refused at the tag, not decoded into a wrong picture.
+#[test]
+fn geotiff_tiles_of_a_side_not_a_multiple_of_16_are_refused() {
+    let dir = TempDir::new("tiles");
+    let mut data = std::fs::read(terrain_file("lidar_dem_400.tif")).unwrap();
+    assert!(Ifd::parse(&data).le, "fixture layout changed");
+    let ifd = u32::from_le_bytes(data[4..8].try_into().unwrap()) as usize;
+    let n = u16::from_le_bytes(data[ifd..ifd + 2].try_into().unwrap()) as usize;
+    let entry = (0..n)
+        .map(|k| ifd + 2 + 12 * k)
+        .find(|&e| u16::from_le_bytes(data[e..e + 2].try_into().unwrap()) == 322)
+        .expect("a tiled fixture");
+    let ty = u16::from_le_bytes(data[entry + 2..entry + 4].try_into().unwrap());
+    let value = entry + 8;
+    if ty == 3 {
+        data[value..value + 2].copy_from_slice(&100u16.to_le_bytes());
+    } else {
+        data[value..value + 4].copy_from_slice(&100u32.to_le_bytes());
+    }
+    let path = dir.join("odd_tiles.tif");
+    std::fs::write(&path, &data).unwrap();
+    let err = read_geotiff(&path).unwrap_err();
+    let text = assert_names_file_and_position(&err, &path, "tag 322");
+    assert!(text.contains("multiple of 16"), "{text}");
+}
+
 #[test]
 fn geotiff_unsupported_samples_and_garbage_are_errors() {
     use tiff::encoder::{colortype, TiffEncoder};
@@ -1054,6 +1081,26 @@ fn load_dem_dispatches_on_extension() {
     let odd = dir.join("odd.r32");
     std::fs::write(&odd, [0u8; 12]).unwrap();
     assert_names_file_and_position(&load_dem(&odd, &o).unwrap_err(), &odd, "byte 12");
+
+    // An infinite height is refused at its cell; NaN is no data.
+    for (at, bad) in [(6usize, f32::INFINITY), (13, f32::NEG_INFINITY)] {
+        let mut heights: Vec<f32> = (0..16).map(|v| v as f32).collect();
+        heights[2] = f32::NAN;
+        heights[at] = bad;
+        let path = dir.join("inf.r32");
+        std::fs::write(
+            &path,
+            heights
+                .iter()
+                .flat_map(|h| h.to_le_bytes())
+                .collect::<Vec<u8>>(),
+        )
+        .unwrap();
+        let err = load_dem(&path, &o).unwrap_err();
+        let place = format!("row {}, column {}", at / 4, at % 4);
+        let text = assert_names_file_and_position(&err, &path, &place);
+        assert!(text.contains("not finite"), "{text}");
+    }
 
     let unknown = dir.join("terrain.xyz");
     std::fs::write(&unknown, b"1 2 3").unwrap();

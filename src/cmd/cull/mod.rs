@@ -31,6 +31,7 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
     crate::paths::ensure_output(&args.output, &[args.input.as_path()])?;
     if let Some(r) = &args.report {
         crate::paths::ensure_output(r, &[args.input.as_path(), args.output.as_path()])?;
+        crate::paths::ensure_distinct(&args.output, r, "the output", "--report")?;
     }
     let mode = if args.paper {
         ModeArg::Paper

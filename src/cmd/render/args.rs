@@ -1,9 +1,22 @@
 //! The arguments of `raykit render`.
 
 use clap::{Args, ValueEnum};
+use raykit_lab::args::build_args::number_in;
 use raykit_render::shadowmap::ShadowMapOptions;
 use raykit_render::whitted::{IntegratorKind, PrimaryMode, ShadowMode, DEFAULT_MAX_DEPTH};
 use std::path::PathBuf;
+
+fn fraction(text: &str) -> Result<f32, String> {
+    number_in(text, 0.0, 1.0)
+}
+
+fn texels(text: &str) -> Result<f32, String> {
+    number_in(text, 0.0, 1e3)
+}
+
+fn radiance(text: &str) -> Result<f32, String> {
+    number_in(text, 0.0, 1e6)
+}
 
 /// Shadow test on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -113,18 +126,21 @@ pub struct RenderArgs {
     /// Disable shadows (same as --shadows off).
     #[arg(long)]
     pub(super) no_shadows: bool,
-    /// Shadow-map resolution in texels per side (per cube face for point lights).
-    #[arg(long, default_value_t = ShadowMapOptions::default().resolution)]
+    /// Shadow-map resolution in texels per side (per cube face for point
+    /// lights), 16-8192.
+    #[arg(long, default_value_t = ShadowMapOptions::default().resolution, value_parser = clap::value_parser!(u32).range(16..=8192))]
     pub(super) shadow_map_size: u32,
-    /// Shadow-map box filter (percentage-closer filtering) width in texels; 1 = unfiltered.
-    #[arg(long, default_value_t = ShadowMapOptions::default().pcf)]
+    /// Shadow-map box filter (percentage-closer filtering) width in texels,
+    /// 1-15; 1 = unfiltered.
+    #[arg(long, default_value_t = ShadowMapOptions::default().pcf, value_parser = clap::value_parser!(u32).range(1..=15))]
     pub(super) pcf: u32,
-    /// Shadow-map depth bias, constant part, as a fraction of the scene diagonal
-    /// (default: automatic).
-    #[arg(long)]
+    /// Shadow-map depth bias, constant part, as a fraction of the scene diagonal,
+    /// 0-1 (default: automatic).
+    #[arg(long, value_parser = fraction)]
     pub(super) shadow_bias: Option<f32>,
-    /// Shadow-map depth bias, slope-scaled part, in texels (default: automatic).
-    #[arg(long)]
+    /// Shadow-map depth bias, slope-scaled part, in texels, 0-1000 (default:
+    /// automatic).
+    #[arg(long, value_parser = texels)]
     pub(super) shadow_slope_bias: Option<f32>,
     /// First-hit source.
     #[arg(long, value_enum, default_value_t = PrimaryArg::Traced)]
@@ -133,10 +149,10 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = IntegratorArg::Recursive)]
     pub(super) integrator: IntegratorArg,
     /// Factor on the linear radiance before encoding.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = radiance)]
     pub(super) exposure: f32,
     /// Ambient radiance, times each surface's diffuse colour.
-    #[arg(long, default_value_t = 0.06)]
+    #[arg(long, default_value_t = 0.06, value_parser = radiance)]
     pub(super) ambient: f32,
     /// Also write AOVs of the first hit: any of depth,normal,id (EXR next to
     /// the output, plus PNG previews).

@@ -29,8 +29,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Render and write the image.
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
-    if args.width == 0 || args.height == 0 || args.width > 16384 || args.height > 16384 {
-        bail!("--width and --height must be between 1 and 16384");
+    let max = raykit_io::MAX_IMAGE_SIDE;
+    if args.width == 0 || args.height == 0 || args.width > max || args.height > max {
+        bail!("--width and --height must be between 1 and {max}");
     }
     if args.spp == 0 || args.spp > 4096 {
         bail!("--spp must be between 1 and 4096");
@@ -155,9 +156,10 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             let (accel, build_s) =
                 pool.install(|| timed(|| build_accel(kind, test, mesh, &args.build.options())));
             let maps = if shadows == ShadowMode::Maps {
+                shadow_maps_fit(&setup.lights, args.shadow_map_size)?;
                 let mut o = ShadowMapOptions::for_mesh(mesh);
-                o.resolution = args.shadow_map_size.clamp(16, 16384);
-                o.pcf = args.pcf.clamp(1, 15);
+                o.resolution = args.shadow_map_size;
+                o.pcf = args.pcf;
                 let diag = mesh.bounds().diagonal();
                 if let Some(b) = args.shadow_bias {
                     o.bias_constant = b * diag;
@@ -257,4 +259,30 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Most memory the shadow maps of one render may take.
+const SHADOW_MAP_BUDGET: u64 = 8 << 30;
+
+/// Refuses shadow maps of `size`² texels whose depths would need more than
+/// [`SHADOW_MAP_BUDGET`]: one map per light, six for a point light's cube.
+fn shadow_maps_fit(lights: &[raykit_core::light::Light], size: u32) -> Result<()> {
+    let faces: u64 = lights
+        .iter()
+        .map(|l| match l {
+            raykit_core::light::Light::Point(_) => 6,
+            _ => 1,
+        })
+        .sum();
+    let bytes = faces * u64::from(size).pow(2) * 4;
+    if bytes > SHADOW_MAP_BUDGET {
+        bail!(
+            "shadow maps of {} lights ({faces} faces) at {size}² texels need {:.1} GiB, more than {} GiB: \
+             lower --shadow-map-size",
+            lights.len(),
+            bytes as f64 / (1u64 << 30) as f64,
+            SHADOW_MAP_BUDGET >> 30
+        );
+    }
+    Ok(())
 }

@@ -24,8 +24,8 @@ pub struct BuildArgs {
     /// SAH bins per axis (2-256).
     #[arg(long, default_value_t = BuildOptions::default().bins as u32, value_parser = clap::value_parser!(u32).range(2..=256))]
     bins: u32,
-    /// SAH cost of a node traversal relative to one triangle test.
-    #[arg(long, default_value_t = BuildOptions::default().traversal_cost)]
+    /// SAH cost of a node traversal relative to one triangle test (0-1000).
+    #[arg(long, default_value_t = BuildOptions::default().traversal_cost, value_parser = traversal_cost)]
     traversal_cost: f32,
     /// BVH builder: `sah` (binned SAH), `high` (the binned SAH, and bvh4 and
     /// bvh8 over moller fill every node's free slots with the halves of their
@@ -40,13 +40,34 @@ pub struct BuildArgs {
     /// |front-back|·(20-H) + splits·H, H in 0..=20).
     #[arg(long, default_value = "sah", value_parser = KdSplit::from_str)]
     kd_split: KdSplit,
-    /// kd-tree SAH cost of one triangle test relative to a node traversal.
-    #[arg(long, default_value_t = KdOptions::default().intersection_cost)]
+    /// kd-tree SAH cost of one triangle test relative to a node traversal
+    /// (0.001-1000).
+    #[arg(long, default_value_t = KdOptions::default().intersection_cost, value_parser = kd_isect_cost)]
     kd_isect_cost: f32,
     /// kd-tree node layout: subtrees of this many levels, each laid out
     /// breadth-first; 0 lays the whole tree out breadth-first.
     #[arg(long, default_value_t = KdOptions::default().subtree_levels)]
     kd_subtree_levels: u32,
+}
+
+/// A number in `lo..=hi` (NaN and infinities refused) for a clap option.
+pub fn number_in(text: &str, lo: f32, hi: f32) -> Result<f32, String> {
+    let v: f32 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number"))?;
+    if !(lo..=hi).contains(&v) {
+        return Err(format!("must be between {lo} and {hi}, got {text}"));
+    }
+    Ok(v)
+}
+
+fn traversal_cost(text: &str) -> Result<f32, String> {
+    number_in(text, 0.0, 1e3)
+}
+
+fn kd_isect_cost(text: &str) -> Result<f32, String> {
+    number_in(text, 1e-3, 1e3)
 }
 
 impl BuildArgs {
@@ -56,11 +77,11 @@ impl BuildArgs {
             max_leaf_size: self.max_leaf as usize,
             packed_leaf_size: self.max_packed_leaf as usize,
             bins: self.bins as usize,
-            traversal_cost: self.traversal_cost.clamp(0.0, 1e3),
+            traversal_cost: self.traversal_cost,
             quality: self.bvh_build,
             kd: KdOptions {
                 split: self.kd_split,
-                intersection_cost: self.kd_isect_cost.clamp(1e-3, 1e3),
+                intersection_cost: self.kd_isect_cost,
                 subtree_levels: self.kd_subtree_levels,
                 ..KdOptions::default()
             },

@@ -45,11 +45,12 @@ pub struct BenchArgs {
     /// the fastest with bvh8; with --backend gpu, every test).
     #[arg(long)]
     test: Option<String>,
-    /// Image side of the ray sets (SIZE² primary and incoherent rays).
-    #[arg(long, default_value_t = 1024)]
+    /// Image side of the ray sets (SIZE² primary and incoherent rays),
+    /// 1-16384.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=raykit_io::MAX_IMAGE_SIDE as i64))]
     size: u32,
-    /// Repetitions of every measurement (the median is reported).
-    #[arg(long, default_value_t = 3)]
+    /// Repetitions of every measurement (the median is reported), 1-1000.
+    #[arg(long, default_value_t = 3, value_parser = clap::builder::TypedValueParser::map(clap::value_parser!(u64).range(1..=1000), |v| v as usize))]
     reps: usize,
     /// Threads of the parallel runs (0 = one per core).
     #[arg(long, default_value_t = 0)]

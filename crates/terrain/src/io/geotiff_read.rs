@@ -99,6 +99,20 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
         ));
     }
 
+    // TIFF 6.0 makes tile sides multiples of 16; a file that breaks the
+    // rule has a layout no reader agrees on.
+    for tag in [Tag::TileWidth, Tag::TileLength] {
+        if let Some(side) = unsigned(path, &mut dec, tag)? {
+            if side == 0 || side % 16 != 0 {
+                return Err(DemError::new(
+                    path,
+                    format!("tag {}", tag.to_u16()),
+                    format!("tile side {side} is not a positive multiple of 16 (TIFF 6.0)"),
+                ));
+            }
+        }
+    }
+
     let georef = read_georef(path, &mut dec)?;
     let nodata = match find(path, &mut dec, TAG_GDAL_NODATA)? {
         None => None,

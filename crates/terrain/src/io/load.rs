@@ -50,6 +50,22 @@ impl Default for LoadOptions {
 /// supported ones.
 pub fn load_dem(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Dem, DemError> {
     let path = path.as_ref();
+    let dem = read_any(path, options)?;
+    if let Some((col, row, h)) = dem.first_infinite() {
+        return Err(DemError::new(
+            path,
+            format!("row {row}, column {col}"),
+            format!(
+                "height {h} is not finite (a float64 sample beyond the float32 range reads as \
+                 infinite); heights must be finite, or NaN for no data"
+            ),
+        ));
+    }
+    Ok(dem)
+}
+
+/// [`load_dem`]'s reader for the extension, without the check of the heights.
+fn read_any(path: &Path, options: &LoadOptions) -> Result<Dem, DemError> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())

@@ -158,11 +158,12 @@ fn parse_path(s: &str) -> Result<FlyPath, String> {
 
 /// Validate the plain numeric arguments.
 pub(super) fn check_args(args: &TerrainRenderArgs) -> Result<()> {
-    if args.width == 0 || args.width > 16384 {
-        bail!("--width must be between 1 and 16384, got {}", args.width);
+    let max = raykit_io::MAX_IMAGE_SIDE;
+    if args.width == 0 || args.width > max {
+        bail!("--width must be between 1 and {max}, got {}", args.width);
     }
-    if args.height == 0 || args.height > 16384 {
-        bail!("--height must be between 1 and 16384, got {}", args.height);
+    if args.height == 0 || args.height > max {
+        bail!("--height must be between 1 and {max}, got {}", args.height);
     }
     if !(args.fov >= 1.0 && args.fov < 179.0) {
         bail!("--fov must be between 1 and 179 degrees, got {}", args.fov);

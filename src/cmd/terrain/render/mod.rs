@@ -9,7 +9,7 @@ pub use args::TerrainRenderArgs;
 use args::{check_args, BackendArg, CasterArg};
 
 use super::dem_arg;
-use crate::paths::ensure_output;
+use crate::paths::{ensure_distinct, ensure_output};
 use anyhow::{anyhow, bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_gpu::{GpuCaster, GpuContext, GpuTerrain};
@@ -106,6 +106,9 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
     for p in out_paths.iter().chain(heat_paths.iter().flatten()) {
         ensure_parent(p)?;
         ensure_output(p, &inputs)?;
+    }
+    for (p, h) in out_paths.iter().zip(heat_paths.iter().flatten()) {
+        ensure_distinct(p, h, "--out", "--heatmap")?;
     }
     let pool = pool(args.threads)?;
 
