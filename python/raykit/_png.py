@@ -10,16 +10,19 @@ import zlib
 
 import numpy as np
 
+from .files import fspath
+
 
 def _chunk(kind: bytes, data: bytes) -> bytes:
     return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
 
 
-def write_png(path: str | os.PathLike, rgb: np.ndarray) -> None:
+def write_png(path: str | bytes | os.PathLike, rgb: np.ndarray) -> None:
     """Write ``rgb``, an ``(h, w, 3)`` uint8 array, as a PNG at ``path``."""
+    path = fspath(path)
     a = np.ascontiguousarray(rgb)
     if a.dtype != np.uint8 or a.ndim != 3 or a.shape[2] != 3 or 0 in a.shape[:2]:
-        raise ValueError(f"{os.fspath(path)}: expected a non-empty (h, w, 3) uint8 image, got {a.dtype} {a.shape}")
+        raise ValueError(f"{path}: expected a non-empty (h, w, 3) uint8 image, got {a.dtype} {a.shape}")
     h, w = a.shape[:2]
     # Filter type 0 (none) before each row.
     raw = np.concatenate([np.zeros((h, 1), np.uint8), a.reshape(h, w * 3)], axis=1).tobytes()
@@ -32,9 +35,9 @@ def write_png(path: str | os.PathLike, rgb: np.ndarray) -> None:
     write_atomic(path, data)
 
 
-def write_atomic(path: str | os.PathLike, data: bytes) -> None:
+def write_atomic(path: str | bytes | os.PathLike, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file and a rename."""
-    path = os.fspath(path)
+    path = fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp", dir=folder)
     try:

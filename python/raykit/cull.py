@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import os
 from typing import NamedTuple
 
 import numpy as np
 
 from . import _arrays, _raykit
-from .files import load_mesh
+from .files import PATH_TYPES, load_mesh
 
 
 class CullResult(NamedTuple):
@@ -39,10 +38,11 @@ def cull(
     ``vertices`` and ``triangles``: ``(n, 3)`` floats and ``(m, 3)``
     integers, or a mesh file path (``triangles`` and ``parts`` then come
     from the file). ``parts``: ``(m,)`` integers grouping triangles into
-    parts. ``conservative`` (default, as ``raykit cull``) keeps what the
-    evidence does not clearly hide; ``False`` applies the distance-field rule alone.
+    parts, ids below the number of triangles or 2**20, whichever is larger.
+    ``conservative`` (default, as ``raykit cull``) keeps what the evidence
+    does not clearly hide; ``False`` applies the distance-field rule alone.
     """
-    if isinstance(vertices, (str, os.PathLike)):
+    if isinstance(vertices, PATH_TYPES):
         if triangles is not None or parts is not None:
             raise ValueError("a mesh file carries its own triangles and parts")
         vertices, triangles, parts = load_mesh(vertices)
@@ -59,6 +59,8 @@ def cull(
             raise ValueError(f"parts must be a 1-D integer array, got dtype {p.dtype} and shape {p.shape}")
         if p.size and p.min() < 0:
             raise ValueError("parts must not be negative")
+        if p.size and int(p.max()) > np.iinfo(np.uint32).max:
+            raise ValueError(f"parts: the largest part id is {int(p.max())}, above {np.iinfo(np.uint32).max}")
         p = np.ascontiguousarray(p, dtype=np.uint32)
     keep, part_keep, stats = _raykit.cull(v, t, p, int(resolution), bool(conservative), _arrays.threads(threads))
     return CullResult(keep, part_keep, stats)

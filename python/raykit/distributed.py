@@ -47,6 +47,7 @@ import numpy as np
 
 from . import _raykit
 from ._png import write_png
+from .files import PATH_TYPES, fspath
 from .raycasting import RaycastingScene
 from .render import render as render_image
 from .terrain import grid, viewshed
@@ -65,7 +66,7 @@ loads = 0
 # ---------------------------------------------------------------- scenes
 
 
-def save_scene(scene, workdir: str | os.PathLike) -> str:
+def save_scene(scene, workdir: str | bytes | os.PathLike) -> str:
     """Save ``scene`` (a :class:`raykit.RaycastingScene`, built here if it
     is not yet, or any mesh ``add_triangles`` takes) to ``workdir`` for the
     workers: its structure file (``.rkstruct``) beside an ``.npz`` of its
@@ -75,8 +76,9 @@ def save_scene(scene, workdir: str | os.PathLike) -> str:
         mesh = scene
         scene = RaycastingScene()
         scene.add_triangles(mesh)
+    workdir = fspath(workdir, "workdir")
     os.makedirs(workdir, exist_ok=True)
-    stem = os.path.join(os.fspath(workdir), f"scene-{uuid.uuid4().hex}")
+    stem = os.path.join(workdir, f"scene-{uuid.uuid4().hex}")
     path = stem + ".rkstruct"
     scene.save(path)
     arrays: dict[str, Any] = {"accel": np.array(scene.accel), "test": np.array(scene.test)}
@@ -89,12 +91,12 @@ def save_scene(scene, workdir: str | os.PathLike) -> str:
     return path
 
 
-def load_scene(path: str | os.PathLike, threads: int = 1) -> RaycastingScene:
+def load_scene(path: str | bytes | os.PathLike, threads: int = 1) -> RaycastingScene:
     """The scene saved by :func:`save_scene` at ``path``, loaded once per
     process without rebuilding its structure, and kept (the last few
     scenes used, while their files are unchanged)."""
     global loads
-    path = os.fspath(path)
+    path = fspath(path)
     st = os.stat(path)
     key = (path, st.st_mtime_ns, st.st_size)
     with _SCENES_LOCK:
@@ -187,10 +189,10 @@ def _render_task(path: str, width: int, height: int, camera: dict, band: tuple[i
     return render_image(scene, width, height, window=(0, y, width, rows), **camera, **options)
 
 
-def frame_path(out: str | os.PathLike, index: int) -> str:
+def frame_path(out: str | bytes | os.PathLike, index: int) -> str:
     """Frame ``index``'s file of an animation written to ``out``:
     ``STEM.NNNN.png`` beside it, as ``raykit render --orbit`` names them."""
-    stem, ext = os.path.splitext(os.fspath(out))
+    stem, ext = os.path.splitext(fspath(out, "out"))
     return f"{stem}.{index:04d}{ext}"
 
 
@@ -202,8 +204,8 @@ def render(
     *,
     frames: Sequence[dict[str, Any]] | None = None,
     tiles: int = 1,
-    out: str | os.PathLike | None = None,
-    workdir: str | os.PathLike | None = None,
+    out: str | bytes | os.PathLike | None = None,
+    workdir: str | bytes | os.PathLike | None = None,
     threads: int = 1,
     progress: Progress = True,
     **camera_and_options: Any,
@@ -223,7 +225,7 @@ def render(
     (``(height, width, 3)`` uint8), or the list of frames with ``frames``.
     """
     own_dir = workdir is None
-    workdir = tempfile.mkdtemp(prefix="raykit-dask-") if own_dir else os.fspath(workdir)
+    workdir = tempfile.mkdtemp(prefix="raykit-dask-") if own_dir else fspath(workdir, "workdir")
     try:
         path = save_scene(scene, workdir)
         _check_visible(client, path)
@@ -275,7 +277,7 @@ def cast_rays(
     scene,
     rays,
     *,
-    workdir: str | os.PathLike | None = None,
+    workdir: str | bytes | os.PathLike | None = None,
     threads: int = 1,
 ) -> dict[str, Any]:
     """First hits of a dask array of rays, ``(n, 6)`` rows
@@ -297,7 +299,7 @@ def cast_rays(
 
     if rays.ndim != 2 or rays.shape[1] != 6:
         raise ValueError(f"rays must have shape (n, 6), got {rays.shape}")
-    workdir = tempfile.mkdtemp(prefix="raykit-dask-") if workdir is None else os.fspath(workdir)
+    workdir = tempfile.mkdtemp(prefix="raykit-dask-") if workdir is None else fspath(workdir, "workdir")
     path = save_scene(scene, workdir)
     _check_visible(client, path)
     rays = rays.rechunk({1: 6})
@@ -352,7 +354,7 @@ def viewsheds(
     dem,
     observers: Iterable[Sequence[float]],
     *,
-    out: str | os.PathLike | None = None,
+    out: str | bytes | os.PathLike | None = None,
     transform=None,
     geographic: bool = False,
     nodata=None,
@@ -386,10 +388,10 @@ def viewsheds(
     if batch < 1:
         raise ValueError(f"batch must be at least 1, got {batch}")
     like = None
-    if isinstance(dem, (str, os.PathLike)):
+    if isinstance(dem, PATH_TYPES):
         if transform is not None:
             raise ValueError("a DEM file carries its own transform; pass transform only with an array")
-        like = os.path.abspath(os.fspath(dem))
+        like = os.path.abspath(fspath(dem, "dem"))
         _check_visible(client, like)
         h, t, geo = grid(like)
         source: Any = like
@@ -397,8 +399,8 @@ def viewsheds(
         h, t, geo = grid(dem, transform, geographic, nodata)
         source = client.scatter([(h, t, geo)], broadcast=True)[0]
     if out is not None:
+        out = os.path.abspath(fspath(out, "out"))
         os.makedirs(out, exist_ok=True)
-        out = os.path.abspath(os.fspath(out))
     groups = [list(range(i, min(i + batch, len(obs)))) for i in range(0, len(obs), batch)]
     futures = []
     for g in groups:

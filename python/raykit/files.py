@@ -8,6 +8,18 @@ import numpy as np
 
 from . import _raykit
 
+#: What a path argument may be, as ``open`` takes it.
+PATH_TYPES = (str, bytes, os.PathLike)
+
+
+def fspath(path, name: str = "path") -> str:
+    """A path argument (``str``, ``bytes`` or ``os.PathLike``, as ``open``
+    takes) as ``str``: bytes decoded as ``os.fsdecode`` does, so that the
+    extension gets back the same bytes."""
+    if not isinstance(path, PATH_TYPES):
+        raise TypeError(f"{name} must be a str, bytes or os.PathLike path, got {type(path).__name__}")
+    return os.fsdecode(path)
+
 
 def load_mesh(path: str | bytes | os.PathLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Load a triangle mesh: OBJ (+MTL), PLY (ASCII or binary, also
@@ -24,4 +36,4 @@ def load_mesh(path: str | bytes | os.PathLike) -> tuple[np.ndarray, np.ndarray, 
     file and the line, byte offset or JSON element, as ``raykit`` prints
     them.
     """
-    return _raykit.load_mesh(os.fsdecode(path))
+    return _raykit.load_mesh(fspath(path))

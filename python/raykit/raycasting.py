@@ -33,11 +33,11 @@ from __future__ import annotations
 
 import inspect
 import math
-import os
 
 import numpy as np
 
 from . import _arrays, _raykit
+from .files import fspath
 
 INVALID_ID = 4294967295
 """``geometry_ids`` and ``primitive_ids`` of a ray that hits nothing (Open3D's value)."""
@@ -509,7 +509,8 @@ class RaycastingScene:
 
     def save(self, path) -> None:
         """Write the ray acceleration structure (built first if needed) to
-        ``path``, for :meth:`load_structure` (beyond Open3D).
+        ``path`` (``str``, ``bytes`` or ``os.PathLike``), for
+        :meth:`load_structure` (beyond Open3D).
 
         Only ``"bvh8"`` and ``"bvh4"`` have a saved form. The file is
         versioned and checksummed, holds a checksum of the mesh, and is
@@ -519,7 +520,7 @@ class RaycastingScene:
         instances (whose two-level structure has no saved form).
         """
         self._not_instanced("save")
-        self._built().save(os.fspath(path))
+        self._built().save(fspath(path))
 
     def load_structure(self, path) -> None:
         """Load the ray acceleration structure of the geometries added so
@@ -542,7 +543,7 @@ class RaycastingScene:
             self._accel_name,
             self._test_name,
             self._nthreads,
-            os.fspath(path),
+            fspath(path),
         )
         self._scene = scene
         self._accel_name = scene.accel

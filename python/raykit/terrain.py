@@ -12,7 +12,9 @@ has ``b = d = 0``, ``a > 0``, ``e < 0``; rotated rasters are refused.
 Without a transform, pixels are 1 m squares with the top-left corner at
 (0, 0). ``geographic=True`` says that map units are degrees of
 longitude/latitude (as for SRTM); heights are metres either way. NaN
-heights (or those equal to ``nodata``) are no data.
+heights (or those equal to ``nodata``) are no data; infinite ones (or
+float64 ones beyond the float32 range) are refused with ``ValueError``, as
+are cells smaller than 1e-9 m or larger than 1e9 m.
 
 The surface is raykit's declared one: the grid points joined as two
 triangles per cell, split along the cell's north-west to south-east
@@ -22,11 +24,11 @@ diagonal, so the answers are exact for it.
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 
 from . import _arrays, _raykit
+from .files import PATH_TYPES, fspath
 
 
 def _transform(t) -> tuple[float, float, float, float, float, float]:
@@ -45,16 +47,26 @@ def _transform(t) -> tuple[float, float, float, float, float, float]:
 def grid(heights, transform=None, geographic: bool = False, nodata=None):
     """``(heights float32 (rows, cols) with NaN for no data, transform,
     geographic)`` of a DEM path or an array with its transform."""
-    if isinstance(heights, (str, os.PathLike)):
+    if isinstance(heights, PATH_TYPES):
         if transform is not None:
             raise ValueError("a DEM file carries its own transform; pass transform only with an array")
-        h, t, geo, _ = _raykit.load_dem(os.fspath(heights))
+        h, t, geo, _ = _raykit.load_dem(fspath(heights, "heights"))
         return h, t, geo
-    h = _arrays.floats(heights, "heights")
+    with np.errstate(over="ignore"):
+        h = _arrays.floats(heights, "heights")
     if h.ndim != 2:
         raise ValueError(f"heights must have shape (rows, cols), got {h.shape}")
     if nodata is not None:
         h = np.where(h == np.float32(nodata), np.float32(np.nan), h)
+    inf = np.isinf(h)
+    if inf.any():
+        r, c = (int(i) for i in np.argwhere(inf)[0])
+        given = _arrays.to_numpy(heights)[r, c]
+        beyond = " (beyond the float32 range)" if np.isfinite(given) else ""
+        raise ValueError(
+            f"heights: row {r}, column {c}: height {given} is not finite{beyond}; "
+            "heights must be finite, or NaN for no data"
+        )
     return np.ascontiguousarray(h, dtype=np.float32), _transform(transform), bool(geographic)
 
 
@@ -165,7 +177,8 @@ def cast(
     at ``target`` (x, y in map units, z in metres), cast exactly on the
     surface with ``caster``: ``"boxes"`` (per-frame quadtree boxes with
     LOD ``tau``), ``"maxmip"`` (maximum mipmap, Tevs et al. 2008) or
-    ``"march"`` (cell by cell); all three give the same hits.
+    ``"march"`` (cell by cell); all three give the same hits. ``width``
+    and ``height``: 1 to 8192 pixels.
 
     Returns a dict of ``t`` ``(height, width)`` float64 (metres from the
     eye, inf on a miss), ``col``/``row`` int64 (the hit cell, -1 on a miss),

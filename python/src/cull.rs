@@ -9,6 +9,12 @@ use pyo3::types::PyDict;
 use raykit_core::{Part, TriangleMesh, Vec3};
 use raykit_cull::CullOptions;
 
+/// Part ids below this many are accepted whatever the triangle count
+/// (ids may skip numbers, as a file's parts without triangles do); above
+/// it, only ids below the number of triangles, so that a stray large id
+/// does not make the cull allocate a part record for every id up to it.
+const MAX_PARTS: usize = 1 << 20;
+
 /// Which triangles (and parts) of the mesh can be seen from outside it:
 /// `(keep (m,) bool, part_keep (p,) bool, stats dict)`. `parts` (uint32,
 /// one per triangle) groups triangles into parts; `conservative` keeps
@@ -52,6 +58,13 @@ pub fn cull<'py>(
             )));
         }
         let count = p.iter().max().map_or(0, |&x| x as usize + 1);
+        if count > m.max(MAX_PARTS) {
+            return Err(value_error(format!(
+                "parts: the largest part id is {}, but ids must be below the number of \
+                 triangles ({m}) or {MAX_PARTS}, whichever is larger",
+                count - 1
+            )));
+        }
         mesh.parts = (0..count)
             .map(|i| Part {
                 name: format!("part {i}"),

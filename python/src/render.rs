@@ -90,10 +90,20 @@ pub fn render<'py>(
             c
         }
     };
-    if !(camera.eye.is_finite() && camera.target.is_finite() && camera.eye != camera.target) {
-        return Err(value_error(
-            "eye and target must be finite and differ (the camera needs a direction to look in)",
-        ));
+    if !(camera.eye.is_finite()
+        && camera.target.is_finite()
+        && (camera.target - camera.eye).normalize().is_finite())
+    {
+        return Err(value_error(format!(
+            "eye {} and target {} must be finite and differ (the camera needs a direction to look in)",
+            camera.eye, camera.target
+        )));
+    }
+    if !camera.up.is_finite() {
+        return Err(value_error(format!(
+            "up must be three finite numbers, got {}",
+            camera.up
+        )));
     }
     let p = standard_light(&bounds);
     let lights: Vec<Light> =

@@ -18,6 +18,16 @@ use std::path::PathBuf;
 /// The six terms of rasterio's affine transform.
 type Transform = (f64, f64, f64, f64, f64, f64);
 
+/// Cell sizes accepted, in metres: far beyond any real DEM either way, and
+/// far enough from the floating-point limits that squared distances
+/// across the grid neither underflow nor overflow.
+const CELL_SIZE_M: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
+
+/// Largest image side `cast` (and so `render`) accepts: the per-pixel
+/// buffers of an 8192 × 8192 image take a few GiB; a 16384 one four times
+/// as much.
+const MAX_SIDE: u32 = 8192;
+
 /// A DEM file's heights (NaN where no data), transform, whether its map
 /// units are degrees, and its nodata value.
 #[pyfunction]
@@ -61,10 +71,27 @@ fn dem(heights: &PyReadonlyArray2<'_, f32>, t: Transform, geographic: bool) -> P
     }
     let shape = heights.shape();
     let (rows, cols) = (shape[0], shape[1]);
+    let (x1, y1) = (c + a * cols as f64, f + e * rows as f64);
+    if !(x1.is_finite() && y1.is_finite() && c + a != c && f + e != f) {
+        return Err(value_error(format!(
+            "transform ({a}, {b}, {c}, {d}, {e}, {f}): the pixel size is too small to tell \
+             neighbouring pixels apart at the origin, or the {cols} x {rows} grid reaches \
+             beyond the largest coordinates"
+        )));
+    }
     let values = heights
         .as_slice()
         .map_err(|_| value_error("heights must be C-contiguous"))?
         .to_vec();
+    if let Some(i) = values.iter().position(|h| h.is_infinite()) {
+        return Err(value_error(format!(
+            "heights: row {}, column {}: height {} is not finite; heights must be finite, \
+             or NaN for no data",
+            i / cols,
+            i % cols,
+            values[i]
+        )));
+    }
     let mut dem = Dem::from_heights(cols, rows, values);
     dem.georef = GeoRef {
         origin_x: c,
@@ -87,6 +114,17 @@ fn surface(
 ) -> PyResult<(Dem, HeightField)> {
     let mut dem = dem(heights, t, geographic)?;
     let field = HeightField::take(&mut dem).map_err(value_error)?;
+    if !(CELL_SIZE_M.contains(&field.sx) && CELL_SIZE_M.contains(&field.sy)) {
+        let (a, _, c, _, e, f) = t;
+        return Err(value_error(format!(
+            "transform ({a}, 0, {c}, 0, {e}, {f}): cell size must be between {:e} and {:e} m, \
+             got {:e} x {:e}",
+            CELL_SIZE_M.start(),
+            CELL_SIZE_M.end(),
+            field.sx,
+            field.sy
+        )));
+    }
     Ok((dem, field))
 }
 
@@ -226,9 +264,9 @@ pub fn cast<'py>(
     tau: f64,
     threads: i64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if width == 0 || width > 16384 || height == 0 || height > 16384 {
+    if width == 0 || width > MAX_SIDE || height == 0 || height > MAX_SIDE {
         return Err(value_error(format!(
-            "width and height must be between 1 and 16384, got {width} x {height}"
+            "width and height must be between 1 and {MAX_SIDE}, got {width} x {height}"
         )));
     }
     if !(1.0..179.0).contains(&fov) {

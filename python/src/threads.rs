@@ -2,23 +2,38 @@
 //! size the caller asked for.
 //!
 //! `threads = 0` uses rayon's global pool (one thread per core). Any other
-//! size gets its own pool, made once per size and kept, so that a call
-//! with `threads=1` costs no thread start-up.
+//! size gets its own pool, kept among the few most recently used ones, so
+//! that repeated calls with `threads=1` cost no thread start-up while a
+//! loop over many sizes does not keep a pool of each alive. A pool dropped
+//! from the cache lives on until the calls running on it return.
 
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use rayon::{ThreadPool, ThreadPoolBuilder};
-use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// Largest `threads` accepted: far above any core count, low enough that
 /// a typo does not start a million threads.
 const MAX_THREADS: i64 = 4096;
 
-/// The pools made so far, by size.
-fn pools() -> &'static Mutex<HashMap<usize, Arc<ThreadPool>>> {
-    static POOLS: OnceLock<Mutex<HashMap<usize, Arc<ThreadPool>>>> = OnceLock::new();
-    POOLS.get_or_init(|| Mutex::new(HashMap::new()))
+/// How many pools the cache keeps.
+const KEEP_POOLS: usize = 4;
+
+/// Largest pool the cache keeps: bigger ones (more threads than a few
+/// times the cores) are made for the call and end with it, so that the
+/// cache holds at most `KEEP_POOLS` × this many idle threads.
+fn largest_kept() -> usize {
+    static LARGEST: OnceLock<usize> = OnceLock::new();
+    *LARGEST.get_or_init(|| 4 * std::thread::available_parallelism().map_or(1, |n| n.get()))
+}
+
+/// Pools by size, most recently used last.
+type Kept = Vec<(usize, Arc<ThreadPool>)>;
+
+/// The pools kept.
+fn pools() -> &'static Mutex<Kept> {
+    static POOLS: OnceLock<Mutex<Kept>> = OnceLock::new();
+    POOLS.get_or_init(|| Mutex::new(Vec::new()))
 }
 
 /// The pool for `threads` (`None`: rayon's global pool).
@@ -32,18 +47,26 @@ fn pool(threads: i64) -> PyResult<Option<Arc<ThreadPool>>> {
         return Ok(None);
     }
     let n = threads as usize;
-    let mut map = pools()
+    let mut kept = pools()
         .lock()
         .map_err(|_| PyRuntimeError::new_err("the thread pool registry is poisoned"))?;
-    if let Some(p) = map.get(&n) {
-        return Ok(Some(p.clone()));
+    if let Some(i) = kept.iter().position(|(size, _)| *size == n) {
+        let entry = kept.remove(i);
+        let p = entry.1.clone();
+        kept.push(entry);
+        return Ok(Some(p));
     }
     let p = ThreadPoolBuilder::new()
         .num_threads(n)
         .build()
         .map_err(|e| PyRuntimeError::new_err(format!("cannot start {n} threads: {e}")))?;
     let p = Arc::new(p);
-    map.insert(n, p.clone());
+    if n <= largest_kept() {
+        if kept.len() == KEEP_POOLS {
+            kept.remove(0);
+        }
+        kept.push((n, p.clone()));
+    }
     Ok(Some(p))
 }
 

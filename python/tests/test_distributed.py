@@ -162,3 +162,12 @@ def test_a_job_survives_a_killed_worker(client, scene, bunny):
     # The nanny restarted the killed process.
     client.wait_for_workers(2, timeout=60)
     assert victim not in client.run(os.getpid).values()
+
+
+def test_frame_path_takes_the_paths_open_takes(tmp_path):
+    # Frame k of out is STEM.kkkk.EXT beside it, as raykit render --orbit names it.
+    want = os.path.join(str(tmp_path), "out.0003.png")
+    for out in (tmp_path / "out.png", str(tmp_path / "out.png"), os.fsencode(tmp_path / "out.png")):
+        assert rkd.frame_path(out, 3) == want
+    with pytest.raises(TypeError, match="out must be a str, bytes or os.PathLike"):
+        rkd.frame_path(3, 3)

@@ -194,3 +194,77 @@ def test_casters_agree_and_match_a_bvh(data):
     assert image[sky].std(axis=0).max() < image[~sky].std(axis=0).max()
     default = raykit.terrain.render(data / "terrain" / "lidar_dem_400.tif", width=32, height=18, sun=(300, 20))
     assert default.shape == (18, 32, 3)
+
+
+def test_a_dem_path_may_be_bytes(data):
+    path = data / "terrain" / "lidar_dem_400.tif"
+    heights, transform, nodata = read_with_gdal(path)
+    ref = raykit.terrain.shadow(heights, transform, sun=(135, 8), nodata=nodata)
+    np.testing.assert_array_equal(raykit.terrain.shadow(os.fsencode(path), sun=(135, 8)), ref)
+
+
+def test_infinite_heights_and_degenerate_transforms_are_refused():
+    h = np.zeros((5, 6), np.float32)
+    h[2, 3] = 10.0
+    base = raykit.terrain.shadow(h, sun=(90, 30))
+    assert base[2, 3] == 1 and base[2, 2] == 0  # the hill's western foot is in its shadow
+    eye, target = (-3.0, 3.0, 20.0), (3.0, -2.5, 0.0)
+    for bad, shown in ((np.inf, "inf"), (-np.inf, "-inf")):
+        z = h.copy()
+        z[3, 1] = bad
+        with pytest.raises(ValueError, match=f"row 3, column 1: height {shown} is not finite"):
+            raykit.terrain.shadow(z, sun=(90, 30))
+        with pytest.raises(ValueError, match="row 3, column 1"):
+            raykit.terrain.cast(z, eye=eye, target=target, width=8, height=6)
+    # float64 heights beyond float32 would become infinite.
+    z = h.astype(np.float64)
+    z[4, 5] = 1e300
+    with pytest.raises(ValueError, match=r"row 4, column 5: height 1e\+300 is not finite \(beyond the float32"):
+        raykit.terrain.viewshed(z, observer=(2, -2))
+    # A value given as nodata is no data, infinite or not.
+    z = h.copy()
+    z[0, 0] = np.inf
+    assert raykit.terrain.shadow(z, sun=(90, 30), nodata=np.inf)[0, 0] == 255
+    # Pixel sizes far below or above any DEM's, or too fine to tell
+    # neighbouring pixels apart at the origin.
+    for t, why in (
+        ((1e-200, 0, 0, 0, -1e-200, 0), "cell size must be between 1e-9 and 1e9 m"),
+        ((1e-10, 0, 0, 0, -1e-10, 0), "cell size must be between 1e-9 and 1e9 m"),
+        ((1e10, 0, 0, 0, -1e10, 0), "cell size must be between 1e-9 and 1e9 m"),
+        ((5e-324, 0, 0, 0, -5e-324, 0), "cell size must be between 1e-9 and 1e9 m"),
+        ((1e300, 0, 0, 0, -1e300, 0), "cell size must be between 1e-9 and 1e9 m"),
+        ((1e308, 0, 0, 0, -1e308, 0), "grid reaches beyond the largest coordinates"),
+        ((1, 0, 1e300, 0, -1, 0), "too small to tell neighbouring pixels apart"),
+    ):
+        with pytest.raises(ValueError, match=why):
+            raykit.terrain.render(h, t, width=8, height=6)
+        with pytest.raises(ValueError, match=why):
+            raykit.terrain.shadow(h, t, sun=(90, 30))
+    for t in ((np.nan, 0, 0, 0, -1, 0), (1, 0, 0, 0, -np.inf, 0), (0, 0, 0, 0, -1, 0)):
+        with pytest.raises(ValueError, match="transform"):
+            raykit.terrain.cast(h, t, eye=eye, target=target, width=8, height=6)
+    # A millimetre grid is accepted and answers as the metre grid scaled.
+    np.testing.assert_array_equal(raykit.terrain.shadow(h / 1000, (1e-3, 0, 0, 0, -1e-3, 0), sun=(90, 30)), base)
+
+
+def test_cast_image_size_is_bounded():
+    rng = np.random.default_rng(8)
+    h = rng.uniform(0.0, 5.0, (40, 30)).astype(np.float32)
+    eye, target = (-5.0, 5.0, 30.0), (15.0, -20.0, 0.0)
+    # The largest side accepted works, and the casters agree on it.
+    hit = []
+    for w, hh in ((2, 8192), (8192, 2)):
+        boxes = raykit.terrain.cast(h, eye=eye, target=target, width=w, height=hh)
+        march = raykit.terrain.cast(h, eye=eye, target=target, width=w, height=hh, caster="march")
+        np.testing.assert_array_equal(boxes["col"], march["col"])
+        np.testing.assert_array_equal(boxes["row"], march["row"])
+        np.testing.assert_allclose(boxes["t"], march["t"], rtol=1e-9)
+        hit.append(np.isfinite(boxes["t"]).mean())
+    # A tall image sweeps down across the grid; a wide one meets it only
+    # in its middle.
+    assert hit[0] > 0.5 and hit[1] > 0
+    for w, hh in ((16384, 16384), (8193, 2), (2, 8193)):
+        with pytest.raises(ValueError, match="between 1 and 8192"):
+            raykit.terrain.cast(h, eye=eye, target=target, width=w, height=hh)
+        with pytest.raises(ValueError, match="between 1 and 8192"):
+            raykit.terrain.render(h, width=w, height=hh)

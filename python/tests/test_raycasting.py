@@ -3,6 +3,7 @@ RaycastingScene on the same rays, and on bad input."""
 
 from __future__ import annotations
 
+import os
 import sys
 import threading
 import time
@@ -308,3 +309,23 @@ def test_image_rays_traced_in_blocks_give_the_row_order_answers(bunny):
     np.testing.assert_array_equal(blocks["t_hit"].reshape(-1), rows["t_hit"])
     assert ties(f, blocks["primitive_ids"].reshape(-1)[np.isfinite(rows["t_hit"])], rows["primitive_ids"][np.isfinite(rows["t_hit"])]).all()
     np.testing.assert_array_equal(scene.test_occlusions(image).reshape(-1), scene.test_occlusions(image.reshape(-1, 6)))
+
+
+def test_thread_pools_of_many_sizes_do_not_pile_up(bunny):
+    # A loop over thread counts keeps only a few pools alive: the number of
+    # threads of this process stays bounded while every count answers as
+    # all cores do.
+    v, f, _ = bunny
+    rays = rays_at(v, 64, 11)
+    scene = scene_of(v, f)
+    ref = scene.cast_rays(rays, nthreads=0)["t_hit"]
+    before = len(os.listdir("/proc/self/task"))
+    for n in list(range(1, 61)) + [600]:
+        np.testing.assert_array_equal(scene.cast_rays(rays, nthreads=n)["t_hit"], ref, err_msg=f"nthreads={n}")
+    # Four kept pools of at most four threads per core, and threads of the
+    # pools let go, which end soon after (waited for, not timed).
+    limit = before + 4 * 4 * (os.cpu_count() or 1) + 8
+    deadline = time.monotonic() + 60
+    while len(os.listdir("/proc/self/task")) > limit and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert len(os.listdir("/proc/self/task")) <= limit

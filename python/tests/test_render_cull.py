@@ -3,6 +3,8 @@ hidden part is known by construction."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 import trimesh
@@ -72,3 +74,45 @@ def test_cull_a_mesh_file(data):
     v, f, parts = raykit.load_mesh(data / "meshes" / "2CylinderEngine.glb")
     assert result.keep.shape == (len(f),) and result.part_keep.shape == (parts.max() + 1,)
     assert 0 < result.keep.mean() <= 1
+    # A bytes path names the same file.
+    from_bytes = raykit.cull(os.fsencode(data / "meshes" / "2CylinderEngine.glb"), resolution=48)
+    np.testing.assert_array_equal(from_bytes.keep, result.keep)
+
+
+def test_cull_refuses_part_ids_it_cannot_hold():
+    outer_v, outer_f = box(np.zeros(3), 1.0)
+    inner_v, inner_f = box(np.zeros(3), 0.3)
+    v = np.concatenate([outer_v, inner_v])
+    f = np.concatenate([outer_f, inner_f + len(outer_v)])
+    m = len(f)
+    # Ids may skip numbers: parts 0 and 7 are parts 0 and 7 of eight.
+    sparse = raykit.cull(v, f, np.repeat([0, 7], [len(outer_f), len(inner_f)]), resolution=32)
+    np.testing.assert_array_equal(sparse.keep, np.repeat([True, False], [len(outer_f), len(inner_f)]))
+    assert sparse.part_keep.shape == (8,) and sparse.part_keep[0] and not sparse.part_keep[7]
+    # An id past the bound is refused, naming it, rather than allocating a
+    # part per id up to it; one past uint32 rather than wrapped round.
+    for big in (2**31, 2**20 + 5):
+        with pytest.raises(ValueError, match=f"largest part id is {big}"):
+            raykit.cull(v, f, np.full(m, big, np.int64), resolution=32)
+    with pytest.raises(ValueError, match=f"largest part id is {2**32 + 5}"):
+        raykit.cull(v, f, np.full(m, 2**32 + 5, np.int64), resolution=32)
+
+
+def test_render_refuses_a_camera_without_a_direction(bunny):
+    v, f, _ = bunny
+    scene = raykit.RaycastingScene()
+    scene.add_triangles(v, f)
+    centre = (v.min(0) + v.max(0)) / 2
+    eye = centre + [0.0, 0.0, 1.0]
+    image = raykit.render(scene, 24, 16, eye=eye, target=centre)
+    # up is a direction: its length does not matter.
+    np.testing.assert_array_equal(raykit.render(scene, 24, 16, eye=eye, target=centre, up=(0, 3, 0)), image)
+    for bad in (np.nan, np.inf, 1e300):
+        with pytest.raises(ValueError, match="up must be three finite numbers"):
+            raykit.render(scene, 24, 16, eye=eye, target=centre, up=(bad, 1, 0))
+        with pytest.raises(ValueError, match="eye .* and target .* must be finite"):
+            raykit.render(scene, 24, 16, eye=(bad, 0, 1), target=centre)
+        with pytest.raises(ValueError, match="eye .* and target .* must be finite"):
+            raykit.render(scene, 24, 16, eye=eye, target=(0, bad, 0))
+    with pytest.raises(ValueError, match="must be finite and differ"):
+        raykit.render(scene, 24, 16, eye=centre, target=centre)

@@ -6,6 +6,8 @@ answers as a scene built on the moved mesh."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import open3d as o3d
 import pytest
@@ -214,3 +216,19 @@ def test_update_vertices_before_a_build_and_bad_input(bunny):
         scene.update_vertices(0, nan)
     # A refused update leaves the scene as it was.
     assert_same_answers(scene.cast_rays(rays), scene_of((moved, f)).cast_rays(rays))
+
+
+def test_save_and_load_take_the_paths_open_takes(bunny, tmp_path):
+    v, f, _ = bunny
+    rays = rays_at(v, 300, 4)
+    built = scene_of((v, f))
+    ref = built.cast_rays(rays)
+    for kind, to_path in (("str", str), ("bytes", os.fsencode), ("PathLike", lambda p: p)):
+        path = tmp_path / f"{kind}.bvh"
+        built.save(to_path(path))
+        assert path.stat().st_size > 0, kind
+        loaded = scene_of((v, f))
+        loaded.load_structure(to_path(path))
+        assert_same_answers(loaded.cast_rays(rays), ref)
+    with pytest.raises(TypeError, match="path must be a str, bytes or os.PathLike"):
+        built.save(3)
