@@ -68,6 +68,13 @@ fn merged_bands_equal_the_one_process_render() {
         let order = [2, 0, 3, 1];
         let mut args = vec!["merge-tiles", s(&merged)];
         args.extend(order.iter().map(|&i| s(&parts[i])));
+        // A name that promises another format is refused, and nothing is written.
+        let jpg = dir.path().join(format!("{name}-merged.jpg"));
+        let mut wrong = args.clone();
+        wrong[1] = s(&jpg);
+        let o = raykit(&wrong);
+        assert!(!o.status.success() && !jpg.exists());
+        assert!(String::from_utf8_lossy(&o.stderr).contains(".png"));
         ok(&raykit(&args));
         let (a, b) = (pixels(&whole), pixels(&merged));
         assert_eq!(a.dimensions(), b.dimensions());

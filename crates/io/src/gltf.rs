@@ -365,6 +365,23 @@ impl<'a, 'b> Builder<'a, 'b> {
                 continue;
             };
             let (path, bufs, limit) = (self.path, self.buffers, self.limit);
+            // Positions are floats unless the file uses the extension that
+            // quantizes them.
+            let quantized = self
+                .doc
+                .extensions_used()
+                .any(|e| e == "KHR_mesh_quantization");
+            let ty = pos_acc.data_type();
+            if ty != ::gltf::accessor::DataType::F32 && !quantized {
+                return Err(LoadError::at_json(
+                    path,
+                    format!("accessors[{}]", pos_acc.index()),
+                    format!(
+                        "POSITION has component type {ty:?}; without KHR_mesh_quantization in \
+                         extensionsUsed it must be F32"
+                    ),
+                ));
+            }
             let pos = read_floats(path, &pos_acc, bufs, 3, limit)?;
             let nv = pos.len() / 3;
             let attr =

@@ -224,3 +224,30 @@ fn gltf_external_files_stay_in_the_files_folder() {
     std::fs::write(inner.join("b.bin"), &longer).unwrap();
     assert_eq!(with_uri("./b.bin").unwrap().mesh.positions, want.positions);
 }
+
+/// POSITION must be float unless the file declares KHR_mesh_quantization:
+/// bytes declared as anything else are refused at the accessor, and with
+/// the extension declared the same file loads.
+#[test]
+fn gltf_quantized_positions_need_their_extension() {
+    let text = std::fs::read_to_string(local("transforms.gltf")).unwrap();
+    let first = "\"componentType\": 5126";
+    assert!(text.contains(first), "fixture layout changed");
+    let byte_positions = text.replacen(first, "\"componentType\": 5120", 1);
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(local("transforms.bin"), dir.path().join("transforms.bin")).unwrap();
+    let p = dir.path().join("t.gltf");
+    std::fs::write(&p, &byte_positions).unwrap();
+    let e = load(&p).unwrap_err();
+    assert_eq!(e.location(), &Location::Json("accessors[0]".into()), "{e}");
+    assert!(e.to_string().contains("KHR_mesh_quantization"), "{e}");
+    let declared = byte_positions.replacen(
+        "\"asset\": {",
+        "\"extensionsUsed\": [\"KHR_mesh_quantization\"],\n \"asset\": {",
+        1,
+    );
+    std::fs::write(&p, declared).unwrap();
+    let m = load(&p).unwrap().mesh;
+    let floats = load(&local("transforms.gltf")).unwrap().mesh;
+    assert_eq!(m.num_triangles(), floats.num_triangles());
+}
