@@ -15,7 +15,7 @@ use raykit_render::PointLight;
 use serde::Deserialize;
 use serde_json::json;
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// A JSON error response `{"error": message}`.
@@ -168,17 +168,18 @@ struct SceneRequest {
 }
 
 /// Whether `spec` may be loaded: built-in scenes always, files only inside
-/// `--scene-dir`. Returns the spec to hand to the loader.
-fn allowed_scene(state: &AppState, spec: &str) -> Result<String, String> {
+/// `--scene-dir`. Returns the spec to hand to the loader, and for a file
+/// the scene folder as resolved.
+fn allowed_scene(state: &AppState, spec: &str) -> Result<(String, Option<PathBuf>), String> {
     if spec.starts_with("builtin:") {
-        return Ok(spec.to_string());
+        return Ok((spec.to_string(), None));
     }
     let Some(dir) = &state.config.scene_dir else {
         return Err("only builtin: scenes can be loaded; start the server with --scene-dir DIR to allow files in DIR".into());
     };
     let root = dir
         .canonicalize()
-        .map_err(|e| format!("--scene-dir {}: {e}", dir.display()))?;
+        .map_err(|e| format!("the server's --scene-dir cannot be read: {}", e.kind()))?;
     let path = root
         .join(Path::new(spec))
         .canonicalize()
@@ -186,7 +187,15 @@ fn allowed_scene(state: &AppState, spec: &str) -> Result<String, String> {
     if !path.starts_with(&root) {
         return Err(format!("scene file '{spec}' is outside --scene-dir"));
     }
-    Ok(path.to_string_lossy().into_owned())
+    Ok((path.to_string_lossy().into_owned(), Some(root)))
+}
+
+/// `message` with the scene folder's own path taken out of every file name
+/// in it, so that clients see names relative to `--scene-dir` and never
+/// where the server keeps its files.
+fn relative_to_scene_dir(message: &str, root: &Path) -> String {
+    let prefix = format!("{}{}", root.display(), std::path::MAIN_SEPARATOR);
+    message.replace(&prefix, "")
 }
 
 /// `POST /api/scene` with `{"scene": SPEC}`.
@@ -195,7 +204,7 @@ pub async fn load_scene(State(state): State<Arc<AppState>>, bytes: Bytes) -> Res
         Ok(r) => r,
         Err(r) => return r.into_response(),
     };
-    let spec = match allowed_scene(&state, &req.scene) {
+    let (spec, root) = match allowed_scene(&state, &req.scene) {
         Ok(s) => s,
         Err(e) => return error(StatusCode::BAD_REQUEST, e),
     };
@@ -224,7 +233,14 @@ pub async fn load_scene(State(state): State<Arc<AppState>>, bytes: Bytes) -> Res
             "load_and_build_ms": took.as_secs_f64() * 1e3,
         }))
         .into_response(),
-        Ok(Err(e)) => error(StatusCode::BAD_REQUEST, format!("{e:#}")),
+        Ok(Err(e)) => {
+            let message = format!("{e:#}");
+            let message = match &root {
+                Some(root) => relative_to_scene_dir(&message, root),
+                None => message,
+            };
+            error(StatusCode::BAD_REQUEST, message)
+        }
         Err(e) => error(
             StatusCode::INTERNAL_SERVER_ERROR,
             format!("scene loading failed: {e}"),
@@ -375,4 +391,22 @@ pub async fn metrics(State(state): State<Arc<AppState>>) -> Response {
         text,
     )
         .into_response()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A loader's error names files relative to the scene folder; other
+    /// text stays as it was.
+    #[test]
+    fn errors_name_files_relative_to_the_scene_folder() {
+        let root = Path::new("/srv/raykit/scenes");
+        let m = "/srv/raykit/scenes/sub/a.gltf: buffers[0].uri: cannot read \
+                 /srv/raykit/scenes/sub/b.bin: no such file";
+        assert_eq!(
+            relative_to_scene_dir(m, root),
+            "sub/a.gltf: buffers[0].uri: cannot read sub/b.bin: no such file"
+        );
+    }
 }
