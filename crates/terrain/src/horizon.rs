@@ -852,11 +852,41 @@ fn merge_strip(
         }
         n += DETAIL;
     }
-    // Past the strip's last row: the old horizon alone.
-    walk.merge(&[], end);
-    if walk.out.last().is_none_or(|p| p.u < end) {
-        let v = walk.top_r;
-        walk.out.push(Vertex { u: end, v });
+    // Past the strip's last row: the old horizon alone, as far as a later
+    // column can look. A later column's rows end no further out than this
+    // one's (the grid's last row) at a larger `a`, so directions beyond
+    // this column's last row are never read again; kept, they would be
+    // copied column after column, quadratic time on a long, thin grid.
+    let last_u = fb[fb.len() - 1].u;
+    let keep = if last_u > 0.0 { lo(end, last_u) } else { end };
+    if walk.x <= keep {
+        walk.merge(&[], keep);
+        if walk.out.last().is_none_or(|p| p.u < keep) {
+            let v = walk.top_r;
+            walk.out.push(Vertex { u: keep, v });
+        }
+    } else {
+        // The strip reached past `keep`: cut the new horizon there, on the
+        // piece that spans it (the last one runs to `x` at `top_r`).
+        let mut after = Vertex {
+            u: walk.x,
+            v: walk.top_r,
+        };
+        while let Some(&p) = walk.out.last().filter(|p| p.u > keep) {
+            after = p;
+            walk.out.pop();
+        }
+        match walk.out.last().copied() {
+            Some(before) if before.u < keep => walk.out.push(Vertex {
+                u: keep,
+                v: at(before, after, keep),
+            }),
+            Some(_) => {}
+            None => walk.out.push(Vertex {
+                u: keep,
+                v: after.v,
+            }),
+        }
     }
     // A point on the octant's diagonal (b = a, u = 1): its segment runs
     // along outward diagonals, whose grid points the old horizon holds at

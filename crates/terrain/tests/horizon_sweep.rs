@@ -58,6 +58,20 @@ fn surfaces() -> Vec<(&'static str, Dem)> {
                 }
             }),
         ),
+        // Long, thin grids: octants along the long side have many more
+        // columns than rows.
+        (
+            "thin strip",
+            dem(400, 3, 3.0, 2.0, |x, y, r| {
+                8.0 * ((x as f32) * 0.07).sin() + (y as f32) + 2.0 * r.next_f32()
+            }),
+        ),
+        (
+            "thin column",
+            dem(4, 300, 1.0, 1.5, |x, y, r| {
+                6.0 * ((y as f32) * 0.05).cos() + (x as f32) * 0.5 + r.next_f32()
+            }),
+        ),
         (
             "terraces, anisotropic cells",
             dem(101, 77, 2.0, 7.0, |x, y, _| {
@@ -75,8 +89,8 @@ fn lights(field: &HeightField) -> Vec<(f64, f64, f64)> {
     let mut out = vec![
         // On a grid point, on a grid line each way, at the corners and edges.
         ((w / 2.0).round() / w, (h / 2.0).round() / h, 20.0),
-        (30.0 / w, 0.437, 6.0),
-        (0.381, 40.0 / h, 6.0),
+        ((30.0 / w).min(1.0), 0.437, 6.0),
+        (0.381, (40.0 / h).min(1.0), 6.0),
         (0.0, 0.0, 15.0),
         (1.0, 1.0, 40.0),
         (0.997, 0.03, 3.0),
@@ -84,7 +98,7 @@ fn lights(field: &HeightField) -> Vec<(f64, f64, f64)> {
         // On the ground: on a grid point, on a grid line, anywhere, and
         // within a rounding step of it.
         ((w / 3.0).round() / w, (h / 4.0).round() / h, 0.0),
-        (0.618, 50.0 / h, 0.0),
+        (0.618, (50.0 / h).min(1.0), 0.0),
         (0.291, 0.733, 0.0),
         (0.8, 0.4, 1e-8),
     ];
