@@ -12,6 +12,7 @@ import numpy.typing as npt
 
 __version__: str
 INVALID_ID: int
+MAX_COORDINATE: float
 
 Transform = Tuple[float, float, float, float, float, float]
 

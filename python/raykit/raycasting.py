@@ -140,9 +140,7 @@ class RaycastingScene:
             raise ValueError(
                 f"triangle {bad} refers to vertex {int(t[bad].max())}, but there are only {len(v)} vertices"
             )
-        if not np.isfinite(v).all():
-            bad = int(np.argmax(~np.isfinite(v).all(axis=1)))
-            raise ValueError(f"vertex {bad} has a NaN or infinite coordinate")
+        _check_coordinates(v)
         self._vertices.append(v)
         self._triangles.append(t)
         self._geometry_masks.append(mask)
@@ -574,9 +572,7 @@ class RaycastingScene:
         old = self._vertices[gid]
         if v.shape != old.shape:
             raise ValueError(f"vertex_positions must have shape {old.shape} (geometry {gid}'s), got {v.shape}")
-        if not np.isfinite(v).all():
-            bad = int(np.argmax(~np.isfinite(v).all(axis=1)))
-            raise ValueError(f"vertex {bad} has a NaN or infinite coordinate")
+        _check_coordinates(v)
         self._vertices[gid] = v
         self._flat_of_instances = None
         if self._scene is None:
@@ -605,6 +601,21 @@ class RaycastingScene:
     def _not_instanced(self, what: str) -> None:
         if self.instanced:
             raise ValueError(f"{what}: a scene with instances has no saved form; only single-level scenes do")
+
+
+def _check_coordinates(v: np.ndarray) -> None:
+    """Refuse vertices that are not finite, or beyond the coordinates a mesh
+    may hold (the f32 products of the ray and winding-number tests
+    overflow there), naming the first."""
+    if not np.isfinite(v).all():
+        bad = int(np.argmax(~np.isfinite(v).all(axis=1)))
+        raise ValueError(f"vertex {bad} has a NaN or infinite coordinate")
+    far = (np.abs(v) > _raykit.MAX_COORDINATE).any(axis=1)
+    if far.any():
+        raise ValueError(
+            f"vertex {int(np.argmax(far))} has a coordinate beyond ±{_raykit.MAX_COORDINATE:.0e}, where the "
+            "f32 products of the ray and winding-number tests overflow; move or scale the mesh"
+        )
 
 
 def _missed(t, g, p, uv, n):

@@ -19,7 +19,7 @@ use raykit_core::accel::bvh::DEFAULT_MAX_DEGRADATION;
 use raykit_core::accel::{build_accel, load_accel, AccelKind, BuildOptions, RefitError};
 use raykit_core::query::SurfaceBvh;
 use raykit_core::tri::TestKind;
-use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, Vec3};
+use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, Vec3, MAX_COORDINATE};
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::{OnceLock, RwLock, RwLockReadGuard};
@@ -248,9 +248,13 @@ impl Scene {
                 .chunks_exact(3)
                 .position(|p| !p.iter().all(|c| c.is_finite()))
             {
-                return Err(value_error(format!(
-                    "vertex {i} has a NaN or infinite coordinate"
-                )));
+                return Err(value_error(MeshError::NonFinite { vertex: i }.to_string()));
+            }
+            if let Some(i) = v
+                .chunks_exact(3)
+                .position(|p| !p.iter().all(|c| c.abs() <= MAX_COORDINATE))
+            {
+                return Err(value_error(MeshError::TooFar { vertex: i }.to_string()));
             }
             let mesh = TriangleMesh::new(
                 v.chunks_exact(3)

@@ -179,6 +179,11 @@ def test_bad_meshes_raise(bunny):
     bad[7, 1] = np.nan
     with pytest.raises(ValueError, match="vertex 7 has a NaN or infinite coordinate"):
         s.add_triangles(bad, f)
+    # Coordinates whose f32 products overflow in the ray and winding
+    # tests: a ray from inside such a cube used to miss it.
+    far = v.astype(np.float64) * 1e15
+    with pytest.raises(ValueError, match=r"vertex \d+ has a coordinate beyond"):
+        s.add_triangles(far, f)
     with pytest.raises(ValueError, match="must hold integers"):
         s.add_triangles(v, f.astype(np.float32))
     with pytest.raises(ValueError, match="between 0 and"):

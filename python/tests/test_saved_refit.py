@@ -214,6 +214,12 @@ def test_update_vertices_before_a_build_and_bad_input(bunny):
     nan[5, 2] = np.nan
     with pytest.raises(ValueError, match="vertex 5"):
         scene.update_vertices(0, nan)
+    far = moved.astype(np.float64)
+    far[6, 0] = 1e14
+    with pytest.raises(ValueError, match="vertex 6 has a coordinate beyond"):
+        scene.update_vertices(0, far)
+    with pytest.raises(ValueError, match="vertex 6 has a coordinate beyond"):
+        scene_of((v, f)).update_vertices(0, far)
     # A refused update leaves the scene as it was.
     assert_same_answers(scene.cast_rays(rays), scene_of((moved, f)).cast_rays(rays))
 

@@ -75,7 +75,7 @@ pub use glam::{Vec2, Vec3, Vec3A};
 pub use hit::Hit;
 pub use icosphere::Icosphere;
 pub use light::{Light, LightSample, PointLight};
-pub use mesh::{Material, MeshError, Part, TriangleMesh};
+pub use mesh::{Material, MeshError, Part, TriangleMesh, MAX_COORDINATE};
 pub use ray::Ray;
 pub use texture::Texture;
 pub use tri::TriangleTest;

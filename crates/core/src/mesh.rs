@@ -97,6 +97,8 @@ pub enum MeshError {
     },
     /// Vertex `vertex` has a NaN or infinite coordinate.
     NonFinite { vertex: usize },
+    /// Vertex `vertex` has a coordinate beyond [`MAX_COORDINATE`].
+    TooFar { vertex: usize },
     /// An attribute array has the wrong length.
     Length {
         what: &'static str,
@@ -116,6 +118,11 @@ impl fmt::Display for MeshError {
             MeshError::NonFinite { vertex } => {
                 write!(f, "vertex {vertex} has a NaN or infinite coordinate")
             }
+            MeshError::TooFar { vertex } => write!(
+                f,
+                "vertex {vertex} has a coordinate beyond ±{MAX_COORDINATE:e}, where the f32 \
+                 products of the ray and winding-number tests overflow; move or scale the mesh"
+            ),
             MeshError::Length {
                 what,
                 got,
@@ -128,6 +135,12 @@ impl fmt::Display for MeshError {
 }
 
 impl std::error::Error for MeshError {}
+
+/// Largest coordinate magnitude a valid mesh holds. The ray-triangle tests
+/// and the winding number multiply three coordinate differences in `f32`;
+/// up to twice this, such products stay below `f32::MAX` (`(2·10¹²)³ =
+/// 8·10³⁶`), beyond it they overflow and rays miss what they hit.
+pub const MAX_COORDINATE: f32 = 1e12;
 
 impl TriangleMesh {
     /// A mesh from positions and triangles, with no attributes.
@@ -228,6 +241,13 @@ impl TriangleMesh {
         let n = self.positions.len();
         if let Some(v) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(MeshError::NonFinite { vertex: v });
+        }
+        if let Some(v) = self
+            .positions
+            .iter()
+            .position(|p| p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(MeshError::TooFar { vertex: v });
         }
         for (t, tri) in self.indices.iter().enumerate() {
             if let Some(&i) = tri.iter().find(|&&i| i as usize >= n) {
@@ -388,6 +408,11 @@ mod tests {
     fn validate_finds_each_defect() {
         assert_eq!(quad().validate(), Ok(()));
         assert_eq!(TriangleMesh::default().validate(), Err(MeshError::Empty));
+        let mut far = quad();
+        far.positions[2].y = -0.9e12;
+        assert_eq!(far.validate(), Ok(()));
+        far.positions[3].z = 2e12;
+        assert_eq!(far.validate(), Err(MeshError::TooFar { vertex: 3 }));
         let mut m = quad();
         m.indices[1][2] = 9;
         assert_eq!(

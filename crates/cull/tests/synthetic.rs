@@ -190,12 +190,25 @@ fn empty_and_degenerate_input_never_panics() {
     );
     let huge = TriangleMesh::new(
         vec![
+            Vec3::splat(-1e11),
+            Vec3::new(1e11, 0.0, 0.0),
+            Vec3::splat(1e11),
+        ],
+        vec![[0, 1, 2]],
+    );
+    // Beyond the coordinates a mesh may hold: refused by name.
+    let too_far = TriangleMesh::new(
+        vec![
             Vec3::splat(-1e30),
             Vec3::new(1e30, 0.0, 0.0),
             Vec3::splat(1e30),
         ],
         vec![[0, 1, 2]],
     );
+    let e = cull(&too_far, &CullOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("vertex 0") && e.contains("beyond"), "{e}");
     for mesh in [point, line, flat, huge] {
         for res in [0, 1, 5, 33] {
             let mut with_rays = CullOptions::conservative(res);

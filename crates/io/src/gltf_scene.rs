@@ -100,7 +100,8 @@ impl SceneCollector {
                 (Checked::Valid(CameraType::Perspective), Some(p)) => {
                     self.perspective += 1;
                     if self.camera.is_none() {
-                        if placed && up != Vec3::ZERO && p.yfov.is_finite() && p.yfov > 0.0 {
+                        let fov_ok = p.yfov > 0.0 && p.yfov < std::f32::consts::PI;
+                        if placed && up != Vec3::ZERO && fov_ok {
                             self.camera = Some(Camera {
                                 eye: origin,
                                 target: origin + forward,
@@ -109,7 +110,7 @@ impl SceneCollector {
                             });
                         } else {
                             self.degenerate.push(format!(
-                                "nodes[{index}]: camera skipped (degenerate transform or yfov)"
+                                "nodes[{index}]: camera skipped (degenerate transform, or yfov not between 0 and π)"
                             ));
                         }
                     }
@@ -129,8 +130,11 @@ impl SceneCollector {
                 ));
                 return;
             }
-            if let Some(light) = self.convert(l, origin, forward) {
-                self.lights.push(light);
+            match self.convert(l, origin, forward) {
+                Some(light) => self.lights.push(light),
+                None => self.degenerate.push(format!(
+                    "nodes[{index}]: light skipped (colour × intensity negative or not finite)"
+                )),
             }
         }
     }
@@ -140,7 +144,7 @@ impl SceneCollector {
             self.ranged += 1;
         }
         let power = Vec3::from_array(l.color) * l.intensity;
-        if !power.is_finite() {
+        if !power.is_finite() || power.min_element() < 0.0 {
             return None;
         }
         Some(match l.type_ {

@@ -392,6 +392,50 @@ fn orthographic_cameras_are_skipped_and_the_first_perspective_one_is_used() {
     assert!(l.lights.is_empty());
 }
 
+/// A camera whose yfov is not between 0 and π and lights of negative or
+/// overflowing power are skipped, each with a warning naming its node.
+#[test]
+fn cameras_and_lights_out_of_range_are_skipped_by_name() {
+    let rest = r#""extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+    {"type": "point", "intensity": -5},
+    {"type": "point", "color": [-1, -1, -1]},
+    {"type": "point", "intensity": 1e39},
+    {"type": "point", "color": [1, 0.5, 0], "intensity": 2}
+  ]}},
+  "cameras": [
+    {"type": "perspective", "perspective": {"yfov": 3.2, "znear": 0.1}},
+    {"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.1}}
+  ],
+  "nodes": [
+    {"camera": 0},
+    {"extensions": {"KHR_lights_punctual": {"light": 0}}},
+    {"extensions": {"KHR_lights_punctual": {"light": 1}}},
+    {"extensions": {"KHR_lights_punctual": {"light": 2}}},
+    {"translation": [0, 2, 0], "extensions": {"KHR_lights_punctual": {"light": 3}}},
+    {"translation": [0, 0, 5], "camera": 1},
+    {"mesh": 0}
+  ],
+  "scenes": [{"nodes": [0, 1, 2, 3, 4, 5, 6]}]"#;
+    let dir = tempfile::tempdir().unwrap();
+    let l = load_ok(dir.path(), "ranges.gltf", &gltf(None, rest));
+    assert!(has_warning(&l, &["nodes[0]", "yfov"]), "{:?}", l.warnings);
+    let cam = l.camera.expect("the second camera");
+    assert!((cam.vfov_deg as f64 - 0.7f64.to_degrees()).abs() < 1e-4);
+    for node in ["nodes[1]", "nodes[2]", "nodes[3]"] {
+        assert!(
+            has_warning(&l, &[node, "light skipped"]),
+            "{node}: {:?}",
+            l.warnings
+        );
+    }
+    assert_eq!(l.lights.len(), 1);
+    let Light::Point(p) = l.lights[0] else {
+        panic!("{:?}", l.lights[0])
+    };
+    assert_close(p.intensity, [2.0, 1.0, 0.0], "the one light kept");
+}
+
 // ---------- textures ----------
 
 fn textured(image: &str, extra: &str) -> String {
