@@ -120,7 +120,8 @@ class RaycastingScene:
         ``(n, 3)`` float array and an ``(m, 3)`` integer array, or
         ``add_triangles(mesh)`` with an Open3D ``TriangleMesh`` (tensor or
         legacy) or a ``trimesh.Trimesh``. Indices out of range, NaN or
-        infinite coordinates raise ``ValueError``.
+        infinite coordinates, and coordinates beyond ``±1e12`` (where the
+        engine's float32 products overflow) raise ``ValueError``.
 
         Beyond Open3D: ``place=False`` stores the mesh for
         :meth:`add_instance` without placing it where its vertices are;
