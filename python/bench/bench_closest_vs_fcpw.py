@@ -27,27 +27,14 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import time
-from pathlib import Path
 
 import numpy as np
 
 import raykit
-
-DRAGON = os.environ.get(
-    "RAYKIT_DRAGON", str(Path(__file__).resolve().parents[2] / "data-cache" / "dragon_vrip.ply.gz")
-)
+from query_points import DRAGON, query_points, timed
 
 
-def timed(fn, reps):
-    fn()
-    times = []
-    for _ in range(reps):
-        start = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), out
 
 
 def morton(points):
@@ -83,13 +70,7 @@ def main():
     lo, hi = v.min(0).astype(np.float64), v.max(0).astype(np.float64)
     diag = float(np.linalg.norm(hi - lo))
     rng = np.random.default_rng(3)
-    pad = 0.1 * (hi - lo)
-    points = (lo - pad + rng.random((args.points, 3)) * (hi - lo + 2 * pad)).astype(np.float32)
-    if args.near:
-        pick = v[rng.integers(0, len(v), args.points)].astype(np.float64)
-        step = rng.normal(size=(args.points, 3))
-        step *= 0.01 * diag * rng.random((args.points, 1)) / np.linalg.norm(step, axis=1, keepdims=True)
-        points = (pick + step).astype(np.float32)
+    points = query_points(v, args.points, args.near, rng)
     if args.sorted:
         points = points[np.argsort(morton(points), kind="stable")]
     print(f"{os.path.basename(args.mesh)}: {len(f):,} triangles; {args.points:,} points "
