@@ -206,10 +206,16 @@ fn distance2_lanes(c: &[[[f32; LANES]; 3]; 3]) -> ([f32; LANES], u32) {
         let vb = d5 * d2_ - d1 * d6;
         let va = d3 * d6 - d5 * d4;
         let denom = va + vb + vc;
-        // `denom` is `|ab × ac|²` (Lagrange's identity).
+        // The thin-triangle test of `triangle_distance2`, in its order of
+        // operations (glam's cross product and dot), so both agree.
+        let (cx, cy, cz) = (
+            aby * acz - acy * abz,
+            abz * acx - acz * abx,
+            abx * acy - acx * aby,
+        );
         let aa = abx * abx + aby * aby + abz * abz;
         let cc = acx * acx + acy * acy + acz * acz;
-        let wide = denom > THIN * aa * cc;
+        let wide = cx * cx + cy * cy + cz * cz > THIN * aa * cc;
         // The face, then each region overriding in reverse order of
         // precedence. `max` then `min` rather than `clamp`: the bounds of a
         // lane that ends up degenerate are NaN.
@@ -492,9 +498,10 @@ mod tests {
 
     /// The four-lane kernel gives the scalar kernel's squared distance bit
     /// for bit, on triangles of every shape (degenerate ones included: a
-    /// repeated corner, collinear corners, a point triangle) and points in
-    /// every Voronoi region of each; and both are within rounding of the
-    /// `f64` closest point, the degenerate and nearly collinear ones too.
+    /// repeated corner, collinear corners, a point triangle, slivers at the
+    /// thin-triangle angle) and points in every Voronoi region of each; and
+    /// both are within rounding of the `f64` closest point, the degenerate
+    /// and nearly collinear ones too.
     #[test]
     fn four_lane_distances_are_the_scalar_ones() {
         let mut rng = Pcg32::new(11);
@@ -511,6 +518,14 @@ mod tests {
                 3 => tris[3] = [tris[3][0]; 3],
                 _ => {}
             }
+            // Lane 0 of every round is a sliver at the thin-triangle angle
+            // (sin = 1/64) give or take 2%, where the f32 and f64 paths meet.
+            let [a, b, _] = tris[0];
+            let e = b - a;
+            let w = r();
+            let across = (w - e * (w.dot(e) / e.length_squared())).normalize_or(Vec3::Z);
+            let sin = (1.0 / 64.0) * (0.98 + 0.04 * (round % 101) as f32 / 100.0);
+            tris[0][2] = a + e * 0.6 + across * (0.6 * e.length() * sin / (1.0 - sin * sin).sqrt());
             degenerate += usize::from(round % 4 != 0);
             let p = r() * 1.5;
             let n = 1 + round % LANES;
