@@ -44,7 +44,7 @@ pub struct ClosestPoint {
 /// the closest point of its three edges. Where the products of the corners'
 /// dot products overflow, `(u, v)` may be NaN.
 macro_rules! closest_uv {
-    ($name:ident, $v:ty, $f:ty) => {
+    ($name:ident, $v:ty, $f:ty, $thin:expr) => {
         #[inline(always)]
         pub(crate) fn $name(a: $v, b: $v, c: $v) -> ($f, $f) {
             let (ab, ac) = (b - a, c - a);
@@ -82,6 +82,12 @@ macro_rules! closest_uv {
                 // f32): no answer here, for the caller to solve wider.
                 return (<$f>::NAN, <$f>::NAN);
             }
+            // `denom` is `|ab × ac|²` (Lagrange's identity): on a thin
+            // triangle its rounding swamps the face's barycentrics, so no
+            // answer here either.
+            if $thin > 0.0 && denom <= $thin * ab.dot(ab) * ac.dot(ac) {
+                return (<$f>::NAN, <$f>::NAN);
+            }
             if denom <= 0.0 {
                 // Degenerate: the best of the three edges.
                 let seg = |s: $v, e: $v| -> $f {
@@ -113,8 +119,8 @@ macro_rules! closest_uv {
     };
 }
 
-closest_uv!(closest_uv32, Vec3, f32);
-closest_uv!(closest_uv64, DVec3, f64);
+closest_uv!(closest_uv32, Vec3, f32, THIN);
+closest_uv!(closest_uv64, DVec3, f64, 0.0);
 
 /// Below this `sin²` of the angle between a triangle's edges `b - a` and
 /// `c - a` (about 0.9°) the triangle is thin: Ericson's face-region
@@ -128,14 +134,7 @@ const THIN: f32 = 1.0 / 4096.0;
 #[inline(always)]
 pub(crate) fn triangle_distance2(p: Vec3, tri: &[Vec3; 3]) -> (f32, f32, f32) {
     let (a, b, c) = (tri[0] - p, tri[1] - p, tri[2] - p);
-    let (ab, ac) = (b - a, c - a);
-    // Not thin: false for thin triangles and for NaN or overflow.
-    let wide = ab.cross(ac).length_squared() > THIN * ab.length_squared() * ac.length_squared();
-    let (u, v) = if wide {
-        closest_uv32(a, b, c)
-    } else {
-        (f32::NAN, f32::NAN)
-    };
+    let (u, v) = closest_uv32(a, b, c);
     if !(u.is_finite() && v.is_finite()) {
         // A thin triangle, whose face region f32 cannot tell from its
         // edges, or overflowed f32 products: the same steps in f64.
@@ -206,16 +205,11 @@ fn distance2_lanes(c: &[[[f32; LANES]; 3]; 3]) -> ([f32; LANES], u32) {
         let vb = d5 * d2_ - d1 * d6;
         let va = d3 * d6 - d5 * d4;
         let denom = va + vb + vc;
-        // The thin-triangle test of `triangle_distance2`, in its order of
-        // operations (glam's cross product and dot), so both agree.
-        let (cx, cy, cz) = (
-            aby * acz - acy * abz,
-            abz * acx - acz * abx,
-            abx * acy - acx * aby,
-        );
+        // The thin-triangle test of `closest_uv32`, in its order of
+        // operations (glam's dot), so that both agree bit for bit.
         let aa = abx * abx + aby * aby + abz * abz;
         let cc = acx * acx + acy * acy + acz * acz;
-        let wide = cx * cx + cy * cy + cz * cz > THIN * aa * cc;
+        let wide = denom > THIN * aa * cc;
         // The face, then each region overriding in reverse order of
         // precedence. `max` then `min` rather than `clamp`: the bounds of a
         // lane that ends up degenerate are NaN.
