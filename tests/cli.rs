@@ -395,3 +395,88 @@ fn colliding_or_unwritable_outputs_fail_before_any_is_written() {
         assert!(!written.exists(), "{args:?} wrote {}", written.display());
     }
 }
+
+/// Numbers no render, trace or benchmark can use are refused by their
+/// flag before any work: sizes that would exhaust memory, NaN costs and
+/// biases, a camera that looks nowhere.
+#[test]
+fn unusable_numbers_are_refused_by_their_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.png");
+    let o = s(&out);
+    let runs: [(&[&str], &str); 9] = [
+        (
+            &[
+                "render",
+                "--shadows",
+                "maps",
+                "--shadow-map-size",
+                "30000",
+                "--out",
+                o,
+            ],
+            "--shadow-map-size",
+        ),
+        (
+            &["render", "--shadows", "maps", "--pcf", "0", "--out", o],
+            "--pcf",
+        ),
+        (
+            &[
+                "render",
+                "--shadows",
+                "maps",
+                "--shadow-bias",
+                "nan",
+                "--out",
+                o,
+            ],
+            "--shadow-bias",
+        ),
+        (&["render", "--exposure", "nan", "--out", o], "--exposure"),
+        (
+            &["render", "--eye", "0,1,0", "--target", "0,1,0", "--out", o],
+            "same point",
+        ),
+        (
+            &[
+                "trace",
+                "--traversal-cost",
+                "nan",
+                "--mesh",
+                "builtin:cornell",
+                "--rays",
+                o,
+                "--out",
+                o,
+            ],
+            "--traversal-cost",
+        ),
+        (
+            &[
+                "trace",
+                "--kd-isect-cost",
+                "inf",
+                "--mesh",
+                "builtin:cornell",
+                "--rays",
+                o,
+                "--out",
+                o,
+            ],
+            "--kd-isect-cost",
+        ),
+        (&["bench", "--size", "100000"], "--size"),
+        (&["bench", "--reps", "0"], "--reps"),
+    ];
+    for (args, needle) in runs {
+        let r = raykit(args);
+        let e = stderr(&r);
+        assert!(!r.status.success(), "{args:?}");
+        assert!(
+            e.contains(needle) && !e.contains("panicked"),
+            "{args:?}: {e}"
+        );
+        assert!(!out.exists(), "{args:?} wrote an output");
+    }
+}
