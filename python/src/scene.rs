@@ -19,7 +19,7 @@ use raykit_core::accel::bvh::DEFAULT_MAX_DEGRADATION;
 use raykit_core::accel::{build_accel, load_accel, AccelKind, BuildOptions, RefitError};
 use raykit_core::query::SurfaceBvh;
 use raykit_core::tri::TestKind;
-use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, Vec3, MAX_COORDINATE};
+use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::{OnceLock, RwLock, RwLockReadGuard};
@@ -244,24 +244,16 @@ impl Scene {
                     "vertices: the scene has {have} vertices, got {n}"
                 )));
             }
-            if let Some(i) = v
-                .chunks_exact(3)
-                .position(|p| !p.iter().all(|c| c.is_finite()))
-            {
-                return Err(value_error(MeshError::NonFinite { vertex: i }.to_string()));
-            }
-            if let Some(i) = v
-                .chunks_exact(3)
-                .position(|p| !p.iter().all(|c| c.abs() <= MAX_COORDINATE))
-            {
-                return Err(value_error(MeshError::TooFar { vertex: i }.to_string()));
-            }
             let mesh = TriangleMesh::new(
                 v.chunks_exact(3)
                     .map(|p| Vec3::new(p[0], p[1], p[2]))
                     .collect(),
                 built.mesh.indices.clone(),
             );
+            match mesh.validate() {
+                Ok(()) | Err(MeshError::Empty) => {}
+                Err(e) => return Err(value_error(e.to_string())),
+            }
             let (kind, test) = (self.kind, self.test);
             let rebuild = |accel: &mut Option<Box<dyn Accel>>| {
                 *accel = Some(build_accel(kind, test, &mesh, &BuildOptions::default()));

@@ -18,11 +18,6 @@ use std::path::PathBuf;
 /// The six terms of rasterio's affine transform.
 type Transform = (f64, f64, f64, f64, f64, f64);
 
-/// Cell sizes accepted, in metres: far beyond any real DEM either way, and
-/// far enough from the floating-point limits that squared distances
-/// across the grid neither underflow nor overflow.
-const CELL_SIZE_M: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
-
 /// Largest image side `cast` (and so `render`) accepts: the per-pixel
 /// buffers of an 8192 × 8192 image take a few GiB; a 16384 one four times
 /// as much.
@@ -83,15 +78,6 @@ fn dem(heights: &PyReadonlyArray2<'_, f32>, t: Transform, geographic: bool) -> P
         .as_slice()
         .map_err(|_| value_error("heights must be C-contiguous"))?
         .to_vec();
-    if let Some(i) = values.iter().position(|h| h.is_infinite()) {
-        return Err(value_error(format!(
-            "heights: row {}, column {}: height {} is not finite; heights must be finite, \
-             or NaN for no data",
-            i / cols,
-            i % cols,
-            values[i]
-        )));
-    }
     let mut dem = Dem::from_heights(cols, rows, values);
     dem.georef = GeoRef {
         origin_x: c,
@@ -113,18 +99,8 @@ fn surface(
     geographic: bool,
 ) -> PyResult<(Dem, HeightField)> {
     let mut dem = dem(heights, t, geographic)?;
+    // Infinite heights and absurd cell sizes are refused here, by name.
     let field = HeightField::take(&mut dem).map_err(value_error)?;
-    if !(CELL_SIZE_M.contains(&field.sx) && CELL_SIZE_M.contains(&field.sy)) {
-        let (a, _, c, _, e, f) = t;
-        return Err(value_error(format!(
-            "transform ({a}, 0, {c}, 0, {e}, {f}): cell size must be between {:e} and {:e} m, \
-             got {:e} x {:e}",
-            CELL_SIZE_M.start(),
-            CELL_SIZE_M.end(),
-            field.sx,
-            field.sy
-        )));
-    }
     Ok((dem, field))
 }
 

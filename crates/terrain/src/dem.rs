@@ -119,12 +119,7 @@ impl Dem {
     /// from the top: a sample no surface can stand on (a float64 sample
     /// beyond the float32 range reads as one).
     pub fn first_infinite(&self) -> Option<(usize, usize, f32)> {
-        let i = self.heights.iter().position(|h| h.is_infinite())?;
-        Some((
-            i % self.width.max(1),
-            i / self.width.max(1),
-            self.heights[i],
-        ))
+        first_infinite(&self.heights, self.width)
     }
 
     /// Replace no-data samples (NaN) by `value` (e.g. the lowest height),
@@ -139,4 +134,11 @@ impl Dem {
         }
         n
     }
+}
+
+/// The first infinite sample of row-major `heights`, `width` per row, as
+/// (column, row, height).
+pub fn first_infinite(heights: &[f32], width: usize) -> Option<(usize, usize, f32)> {
+    let i = heights.iter().position(|h| h.is_infinite())?;
+    Some((i % width.max(1), i / width.max(1), heights[i]))
 }

@@ -15,7 +15,7 @@
 //! in both, so distances need no conversion back. All intersection
 //! arithmetic is in f64.
 
-use crate::dem::Dem;
+use crate::dem::{first_infinite, Dem};
 
 /// A ray in grid units (see the module documentation), f64.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,13 +167,13 @@ impl HeightField {
             let e = "the DEM has no valid height (every sample is no-data)".to_string();
             return Err((e, heights));
         }
-        if zmin.is_infinite() || zmax.is_infinite() {
-            let i = heights.iter().position(|h| h.is_infinite()).unwrap_or(0);
+        if let Some((col, row, h)) = (zmin.is_infinite() || zmax.is_infinite())
+            .then(|| first_infinite(&heights, dem.width))
+            .flatten()
+        {
             let e = format!(
-                "height {} at row {}, column {} is not finite; heights must be finite, or NaN for no data",
-                heights[i],
-                i / dem.width,
-                i % dem.width
+                "height {h} at row {row}, column {col} is not finite; heights must be finite, or \
+                 NaN for no data"
             );
             return Err((e, heights));
         }
