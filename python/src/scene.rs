@@ -164,10 +164,7 @@ impl Scene {
                 .collect(),
             t.chunks_exact(3).map(|i| [i[0], i[1], i[2]]).collect(),
         );
-        match mesh.validate() {
-            Ok(()) | Err(MeshError::Empty) => {}
-            Err(e) => return Err(value_error(e.to_string())),
-        }
+        checked(&mesh)?;
         if structure.is_some() && mesh.num_triangles() == 0 {
             return Err(value_error(
                 "the scene has no triangles to load a structure for",
@@ -250,10 +247,7 @@ impl Scene {
                     .collect(),
                 built.mesh.indices.clone(),
             );
-            match mesh.validate() {
-                Ok(()) | Err(MeshError::Empty) => {}
-                Err(e) => return Err(value_error(e.to_string())),
-            }
+            checked(&mesh)?;
             let (kind, test) = (self.kind, self.test);
             let rebuild = |accel: &mut Option<Box<dyn Accel>>| {
                 *accel = Some(build_accel(kind, test, &mesh, &BuildOptions::default()));
@@ -442,5 +436,15 @@ impl Scene {
             d.set_item("triangle_refs", s.triangle_refs)?;
         }
         Ok(d)
+    }
+}
+
+/// `mesh` checked as [`TriangleMesh::validate`] checks it (indices in
+/// range, coordinates finite and within reach); a mesh of no triangles is
+/// accepted, every ray missing it.
+fn checked(mesh: &TriangleMesh) -> PyResult<()> {
+    match mesh.validate() {
+        Ok(()) | Err(MeshError::Empty) => Ok(()),
+        Err(e) => Err(value_error(e.to_string())),
     }
 }
