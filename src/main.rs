@@ -5,6 +5,7 @@ mod cmd;
 mod error_message;
 mod instanced_arg;
 mod paths;
+mod stage;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -52,6 +53,9 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if !matches!(cli.command, Command::Serve(_)) {
+        remove_unfinished_outputs_on_stop();
+    }
     let result = match cli.command {
         Command::Render(a) => cmd::render::run(a),
         Command::MergeTiles(a) => cmd::merge_tiles::run(a),
@@ -73,5 +77,22 @@ fn main() -> ExitCode {
             eprintln!("raykit: error: {}", error_message::error_message(&e));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// On Ctrl-C or SIGTERM, remove the temporary files of the outputs being
+/// written, leave their destinations as they were, and end with the status
+/// a shell gives a program stopped by SIGINT (130). `serve` handles Ctrl-C
+/// itself, as a graceful shutdown.
+fn remove_unfinished_outputs_on_stop() {
+    let installed = ctrlc::set_handler(|| {
+        let _writes_stopped = raykit_io::remove_unfinished_outputs();
+        eprintln!("raykit: stopped; unfinished outputs removed");
+        std::process::exit(130);
+    });
+    if let Err(e) = installed {
+        eprintln!(
+            "raykit: warning: cannot handle Ctrl-C ({e}); a stopped run may leave temporary files"
+        );
     }
 }

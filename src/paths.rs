@@ -9,17 +9,36 @@ use std::path::{Path, PathBuf};
 /// before its work rather than after it, or when `out` names the same file
 /// as one of `inputs` (after resolving links and relative paths), so that a
 /// command can never overwrite its input.
+///
+/// The files an input brings in (a glTF file's buffers and images, an OBJ
+/// file's material libraries and textures) count as inputs, and an OBJ
+/// output's material library `<stem>.mtl`, written beside it, as an output.
 pub fn ensure_output(out: &Path, inputs: &[&Path]) -> Result<()> {
     ensure_folder(out)?;
-    let Ok(out_real) = out.canonicalize() else {
-        return Ok(()); // the output does not exist yet
-    };
-    for input in inputs {
-        if input.canonicalize().is_ok_and(|i| i == out_real) {
-            bail!(
-                "refusing to write {}: it is also an input of this command",
-                out.display()
-            );
+    let is_obj = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let library = is_obj.then(|| out.with_extension("mtl"));
+    for written in std::iter::once(out).chain(library.as_deref()) {
+        let Ok(real) = written.canonicalize() else {
+            continue; // the file does not exist yet
+        };
+        for input in inputs {
+            if input.canonicalize().is_ok_and(|i| i == real) {
+                bail!(
+                    "refusing to write {}: it is also an input of this command",
+                    written.display()
+                );
+            }
+            for file in raykit_io::companion_files(input) {
+                if file.canonicalize().is_ok_and(|f| f == real) {
+                    bail!(
+                        "refusing to write {}: {} reads it",
+                        written.display(),
+                        input.display()
+                    );
+                }
+            }
         }
     }
     Ok(())
@@ -135,6 +154,37 @@ mod tests {
             std::os::unix::fs::symlink(dir.path(), &link).unwrap();
             assert!(ensure_distinct(&a, &link.join("m.png"), "--out", "--preview").is_err());
         }
+    }
+
+    #[test]
+    fn files_an_input_reads_are_not_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let gltf = d.join("s.gltf");
+        std::fs::write(
+            &gltf,
+            br#"{"asset":{"version":"2.0"},"buffers":[{"uri":"s.bin","byteLength":4}]}"#,
+        )
+        .unwrap();
+        std::fs::write(d.join("s.bin"), b"abcd").unwrap();
+        let e = ensure_output(&d.join("s.bin"), &[&gltf])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("s.bin") && e.contains("s.gltf reads it"), "{e}");
+        assert!(ensure_output(&d.join("t.bin"), &[&gltf]).is_ok());
+
+        // An OBJ output's material library must not replace an input's.
+        let obj = d.join("in.obj");
+        std::fs::write(&obj, b"mtllib out.mtl\n").unwrap();
+        std::fs::write(d.join("out.mtl"), b"newmtl a\n").unwrap();
+        let e = ensure_output(&d.join("out.obj"), &[&obj])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("out.mtl") && e.contains("in.obj reads it"),
+            "{e}"
+        );
+        assert!(ensure_output(&d.join("other.obj"), &[&obj]).is_ok());
     }
 
     #[test]

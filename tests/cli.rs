@@ -396,6 +396,80 @@ fn colliding_or_unwritable_outputs_fail_before_any_is_written() {
     }
 }
 
+/// An output that would replace a file an input reads (a glTF file's
+/// external buffer) is refused before the work, and the file is kept.
+#[test]
+fn an_output_never_replaces_a_file_an_input_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/io/tests/data");
+    for name in ["transforms.gltf", "transforms.bin"] {
+        std::fs::copy(data.join(name), dir.path().join(name)).unwrap();
+    }
+    let (gltf, bin) = (
+        dir.path().join("transforms.gltf"),
+        dir.path().join("transforms.bin"),
+    );
+    let before = std::fs::read(&bin).unwrap();
+    let o = raykit(&["rays", "--mesh", s(&gltf), "--size", "8", "--out", s(&bin)]);
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(e.contains("transforms.gltf reads it"), "{e}");
+    assert_eq!(std::fs::read(&bin).unwrap(), before);
+    let other = dir.path().join("rays.bin");
+    let o = raykit(&[
+        "rays",
+        "--mesh",
+        s(&gltf),
+        "--size",
+        "8",
+        "--out",
+        s(&other),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Stopped by SIGINT while it writes its output, a command removes the
+/// temporary file, keeps the old output and ends with status 130.
+#[cfg(unix)]
+#[test]
+fn a_stopped_command_leaves_no_temporary_file() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rays.bin");
+    std::fs::write(&out, b"old").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raykit"))
+        .args(["rays", "--mesh", "builtin:cornell", "--kind", "incoherent"])
+        .args(["--size", "4096", "--out", s(&out)])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let temporary = || {
+        std::fs::read_dir(dir.path())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .any(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+    };
+    let started = std::time::Instant::now();
+    while !temporary() && child.try_wait().unwrap().is_none() {
+        assert!(started.elapsed().as_secs() < 600, "no output started");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the command ended before it could be stopped"
+    );
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{:?}: {e}", o.status.signal());
+    assert!(!temporary(), "a temporary file was left");
+    assert_eq!(std::fs::read(&out).unwrap(), b"old");
+}
+
 /// Numbers no render, trace or benchmark can use are refused by their
 /// flag before any work: sizes that would exhaust memory, NaN costs and
 /// biases, a camera that looks nowhere.

@@ -173,13 +173,16 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
     crate::paths::ensure_output(&args.out, &[input, Path::new(&args.mesh[0])])?;
     let pool = pool(args.threads)?;
     let threads = pool.current_num_threads();
+    let bar = crate::stage::spinner(format!("reading {}", args.mesh[0]));
     let (scene, load_s) = timed(|| scene_arg::load(&args.mesh[0]));
     let mesh = scene?.mesh;
+    bar.set_message(format!("reading {}", input.display()));
     let (points, rays): (Vec<Vec3>, Vec<Ray>) = if q.takes_rays() {
         (Vec::new(), raykit_io::read_rays(input)?)
     } else {
         (raykit_io::read_points(input)?, Vec::new())
     };
+    bar.set_message(format!("building over {} triangles", mesh.num_triangles()));
     let (bvh, build_s) = pool.install(|| {
         timed(|| {
             let bvh = SurfaceBvh::build(&mesh);
@@ -188,14 +191,18 @@ pub fn run(args: QueryArgs) -> Result<ExitCode> {
         })
     });
     let n = points.len() + rays.len();
+    let what = if q.takes_rays() { "rays" } else { "points" };
+    bar.set_message(format!("{} of {n} {what} on {threads} threads", q.name()));
     let cap = hit_cap(args.max_hits);
     let (mut answers, query_s) =
         pool.install(|| timed(|| bvh.answer(q.kind(), &points, &rays, cap.saturating_add(1))));
+    bar.set_message(format!("writing {}", args.out.display()));
     let truncated = match &mut answers {
         raykit_core::query::Answers::HitLists(lists) => Some(cut_to(lists, cap)),
         _ => None,
     };
     write_out(&args.out, |w| write_answers(w, &answers))?;
+    bar.finish_and_clear();
     let (answered, hits, inside_count) =
         (answers.answered(&points), answers.hits(), answers.inside());
     let mut stats = json!({
@@ -235,10 +242,17 @@ fn run_instanced(args: &QueryArgs, input: &Path) -> Result<ExitCode> {
     crate::paths::ensure_output(&args.out, &inputs)?;
     let pool = pool(args.threads)?;
     let threads = pool.current_num_threads();
+    let bar = crate::stage::spinner(format!("reading {}", input.display()));
     let rays = raykit_io::read_rays(input)?;
+    bar.set_message(format!("reading and building {} meshes", args.mesh.len()));
     let loaded = pool.install(|| {
         crate::instanced_arg::load(&args.mesh, &raykit_core::accel::BuildOptions::default())
     })?;
+    bar.set_message(format!(
+        "{} of {} rays on {threads} threads",
+        q.name(),
+        rays.len()
+    ));
     let scene = &loaded.scene;
     let mask = raykit_core::instancing::MASK_ALL;
     let n = rays.len();
@@ -260,6 +274,7 @@ fn run_instanced(args: &QueryArgs, input: &Path) -> Result<ExitCode> {
         hits = lists.iter().map(|l| l.len() as u64).sum();
         write_out(&args.out, |w| write_scene_hit_lists(w, &lists))?;
     }
+    bar.finish_and_clear();
     let per_s = per_second(n, query_s);
     let mut stats = json!({
         "query": q.name(),

@@ -2,13 +2,11 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressStyle};
 use raykit_core::tjunction::{eliminate, Method, TJunctionOptions, TJunctionReport};
 use raykit_lab::measure::{pool, timed};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Duration;
 
 /// The finder, as `--method` spells it.
 #[derive(Clone, Copy, ValueEnum)]
@@ -115,15 +113,11 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
     } else if args.cut_out.is_some() {
         bail!("--cut-out needs --kd-cut H");
     }
-    let bar = ProgressBar::new_spinner().with_style(
-        ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").expect("valid template"),
-    );
-    bar.set_message(format!(
+    let bar = crate::stage::spinner(format!(
         "T-junctions of {} triangles ({})",
         mesh.num_triangles(),
         method.name()
     ));
-    bar.enable_steady_tick(Duration::from_millis(100));
     let result = pool.install(|| eliminate(&mesh, method, &opts));
     bar.finish_and_clear();
     let (fixed, report) = result.with_context(|| format!("{}", args.input.display()))?;

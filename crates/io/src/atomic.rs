@@ -10,8 +10,38 @@ use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, MutexGuard};
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// The temporary files being written, for [`remove_unfinished_outputs`].
+static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn unfinished() -> MutexGuard<'static, Vec<PathBuf>> {
+    UNFINISHED.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Remove the temporary files of the writes under way, for a program that is
+/// about to end without unwinding (on Ctrl-C, say), and keep the lock on them
+/// while it ends, so that no new one is started. The destinations are left
+/// as they were. Call it last: the returned guard blocks every later write.
+pub fn remove_unfinished_outputs() -> impl Drop {
+    remove_unfinished_under(Path::new(""))
+}
+
+/// [`remove_unfinished_outputs`] for the temporary files under `folder`
+/// only (every one for an empty path).
+fn remove_unfinished_under(folder: &Path) -> MutexGuard<'static, Vec<PathBuf>> {
+    let mut files = unfinished();
+    files.retain(|path| {
+        let under = path.starts_with(folder);
+        if under {
+            let _ = fs::remove_file(path);
+        }
+        !under
+    });
+    files
+}
 
 /// Deletes the temporary file unless the write was committed.
 struct TempGuard {
@@ -19,10 +49,21 @@ struct TempGuard {
     armed: bool,
 }
 
+impl TempGuard {
+    fn new(path: PathBuf) -> Self {
+        unfinished().push(path.clone());
+        TempGuard { path, armed: true }
+    }
+}
+
 impl Drop for TempGuard {
     fn drop(&mut self) {
+        let mut files = unfinished();
         if self.armed {
             let _ = fs::remove_file(&self.path);
+        }
+        if let Some(i) = files.iter().position(|p| *p == self.path) {
+            files.swap_remove(i);
         }
     }
 }
@@ -90,10 +131,7 @@ pub fn write_atomic_file<E>(
             Err(e) => return Err(io_error(e)),
         }
     };
-    let mut guard = TempGuard {
-        path: tmp,
-        armed: true,
-    };
+    let mut guard = TempGuard::new(tmp);
     if let Some(m) = existing.filter(|m| m.is_file()) {
         fs::set_permissions(&guard.path, m.permissions()).map_err(&io_error)?;
     }
@@ -165,6 +203,28 @@ mod tests {
         let _ = write_atomic(&q, |_| Err(io::Error::other("x")));
         assert!(!q.exists());
         assert_eq!(entries(dir.path()), vec!["out.bin"]);
+    }
+
+    /// What a stopped program removes: the temporary file of the write under
+    /// way, not the destination's old contents nor a finished output.
+    #[test]
+    fn unfinished_outputs_are_removed_on_request() {
+        let dir = tempfile::tempdir().unwrap();
+        let done = dir.path().join("done.bin");
+        write_atomic(&done, |w| w.write_all(b"done")).unwrap();
+        let p = dir.path().join("p.bin");
+        fs::write(&p, b"old").unwrap();
+        let r = write_atomic(&p, |w| {
+            w.write_all(b"new")?;
+            assert_eq!(entries(dir.path()).len(), 3, "the temporary file exists");
+            drop(remove_unfinished_under(dir.path()));
+            assert_eq!(entries(dir.path()), vec!["done.bin", "p.bin"]);
+            Ok(())
+        });
+        assert!(r.is_err(), "a removed temporary file cannot be renamed");
+        assert_eq!(fs::read(&p).unwrap(), b"old");
+        assert_eq!(fs::read(&done).unwrap(), b"done");
+        assert_eq!(entries(dir.path()), vec!["done.bin", "p.bin"]);
     }
 
     #[test]

@@ -535,7 +535,11 @@ fn convert_material(
     base_texture: Option<Arc<Texture>>,
 ) -> Material {
     let pbr = m.pbr_metallic_roughness();
-    let [r, g, b, _] = pbr.base_color_factor();
+    // Factors outside the ranges glTF allows are clamped into them (a number
+    // beyond f32 reads as infinite): colours and fractions to [0, 1], the
+    // index of refraction to [1, 10], emission to finite non-negative values.
+    let unit = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    let [r, g, b, _] = pbr.base_color_factor().map(unit);
     let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
     let rough = pbr.roughness_factor().clamp(0.0, 1.0);
     let lerp = |c: f32| 0.04 + (c - 0.04) * metallic;
@@ -564,10 +568,15 @@ fn convert_material(
         reflectivity: metallic,
         transmission: m
             .transmission()
-            .map(|t| t.transmission_factor())
+            .map(|t| unit(t.transmission_factor()))
             .unwrap_or(0.0),
-        ior: m.ior().unwrap_or(1.5),
-        emission: m.emissive_factor().map(|e| e * strength),
+        ior: m
+            .ior()
+            .filter(|i| i.is_finite())
+            .map_or(1.5, |i| i.clamp(1.0, 10.0)),
+        emission: m
+            .emissive_factor()
+            .map(|e| (unit(e) * strength).min(f32::MAX)),
         diffuse_texture: texture,
         base_texture,
     };
@@ -609,10 +618,10 @@ fn apply_phong_extras(out: &mut Material, m: &::gltf::Material<'_>) {
         (c.len() == 3 && c.iter().all(|x| x.is_finite())).then(|| [c[0], c[1], c[2]])
     };
     if let Some(c) = rgb("diffuse") {
-        out.diffuse = c;
+        out.diffuse = c.map(|x| x.clamp(0.0, 1.0));
     }
     if let Some(c) = rgb("specular") {
-        out.specular = c;
+        out.specular = c.map(|x| x.clamp(0.0, 1.0));
     }
     if let Some(x) = num("shininess") {
         out.shininess = x.clamp(0.0, 1e4);

@@ -24,6 +24,7 @@
 #![warn(missing_docs)]
 
 mod atomic;
+mod companions;
 mod error;
 mod format;
 mod gltf;
@@ -54,7 +55,8 @@ mod uri;
 mod validate;
 mod write;
 
-pub use atomic::{write_atomic, write_atomic_file};
+pub use atomic::{remove_unfinished_outputs, write_atomic, write_atomic_file};
+pub use companions::companion_files;
 pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
 pub use gltf_instances::{load_gltf_instances, parse_gltf_instances, GltfInstance, GltfInstances};

@@ -19,6 +19,7 @@
 use crate::error::{show, LoadError};
 use crate::text::{parse_f32, parse_i64, Lines, Tokens};
 use crate::texture_image::{decode_texture, Rows};
+use crate::uri::file_below;
 use raykit_core::{Material, Texture};
 use std::collections::HashMap;
 use std::path::Path;
@@ -89,14 +90,17 @@ pub(crate) fn parse_mtl(
                 } else {
                     [r, number(rest)?, number(toks.next())?]
                 };
+                // Reflectances are fractions; emission is not negative.
                 match key {
-                    b"Kd" => m.diffuse = rgb,
-                    b"Ks" => m.specular = rgb,
-                    _ => m.emission = rgb,
+                    b"Kd" => m.diffuse = rgb.map(|x| x.clamp(0.0, 1.0)),
+                    b"Ks" => m.specular = rgb.map(|x| x.clamp(0.0, 1.0)),
+                    _ => m.emission = rgb.map(|x| x.max(0.0)),
                 }
             }
-            b"Ns" => m.shininess = number(toks.next())?,
-            b"Ni" => m.ior = number(toks.next())?,
+            b"Ns" => m.shininess = number(toks.next())?.clamp(0.0, 1e4),
+            // Exporters write `Ni 0` for "not set"; an index below 1 would
+            // bend rays away from the normal, so it is read as 1.
+            b"Ni" => m.ior = number(toks.next())?.clamp(1.0, 10.0),
             b"d" => {
                 let mut t = toks.next();
                 if t == Some(b"-halo") {
@@ -125,7 +129,14 @@ pub(crate) fn parse_mtl(
                     ));
                 }
                 let file = String::from_utf8_lossy(file).into_owned();
-                let full = dir.join(file).to_string_lossy().into_owned();
+                let full = match file_below(dir, &file) {
+                    Ok(f) => f.to_string_lossy().into_owned(),
+                    Err(why) => {
+                        let at = path.display();
+                        warnings.push(format!("{at}:{line}: map_Kd texture not loaded: {why}"));
+                        continue;
+                    }
+                };
                 m.base_texture = textures
                     .entry(full.clone())
                     .or_insert_with(|| match load_texture(&full) {
@@ -169,7 +180,7 @@ fn apply_illum(m: &mut Material, illum: i64) {
 }
 
 /// The file name of a `map_*` statement after its options.
-fn texture_path(mut toks: Tokens<'_>) -> &[u8] {
+pub(crate) fn texture_path(mut toks: Tokens<'_>) -> &[u8] {
     loop {
         let before = toks.clone();
         let Some(t) = toks.next() else {
@@ -230,6 +241,18 @@ newmtl gray\nKd 0.3\nTr 0.5\n";
         assert_eq!(m[1].diffuse, [0.3; 3]);
         assert_eq!(m[1].transmission, 0.5);
         assert_eq!(m[1].reflectivity, 0.0);
+    }
+
+    #[test]
+    fn values_outside_their_ranges_are_clamped() {
+        let src =
+            b"newmtl odd\nKd -1 2 0.5\nKs 3\nKe -1 0 5\nNs -20\nNi 0\nnewmtl big\nNs 1e9\nNi 40\n";
+        let (m, _) = parse_mtl(Path::new("a.mtl"), src).unwrap();
+        assert_eq!(m[0].diffuse, [0.0, 1.0, 0.5]);
+        assert_eq!(m[0].specular, [1.0; 3]);
+        assert_eq!(m[0].emission, [0.0, 0.0, 5.0]);
+        assert_eq!((m[0].shininess, m[0].ior), (0.0, 1.0));
+        assert_eq!((m[1].shininess, m[1].ior), (1e4, 10.0));
     }
 
     #[test]

@@ -11,6 +11,7 @@ use crate::error::{show, LoadError, Location};
 use crate::hashing::{key3_map, Key3};
 use crate::mtl::parse_mtl;
 use crate::text::{parse_f32, parse_i64, Lines, Tokens};
+use crate::uri::file_below;
 use crate::validate::finish;
 use raykit_core::{Material, Part, TriangleMesh, Vec2, Vec3};
 use std::collections::HashMap;
@@ -134,7 +135,7 @@ impl<'p> ObjState<'p> {
                 self.set_part();
             }
             b"usemtl" => self.use_material(toks.rest()),
-            b"mtllib" => self.material_library(toks.rest())?,
+            b"mtllib" => self.material_library(line, toks.rest())?,
             _ => {}
         }
         Ok(())
@@ -315,18 +316,18 @@ impl<'p> ObjState<'p> {
         };
     }
 
-    fn material_library(&mut self, rest: &[u8]) -> Result<(), LoadError> {
+    fn material_library(&mut self, line: usize, rest: &[u8]) -> Result<(), LoadError> {
         let dir = self.path.parent().unwrap_or(Path::new(""));
-        let whole = String::from_utf8_lossy(rest).into_owned();
-        let names: Vec<String> = if dir.join(&whole).is_file() {
-            vec![whole]
-        } else {
-            Tokens::new(rest)
-                .map(|t| String::from_utf8_lossy(t).into_owned())
-                .collect()
-        };
-        for name in names {
-            let file = dir.join(&name);
+        for name in library_names(dir, rest) {
+            let file = match file_below(dir, &name) {
+                Ok(f) => f,
+                Err(why) => {
+                    let at = self.path.display();
+                    self.warnings
+                        .push(format!("{at}:{line}: material library not read: {why}"));
+                    continue;
+                }
+            };
             // A missing or unreadable library falls back to default materials.
             let Ok(bytes) = std::fs::read(&file) else {
                 continue;
@@ -426,6 +427,20 @@ impl<'p> ObjState<'p> {
 }
 
 /// Replace the `NONE` entries of `v` by `new_index`, calling `add` once if any.
+/// The MTL libraries an `mtllib` statement names, its text after the keyword
+/// being `rest`: the whole text when a file of that name exists in `dir`
+/// (a name with spaces), otherwise each whitespace-separated token.
+pub(crate) fn library_names(dir: &Path, rest: &[u8]) -> Vec<String> {
+    let whole = String::from_utf8_lossy(rest).into_owned();
+    if dir.join(&whole).is_file() {
+        vec![whole]
+    } else {
+        Tokens::new(rest)
+            .map(|t| String::from_utf8_lossy(t).into_owned())
+            .collect()
+    }
+}
+
 fn fill_unassigned(v: &mut [u32], new_index: u32, add: impl FnOnce()) {
     let mut any = false;
     for x in v.iter_mut().filter(|x| **x == NONE) {

@@ -93,11 +93,12 @@ pub(crate) fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-/// The file that a glTF file's external `uri` names: a relative path,
-/// percent-decoded, beside or below `dir` (the glTF file's folder). URIs
-/// with a scheme (`http:`, `file:`), absolute paths and paths with `..`
-/// are refused, so that a glTF file (one a server was handed, say) brings
-/// in no file from elsewhere.
+/// The file that a glTF file's external `uri` (or an OBJ file's material
+/// library, an MTL file's texture) names: a relative path, percent-decoded,
+/// beside or below `dir` (the naming file's folder). URIs with a scheme
+/// (`http:`, `file:`), absolute paths and paths with `..` are refused, so
+/// that a scene file (one a server was handed, say) brings in no file from
+/// elsewhere.
 pub(crate) fn external_file(dir: &Path, uri: &str) -> Result<PathBuf, String> {
     let rel = percent_decode(uri);
     if rel.is_empty() {
@@ -106,14 +107,25 @@ pub(crate) fn external_file(dir: &Path, uri: &str) -> Result<PathBuf, String> {
     if let Some((scheme, _)) = rel.split_once(':') {
         if !scheme.contains('/') {
             return Err(format!(
-                "uri \"{uri}\" has a scheme ({scheme}:); only data: URIs and relative file paths are read"
+                "\"{uri}\" has a scheme ({scheme}:); only data: URIs and relative file paths are read"
             ));
         }
     }
-    for part in Path::new(&rel).components() {
+    file_below(dir, &rel).map_err(|_| {
+        format!(
+            "\"{uri}\" leaves the folder of the file naming it; only files beside or below it are read"
+        )
+    })
+}
+
+/// `dir` joined with the relative path `rel` when it stays beside or below
+/// `dir` (no root, no `..`); `Err` with the same refusal as
+/// [`external_file`] otherwise.
+pub(crate) fn file_below(dir: &Path, rel: &str) -> Result<PathBuf, String> {
+    for part in Path::new(rel).components() {
         if !matches!(part, Component::Normal(_) | Component::CurDir) {
             return Err(format!(
-                "uri \"{uri}\" leaves the glTF file's folder; only files beside or below it are read"
+                "\"{rel}\" leaves the folder of the file naming it; only files beside or below it are read"
             ));
         }
     }

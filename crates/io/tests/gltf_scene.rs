@@ -436,6 +436,22 @@ fn cameras_and_lights_out_of_range_are_skipped_by_name() {
     assert_close(p.intensity, [2.0, 1.0, 0.0], "the one light kept");
 }
 
+#[test]
+fn material_factors_out_of_range_are_clamped() {
+    let rest = r#""extensionsUsed": ["KHR_materials_ior", "KHR_materials_transmission"],
+  "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [-0.5, 1e39, 0.25, 1]},
+    "emissiveFactor": [-1, 0.5, 7],
+    "extensions": {"KHR_materials_ior": {"ior": 0},
+                   "KHR_materials_transmission": {"transmissionFactor": 4}}}],
+  "nodes": [{"mesh": 0}]"#;
+    let dir = tempfile::tempdir().unwrap();
+    let l = load_ok(dir.path(), "factors.gltf", &gltf(Some(0), rest));
+    let m = &l.mesh.materials[0];
+    assert_eq!(m.diffuse, [0.0, 1.0, 0.25]);
+    assert_eq!(m.emission, [0.0, 0.5, 1.0]);
+    assert_eq!((m.ior, m.transmission), (1.0, 1.0));
+}
+
 // ---------- textures ----------
 
 fn textured(image: &str, extra: &str) -> String {

@@ -197,11 +197,17 @@ fn gltf_external_files_stay_in_the_files_folder() {
     };
     let outside = dir.path().join("outside.bin");
     for (uri, needle) in [
-        ("../outside.bin", "leaves the glTF file's folder"),
-        (outside.to_str().unwrap(), "leaves the glTF file's folder"),
-        ("sub/..%2F../outside.bin", "leaves the glTF file's folder"),
+        ("../outside.bin", "leaves the folder of the file naming it"),
+        (
+            outside.to_str().unwrap(),
+            "leaves the folder of the file naming it",
+        ),
+        (
+            "sub/..%2F../outside.bin",
+            "leaves the folder of the file naming it",
+        ),
         ("file:///etc/passwd", "has a scheme"),
-        ("/dev/zero", "leaves the glTF file's folder"),
+        ("/dev/zero", "leaves the folder of the file naming it"),
         ("sub", "is not a regular file"),
     ] {
         let e = with_uri(uri).unwrap_err();

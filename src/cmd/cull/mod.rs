@@ -18,7 +18,6 @@ use raykit_cull::{
 };
 use raykit_lab::measure::timed;
 use std::process::ExitCode;
-use std::time::Duration;
 
 /// Load, cull, write, report.
 pub fn run(args: CullArgs) -> Result<ExitCode> {
@@ -53,11 +52,7 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
         max_rounds: args.rounds as usize,
         ..Default::default()
     };
-    let bar = ProgressBar::new_spinner().with_style(
-        ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").expect("valid template"),
-    );
-    bar.enable_steady_tick(Duration::from_millis(100));
-    bar.set_message(format!("reading {}", args.input.display()));
+    let bar = crate::stage::spinner(format!("reading {}", args.input.display()));
     let (mesh, load_s) = timed(|| raykit_io::load_mesh(&args.input));
     let mesh = match mesh {
         Ok(m) => m,
