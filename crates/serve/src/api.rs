@@ -172,6 +172,12 @@ struct SceneRequest {
 /// the scene folder as resolved.
 fn allowed_scene(state: &AppState, spec: &str) -> Result<(String, Option<PathBuf>), String> {
     if spec.starts_with("builtin:") {
+        let max = state.config.max_scene_triangles;
+        if let Some(n) = asked_triangles(spec).filter(|&n| n > max as u64) {
+            return Err(format!(
+                "the scene asks for {n} triangles, more than this server's --max-scene-triangles {max}"
+            ));
+        }
         return Ok((spec.to_string(), None));
     }
     let Some(dir) = &state.config.scene_dir else {
@@ -180,6 +186,17 @@ fn allowed_scene(state: &AppState, spec: &str) -> Result<(String, Option<PathBuf
     let root = dir
         .canonicalize()
         .map_err(|e| format!("the server's --scene-dir cannot be read: {}", e.kind()))?;
+    // Names that leave the folder are refused before the file system is
+    // asked, so that the answer does not tell which files exist elsewhere.
+    let leaves = Path::new(spec).components().any(|c| {
+        !matches!(
+            c,
+            std::path::Component::Normal(_) | std::path::Component::CurDir
+        )
+    });
+    if leaves {
+        return Err(format!("scene file '{spec}' is outside --scene-dir"));
+    }
     let path = root
         .join(Path::new(spec))
         .canonicalize()
@@ -187,7 +204,27 @@ fn allowed_scene(state: &AppState, spec: &str) -> Result<(String, Option<PathBuf
     if !path.starts_with(&root) {
         return Err(format!("scene file '{spec}' is outside --scene-dir"));
     }
+    // The files it brings in (glTF buffers and images, OBJ material
+    // libraries and textures), links followed, stay inside too.
+    for file in raykit_io::companion_files(&path) {
+        if file.canonicalize().is_ok_and(|f| !f.starts_with(&root)) {
+            return Err(format!(
+                "scene file '{spec}' reads a file outside --scene-dir"
+            ));
+        }
+    }
     Ok((path.to_string_lossy().into_owned(), Some(root)))
+}
+
+/// The `triangles=N` a built-in scene's specification asks for, so that a
+/// request over the server's limit is refused before the scene is built.
+fn asked_triangles(spec: &str) -> Option<u64> {
+    let (_, params) = spec.strip_prefix("builtin:")?.split_once(':')?;
+    params.split(',').find_map(|p| {
+        let (key, value) = p.split_once('=')?;
+        let digits: String = value.trim().chars().filter(|&c| c != '_').collect();
+        (key.trim() == "triangles").then(|| digits.parse().ok())?
+    })
 }
 
 /// `message` with the scene folder's own path taken out of every file name
@@ -195,7 +232,9 @@ fn allowed_scene(state: &AppState, spec: &str) -> Result<(String, Option<PathBuf
 /// where the server keeps its files.
 fn relative_to_scene_dir(message: &str, root: &Path) -> String {
     let prefix = format!("{}{}", root.display(), std::path::MAIN_SEPARATOR);
-    message.replace(&prefix, "")
+    message
+        .replace(&prefix, "")
+        .replace(&root.display().to_string(), "--scene-dir")
 }
 
 /// `POST /api/scene` with `{"scene": SPEC}`.

@@ -39,13 +39,17 @@ pub struct ServeConfig {
     /// Directory scene files may be loaded from through the API (`None`:
     /// built-in scenes only).
     pub scene_dir: Option<PathBuf>,
+    /// Time a client has to send a request's headers before its connection
+    /// is closed, so that connections that never finish a request (a
+    /// slow-loris client) cannot use up the server's sockets.
+    pub header_timeout: Duration,
 }
 
 impl Default for ServeConfig {
     /// 127.0.0.1:8080, no token, 16 clients, 1280×720 refined with 4
     /// samples, 3840×2160 and 16 samples at most, quality 80, 150 ms settle,
     /// 16 KiB messages, 240 inputs/s, scenes up to 20M triangles, a ping every
-    /// 20 s and 65 s of silence allowed.
+    /// 20 s and 65 s of silence allowed, 10 s to send a request's headers.
     fn default() -> Self {
         ServeConfig {
             addr: SocketAddr::from(([127, 0, 0, 1], 8080)),
@@ -63,6 +67,7 @@ impl Default for ServeConfig {
             ping_every: Duration::from_secs(20),
             idle_timeout: Duration::from_secs(65),
             scene_dir: None,
+            header_timeout: Duration::from_secs(10),
         }
     }
 }
@@ -95,6 +100,9 @@ impl ServeConfig {
         if self.max_clients == 0 || self.max_message_bytes < 256 || self.max_inputs_per_second == 0
         {
             return Some("max clients, inputs per second must be positive and message size at least 256 bytes".into());
+        }
+        if self.header_timeout.is_zero() {
+            return Some("the header timeout must be positive".into());
         }
         if self.ping_every.is_zero() || self.idle_timeout <= self.ping_every {
             return Some("the idle timeout must exceed the (non-zero) ping period".into());

@@ -38,6 +38,7 @@ mod auth;
 pub mod camera_control;
 mod client;
 mod config;
+mod connections;
 mod frame;
 pub mod link;
 pub mod load;
@@ -146,24 +147,14 @@ pub async fn start(config: ServeConfig, loader: SceneLoader, scene: &str) -> Res
         .await
         .context("loading the scene")??;
     let addr = config.addr;
+    let header_timeout = config.header_timeout;
     let state = AppState::new(config, loader, scene);
     let listener = tokio::net::TcpListener::bind(addr)
         .await
         .with_context(|| format!("cannot listen on {addr}"))?;
     let addr = listener.local_addr()?;
     let app = router(state.clone());
-    let mut stop = state.watch_shutdown();
-    // Frames and acknowledgements go out at once (no Nagle delay): one
-    // frame is in flight at a time, so a held-back tail stalls the stream.
-    let listener = axum::serve::ListenerExt::tap_io(listener, |tcp| {
-        let _ = tcp.set_nodelay(true);
-    });
-    let task = tokio::spawn(async move {
-        axum::serve(listener, app)
-            .with_graceful_shutdown(async move {
-                let _ = stop.wait_for(|s| *s).await;
-            })
-            .await
-    });
+    let stop = state.watch_shutdown();
+    let task = tokio::spawn(connections::serve(listener, app, header_timeout, stop));
     Ok(Server { addr, state, task })
 }

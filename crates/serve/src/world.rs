@@ -1,6 +1,7 @@
 //! What every client shares: the loaded scene with its acceleration
 //! structure, the lights and the default camera.
 
+use crate::camera_control::camera_problem;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::raysets::standard_light;
 use raykit_core::tri::TestKind;
@@ -53,11 +54,15 @@ impl Geometry {
         vec![PointLight::with_irradiance_at(p, Vec3::ONE, p.distance(self.bounds.center())).into()]
     }
 
-    /// The scene's camera, or one fitting the mesh for `aspect`.
+    /// The scene's camera when clients could set it themselves (see
+    /// [`camera_problem`]), or else one fitting the mesh for `aspect`.
     pub fn default_camera(&self, aspect: f32) -> Camera {
-        self.scene.camera.unwrap_or_else(|| {
-            Camera::fit_points(&self.bounds, &self.scene.mesh.positions, 40.0, aspect)
-        })
+        self.scene
+            .camera
+            .filter(|c| camera_problem(c).is_none())
+            .unwrap_or_else(|| {
+                Camera::fit_points(&self.bounds, &self.scene.mesh.positions, 40.0, aspect)
+            })
     }
 
     /// Scale of camera motion: the bounding-box diagonal (1 for an empty

@@ -30,9 +30,16 @@ pub async fn handler(State(state): State<Arc<AppState>>, upgrade: WebSocketUpgra
         );
     };
     let max = state.config.max_message_bytes;
+    // What may wait to be sent: the largest frame (raw RGB at the largest
+    // size) and a little more. A client that sends pings and never reads
+    // their pongs fills it, and its session ends, instead of growing the
+    // server's memory without bound.
+    let (w, h) = state.config.max_size;
+    let unsent = (w as usize * h as usize * 3).saturating_add(1 << 20);
     upgrade
         .max_message_size(max)
         .max_frame_size(max)
+        .max_write_buffer_size(unsent)
         .on_upgrade(move |socket| session(socket, state, guard))
         .into_response()
 }
