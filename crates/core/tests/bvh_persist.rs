@@ -351,12 +351,17 @@ fn crafted_trees_are_refused_or_traceable() {
             }
             Ok(t) => {
                 loaded += 1;
+                // A hit names one of the mesh's triangles, never an
+                // unused lane's u32::MAX.
+                let named =
+                    |h: Option<Hit>| h.is_none_or(|h| (h.prim as usize) < mesh.num_triangles());
                 for r in &rays[..200] {
-                    let _ = t.intersect(r);
+                    assert!(named(t.intersect(r)), "round {round}");
                     let _ = t.occluded(r);
                 }
                 let mut out = vec![None; 200];
                 t.intersect_batch(&rays[..200], &mut out);
+                assert!(out.iter().all(|h| named(*h)), "round {round}");
                 t.visit_regions(&mut |_| true, &mut |_| {});
             }
         }

@@ -4,7 +4,7 @@
 //! pictures of different sizes.
 
 use crate::error::LoadError;
-use crate::image_part::{read_png_part, ImagePart};
+use crate::image_part::{read_png_part, read_png_placement, ImagePart};
 use std::path::Path;
 
 /// Why parts do not make a picture.
@@ -37,75 +37,102 @@ impl std::error::Error for MergeError {
 
 /// The picture the parts at `paths` cover: width, height and RGB bytes.
 /// Every pixel must come from exactly one part, and all parts must belong
-/// to a picture of one size; errors name the part at fault.
+/// to a picture of one size; errors name the part at fault. The parts'
+/// placements are checked before the picture is allocated, so a part that
+/// claims a large picture costs nothing unless the parts fill it.
 pub fn merge_png_parts(paths: &[&Path]) -> Result<(u32, u32, Vec<u8>), MergeError> {
     if paths.is_empty() {
         return Err(MergeError::Parts("no parts to merge".into()));
     }
-    let mut size: Option<(u32, u32, &Path)> = None;
-    let mut rgb = Vec::new();
-    // The part covering each pixel so far (index into `paths`).
-    let mut owner: Vec<u32> = Vec::new();
-    const NONE: u32 = u32::MAX;
-    for (i, path) in paths.iter().enumerate() {
-        let (part, pixels) = read_png_part(path).map_err(MergeError::Read)?;
-        match size {
-            None => {
-                size = Some((part.full_width, part.full_height, path));
-                let n = part.full_width as usize * part.full_height as usize;
-                rgb = vec![0u8; n * 3];
-                owner = vec![NONE; n];
-            }
-            Some((w, h, first)) if (w, h) != (part.full_width, part.full_height) => {
-                return Err(MergeError::Parts(format!(
-                    "{}: a part of a {}×{} image, but {} is a part of a {w}×{h} image",
-                    path.display(),
-                    part.full_width,
-                    part.full_height,
-                    first.display()
-                )))
-            }
-            Some(_) => {}
+    let placements = paths
+        .iter()
+        .map(|p| read_png_placement(p).map_err(MergeError::Read))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (width, height) = (placements[0].full_width, placements[0].full_height);
+    for (part, path) in placements.iter().zip(paths) {
+        if (part.full_width, part.full_height) != (width, height) {
+            return Err(MergeError::Parts(format!(
+                "{}: a part of a {}×{} image, but {} is a part of a {width}×{height} image",
+                path.display(),
+                part.full_width,
+                part.full_height,
+                paths[0].display()
+            )));
         }
-        paste(&part, &pixels, i as u32, &mut rgb, &mut owner).map_err(|(x, y, other)| {
-            MergeError::Parts(overlap(path, paths[other as usize], x, y))
-        })?;
     }
-    let (width, height, _) = size.expect("at least one part");
-    let missing = owner.iter().filter(|&&o| o == NONE).count();
-    if let Some(first) = owner.iter().position(|&o| o == NONE) {
-        let (x, y) = (first % width as usize, first / width as usize);
-        return Err(MergeError::Parts(format!(
-            "the parts leave {missing} of the {width}×{height} pixels uncovered, the first at column {x}, row {y}: a part is missing"
-        )));
+    check_tiling(&placements, paths)?;
+    let mut rgb = vec![0u8; width as usize * height as usize * 3];
+    for (placed, path) in placements.iter().zip(paths) {
+        let (part, pixels) = read_png_part(path).map_err(MergeError::Read)?;
+        if part != *placed {
+            return Err(MergeError::Parts(format!(
+                "{}: changed while the parts were merged",
+                path.display()
+            )));
+        }
+        paste(&part, &pixels, &mut rgb);
     }
     Ok((width, height, rgb))
 }
 
-/// Copy `pixels` into `rgb` at `part`'s place, marking the pixels as
-/// `index`'s; on a pixel already covered, its position and owner.
-fn paste(
-    part: &ImagePart,
-    pixels: &[u8],
-    index: u32,
-    rgb: &mut [u8],
-    owner: &mut [u32],
-) -> Result<(), (u32, u32, u32)> {
-    let w = part.full_width as usize;
-    for row in 0..part.height {
-        let y = part.y + row;
-        for col in 0..part.width {
-            let x = part.x + col;
-            let at = y as usize * w + x as usize;
-            if owner[at] != u32::MAX {
-                return Err((x, y, owner[at]));
+/// Check that the parts, all of one picture, cover each of its pixels
+/// exactly once, row by row over the parts' column ranges; the first
+/// overlap (in row order, naming the later of the two parts) is reported
+/// before any gap.
+fn check_tiling(parts: &[ImagePart], paths: &[&Path]) -> Result<(), MergeError> {
+    let (width, height) = (parts[0].full_width, parts[0].full_height);
+    let mut gap: Option<(u32, u32)> = None;
+    let mut missing = 0u64;
+    let mut row: Vec<(u32, u32, usize)> = Vec::new();
+    for y in 0..height {
+        row.clear();
+        row.extend(
+            parts
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.y <= y && y - p.y < p.height)
+                .map(|(i, p)| (p.x, p.x + p.width, i)),
+        );
+        row.sort_unstable();
+        // Covered up to column `end`, by part `owner` at the far end.
+        let (mut end, mut owner) = (0u32, usize::MAX);
+        for &(x0, x1, i) in &row {
+            if x0 < end {
+                let (later, earlier) = (i.max(owner), i.min(owner));
+                return Err(MergeError::Parts(overlap(
+                    paths[later],
+                    paths[earlier],
+                    x0,
+                    y,
+                )));
             }
-            owner[at] = index;
-            let src = (row as usize * part.width as usize + col as usize) * 3;
-            rgb[at * 3..at * 3 + 3].copy_from_slice(&pixels[src..src + 3]);
+            if x0 > end {
+                gap.get_or_insert((end, y));
+                missing += u64::from(x0 - end);
+            }
+            (end, owner) = (x1, i);
+        }
+        if end < width {
+            gap.get_or_insert((end, y));
+            missing += u64::from(width - end);
         }
     }
-    Ok(())
+    match gap {
+        None => Ok(()),
+        Some((x, y)) => Err(MergeError::Parts(format!(
+            "the parts leave {missing} of the {width}×{height} pixels uncovered, the first at column {x}, row {y}: a part is missing"
+        ))),
+    }
+}
+
+/// Copy `pixels` into `rgb` at `part`'s place.
+fn paste(part: &ImagePart, pixels: &[u8], rgb: &mut [u8]) {
+    let w = part.full_width as usize;
+    let row_bytes = part.width as usize * 3;
+    for row in 0..part.height as usize {
+        let at = ((part.y as usize + row) * w + part.x as usize) * 3;
+        rgb[at..at + row_bytes].copy_from_slice(&pixels[row * row_bytes..(row + 1) * row_bytes]);
+    }
 }
 
 /// The error of two parts covering one pixel.
@@ -163,6 +190,107 @@ mod tests {
                 assert_eq!(rgb[at..at + 3], [x as u8, y as u8, (x + y) as u8]);
             }
         }
+    }
+
+    /// Rectangles of a 7×5 picture (a guillotine cut, then one rectangle
+    /// dropped, repeated or moved, or none) merged, against a count of the
+    /// parts over each pixel: the first pixel in row order that two cover
+    /// or none covers is the one named, and whole covers give the pixels.
+    #[test]
+    fn rectangles_are_checked_pixel_by_pixel() {
+        let (w, h) = (7u32, 5u32);
+        let dir = tempfile::tempdir().unwrap();
+        let mut rng = raykit_core::rng::Pcg32::new(3);
+        for round in 0..200 {
+            let mut rects = vec![(0u32, 0u32, w, h)];
+            for _ in 0..rng.below(6) {
+                let k = rng.below(rects.len() as u32) as usize;
+                let (x, y, rw, rh) = rects[k];
+                if rw > 1 && (rng.below(2) == 0 || rh == 1) {
+                    let cut = 1 + rng.below(rw - 1);
+                    rects[k] = (x, y, cut, rh);
+                    rects.push((x + cut, y, rw - cut, rh));
+                } else if rh > 1 {
+                    let cut = 1 + rng.below(rh - 1);
+                    rects[k] = (x, y, rw, cut);
+                    rects.push((x, y + cut, rw, rh - cut));
+                }
+            }
+            let k = rng.below(rects.len() as u32) as usize;
+            match rng.below(4) {
+                0 if rects.len() > 1 => {
+                    rects.remove(k);
+                }
+                1 => rects.push(rects[k]),
+                2 => {
+                    let (x, y, rw, rh) = rects[k];
+                    rects[k] = (x.saturating_sub(1), y, rw, rh);
+                }
+                _ => {}
+            }
+            let mut count = vec![0u32; (w * h) as usize];
+            let mut paths = Vec::new();
+            for (i, &(x, y, rw, rh)) in rects.iter().enumerate() {
+                let mut rgb = Vec::new();
+                for py in y..y + rh {
+                    for px in x..x + rw {
+                        count[(py * w + px) as usize] += 1;
+                        rgb.extend([px as u8, py as u8, (px * py) as u8]);
+                    }
+                }
+                let part = ImagePart {
+                    x,
+                    y,
+                    width: rw,
+                    height: rh,
+                    full_width: w,
+                    full_height: h,
+                };
+                let path = dir.path().join(format!("r{round}-{i}.png"));
+                write_png_part(&path, &part, &rgb).unwrap();
+                paths.push(path);
+            }
+            let refs: Vec<&Path> = paths.iter().map(|p| p.as_path()).collect();
+            let at = |i: usize| format!("column {}, row {}", i as u32 % w, i as u32 / w);
+            let result = merge_png_parts(&refs);
+            if let Some(i) = count.iter().position(|&c| c > 1) {
+                let m = result.err().map(|e| e.to_string()).unwrap_or_default();
+                assert!(m.contains("overlaps") && m.contains(&at(i)), "{round}: {m}");
+            } else if let Some(i) = count.iter().position(|&c| c == 0) {
+                let m = result.err().map(|e| e.to_string()).unwrap_or_default();
+                let missing = count.iter().filter(|&&c| c == 0).count();
+                assert!(
+                    m.contains("uncovered") && m.contains(&at(i)),
+                    "{round}: {m}"
+                );
+                assert!(m.contains(&format!("leave {missing} of")), "{round}: {m}");
+            } else {
+                let (_, _, rgb) = result.unwrap();
+                for (i, px) in rgb.chunks(3).enumerate() {
+                    let (x, y) = (i as u32 % w, i as u32 / w);
+                    assert_eq!(px, [x as u8, y as u8, (x * y) as u8], "{round}");
+                }
+            }
+        }
+    }
+
+    /// A part claiming a picture it does not fill is refused by its
+    /// placement, before a picture of that size is allocated.
+    #[test]
+    fn a_part_claiming_a_large_picture_is_refused_as_missing_parts() {
+        let dir = tempfile::tempdir().unwrap();
+        let part = ImagePart {
+            x: 0,
+            y: 0,
+            width: 1,
+            height: 1,
+            full_width: 16384,
+            full_height: 16384,
+        };
+        let path = dir.path().join("one.png");
+        write_png_part(&path, &part, &[1, 2, 3]).unwrap();
+        let m = merge_png_parts(&[path.as_path()]).unwrap_err().to_string();
+        assert!(m.contains("leave 268435455 of the 16384×16384"), "{m}");
     }
 
     #[test]

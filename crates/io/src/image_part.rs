@@ -117,10 +117,38 @@ pub fn write_png_part(path: &Path, part: &ImagePart, rgb8: &[u8]) -> io::Result<
 /// RGB, one without the placement chunk, or one whose size disagrees with
 /// it.
 pub fn read_png_part(path: &Path) -> Result<(ImagePart, Vec<u8>), LoadError> {
+    let (part, mut reader) = open_png_part(path)?;
+    let malformed = |m: String| LoadError::new(path, ErrorKind::Malformed, Location::File, m);
+    let (width, height) = (part.width, part.height);
+    let mut rgb = vec![0u8; reader.output_buffer_size().unwrap_or(0)];
+    let frame = reader
+        .next_frame(&mut rgb)
+        .map_err(|e| malformed(format!("pixels: {e}")))?;
+    rgb.truncate(frame.buffer_size());
+    if rgb.len() as u64 != width as u64 * height as u64 * 3 {
+        return Err(malformed(format!(
+            "{} bytes of pixels for {width}x{height} RGB",
+            rgb.len()
+        )));
+    }
+    Ok((part, rgb))
+}
+
+/// The placement of the PNG part at `path`, checked as [`read_png_part`]
+/// checks it, without decoding its pixels.
+pub(crate) fn read_png_placement(path: &Path) -> Result<ImagePart, LoadError> {
+    open_png_part(path).map(|(part, _)| part)
+}
+
+/// The placement of the PNG part at `path` and the reader positioned at its
+/// pixels.
+fn open_png_part(
+    path: &Path,
+) -> Result<(ImagePart, ::png::Reader<io::BufReader<std::fs::File>>), LoadError> {
     let file = std::fs::File::open(path).map_err(|e| LoadError::io(path, "open", e))?;
     let malformed = |m: String| LoadError::new(path, ErrorKind::Malformed, Location::File, m);
     let decoder = ::png::Decoder::new(io::BufReader::new(file));
-    let mut reader = decoder
+    let reader = decoder
         .read_info()
         .map_err(|e| malformed(format!("not a readable PNG: {e}")))?;
     let info = reader.info();
@@ -151,18 +179,7 @@ pub fn read_png_part(path: &Path) -> Result<(ImagePart, Vec<u8>), LoadError> {
             "the image is {width}x{height}, but its placement says {text} (it must be that size and lie inside the picture, of sides at most {MAX_IMAGE_SIDE})"
         )));
     }
-    let mut rgb = vec![0u8; reader.output_buffer_size().unwrap_or(0)];
-    let frame = reader
-        .next_frame(&mut rgb)
-        .map_err(|e| malformed(format!("pixels: {e}")))?;
-    rgb.truncate(frame.buffer_size());
-    if rgb.len() as u64 != width as u64 * height as u64 * 3 {
-        return Err(malformed(format!(
-            "{} bytes of pixels for {width}x{height} RGB",
-            rgb.len()
-        )));
-    }
-    Ok((part, rgb))
+    Ok((part, reader))
 }
 
 #[cfg(test)]

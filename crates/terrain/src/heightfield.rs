@@ -196,7 +196,7 @@ impl HeightField {
         let sane = |c: f64| (1e-9..=1e9).contains(&c);
         if !(sane(sx) && sane(sy)) {
             return Err((
-                format!("cell size must be between 1e-9 and 1e9 m, got {sx} x {sy}"),
+                format!("cell size must be between 1e-9 and 1e9 m, got {sx:e} x {sy:e}"),
                 heights,
             ));
         }

@@ -11,7 +11,7 @@ use tiff::decoder::{ifd::Value, Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
 use super::geokeys::{geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
-use super::limits::{check_dimensions, MAX_SAMPLES};
+use super::limits::{check_dimensions, zeroed_heights, MAX_SAMPLES};
 use super::nodata::nodata_as_f32;
 use super::DemError;
 use crate::dem::{Dem, GeoRef};
@@ -299,7 +299,7 @@ fn plain_strips<R: Read + Seek>(
     if !fits {
         return Ok(None);
     }
-    let mut heights = vec![0f32; width * height];
+    let mut heights = zeroed_heights(path, "tag 256", width, height)?;
     use rayon::prelude::*;
     heights
         .par_chunks_mut(strip)

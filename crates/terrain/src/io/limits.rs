@@ -46,3 +46,28 @@ pub fn check_dimensions(
     }
     Ok(())
 }
+
+/// Zeroed room for the `width` × `height` heights of `path`, or an error
+/// naming their size when this machine cannot allocate it (rather than the
+/// process aborting); `at` names where the dimensions were read.
+pub fn zeroed_heights(
+    path: &Path,
+    at: &str,
+    width: usize,
+    height: usize,
+) -> Result<Vec<f32>, DemError> {
+    let n = width * height;
+    let mut heights = Vec::new();
+    if heights.try_reserve_exact(n).is_err() {
+        return Err(DemError::new(
+            path,
+            at,
+            format!(
+                "raster is {width}×{height}: its heights need {} MiB, which cannot be allocated",
+                (n * 4) >> 20
+            ),
+        ));
+    }
+    heights.resize(n, 0.0);
+    Ok(heights)
+}

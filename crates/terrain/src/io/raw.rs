@@ -5,7 +5,7 @@ use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
 
-use super::limits::check_dimensions;
+use super::limits::{check_dimensions, zeroed_heights};
 use super::samples::read_samples;
 use super::DemError;
 use crate::dem::Dem;
@@ -109,7 +109,7 @@ pub fn read_raw(
             ),
         ));
     }
-    let mut heights = vec![0f32; width * height];
+    let mut heights = zeroed_heights(path, "raw size", width, height)?;
     read_samples(
         path,
         &mut BufReader::new(file),

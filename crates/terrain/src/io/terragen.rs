@@ -6,7 +6,7 @@ use std::fs::File;
 use std::io::{BufReader, ErrorKind, Read};
 use std::path::Path;
 
-use super::limits::check_dimensions;
+use super::limits::{check_dimensions, zeroed_heights};
 use super::samples::read_samples;
 use super::DemError;
 use crate::dem::{Dem, GeoRef};
@@ -178,7 +178,7 @@ pub fn read_ter(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             ),
         ));
     }
-    let mut heights = vec![0f32; width * height];
+    let mut heights = zeroed_heights(path, &format!("byte {altw_at}"), width, height)?;
     let (k, base, sz) = (
         height_scale as f64 / 65536.0,
         base_height as f64,

@@ -482,7 +482,7 @@ pub(crate) unsafe fn load<B: WideParts>(
     let built_sah = f64::from_bits(u64_at(&meta, 32));
     let sah_cost = f64::from_bits(u64_at(&meta, 40));
 
-    let shape = check_tree::<B>(&mut nodes, root, form, units, triangles, &fault)?;
+    let shape = check_tree::<B>(&mut nodes, root, form, &packs, units, triangles, &fault)?;
     let leaves = if form == FORM_PACKED {
         Leaves::Packed(Tri4Leaves::from_packs(packs))
     } else {
@@ -697,13 +697,16 @@ struct Shape {
 
 /// Check that the loaded nodes form a tree the traversal can walk: every
 /// inner reference points after its node and in range, every node but the
-/// root has exactly one parent, every leaf's units are in range, and the
+/// root has exactly one parent, every leaf's units are in range (and in
+/// `packs`, the packed form's units, the lanes a leaf's count covers name a
+/// triangle: a hit never reports an unused lane's `u32::MAX`), and the
 /// deepest stack fits; the boxes of unused slots are reset to the inverted
 /// box (no ray enters them).
 fn check_tree<B: WideParts>(
     nodes: &mut [B::Node],
     root: Child4,
     form: u32,
+    packs: &[Tri4],
     units: usize,
     triangles: usize,
     fault: &Fault<'_>,
@@ -715,17 +718,28 @@ fn check_tree<B: WideParts>(
         (HEADER + META + i * node_bytes + node_bytes - 8 * width + 8 * slot) as u64
     };
     let per_unit = if form == FORM_PACKED { 4 } else { 1 };
-    let leaf_ok = |c: Child4| {
+    let in_range = |c: Child4| {
         (c.index as usize)
             .checked_add((c.count as usize).div_ceil(per_unit))
             .is_some_and(|end| end <= units)
     };
+    let lanes_filled = |c: Child4| {
+        let first = c.index as usize;
+        form != FORM_PACKED
+            || (0..c.count as usize).all(|k| packs[first + k / 4].prim[k % 4] != u32::MAX)
+    };
+    let leaf_ok = |c: Child4| in_range(c) && lanes_filled(c);
     let leaf_fault = |at: u64, c: Child4| {
+        let what = if in_range(c) {
+            "has an unused lane among its triangles"
+        } else {
+            "runs past the leaf units"
+        };
         fault.at(
             at,
             "child reference",
             format!(
-                "leaf of {} triangles from unit {} runs past the {units} leaf units",
+                "leaf of {} triangles from unit {} {what} ({units} units)",
                 c.count, c.index
             ),
         )
