@@ -163,6 +163,7 @@ pub async fn status(State(state): State<Arc<AppState>>) -> Response {
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct SceneRequest {
     scene: String,
 }
@@ -338,6 +339,7 @@ pub async fn put_camera(
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct LightJson {
     position: [f32; 3],
     #[serde(default = "white")]
@@ -349,6 +351,7 @@ fn white() -> [f32; 3] {
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct LightsRequest {
     lights: Vec<LightJson>,
 }
@@ -387,6 +390,7 @@ pub async fn put_lights(State(state): State<Arc<AppState>>, bytes: Bytes) -> Res
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct ResolutionRequest {
     width: u32,
     height: u32,

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 /// degrees. In requests each field is optional and defaults to the current
 /// camera's.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CameraJson {
     /// Eye point.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -61,7 +62,7 @@ pub struct Envelope {
 
 /// What a client asks for.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(tag = "type", rename_all = "lowercase")]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum ClientMessage {
     /// Frame `frame` was shown; the next may be sent.
     Ack {
@@ -125,6 +126,7 @@ pub enum ClientMessage {
 
 /// Client settings; absent fields stay as they are.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SettingsJson {
     /// Full-resolution width.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -282,6 +284,15 @@ mod tests {
         assert_eq!(e.message, ClientMessage::Reset);
         assert!(serde_json::from_str::<Envelope>(r#"{"type":"warp"}"#).is_err());
         assert!(serde_json::from_str::<Envelope>(r#"{"type":"zoom"}"#).is_err());
+        // A misspelt field is an error naming it, not ignored.
+        for typo in [
+            r#"{"type":"camera","eye":[0,1,3],"taget":[9,9,9]}"#,
+            r#"{"type":"settings","widht":800}"#,
+            r#"{"type":"orbit","yaw":0.1,"pich":0.2,"seq":3}"#,
+        ] {
+            let e = serde_json::from_str::<Envelope>(typo).unwrap_err();
+            assert!(e.to_string().contains("unknown field"), "{typo}: {e}");
+        }
     }
 
     #[test]

@@ -214,6 +214,9 @@ async fn a_token_is_required_when_set() {
         .0,
         200
     );
+    // The scheme's name is case-insensitive (RFC 9110).
+    let lower = "Authorization: bearer s3cr3t\r\n";
+    assert_eq!(http(&server, "GET", "/metrics", lower, "").await.0, 200);
     let url = format!("ws://{}/ws", server.addr());
     assert!(tokio_tungstenite::connect_async(url.as_str())
         .await
