@@ -89,6 +89,8 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/", get(api::index))
         .route("/client.js", get(api::client_js))
         .merge(protected)
+        .fallback(|| async { api::error(axum::http::StatusCode::NOT_FOUND, "no such path") })
+        .layer(axum::middleware::from_fn(api::json_errors))
         .with_state(state)
 }
 

@@ -272,6 +272,23 @@ async fn api_writes_must_be_json() {
         .unwrap()
         .contains("application/json"));
     assert_eq!(server.state().world().geometry.scene.name, "cornell");
+    // The errors the framework answers are JSON too.
+    let big = format!(r#"{{"scene":"{}"}}"#, "x".repeat(64 << 10));
+    let cases = [
+        ("GET", "/nowhere", "", 404),
+        ("DELETE", "/api/scene", "", 405),
+        ("POST", "/api/scene", big.as_str(), 413),
+        ("GET", "/ws", "", 400),
+    ];
+    for (method, path, body, want) in cases {
+        let (status, head, reply) = http(&server, method, path, "", body).await;
+        assert_eq!(status, want, "{method} {path}");
+        let message = json_body(&reply)["error"].as_str().unwrap().to_string();
+        assert!(!message.is_empty(), "{method} {path}: {head}");
+        if want == 405 {
+            assert!(head.to_ascii_lowercase().contains("allow:"), "{head}");
+        }
+    }
     server.shutdown().await.unwrap();
 }
 
