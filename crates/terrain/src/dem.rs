@@ -115,11 +115,12 @@ impl Dem {
             })
     }
 
-    /// The first infinite height as (column, row, height), scanning rows
-    /// from the top: a sample no surface can stand on (a float64 sample
-    /// beyond the float32 range reads as one).
-    pub fn first_infinite(&self) -> Option<(usize, usize, f32)> {
-        first_infinite(&self.heights, self.width)
+    /// The first height beyond ±[`MAX_HEIGHT`] (infinite ones included) as
+    /// (column, row, height), scanning rows from the top: a sample no
+    /// surface can stand on (a float64 sample beyond the float32 range
+    /// reads as infinite).
+    pub fn first_unusable(&self) -> Option<(usize, usize, f32)> {
+        first_unusable(&self.heights, self.width)
     }
 
     /// Replace no-data samples (NaN) by `value` (e.g. the lowest height),
@@ -136,9 +137,27 @@ impl Dem {
     }
 }
 
-/// The first infinite sample of row-major `heights`, `width` per row, as
+/// Largest height magnitude a DEM may hold, metres: beyond it, differences
+/// of heights and the rays over them overflow float32 (two heights of ±3e38
+/// differ by infinity, and every cell would read as lit).
+pub const MAX_HEIGHT: f32 = 1e9;
+
+/// The first sample of row-major `heights`, `width` per row, beyond
+/// ±[`MAX_HEIGHT`] (infinite ones included; NaN, no data, is not), as
 /// (column, row, height).
-pub fn first_infinite(heights: &[f32], width: usize) -> Option<(usize, usize, f32)> {
-    let i = heights.iter().position(|h| h.is_infinite())?;
+pub fn first_unusable(heights: &[f32], width: usize) -> Option<(usize, usize, f32)> {
+    let i = heights.iter().position(|h| h.abs() > MAX_HEIGHT)?;
     Some((i % width.max(1), i / width.max(1), heights[i]))
+}
+
+/// Why the height `h` cannot be used: not finite, or beyond ±[`MAX_HEIGHT`].
+pub fn unusable_height(h: f32) -> String {
+    if h.is_infinite() {
+        format!(
+            "height {h} is not finite (a float64 sample beyond the float32 range reads as \
+             infinite); heights must be finite, or NaN for no data"
+        )
+    } else {
+        format!("height {h:e} is beyond ±{MAX_HEIGHT:e} m; heights must lie within it, or be NaN for no data")
+    }
 }

@@ -15,7 +15,7 @@
 //! in both, so distances need no conversion back. All intersection
 //! arithmetic is in f64.
 
-use crate::dem::{first_infinite, Dem};
+use crate::dem::{first_unusable, unusable_height, Dem, MAX_HEIGHT};
 
 /// A ray in grid units (see the module documentation), f64.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,14 +167,11 @@ impl HeightField {
             let e = "the DEM has no valid height (every sample is no-data)".to_string();
             return Err((e, heights));
         }
-        if let Some((col, row, h)) = (zmin.is_infinite() || zmax.is_infinite())
-            .then(|| first_infinite(&heights, dem.width))
+        if let Some((col, row, h)) = (zmin < -MAX_HEIGHT || zmax > MAX_HEIGHT)
+            .then(|| first_unusable(&heights, dem.width))
             .flatten()
         {
-            let e = format!(
-                "height {h} at row {row}, column {col} is not finite; heights must be finite, or \
-                 NaN for no data"
-            );
+            let e = format!("row {row}, column {col}: {}", unusable_height(h));
             return Err((e, heights));
         }
         let g = &dem.georef;

@@ -279,6 +279,19 @@ fn infinite_heights_and_absurd_cells_are_refused() {
         e.contains("row 4, column 5") && e.contains("not finite"),
         "{e}"
     );
+    // Finite heights whose differences overflow float32 are refused too;
+    // heights up to the bound are kept.
+    for (h, ok) in [(3e38f32, false), (-2e9, false), (1e9, true), (-1e9, true)] {
+        let mut dem = hills(9, 7, 3);
+        dem.heights[9 * 2 + 1] = h;
+        match HeightField::new(&dem) {
+            Ok(_) => assert!(ok, "{h} accepted"),
+            Err(e) => assert!(
+                !ok && e.contains("row 2, column 1") && e.contains("beyond"),
+                "{h}: {e}"
+            ),
+        }
+    }
     for size in [1e-200, 0.0, 1e12, f64::INFINITY] {
         let mut dem = hills(9, 7, 3);
         dem.georef.pixel_width = size;

@@ -1083,7 +1083,12 @@ fn load_dem_dispatches_on_extension() {
     assert_names_file_and_position(&load_dem(&odd, &o).unwrap_err(), &odd, "byte 12");
 
     // An infinite height is refused at its cell; NaN is no data.
-    for (at, bad) in [(6usize, f32::INFINITY), (13, f32::NEG_INFINITY)] {
+    for (at, bad) in [
+        (6usize, f32::INFINITY),
+        (13, f32::NEG_INFINITY),
+        (7, 3e38),
+        (9, -3e38),
+    ] {
         let mut heights: Vec<f32> = (0..16).map(|v| v as f32).collect();
         heights[2] = f32::NAN;
         heights[at] = bad;
@@ -1099,7 +1104,12 @@ fn load_dem_dispatches_on_extension() {
         let err = load_dem(&path, &o).unwrap_err();
         let place = format!("row {}, column {}", at / 4, at % 4);
         let text = assert_names_file_and_position(&err, &path, &place);
-        assert!(text.contains("not finite"), "{text}");
+        let why = if bad.is_infinite() {
+            "not finite"
+        } else {
+            "beyond"
+        };
+        assert!(text.contains(why), "{text}");
     }
 
     let unknown = dir.join("terrain.xyz");

@@ -51,14 +51,11 @@ impl Default for LoadOptions {
 pub fn load_dem(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Dem, DemError> {
     let path = path.as_ref();
     let dem = read_any(path, options)?;
-    if let Some((col, row, h)) = dem.first_infinite() {
+    if let Some((col, row, h)) = dem.first_unusable() {
         return Err(DemError::new(
             path,
             format!("row {row}, column {col}"),
-            format!(
-                "height {h} is not finite (a float64 sample beyond the float32 range reads as \
-                 infinite); heights must be finite, or NaN for no data"
-            ),
+            crate::dem::unusable_height(h),
         ));
     }
     Ok(dem)
