@@ -229,3 +229,33 @@ fn the_default_nodata_value_steps_aside_for_the_mask_values() {
         text(&o.stderr)
     );
 }
+
+/// A DEM too large for the memory the process may use is an error naming
+/// its size, not an abort: a sparse 32768² float file (4 GiB of heights)
+/// under a 2 GiB address-space limit.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_dem_larger_than_memory_allows_is_an_error_not_an_abort() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("big.r32");
+    let file = std::fs::File::create(&dem).unwrap();
+    file.set_len(32768 * 32768 * 4).unwrap();
+    let out = dir.path().join("m.tif");
+    let script = format!(
+        "ulimit -v 2097152; exec {} terrain shadow {} --sun 135,30 --out {}",
+        env!("CARGO_BIN_EXE_raykit"),
+        s(&dem),
+        s(&out)
+    );
+    let o = std::process::Command::new("bash")
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("big.r32") && e.contains("32768×32768") && e.contains("cannot be allocated"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}

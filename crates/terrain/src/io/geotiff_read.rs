@@ -11,7 +11,7 @@ use tiff::decoder::{ifd::Value, Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
 use super::geokeys::{geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
-use super::limits::{check_dimensions, zeroed_heights, MAX_SAMPLES};
+use super::limits::{check_dimensions, ensure_room, zeroed_heights, MAX_SAMPLES};
 use super::nodata::nodata_as_f32;
 use super::DemError;
 use crate::dem::{Dem, GeoRef};
@@ -150,6 +150,8 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             heights
         }
         None => {
+            // The decoded samples and the heights made from them.
+            ensure_room(path, "tag 256", width, height, bits as usize / 8 + 4)?;
             let data = dec.read_image().map_err(|e| {
                 DemError::new(path, "image data", format!("cannot decode samples: {e}"))
             })?;

@@ -56,18 +56,33 @@ pub fn zeroed_heights(
     width: usize,
     height: usize,
 ) -> Result<Vec<f32>, DemError> {
-    let n = width * height;
+    ensure_room(path, at, width, height, 4)?;
     let mut heights = Vec::new();
-    if heights.try_reserve_exact(n).is_err() {
+    heights.resize(width * height, 0.0);
+    Ok(heights)
+}
+
+/// Fail, naming the size, when `bytes_per_sample` bytes for each of the
+/// `width` × `height` samples of `path` cannot be allocated now (the memory
+/// a decoder is about to ask for), rather than let the allocation abort the
+/// process.
+pub fn ensure_room(
+    path: &Path,
+    at: &str,
+    width: usize,
+    height: usize,
+    bytes_per_sample: usize,
+) -> Result<(), DemError> {
+    let bytes = (width * height).saturating_mul(bytes_per_sample);
+    if Vec::<u8>::new().try_reserve_exact(bytes).is_err() {
         return Err(DemError::new(
             path,
             at,
             format!(
-                "raster is {width}×{height}: its heights need {} MiB, which cannot be allocated",
-                (n * 4) >> 20
+                "raster is {width}×{height}: reading it needs {} MiB, which cannot be allocated",
+                bytes >> 20
             ),
         ));
     }
-    heights.resize(n, 0.0);
-    Ok(heights)
+    Ok(())
 }

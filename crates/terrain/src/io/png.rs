@@ -5,7 +5,7 @@ use std::path::Path;
 
 use image::{ColorType, DynamicImage, ImageDecoder, ImageReader, Limits};
 
-use super::limits::{check_dimensions, MAX_SAMPLES, MAX_SIDE};
+use super::limits::{check_dimensions, ensure_room, MAX_SAMPLES, MAX_SIDE};
 use super::DemError;
 use crate::dem::Dem;
 
@@ -35,6 +35,9 @@ pub fn read_png(path: impl AsRef<Path>, scale: f64, offset: f64) -> Result<Dem, 
             format!("colour type is {colour:?}; expected 8- or 16-bit grayscale (L8 or L16)"),
         ));
     }
+    // The decoded samples and the heights made from them.
+    let bytes = if colour == ColorType::L16 { 2 } else { 1 };
+    ensure_room(path, "PNG header", w as usize, h as usize, bytes + 4)?;
     let image = DynamicImage::from_decoder(decoder)
         .map_err(|e| DemError::new(path, "PNG image data", format!("cannot decode: {e}")))?;
     let map = |s: f64| (s * scale + offset) as f32;
