@@ -182,12 +182,17 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
             Some(Ok(Message::Close(_))) => break,
             Some(Ok(Message::Ping(_) | Message::Pong(_))) => continue,
             Some(Ok(Message::Binary(_))) => {
-                reply_error(
-                    &tx,
-                    &client,
-                    &state,
-                    "binary messages are not accepted; send JSON text",
-                );
+                // Answered within the rate limit, as any other input.
+                if limit.allow(Instant::now()) {
+                    reply_error(
+                        &tx,
+                        &client,
+                        &state,
+                        "binary messages are not accepted; send JSON text",
+                    );
+                } else {
+                    client.count_error(&state.totals);
+                }
                 continue;
             }
         };

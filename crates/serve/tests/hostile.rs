@@ -143,6 +143,27 @@ async fn floods_are_rate_limited_and_oversized_messages_close_only_that_connecti
     }
     let (status, _, _) = http(&server, "GET", "/api/status", "", "").await;
     assert_eq!(status, 200);
+    // Binary messages are answered within the same limit: of 200 at once,
+    // at most the burst of 50 (and what refills meanwhile) gets a reply.
+    let (mut bin, _) = connect(&server, "").await;
+    for _ in 0..200 {
+        bin.send(Message::binary(vec![7u8; 8])).await.unwrap();
+    }
+    let mut replies = 0;
+    while let Ok(Some(Ok(m))) = tokio::time::timeout(
+        Duration::from_millis(500),
+        futures_util::StreamExt::next(&mut bin),
+    )
+    .await
+    {
+        if matches!(&m, Message::Text(t) if t.contains("binary")) {
+            replies += 1;
+        }
+    }
+    assert!(
+        (1..=60).contains(&replies),
+        "{replies} replies to 200 binary messages"
+    );
     // A body over the limit is refused with 413.
     let big = format!(r#"{{"scene":"builtin:{}"}}"#, "a".repeat(2000));
     let (status, _, _) = http(&server, "POST", "/api/scene", "", &big).await;
