@@ -14,30 +14,48 @@ use std::path::{Path, PathBuf};
 /// file's material libraries and textures) count as inputs, and an OBJ
 /// output's material library `<stem>.mtl`, written beside it, as an output.
 pub fn ensure_output(out: &Path, inputs: &[&Path]) -> Result<()> {
-    ensure_folder(out)?;
-    let is_obj = out
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    let library = is_obj.then(|| out.with_extension("mtl"));
-    for written in std::iter::once(out).chain(library.as_deref()) {
-        let Ok(real) = written.canonicalize() else {
-            continue; // the file does not exist yet
-        };
-        for input in inputs {
-            if input.canonicalize().is_ok_and(|i| i == real) {
+    ensure_outputs(&[out], inputs)
+}
+
+/// [`ensure_output`] for each of `outs` (the frames of an animation, say),
+/// the files the inputs bring in found once.
+pub fn ensure_outputs(outs: &[&Path], inputs: &[&Path]) -> Result<()> {
+    let mut brought: Option<Vec<(PathBuf, &Path)>> = None;
+    for out in outs {
+        ensure_folder(out)?;
+        let is_obj = out
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+        let library = is_obj.then(|| out.with_extension("mtl"));
+        for written in std::iter::once(*out).chain(library.as_deref()) {
+            let Ok(real) = written.canonicalize() else {
+                continue; // the file does not exist yet
+            };
+            if inputs
+                .iter()
+                .any(|input| input.canonicalize().is_ok_and(|i| i == real))
+            {
                 bail!(
                     "refusing to write {}: it is also an input of this command",
                     written.display()
                 );
             }
-            for file in raykit_io::companion_files(input) {
-                if file.canonicalize().is_ok_and(|f| f == real) {
-                    bail!(
-                        "refusing to write {}: {} reads it",
-                        written.display(),
-                        input.display()
-                    );
-                }
+            let brought = brought.get_or_insert_with(|| {
+                let files = inputs.iter().flat_map(|&i| {
+                    raykit_io::companion_files(i)
+                        .into_iter()
+                        .map(move |f| (f, i))
+                });
+                files
+                    .filter_map(|(f, i)| Some((f.canonicalize().ok()?, i)))
+                    .collect()
+            });
+            if let Some((_, input)) = brought.iter().find(|(f, _)| *f == real) {
+                bail!(
+                    "refusing to write {}: {} reads it",
+                    written.display(),
+                    input.display()
+                );
             }
         }
     }

@@ -104,9 +104,8 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let (setup, load_s) = timed(|| setup::setup(&args.scene, aspect));
     let mut setup = setup?;
     let frames = animation_frames(&setup.camera, &args.out, args.orbit, args.frames)?;
-    for f in &frames {
-        crate::paths::ensure_output(&f.out, &[std::path::Path::new(&args.scene.scene)])?;
-    }
+    let outs: Vec<&std::path::Path> = frames.iter().map(|f| f.out.as_path()).collect();
+    crate::paths::ensure_outputs(&outs, &[std::path::Path::new(&args.scene.scene)])?;
     let window = window.unwrap_or(raykit_render::Tile::whole(args.width, args.height));
     let samples = window.pixels() * args.spp as u64 * frames.len() as u64;
     let bar = ProgressBar::new(samples).with_style(
