@@ -235,6 +235,28 @@ fn truncated_and_garbage_files_are_errors_naming_the_file() {
         assert_eq!(e.path(), path);
         assert!(e.to_string().contains(&*path.to_string_lossy()), "{e}");
     }
+    // A Radiance file cut short is an error naming the byte where it ends;
+    // one cut inside its header, the byte the decoder reached.
+    let pixels: Vec<image::Rgb<f32>> = (0..32).map(|i| image::Rgb([i as f32, 1.0, 0.5])).collect();
+    let mut whole = Vec::new();
+    image::codecs::hdr::HdrEncoder::new(&mut whole)
+        .encode(&pixels, 8, 4)
+        .unwrap();
+    let body = whole.windows(2).position(|w| w == b"\n\n").unwrap() + 2;
+    let size_line = whole[body..].iter().position(|&b| b == b'\n').unwrap() + body + 1;
+    for cut in [size_line + 3, whole.len() - 5] {
+        let path = dir.path().join(format!("cut{cut}.hdr"));
+        std::fs::write(&path, &whole[..cut]).unwrap();
+        let e = EquirectMap::load(&path).unwrap_err().to_string();
+        assert!(e.contains(&format!("ends at byte {cut}")), "{e}");
+    }
+    let path = dir.path().join("bad-size.hdr");
+    let mut bad = whole[..body].to_vec();
+    bad.extend_from_slice(b"-Y zz +X 8\n");
+    std::fs::write(&path, &bad).unwrap();
+    let e = EquirectMap::load(&path).unwrap_err().to_string();
+    assert!(e.contains(&format!("at byte {}", bad.len())), "{e}");
+
     let missing = dir.path().join("missing.exr");
     let e = EquirectMap::load(&missing).unwrap_err();
     assert!(matches!(e, EnvError::Io { .. }) && e.to_string().contains("missing.exr"));

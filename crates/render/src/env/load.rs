@@ -4,7 +4,7 @@
 use super::equirect::EquirectMap;
 use super::error::EnvError;
 use std::fs::File;
-use std::io::BufReader;
+use std::io::Read;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
@@ -75,12 +75,31 @@ fn decode_exr(path: &Path) -> Result<Decoded, EnvError> {
     Ok((size.0, size.1, texels))
 }
 
+/// Decode a Radiance file read whole, so that an error can name the byte
+/// the decoder had reached (and a truncated file say so).
 fn decode_hdr(path: &Path) -> Result<Decoded, EnvError> {
-    let reader =
-        image::ImageReader::with_format(BufReader::new(open(path)?), image::ImageFormat::Hdr);
-    let img = reader.decode().map_err(|e| EnvError::Decode {
-        path: path.to_path_buf(),
-        message: e.to_string(),
+    let mut bytes = Vec::new();
+    open(path)?
+        .read_to_end(&mut bytes)
+        .map_err(|source| EnvError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let mut cursor = std::io::Cursor::new(bytes.as_slice());
+    let reader = image::ImageReader::with_format(&mut cursor, image::ImageFormat::Hdr);
+    let decoded = reader.decode();
+    let at = cursor.position();
+    let img = decoded.map_err(|e| {
+        let ended = matches!(&e, image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof);
+        let message = if ended {
+            format!("the file ends at byte {} before its pixels do (truncated?)", bytes.len())
+        } else {
+            format!("{e} (at byte {at})")
+        };
+        EnvError::Decode {
+            path: path.to_path_buf(),
+            message,
+        }
     })?;
     let rgb = img.into_rgb32f();
     let (w, h) = (rgb.width() as usize, rgb.height() as usize);
