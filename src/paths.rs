@@ -62,6 +62,25 @@ pub fn ensure_outputs(outs: &[&Path], inputs: &[&Path]) -> Result<()> {
     Ok(())
 }
 
+/// Fail unless `path` (given with the flag `flag`) ends in one of
+/// `extensions` (lower case, without the dot; any case matches): a file's
+/// name says its format, so one whose name says otherwise is not written.
+pub fn ensure_extension(path: &Path, flag: &str, extensions: &[&str]) -> Result<()> {
+    let ok = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)));
+    if !ok {
+        let names: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
+        bail!(
+            "{}: {flag} must end in {}",
+            path.display(),
+            names.join(" or ")
+        );
+    }
+    Ok(())
+}
+
 /// The folder a file at `path` lies in (`.` for a bare name).
 fn folder_of(path: &Path) -> &Path {
     match path.parent() {

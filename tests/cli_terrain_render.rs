@@ -230,6 +230,21 @@ fn bad_arguments_name_the_flag_or_the_file() {
     assert!(!o.status.success());
     assert!(text(&o.stderr).contains("--out"), "{}", text(&o.stderr));
 
+    // The outputs are PNGs, and named so.
+    for (flag, name) in [("--out", "t.jpg"), ("--heatmap", "h.tif")] {
+        let wrong = dir.path().join(name);
+        let o = match flag {
+            "--out" => render(&wrong, &[]),
+            _ => render(&out, &["--heatmap", s(&wrong)]),
+        };
+        let e = text(&o.stderr);
+        assert!(
+            !o.status.success() && e.contains(&format!("{flag} (a PNG) must end in .png")),
+            "{e}"
+        );
+        assert!(!wrong.exists() && !out.exists());
+    }
+
     let missing = dir.path().join("no_such_dem.ter");
     let o = raykit(&["terrain", "render", s(&missing), "--out", s(&out)]);
     assert!(!o.status.success());

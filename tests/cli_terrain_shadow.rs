@@ -165,11 +165,20 @@ fn bad_arguments_name_the_flag() {
     );
     // The output never replaces the input.
     refused(&[dem, "--sun", "1,1", "--out", dem], "also an input");
-    // Nor does the preview replace the GeoTIFF: `--out m.png` would put both
-    // at m.png.
+    // Outputs are named for their format: the mask is a GeoTIFF (`--out
+    // m.png` would also have put the preview at m.png), the preview a PNG.
     let png_out = dir.path().join("m.png");
-    refused(&[dem, "--sun", "135,20", "--out", s(&png_out)], "--preview");
+    refused(
+        &[dem, "--sun", "135,20", "--out", s(&png_out)],
+        "must end in .tif",
+    );
     assert!(!png_out.exists());
+    let jpg = dir.path().join("p.jpg");
+    refused(
+        &[dem, "--sun", "135,20", "--out", out, "--preview", s(&jpg)],
+        "--preview (a PNG) must end in .png",
+    );
+    assert!(!jpg.exists() && !Path::new(out).exists());
     // A preview that cannot be written stops the command before the GeoTIFF
     // is written.
     refused(

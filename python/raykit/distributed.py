@@ -224,6 +224,11 @@ def render(
     :func:`frame_path(out, k) <frame_path>` — atomically. Returns the image
     (``(height, width, 3)`` uint8), or the list of frames with ``frames``.
     """
+    if out is not None:
+        # Checked before any task runs, as the command line checks it.
+        folder = os.path.dirname(fspath(out, "out")) or "."
+        if not os.path.isdir(folder):
+            raise FileNotFoundError(f"cannot write {fspath(out, 'out')}: the folder {folder} does not exist")
     own_dir = workdir is None
     workdir = tempfile.mkdtemp(prefix="raykit-dask-") if own_dir else fspath(workdir, "workdir")
     try:

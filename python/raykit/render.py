@@ -33,8 +33,10 @@ def render(
 ) -> np.ndarray:
     """Render ``scene`` to an ``(height, width, 3)`` uint8 sRGB image.
 
-    ``scene``: a :class:`raykit.RaycastingScene` (its acceleration structure
-    is reused) or any mesh ``RaycastingScene.add_triangles`` takes. The
+    ``scene``: a :class:`raykit.RaycastingScene` without instances (its
+    acceleration structure is reused) or any mesh
+    ``RaycastingScene.add_triangles`` takes; a scene with instances is a
+    ``ValueError``. The
     camera is a pinhole at ``eye`` looking at ``target`` (default: the
     bounding box centre) with ``up`` and vertical field of view ``fov``
     degrees; without ``eye`` it frames the triangles as ``raykit render``
@@ -52,6 +54,11 @@ def render(
         mesh = scene
         scene = RaycastingScene()
         scene.add_triangles(mesh)
+    if scene.instanced:
+        raise ValueError(
+            "render draws a scene without instances; this one has add_instance placements "
+            "(render each geometry's triangles placed in one mesh instead)"
+        )
     return _raykit.render(
         scene._built(),
         int(width),

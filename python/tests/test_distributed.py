@@ -87,6 +87,12 @@ def test_render_bands_and_frames_equal_the_in_process_render(client, scene, bunn
     assert np.array_equal(single, raykit.render(scene, 50, 37, eye=eye, target=target))
     with pytest.raises(ValueError, match="tiles"):
         rkd.render(client, scene, 10, 4, tiles=5, progress=False)
+    # An output folder that does not exist is named before any task runs.
+    seen.clear()
+    missing = tmp_path / "nowhere" / "f.png"
+    with pytest.raises(FileNotFoundError, match="the folder .*nowhere does not exist"):
+        rkd.render(client, scene, 10, 4, out=missing, progress=lambda d, t: seen.append(d))
+    assert seen == []
 
 
 def test_cast_rays_equals_the_in_process_cast_and_loads_once_per_worker(client, scene, bunny):

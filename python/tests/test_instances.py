@@ -233,3 +233,5 @@ def test_bad_instances_are_refused_by_name(bunny):
     assert not np.isfinite(out["t_hit"][0]) and out["instance_ids"][0] == raykit.RaycastingScene.INVALID_ID
     with pytest.raises(ValueError, match="saved form"):
         scene.save("unused.rkb")
+    with pytest.raises(ValueError, match="without instances"):
+        raykit.render(scene, 16, 12)

@@ -31,6 +31,10 @@ pub fn run(args: InfoArgs) -> Result<ExitCode> {
             for k in AccelKind::ALL {
                 println!("{:<14} {}", k.name(), accel_description(k));
             }
+            let gpu = raykit_gpu::GpuAccelKind::ALL.map(|k| k.name()).join(", ");
+            let cwbvh = "compressed 8-wide BVH (Ylitie et al. 2017), GPU only";
+            println!("{:<14} {cwbvh}", "cwbvh");
+            println!("{:<14} --backend gpu takes {gpu}", "");
         }
         Topic::Tests => {
             for k in TestKind::ALL {

@@ -2,7 +2,7 @@
 //! into the whole image, refusing parts that overlap, leave pixels
 //! uncovered or belong to pictures of different sizes.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Args;
 use raykit_io::{merge_png_parts, MergeError};
 use std::path::{Path, PathBuf};
@@ -28,16 +28,7 @@ pub struct MergeTilesArgs {
 pub fn run(args: MergeTilesArgs) -> Result<ExitCode> {
     let inputs: Vec<&Path> = args.parts.iter().map(PathBuf::as_path).collect();
     crate::paths::ensure_output(&args.out, &inputs)?;
-    let png = args
-        .out
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    if !png {
-        bail!(
-            "{}: merge-tiles writes a PNG; give the output a .png name",
-            args.out.display()
-        );
-    }
+    crate::paths::ensure_extension(&args.out, "the output (a PNG)", &["png"])?;
     let (width, height, rgb) = merge_png_parts(&inputs).map_err(|e| match e {
         MergeError::Read(e) => anyhow::Error::from(e),
         MergeError::Parts(m) => anyhow::Error::msg(m),

@@ -16,8 +16,8 @@ use std::time::Duration;
 wheel or pinch to zoom, WASD/QE to fly, or tilt a phone in orientation mode.\n\n\
 Examples:\n  raykit serve                                     # builtin:cornell on http://127.0.0.1:8080/\n  \
 raykit serve --scene dragon.ply.gz --addr 0.0.0.0:8080 --token s3cret\n  \
-curl -X POST localhost:8080/api/scene -d '{\"scene\":\"builtin:terrain\"}'\n  \
-curl -X PUT localhost:8080/api/camera -d '{\"eye\":[0,1,3],\"target\":[0,0,0]}'\n  \
+curl -X POST localhost:8080/api/scene -H 'Content-Type: application/json' -d '{\"scene\":\"builtin:terrain\"}'\n  \
+curl -X PUT localhost:8080/api/camera -H 'Content-Type: application/json' -d '{\"eye\":[0,1,3],\"target\":[0,0,0]}'\n  \
 curl localhost:8080/metrics\n  \
 ffplay http://127.0.0.1:8080/mjpeg                # no JavaScript: MJPEG\n\n\
 The wire protocol and every endpoint are described in crates/serve/PROTOCOL.md.\n\

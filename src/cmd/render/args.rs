@@ -90,19 +90,19 @@ impl From<IntegratorArg> for IntegratorKind {
 #[derive(Args)]
 #[command(
     after_help = "Examples:\n  raykit render                                   # builtin:whitted (mirror + glass Cornell box) to render.png\n  \
-raykit render --scene examples/cornell-glass.gltf         # a glTF scene with its own camera and lights\n  \
+raykit render --scene examples/whitted-cornell.gltf       # a glTF scene with its own camera and lights\n  \
 raykit render --scene dragon.ply.gz --material glass --env data/envmaps/courtyard.exr --env-box\n  \
 raykit render --shadows maps --pcf 5 --primary raster --integrator wavefront --out frame.exr --aov depth,normal,id\n  \
 raykit render --scene bunny.obj --light dir:-1,-2,-1 --light spot:0,3,2:0,0,0:25:1,0.8,0.6\n  \
-raykit render --tile 2/8 --out part2.png && raykit merge-tiles render.png part*.png   # one band per process\n  \
-raykit render --orbit 120 --frames 30..60 --out anim/f.png   # frames 30 to 59 of a 120-frame orbit\n\n\
+for i in 0 1 2 3; do raykit render --tile $i/4 --out part$i.png; done; raykit merge-tiles render.png part*.png   # one band per process\n  \
+mkdir -p anim; raykit render --orbit 120 --frames 30..60 --out anim/f.png   # frames 30 to 59 of a 120-frame orbit\n\n\
 Without --eye the scene's own camera is used, or one framing the whole mesh.\n\
 Without --light the scene's lights are used, or one point light above the mesh.\n\
 --depth counts rays per path: 1 is direct light only, 2 adds one reflection/refraction bounce.\n\n\
 --backend gpu renders the same image on the GPU (wgpu compute; Mesa's lavapipe without a GPU):\n\
 --integrator recursive runs one kernel per ray path (one thread per pixel sample, --depth up to 16),\n\
 --integrator wavefront a stream of kernels (after Purcell et al. 2002) over ray queues. --accel picks kd-stack,\n\
-bvh-threaded (default) or brute, --test plucker or moller. --shadows maps and --primary raster\n\
+kd-ropes, bvh-threaded (default), cwbvh or brute, --test plucker or moller. --shadows maps and --primary raster\n\
 are CPU-only and are refused with an error."
 )]
 pub struct RenderArgs {

@@ -231,7 +231,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         };
         eprintln!(
             "{}: {} triangles, {} lights, env {}; load {:.0} ms, build {:.0} ms ({}){}, render {}{:.0} ms \
-             ({}×{}, {} spp, depth {}, {:?} shadows, {:?} primaries, {:?}; {:.2} Mrays: {} primary, {} shadow, {} secondary; {:.2} Mrays/s) -> {}",
+             ({}×{}, {} spp, depth {}, {} shadows, {} primaries, {}; {:.2} Mrays: {} primary, {} shadow, {} secondary; {:.2} Mrays/s) -> {}",
             setup.scene.name,
             mesh.num_triangles(),
             setup.lights.len(),
@@ -246,9 +246,9 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             args.height,
             args.spp,
             args.depth,
-            shadows,
-            opts.primary,
-            opts.integrator,
+            format!("{shadows:?}").to_lowercase(),
+            format!("{:?}", opts.primary).to_lowercase(),
+            format!("{:?}", opts.integrator).to_lowercase(),
             st.rays() as f64 / 1e6,
             st.primary_rays,
             st.shadow_rays,

@@ -33,8 +33,8 @@ pub struct TraceArgs {
     #[arg(long)]
     pub(super) out: PathBuf,
     /// Acceleration structure (`raykit info accels`; default bvh8, the
-    /// fastest, or kd-stack with --backend gpu, which also takes
-    /// bvh-threaded and brute). The JSON line names the one used.
+    /// fastest, or kd-stack with --backend gpu, which also takes kd-ropes,
+    /// bvh-threaded, cwbvh and brute). The JSON line names the one used.
     #[arg(long)]
     pub(super) accel: Option<String>,
     /// Ray/triangle test (`raykit info tests`).

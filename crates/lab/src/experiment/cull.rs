@@ -59,7 +59,8 @@ pub struct CullExperimentArgs {
     #[arg(long, default_value_t = EvalOptions::default().max_rounds as u32,
           value_parser = clap::value_parser!(u32).range(2..=raykit_cull::evaluate::MAX_ROUNDS as i64))]
     eval_rounds: u32,
-    /// Leave out the 1M-triangle assemblies (quick runs).
+    /// Leave out the 1M-triangle assemblies (still minutes: the ground truth
+    /// of each model is searched to convergence).
     #[arg(long)]
     small: bool,
     /// Output folder.

@@ -29,7 +29,7 @@ use std::process::ExitCode;
 #[command(
     after_help = "Default meshes: built-in shirley6 (Shirley's six-object test scene), the shared bunny\n\
 and dragon (res2, 202k triangles, the size of the Fairy Forest scene), and the full\n\
-871k dragon (the size of its Happy Buddha) when scripts/dragon-check.sh has fetched it.\n\
+871k dragon (the size of its Happy Buddha) when scripts/fetch-bench-data has fetched it.\n\
 Every GPU answer is checked against the CPU structure of the same name. On Mesa's\n\
 lavapipe (no GPU) the kernels run on the CPU cores: the figures then compare\n\
 organisations, not hardware."
@@ -148,7 +148,7 @@ fn default_meshes() -> Vec<String> {
     match cached_dragon() {
         Some(d) => m.push(d),
         None => eprintln!(
-            "note: full dragon not in data-cache/ (run scripts/dragon-check.sh or pass --mesh); left out"
+            "note: full dragon not in data-cache/ (run scripts/fetch-bench-data or pass --mesh); left out"
         ),
     }
     m

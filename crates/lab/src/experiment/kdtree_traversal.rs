@@ -25,7 +25,7 @@ use std::process::ExitCode;
 #[derive(Args)]
 #[command(
     after_help = "Default meshes: the shared teapot, bunny and dragon (res2), the built-in\n\
-terrain and scattered scenes, and the full dragon when scripts/dragon-check.sh has\n\
+terrain and scattered scenes, and the full dragon when scripts/fetch-bench-data has\n\
 fetched it into data-cache/. Every traversal shares one SAH build per mesh; each\n\
 answer is checked ray by ray against the BVH2 with the same triangle test (itself\n\
 tested against brute force)."
@@ -44,7 +44,7 @@ pub struct KdTraversalArgs {
     /// gives the steadiest CPU figures).
     #[arg(long, default_value_t = 1)]
     threads: usize,
-    /// Output folder for results.md, results.csv, memory.csv and results.json.
+    /// Output folder for results.md, speed.csv, memory.csv and results.json.
     #[arg(long, default_value = "experiments/kdtree-traversal")]
     out: PathBuf,
     #[command(flatten)]
@@ -99,7 +99,7 @@ fn default_meshes() -> Vec<String> {
     match cached_dragon() {
         Some(d) => m.push(d),
         None => eprintln!(
-            "note: full dragon not in data-cache/ (run scripts/dragon-check.sh or pass --mesh); left out"
+            "note: full dragon not in data-cache/ (run scripts/fetch-bench-data or pass --mesh); left out"
         ),
     }
     m

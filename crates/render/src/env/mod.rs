@@ -139,7 +139,7 @@ impl Environment {
                 format!("environment map {} by direction", describe_map(map))
             }
             Environment::Box { map, bounds } => format!(
-                "environment box (Purcell-style stream tracer) from ({}, {}, {}) to ({}, {}, {}) with map {}",
+                "environment box (the map seen with parallax, as in paper 001) from ({}, {}, {}) to ({}, {}, {}) with map {}",
                 bounds.min.x,
                 bounds.min.y,
                 bounds.min.z,

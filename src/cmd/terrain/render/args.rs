@@ -44,8 +44,8 @@ interpolated bilinearly over the hit cell's four corners). Colours: a hypsometri
 DEM's height range (greens, browns, greys, white) or --drape. Rays that miss see a sky gradient.\n\n\
 Examples:\n  raykit terrain render N57E011.hgt --out n57.png\n  \
 raykit terrain render fractal:1025:7 --sun 300,20 --heatmap steps.png\n  \
-raykit terrain render dem.tif --eye 429000,5149000,900 --target 430500,5151000,300 --caster maxmip\n  \
-raykit terrain render dem.tif --drape ortho.png --light 429452,5150685,30\n  \
+raykit terrain render data/terrain/lidar_dem_400.tif --eye 429100,5150400,650 --target 429452,5150685,400 --caster maxmip\n  \
+raykit terrain render data/terrain/lidar_dem_400.tif --drape ortho.png --light 429452,5150685,30\n  \
 raykit terrain render fractal:513 --path 500,500,2300:4000,2500,2100:4500,4500,2200 --frames 120 --out frames/f{}.png\n  \
 raykit terrain render N57E011.hgt --backend gpu --heatmap steps.png\n\n\
 GPU backend (--backend gpu): the heights and the maximum mipmap are uploaded once and a WGSL \

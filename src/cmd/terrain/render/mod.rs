@@ -103,6 +103,10 @@ pub fn run(args: TerrainRenderArgs) -> Result<ExitCode> {
     }
     // The folders are made (a fly-through's frames go into a new one), or
     // refused, before the work.
+    crate::paths::ensure_extension(&args.out, "--out (a PNG)", &["png"])?;
+    if let Some(h) = &args.heatmap {
+        crate::paths::ensure_extension(h, "--heatmap (a PNG)", &["png"])?;
+    }
     for p in out_paths.iter().chain(heat_paths.iter().flatten()) {
         ensure_parent(p)?;
         ensure_output(p, &inputs)?;

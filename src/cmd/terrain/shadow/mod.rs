@@ -109,6 +109,8 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         .clone()
         .unwrap_or_else(|| args.out.with_extension("png"));
     let input = Path::new(&args.dem);
+    crate::paths::ensure_extension(&args.out, "--out (a GeoTIFF)", &["tif", "tiff"])?;
+    crate::paths::ensure_extension(&preview, "--preview (a PNG)", &["png"])?;
     crate::paths::ensure_output(&args.out, &[input])?;
     crate::paths::ensure_output(&preview, &[input])?;
     crate::paths::ensure_distinct(&args.out, &preview, "--out", "--preview")?;
@@ -169,6 +171,8 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
             &args, spec, &dem, &field, &pyramid, method, &nodata, &preview, &layout,
         );
     }
+    // What the summary line calls the light, in the user's map coordinates.
+    let named;
     let light = if let Some(s) = &args.light {
         let [x, y, h] = numbers::<3>("--light", s)?;
         let geo = MapWorld::new(&dem, &field);
@@ -184,12 +188,14 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
             let (gx, gy) = geo.world_to_grid(wx, wy);
             field.height_at(gx, gy) + h
         };
+        named = format!("point light at {x}, {y}, elevation {z:.2} m");
         Light::Point([wx, wy, z])
     } else {
         let [az, el] = numbers::<2>("--sun", args.sun.as_deref().unwrap_or_default())?;
         if !(0.0..=90.0).contains(&el) {
             bail!("--sun: the elevation must be between 0 and 90 degrees, got {el}");
         }
+        named = format!("sun at azimuth {az}°, elevation {el}°");
         Light::Sun {
             azimuth_deg: az,
             elevation_deg: el,
@@ -269,8 +275,7 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     tif?;
     png?;
     eprintln!(
-        "{:?}: {:.1}% of the grid points lit, {:.3} s ({}) -> {} ({}) and {}",
-        light,
+        "{named}: {:.1}% of the grid points lit, {:.3} s ({}) -> {} ({}) and {}",
         100.0 * rasters.lit as f64 / cells as f64,
         secs,
         match method {
