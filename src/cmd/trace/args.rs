@@ -8,7 +8,7 @@ use std::path::PathBuf;
 #[derive(Args)]
 #[command(after_help = "Prints one JSON line of statistics on stderr:\n\
 {\"accel\", \"bvh_build\", \"test\", \"api\", \"load_ms\", \"build_ms\", \"trace_ms\", \"rays\", \"mrays\", \"per_s\" (rays per second), \"threads\"}\n\
-(trace_ms excludes loading and building; api: batch, or one-ray with --one-ray). Hit file: per ray f32 t, u32 prim (8 bytes; a miss is\n\
+(trace_ms excludes loading and building; api, on the CPU without instances: batch, or one-ray with --one-ray). Hit file: per ray f32 t, u32 prim (8 bytes; a miss is\n\
 t = +inf, prim = 4294967295). Occlusion file: one byte per ray (1 = occluded).\n\n\
 Several --mesh (or --instanced): an instanced scene under a two-level BVH, each file a geometry\n\
 placed once, a glTF file one geometry per mesh and one instance per node. Its hit file: per ray\n\
