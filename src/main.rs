@@ -8,6 +8,7 @@ mod paths;
 mod stage;
 
 use clap::{Parser, Subcommand};
+use std::io::Write;
 use std::process::ExitCode;
 
 /// raykit: ray casting and spatial queries on triangle meshes.
@@ -87,7 +88,11 @@ fn main() -> ExitCode {
 fn remove_unfinished_outputs_on_stop() {
     let installed = ctrlc::set_handler(|| {
         let _writes_stopped = raykit_io::remove_unfinished_outputs();
-        eprintln!("raykit: stopped; unfinished outputs removed");
+        // Not eprintln!: with stderr closed it would panic and never exit.
+        let _ = writeln!(
+            std::io::stderr(),
+            "raykit: stopped; unfinished outputs removed"
+        );
         std::process::exit(130);
     });
     if let Err(e) = installed {

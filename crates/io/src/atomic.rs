@@ -119,19 +119,29 @@ pub fn write_atomic_file<E>(
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let (file, tmp) = loop {
+    // Each name is listed before its file is made, so that a stop between
+    // the two cannot leave the file behind; a name already taken is unlisted
+    // without touching the file that holds it.
+    let (file, mut guard) = loop {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let mut tmp_name = std::ffi::OsString::from(".");
         tmp_name.push(name);
         tmp_name.push(format!(".{}.{n}.tmp", std::process::id()));
-        let tmp = dir.join(tmp_name);
-        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
-            Ok(f) => break (f, tmp),
-            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
-            Err(e) => return Err(io_error(e)),
+        let mut guard = TempGuard::new(dir.join(tmp_name));
+        match OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&guard.path)
+        {
+            Ok(f) => break (f, guard),
+            Err(e) => {
+                guard.armed = false;
+                if e.kind() != io::ErrorKind::AlreadyExists {
+                    return Err(io_error(e));
+                }
+            }
         }
     };
-    let mut guard = TempGuard::new(tmp);
     if let Some(m) = existing.filter(|m| m.is_file()) {
         fs::set_permissions(&guard.path, m.permissions()).map_err(&io_error)?;
     }

@@ -9,14 +9,16 @@ use crate::input::gunzip;
 use crate::mtl::texture_path;
 use crate::obj::library_names;
 use crate::text::{Lines, Tokens};
-use crate::uri::{external_file, file_below};
+use crate::uri::external_file;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-/// The files that loading `path` reads besides `path` itself, as paths
-/// beside or below its folder: glTF and GLB buffers and images named by a
-/// file URI, OBJ `mtllib` libraries that exist and the `map_Kd` textures
-/// they name. A file that cannot be read or parsed gives none (loading it
+/// The files that loading `path` reads besides `path` itself: glTF and GLB
+/// buffers and images named by a file URI (beside or below its folder, the
+/// only ones the loader reads), OBJ `mtllib` libraries that exist and the
+/// `map_Kd` textures they name (wherever they are: an OBJ file may name
+/// `../textures/wood.png`, so a caller that confines its inputs, as the
+/// server does, checks these). A file that cannot be read or parsed gives none (loading it
 /// reports the problem); other formats read no other file.
 pub fn companion_files(path: &Path) -> Vec<PathBuf> {
     let name = path
@@ -97,9 +99,7 @@ fn obj_files(dir: &Path, data: &[u8]) -> Vec<PathBuf> {
             continue;
         }
         for name in library_names(dir, toks.rest()) {
-            let Ok(library) = file_below(dir, &name) else {
-                continue;
-            };
+            let library = dir.join(name);
             let Ok(mtl) = std::fs::read(&library) else {
                 continue;
             };
@@ -108,8 +108,8 @@ fn obj_files(dir: &Path, data: &[u8]) -> Vec<PathBuf> {
                 let mut toks = Tokens::new(line);
                 if toks.next() == Some(b"map_Kd".as_slice()) {
                     let file = String::from_utf8_lossy(texture_path(toks)).into_owned();
-                    if let (false, Ok(texture)) = (file.is_empty(), file_below(&mtl_dir, &file)) {
-                        out.push(texture);
+                    if !file.is_empty() {
+                        out.push(mtl_dir.join(file));
                     }
                 }
             }

@@ -537,7 +537,8 @@ fn convert_material(
     let pbr = m.pbr_metallic_roughness();
     // Factors outside the ranges glTF allows are clamped into them (a number
     // beyond f32 reads as infinite): colours and fractions to [0, 1], the
-    // index of refraction to [1, 10], emission to finite non-negative values.
+    // index of refraction to [1, 10] (0 to 10, see below), emission to
+    // finite non-negative values.
     let unit = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
     let [r, g, b, _] = pbr.base_color_factor().map(unit);
     let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
@@ -570,10 +571,15 @@ fn convert_material(
             .transmission()
             .map(|t| unit(t.transmission_factor()))
             .unwrap_or(0.0),
-        ior: m
-            .ior()
-            .filter(|i| i.is_finite())
-            .map_or(1.5, |i| i.clamp(1.0, 10.0)),
+        // `ior` 0 means an infinite index (a fully reflective Fresnel), read
+        // as the largest index kept, 10.
+        ior: m.ior().filter(|i| i.is_finite()).map_or(1.5, |i| {
+            if i == 0.0 {
+                10.0
+            } else {
+                i.clamp(1.0, 10.0)
+            }
+        }),
         emission: m
             .emissive_factor()
             .map(|e| (unit(e) * strength).min(f32::MAX)),

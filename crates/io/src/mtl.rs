@@ -19,7 +19,6 @@
 use crate::error::{show, LoadError};
 use crate::text::{parse_f32, parse_i64, Lines, Tokens};
 use crate::texture_image::{decode_texture, Rows};
-use crate::uri::file_below;
 use raykit_core::{Material, Texture};
 use std::collections::HashMap;
 use std::path::Path;
@@ -129,14 +128,7 @@ pub(crate) fn parse_mtl(
                     ));
                 }
                 let file = String::from_utf8_lossy(file).into_owned();
-                let full = match file_below(dir, &file) {
-                    Ok(f) => f.to_string_lossy().into_owned(),
-                    Err(why) => {
-                        let at = path.display();
-                        warnings.push(format!("{at}:{line}: map_Kd texture not loaded: {why}"));
-                        continue;
-                    }
-                };
+                let full = dir.join(file).to_string_lossy().into_owned();
                 m.base_texture = textures
                     .entry(full.clone())
                     .or_insert_with(|| match load_texture(&full) {

@@ -11,7 +11,6 @@ use crate::error::{show, LoadError, Location};
 use crate::hashing::{key3_map, Key3};
 use crate::mtl::parse_mtl;
 use crate::text::{parse_f32, parse_i64, Lines, Tokens};
-use crate::uri::file_below;
 use crate::validate::finish;
 use raykit_core::{Material, Part, TriangleMesh, Vec2, Vec3};
 use std::collections::HashMap;
@@ -135,7 +134,7 @@ impl<'p> ObjState<'p> {
                 self.set_part();
             }
             b"usemtl" => self.use_material(toks.rest()),
-            b"mtllib" => self.material_library(line, toks.rest())?,
+            b"mtllib" => self.material_library(toks.rest())?,
             _ => {}
         }
         Ok(())
@@ -316,18 +315,10 @@ impl<'p> ObjState<'p> {
         };
     }
 
-    fn material_library(&mut self, line: usize, rest: &[u8]) -> Result<(), LoadError> {
+    fn material_library(&mut self, rest: &[u8]) -> Result<(), LoadError> {
         let dir = self.path.parent().unwrap_or(Path::new(""));
         for name in library_names(dir, rest) {
-            let file = match file_below(dir, &name) {
-                Ok(f) => f,
-                Err(why) => {
-                    let at = self.path.display();
-                    self.warnings
-                        .push(format!("{at}:{line}: material library not read: {why}"));
-                    continue;
-                }
-            };
+            let file = dir.join(&name);
             // A missing or unreadable library falls back to default materials.
             let Ok(bytes) = std::fs::read(&file) else {
                 continue;

@@ -93,9 +93,8 @@ pub(crate) fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-/// The file that a glTF file's external `uri` (or an OBJ file's material
-/// library, an MTL file's texture) names: a relative path, percent-decoded,
-/// beside or below `dir` (the naming file's folder). URIs with a scheme
+/// The file that a glTF file's external `uri` names: a relative path,
+/// percent-decoded, beside or below `dir` (the glTF file's folder). URIs with a scheme
 /// (`http:`, `file:`), absolute paths and paths with `..` are refused, so
 /// that a scene file (one a server was handed, say) brings in no file from
 /// elsewhere.
@@ -121,7 +120,7 @@ pub(crate) fn external_file(dir: &Path, uri: &str) -> Result<PathBuf, String> {
 /// `dir` joined with the relative path `rel` when it stays beside or below
 /// `dir` (no root, no `..`); `Err` with the same refusal as
 /// [`external_file`] otherwise.
-pub(crate) fn file_below(dir: &Path, rel: &str) -> Result<PathBuf, String> {
+fn file_below(dir: &Path, rel: &str) -> Result<PathBuf, String> {
     for part in Path::new(rel).components() {
         if !matches!(part, Component::Normal(_) | Component::CurDir) {
             return Err(format!(

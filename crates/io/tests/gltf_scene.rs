@@ -449,7 +449,7 @@ fn material_factors_out_of_range_are_clamped() {
     let m = &l.mesh.materials[0];
     assert_eq!(m.diffuse, [0.0, 1.0, 0.25]);
     assert_eq!(m.emission, [0.0, 0.5, 1.0]);
-    assert_eq!((m.ior, m.transmission), (1.0, 1.0));
+    assert_eq!((m.ior, m.transmission), (10.0, 1.0));
 }
 
 // ---------- textures ----------

@@ -238,16 +238,20 @@ fn allowed_scene(state: &AppState, spec: &str) -> Result<(String, Option<PathBuf
     if !path.starts_with(&root) {
         return Err(format!("scene file '{spec}' is outside --scene-dir"));
     }
-    // The files it brings in (glTF buffers and images, OBJ material
-    // libraries and textures), links followed, stay inside too.
-    for file in raykit_io::companion_files(&path) {
-        if file.canonicalize().is_ok_and(|f| !f.starts_with(&root)) {
-            return Err(format!(
-                "scene file '{spec}' reads a file outside --scene-dir"
-            ));
+    Ok((path.to_string_lossy().into_owned(), Some(root)))
+}
+
+/// Fail when the scene file `path` (named `spec` by the client) reads a
+/// file outside `root`: the files it brings in (glTF buffers and images,
+/// OBJ material libraries and textures), links followed, stay inside too.
+/// Reads the scene file, so it runs with the load, off the async threads.
+fn companions_inside(path: &Path, spec: &str, root: &Path) -> anyhow::Result<()> {
+    for file in raykit_io::companion_files(path) {
+        if file.canonicalize().is_ok_and(|f| !f.starts_with(root)) {
+            anyhow::bail!("scene file '{spec}' reads a file outside --scene-dir");
         }
     }
-    Ok((path.to_string_lossy().into_owned(), Some(root)))
+    Ok(())
 }
 
 /// The `triangles=N` a built-in scene's specification asks for, so that a
@@ -286,9 +290,13 @@ pub async fn load_scene(State(state): State<Arc<AppState>>, bytes: Bytes) -> Res
     let one_at_a_time = state.load_lock.clone().lock_owned().await;
     let loader = state.loader.clone();
     let st = state.clone();
+    let folder = root.clone();
     let loaded = tokio::task::spawn_blocking(move || {
         let _held = one_at_a_time;
         let start = std::time::Instant::now();
+        if let Some(folder) = &folder {
+            companions_inside(Path::new(&spec), &req.scene, folder)?;
+        }
         let scene = loader(&spec)?;
         let n = scene.mesh.num_triangles();
         let max = st.config.max_scene_triangles;
@@ -374,9 +382,19 @@ pub async fn put_camera(
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LightJson {
+    /// What `GET /api/status` reports; only point lights can be set.
+    #[serde(default)]
+    kind: Option<String>,
     position: [f32; 3],
     #[serde(default = "white")]
     color: [f32; 3],
+    /// Reported by `GET /api/status`, so that its lights can be sent back;
+    /// not read (`color` sets the light).
+    #[serde(default, rename = "direction")]
+    _direction: Option<serde::de::IgnoredAny>,
+    /// As `direction`.
+    #[serde(default, rename = "intensity")]
+    _intensity: Option<serde::de::IgnoredAny>,
 }
 
 fn white() -> [f32; 3] {
@@ -407,6 +425,12 @@ pub async fn put_lights(State(state): State<Arc<AppState>>, bytes: Bytes) -> Res
     let center = state.world().geometry.bounds.center();
     let mut lights = Vec::new();
     for (i, l) in req.lights.iter().enumerate() {
+        if l.kind.as_deref().is_some_and(|k| k != "point") {
+            return error(
+                StatusCode::BAD_REQUEST,
+                format!("lights[{i}]: only point lights can be set"),
+            );
+        }
         let (p, c) = (Vec3::from_array(l.position), Vec3::from_array(l.color));
         if !p.is_finite() || !c.is_finite() || c.min_element() < 0.0 || c.max_element() > 1e6 {
             return error(

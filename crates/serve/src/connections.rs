@@ -55,7 +55,19 @@ pub async fn serve(
         let mut closed = closing.subscribe();
         tokio::spawn(async move {
             let _permit = permit;
-            let mut builder = Builder::new(TokioExecutor::new());
+            // hyper's header timeout starts at a request's first byte: a
+            // connection that sends nothing is closed here instead.
+            // (A peek, not `readable`, whose readiness can be a stale one.)
+            let mut first = [0u8; 1];
+            if !matches!(
+                tokio::time::timeout(header_timeout, tcp.peek(&mut first)).await,
+                Ok(Ok(1))
+            ) {
+                return;
+            }
+            // HTTP/1 only: telling HTTP/2 apart would wait for a first byte
+            // with no timer, so a connection sending nothing would be kept.
+            let mut builder = Builder::new(TokioExecutor::new()).http1_only();
             builder
                 .http1()
                 .timer(TokioTimer::new())

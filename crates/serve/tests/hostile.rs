@@ -293,6 +293,19 @@ async fn api_writes_must_be_json() {
         .unwrap()
         .contains("application/json"));
     assert_eq!(server.state().world().geometry.scene.name, "cornell");
+    // The lights the status reports can be sent back as they are, and a
+    // misspelt field is named.
+    let (_, _, status) = http(&server, "GET", "/api/status", "", "").await;
+    let lights = serde_json::json!({ "lights": json_body(&status)["lights"] }).to_string();
+    let (code, _, reply) = http(&server, "PUT", "/api/lights", "", &lights).await;
+    assert_eq!(code, 200, "{}", String::from_utf8_lossy(&reply));
+    let typo = r#"{"lights":[{"position":[0,1,2],"colour":[1,1,1]}]}"#;
+    let (code, _, reply) = http(&server, "PUT", "/api/lights", "", typo).await;
+    assert_eq!(code, 400);
+    assert!(json_body(&reply)["error"]
+        .as_str()
+        .unwrap()
+        .contains("colour"));
     // The errors the framework answers are JSON too.
     let big = format!(r#"{{"scene":"{}"}}"#, "x".repeat(64 << 10));
     let cases = [

@@ -105,7 +105,12 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let mut setup = setup?;
     let frames = animation_frames(&setup.camera, &args.out, args.orbit, args.frames)?;
     let outs: Vec<&std::path::Path> = frames.iter().map(|f| f.out.as_path()).collect();
-    crate::paths::ensure_outputs(&outs, &[std::path::Path::new(&args.scene.scene)])?;
+    // The environment map is read too (a name such as `sky` names no file).
+    let inputs = [
+        std::path::Path::new(&args.scene.scene),
+        std::path::Path::new(&args.scene.env),
+    ];
+    crate::paths::ensure_outputs(&outs, &inputs)?;
     let window = window.unwrap_or(raykit_render::Tile::whole(args.width, args.height));
     let samples = window.pixels() * args.spp as u64 * frames.len() as u64;
     let bar = ProgressBar::new(samples).with_style(
