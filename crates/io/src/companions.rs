@@ -4,7 +4,7 @@
 //! would replace one of them, as it refuses one that would replace its input.
 
 use crate::format::is_gzip_path;
-use crate::gltf_glb::is_glb;
+use crate::gltf_glb::{is_glb, split_glb};
 use crate::input::gunzip;
 use crate::mtl::texture_path;
 use crate::obj::library_names;
@@ -55,7 +55,12 @@ fn contents(path: &Path) -> Option<Vec<u8>> {
 fn gltf_json(path: &Path) -> Option<Vec<u8>> {
     if is_gzip_path(path) {
         let data = contents(path)?;
-        return Some(glb_json(&data).map_or(data.clone(), <[u8]>::to_vec));
+        if !is_glb(&data) {
+            return Some(data);
+        }
+        return split_glb(path, &data)
+            .ok()
+            .map(|(glb, _)| glb.json.to_vec());
     }
     let mut file = std::fs::File::open(path).ok()?;
     let mut head = [0u8; 20];
@@ -67,15 +72,6 @@ fn gltf_json(path: &Path) -> Option<Vec<u8>> {
         return Some(json);
     }
     std::fs::read(path).ok()
-}
-
-/// The JSON chunk of GLB bytes, or `None` when they are not GLB.
-fn glb_json(data: &[u8]) -> Option<&[u8]> {
-    if !is_glb(data) || data.len() < 20 {
-        return None;
-    }
-    let len = u32::from_le_bytes([data[12], data[13], data[14], data[15]]) as usize;
-    data.get(20..20usize.saturating_add(len).min(data.len()))
 }
 
 fn gltf_files(dir: &Path, json: &[u8]) -> Vec<PathBuf> {

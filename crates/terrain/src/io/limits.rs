@@ -57,9 +57,7 @@ pub fn zeroed_heights(
     height: usize,
 ) -> Result<Vec<f32>, DemError> {
     ensure_room(path, at, width, height, 4)?;
-    let mut heights = Vec::new();
-    heights.resize(width * height, 0.0);
-    Ok(heights)
+    Ok(vec![0.0; width * height])
 }
 
 /// Fail, naming the size, when `bytes_per_sample` bytes for each of the
