@@ -81,23 +81,46 @@ fn main() -> ExitCode {
     }
 }
 
-/// On Ctrl-C or SIGTERM, remove the temporary files of the outputs being
-/// written, leave their destinations as they were, and end with the status
-/// a shell gives a program stopped by SIGINT (130). `serve` handles Ctrl-C
-/// itself, as a graceful shutdown.
+/// On Ctrl-C, SIGTERM or SIGHUP, remove the temporary files of the outputs
+/// being written, leave their destinations as they were, and end with the
+/// status a shell gives a program stopped by that signal (128 + its number:
+/// 130 for Ctrl-C, 143 for SIGTERM). `serve` handles Ctrl-C itself, as a
+/// graceful shutdown.
 fn remove_unfinished_outputs_on_stop() {
-    let installed = ctrlc::set_handler(|| {
+    let installed = stop_handler(|status| {
         let _writes_stopped = raykit_io::remove_unfinished_outputs();
         // Not eprintln!: with stderr closed it would panic and never exit.
         let _ = writeln!(
             std::io::stderr(),
             "raykit: stopped; unfinished outputs removed"
         );
-        std::process::exit(130);
+        std::process::exit(status);
     });
     if let Err(e) = installed {
         eprintln!(
             "raykit: warning: cannot handle Ctrl-C ({e}); a stopped run may leave temporary files"
         );
     }
+}
+
+/// Run `stop(128 + signal)` on a thread of its own when SIGINT, SIGTERM or
+/// SIGHUP arrives.
+#[cfg(unix)]
+fn stop_handler(stop: impl Fn(i32) + Send + 'static) -> std::io::Result<()> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
+    std::thread::Builder::new()
+        .name("stop".into())
+        .spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                stop(128 + signal);
+            }
+        })?;
+    Ok(())
+}
+
+/// Run `stop(130)` on Ctrl-C or a termination request.
+#[cfg(not(unix))]
+fn stop_handler(stop: impl Fn(i32) + Send + 'static) -> Result<(), ctrlc::Error> {
+    ctrlc::set_handler(move || stop(130))
 }

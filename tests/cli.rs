@@ -428,11 +428,18 @@ fn an_output_never_replaces_a_file_an_input_reads() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
-/// Stopped by SIGINT while it writes its output, a command removes the
-/// temporary file, keeps the old output and ends with status 130.
+/// Stopped by SIGINT or SIGTERM while it writes its output, a command
+/// removes the temporary file, keeps the old output and ends with the
+/// shell's status for the signal, 128 + its number.
 #[cfg(unix)]
 #[test]
 fn a_stopped_command_leaves_no_temporary_file() {
+    stopped_by("INT", 130);
+    stopped_by("TERM", 143);
+}
+
+#[cfg(unix)]
+fn stopped_by(signal: &str, status: i32) {
     use std::os::unix::process::ExitStatusExt;
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("rays.bin");
@@ -459,13 +466,18 @@ fn a_stopped_command_leaves_no_temporary_file() {
         "the command ended before it could be stopped"
     );
     let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([&format!("-{signal}"), &child.id().to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
     let o = child.wait_with_output().unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(130), "{:?}: {e}", o.status.signal());
+    assert_eq!(
+        o.status.code(),
+        Some(status),
+        "SIG{signal}: {:?}: {e}",
+        o.status.signal()
+    );
     assert!(!temporary(), "a temporary file was left");
     assert_eq!(std::fs::read(&out).unwrap(), b"old");
 }

@@ -131,6 +131,23 @@ fn scene_files_and_what_they_read_stay_in_the_scene_folder() {
     let mut rest = Vec::new();
     let closed = slow.read_to_end(&mut rest);
     assert!(closed.is_ok(), "{closed:?}");
+    // Headers complete, the body never finished: 408, and the connection
+    // is closed.
+    let mut trickle = TcpStream::connect(addr).unwrap();
+    trickle
+        .write_all(
+            b"POST /api/scene HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: 100\r\n\r\n{\"sc",
+        )
+        .unwrap();
+    trickle
+        .set_read_timeout(Some(Duration::from_secs(30)))
+        .unwrap();
+    let mut answer = Vec::new();
+    let closed = trickle.read_to_end(&mut answer);
+    assert!(closed.is_ok(), "{closed:?}");
+    let answer = String::from_utf8_lossy(&answer);
+    assert!(answer.starts_with("HTTP/1.1 408"), "{answer}");
+    assert!(answer.contains("did not arrive within"), "{answer}");
     // Nor is a connection that sends nothing at all kept.
     let mut silent = TcpStream::connect(addr).unwrap();
     silent

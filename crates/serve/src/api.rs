@@ -56,6 +56,46 @@ pub async fn json_errors(req: axum::extract::Request, next: axum::middleware::Ne
     out
 }
 
+/// A request's body read in full within the configured `header_timeout`
+/// (counted again from the end of the headers) and `max_message_bytes`,
+/// before any handler sees it: a client that sends its body a byte at a
+/// time gets 408 and loses its connection instead of holding it, and a
+/// body over the limit gets 413 as before.
+pub async fn body_in_time(
+    State(state): State<Arc<AppState>>,
+    req: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> Response {
+    let (parts, body) = req.into_parts();
+    let config = &state.config;
+    let limit = config.max_message_bytes;
+    let read = tokio::time::timeout(config.header_timeout, axum::body::to_bytes(body, limit));
+    match read.await {
+        Ok(Ok(bytes)) => {
+            let req = axum::extract::Request::from_parts(parts, axum::body::Body::from(bytes));
+            next.run(req).await
+        }
+        Ok(Err(_)) => error(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!("the request's body is over {limit} bytes, or was cut off"),
+        ),
+        Err(_) => {
+            let mut res = error(
+                StatusCode::REQUEST_TIMEOUT,
+                format!(
+                    "the request's body did not arrive within {:?}",
+                    config.header_timeout
+                ),
+            );
+            res.headers_mut().insert(
+                header::CONNECTION,
+                header::HeaderValue::from_static("close"),
+            );
+            res
+        }
+    }
+}
+
 /// A failed request: status and message, answered by [`error`].
 pub struct ApiError(pub StatusCode, pub String);
 

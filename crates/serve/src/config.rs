@@ -40,8 +40,9 @@ pub struct ServeConfig {
     /// built-in scenes only).
     pub scene_dir: Option<PathBuf>,
     /// Time a client has to send a request's headers before its connection
-    /// is closed, so that connections that never finish a request (a
-    /// slow-loris client) cannot use up the server's sockets.
+    /// is closed, and again its body (408), so that connections that never
+    /// finish a request (a slow-loris client) cannot use up the server's
+    /// sockets.
     pub header_timeout: Duration,
 }
 

@@ -83,6 +83,10 @@ pub fn router(state: Arc<AppState>) -> Router {
         .layer(axum::middleware::from_fn(api::require_json))
         .layer(axum::middleware::from_fn_with_state(
             state.clone(),
+            api::body_in_time,
+        ))
+        .layer(axum::middleware::from_fn_with_state(
+            state.clone(),
             auth::require_token,
         ));
     Router::new()
