@@ -68,6 +68,67 @@ pub struct WideBvh<N, T: TriangleTest> {
     pub(super) built_sah: Option<f64>,
 }
 
+/// What the single-ray traversals compiled for one CPU take and give
+/// back: the ray's reach `t` and its nearest hit so far (`prim`
+/// [`Reach::NONE`] for none). Sixteen bytes, so that it travels in
+/// registers across the call; the hit as an `Option<Hit>` went through
+/// memory, and reading it back stalled each call on the stores just made
+/// (a quarter of a missing ray's time, perf).
+#[derive(Clone, Copy)]
+pub(super) struct Reach {
+    t: f32,
+    u: f32,
+    v: f32,
+    prim: u32,
+}
+
+impl Reach {
+    /// The `prim` of no hit (never a triangle: meshes hold fewer).
+    const NONE: u32 = u32::MAX;
+
+    /// From the ray's reach and nearest hit so far, whose distance it is
+    /// when there is one.
+    #[inline(always)]
+    fn new(tfar: f32, best: Option<Hit>) -> Self {
+        debug_assert!(best.is_none_or(|h| h.t == tfar || tfar.is_nan()));
+        match best {
+            Some(h) => Reach {
+                t: tfar,
+                ..Reach::from(h)
+            },
+            None => Reach {
+                t: tfar,
+                u: 0.0,
+                v: 0.0,
+                prim: Reach::NONE,
+            },
+        }
+    }
+
+    /// The nearest hit, `t` being its distance.
+    #[inline(always)]
+    fn hit(self) -> Option<Hit> {
+        (self.prim != Reach::NONE).then_some(Hit {
+            t: self.t,
+            u: self.u,
+            v: self.v,
+            prim: self.prim,
+        })
+    }
+}
+
+impl From<Hit> for Reach {
+    #[inline(always)]
+    fn from(h: Hit) -> Self {
+        Reach {
+            t: h.t,
+            u: h.u,
+            v: h.v,
+            prim: h.prim,
+        }
+    }
+}
+
 /// The 4-wide BVH: four box tests at once with SSE.
 pub type Bvh4<T> = WideBvh<Node4, T>;
 
@@ -128,17 +189,24 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
         tfar: &mut f32,
         best: &mut Option<Hit>,
     ) -> bool {
-        match self.path {
+        let reach = Reach::new(*tfar, *best);
+        let reach = match self.path {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `path` is Avx2 only where `BoxPath::detect` found AVX2
             // and FMA on this CPU (`with_path` checks the same).
-            BoxPath::Avx2 => unsafe { self.traverse_avx2::<ANY>(start, ray, tfar, best) },
+            BoxPath::Avx2 => unsafe { self.traverse_avx2::<ANY>(start, ray, reach) },
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `path` is Avx512 only where `BoxPath::detect` found
             // every feature `traverse_avx512` is compiled for.
-            BoxPath::Avx512 => unsafe { self.traverse_avx512::<ANY>(start, ray, tfar, best) },
-            path => self.traverse_portable::<ANY>(start, ray, path, tfar, best),
+            BoxPath::Avx512 => unsafe { self.traverse_avx512::<ANY>(start, ray, reach) },
+            path => self.traverse_portable::<ANY>(start, ray, path, reach),
+        };
+        *tfar = reach.t;
+        if ANY {
+            return reach.prim != Reach::NONE;
         }
+        *best = reach.hit();
+        false
     }
 
     /// The traversal for CPUs without AVX2 (and the scalar kernel in
@@ -151,10 +219,9 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
         start: Child4,
         ray: &Ray,
         path: BoxPath,
-        tfar: &mut f32,
-        best: &mut Option<Hit>,
-    ) -> bool {
-        self.traverse_on::<ANY>(start, ray, path, tfar, best)
+        reach: Reach,
+    ) -> Reach {
+        self.traverse_from::<ANY>(start, ray, path, reach)
     }
 
     /// The traversal compiled for AVX-512 (F, VL, BW, DQ) besides AVX2 and
@@ -169,10 +236,9 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
         &self,
         start: Child4,
         ray: &Ray,
-        tfar: &mut f32,
-        best: &mut Option<Hit>,
-    ) -> bool {
-        self.traverse_on::<ANY>(start, ray, BoxPath::Avx512, tfar, best)
+        reach: Reach,
+    ) -> Reach {
+        self.traverse_from::<ANY>(start, ray, BoxPath::Avx512, reach)
     }
 
     /// The traversal compiled for AVX2 and FMA, so that the AVX box kernel
@@ -186,10 +252,36 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
         &self,
         start: Child4,
         ray: &Ray,
-        tfar: &mut f32,
-        best: &mut Option<Hit>,
-    ) -> bool {
-        self.traverse_on::<ANY>(start, ray, BoxPath::Avx2, tfar, best)
+        reach: Reach,
+    ) -> Reach {
+        self.traverse_from::<ANY>(start, ray, BoxPath::Avx2, reach)
+    }
+
+    /// [`WideBvh::traverse_on`] from `reach` and back to it (an any-hit
+    /// query's hit as a `prim` other than [`Reach::NONE`]).
+    #[inline(always)]
+    fn traverse_from<const ANY: bool>(
+        &self,
+        start: Child4,
+        ray: &Ray,
+        path: BoxPath,
+        reach: Reach,
+    ) -> Reach {
+        let (mut tfar, mut best) = (reach.t, reach.hit());
+        let any = self.traverse_on::<ANY>(start, ray, path, &mut tfar, &mut best);
+        match (ANY, best) {
+            (true, _) => Reach {
+                t: tfar,
+                u: 0.0,
+                v: 0.0,
+                prim: if any { 0 } else { Reach::NONE },
+            },
+            (false, Some(h)) => Reach {
+                t: tfar,
+                ..Reach::from(h)
+            },
+            (false, None) => Reach::new(tfar, None),
+        }
     }
 
     #[inline(always)]
