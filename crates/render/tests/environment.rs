@@ -264,6 +264,78 @@ fn truncated_and_garbage_files_are_errors_naming_the_file() {
     assert!(matches!(e, EnvError::UnknownFormat { .. }) && e.to_string().contains("map.png"));
 }
 
+/// The bytes of an OpenEXR header claiming a `width` × `height` RGB layer
+/// of half floats, uncompressed (OpenEXR's file layout: magic, version, the
+/// required attributes, a zero byte), with no offset table or pixels.
+fn exr_header(width: i32, height: i32) -> Vec<u8> {
+    let attr = |name: &str, kind: &str, value: &[u8]| {
+        let mut a = Vec::new();
+        for s in [name, kind] {
+            a.extend_from_slice(s.as_bytes());
+            a.push(0);
+        }
+        a.extend_from_slice(&(value.len() as i32).to_le_bytes());
+        a.extend_from_slice(value);
+        a
+    };
+    let ints = |v: &[i32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let floats = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let mut channels = Vec::new();
+    for c in ["B", "G", "R"] {
+        channels.extend_from_slice(c.as_bytes());
+        channels.push(0);
+        channels.extend_from_slice(&ints(&[1, 0, 1, 1]));
+    }
+    channels.push(0);
+    let window = ints(&[0, 0, width - 1, height - 1]);
+    let mut out = vec![0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0];
+    out.extend(attr("channels", "chlist", &channels));
+    out.extend(attr("compression", "compression", &[0]));
+    out.extend(attr("dataWindow", "box2i", &window));
+    out.extend(attr("displayWindow", "box2i", &window));
+    out.extend(attr("lineOrder", "lineOrder", &[0]));
+    out.extend(attr("pixelAspectRatio", "float", &floats(&[1.0])));
+    out.extend(attr("screenWindowCenter", "v2f", &floats(&[0.0, 0.0])));
+    out.extend(attr("screenWindowWidth", "float", &floats(&[1.0])));
+    out.push(0);
+    out
+}
+
+/// A header claiming more than `MAX_TEXELS` is refused by its size before
+/// anything is allocated (a 200000² OpenEXR header made the decoder's
+/// caller ask for 480 GB and abort); a Radiance map of 12000 × 6000, which
+/// the image crate's default memory bound refused, is read (here, cut
+/// short after its header, the error is that it ends there).
+#[test]
+fn maps_are_bounded_by_their_texel_count_not_the_decoders_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let side = 200_000;
+    assert!((side * side) as usize > raykit_render::env::MAX_TEXELS);
+    let path = dir.path().join("huge.exr");
+    std::fs::write(&path, exr_header(side as i32, side as i32)).unwrap();
+    let e = EquirectMap::load(&path).unwrap_err();
+    assert!(matches!(e, EnvError::Invalid { .. }), "{e}");
+    assert!(e.to_string().contains("at most"), "{e}");
+    // Within the bound, the same header is read as far as it goes.
+    let path = dir.path().join("header-only.exr");
+    std::fs::write(&path, exr_header(64, 32)).unwrap();
+    let e = EquirectMap::load(&path).unwrap_err();
+    assert!(matches!(e, EnvError::Decode { .. }), "{e}");
+
+    let header =
+        |w: usize, h: usize| format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n");
+    let path = dir.path().join("huge.hdr");
+    std::fs::write(&path, header(side, side)).unwrap();
+    let e = EquirectMap::load(&path).unwrap_err();
+    assert!(matches!(e, EnvError::Invalid { .. }), "{e}");
+    assert!(e.to_string().contains("at most"), "{e}");
+    let path = dir.path().join("large.hdr");
+    let text = header(12_000, 6_000);
+    std::fs::write(&path, &text).unwrap();
+    let e = EquirectMap::load(&path).unwrap_err().to_string();
+    assert!(e.contains(&format!("ends at byte {}", text.len())), "{e}");
+}
+
 // ------------------------------------------------------------------- mapping
 
 #[test]

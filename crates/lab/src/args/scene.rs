@@ -34,7 +34,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "SPEC", allow_hyphen_values = true, help = LIGHT_HELP)]
     pub light: Vec<String>,
     /// What rays leaving the scene see: `sky` (a gradient), `black`, `white`,
-    /// `R,G,B` (uniform), or an equirectangular HDR map (`.exr`, `.hdr`).
+    /// `R,G,B` (uniform), or an equirectangular HDR map (`.exr`, `.hdr`; up to 16384 × 16384 texels).
     #[arg(long, default_value = "sky")]
     pub env: String,
     /// The environment box: look the map up where a ray leaves a box

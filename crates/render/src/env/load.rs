@@ -11,6 +11,24 @@ use std::path::Path;
 /// Decoded texels: width, height, rows top to bottom.
 type Decoded = (usize, usize, Vec<[f32; 3]>);
 
+/// Most texels an environment map may have: 2^28, a 16384 × 16384 map or
+/// twice a 16K (16384 × 8192) panorama; 3 GiB decoded. A file whose header
+/// claims more is refused before anything is allocated.
+pub const MAX_TEXELS: usize = 1 << 28;
+
+/// Refuse a `width` × `height` map of more than [`MAX_TEXELS`].
+fn check_size(path: &Path, width: usize, height: usize) -> Result<(), EnvError> {
+    match width.checked_mul(height) {
+        Some(n) if n <= MAX_TEXELS => Ok(()),
+        _ => Err(EnvError::Invalid {
+            path: path.to_path_buf(),
+            message: format!(
+                "{width}×{height} texels; an environment map has at most {MAX_TEXELS} (16384 × 16384)"
+            ),
+        }),
+    }
+}
+
 impl EquirectMap {
     /// Load an equirectangular map from an OpenEXR file (`.exr`: the R, G and B
     /// channels of its first layer, any sample type and compression the `exr`
@@ -53,11 +71,28 @@ fn open(path: &Path) -> Result<File, EnvError> {
 
 fn decode_exr(path: &Path) -> Result<Decoded, EnvError> {
     use exr::prelude::{read_first_rgba_layer_from_file, Vec2 as ExrVec2};
+    let decode_error = |e: exr::error::Error| EnvError::Decode {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
     // Open first so a missing file is an I/O error, not a decode error.
     drop(open(path)?);
+    // The layers' sizes from the headers, before the decoder allocates
+    // any of them.
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(decode_error)?;
+    for header in &meta.headers {
+        check_size(path, header.layer_size.0, header.layer_size.1)?;
+    }
     let image = read_first_rgba_layer_from_file(
         path,
-        |size: ExrVec2<usize>, _| (size.0, vec![[0.0f32; 3]; size.0 * size.1]),
+        |size: ExrVec2<usize>, _| {
+            // Left empty where memory cannot be had; found below.
+            let mut texels = Vec::new();
+            if texels.try_reserve_exact(size.0 * size.1).is_ok() {
+                texels.resize(size.0 * size.1, [0.0f32; 3]);
+            }
+            (size.0, texels)
+        },
         |(w, texels): &mut (usize, Vec<[f32; 3]>),
          pos: ExrVec2<usize>,
          (r, g, b, _a): (f32, f32, f32, f32)| {
@@ -66,12 +101,15 @@ fn decode_exr(path: &Path) -> Result<Decoded, EnvError> {
             }
         },
     )
-    .map_err(|e| EnvError::Decode {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
+    .map_err(decode_error)?;
     let size = image.layer_data.size;
     let (_, texels) = image.layer_data.channel_data.pixels;
+    if texels.len() != size.0 * size.1 {
+        return Err(EnvError::Invalid {
+            path: path.to_path_buf(),
+            message: format!("no memory for its {}×{} texels", size.0, size.1),
+        });
+    }
     Ok((size.0, size.1, texels))
 }
 
@@ -85,8 +123,19 @@ fn decode_hdr(path: &Path) -> Result<Decoded, EnvError> {
             path: path.to_path_buf(),
             source,
         })?;
+    let hdr = image::ImageFormat::Hdr;
+    if let Ok((w, h)) = image::ImageReader::with_format(std::io::Cursor::new(bytes.as_slice()), hdr)
+        .into_dimensions()
+    {
+        check_size(path, w as usize, h as usize)?;
+    }
     let mut cursor = std::io::Cursor::new(bytes.as_slice());
-    let reader = image::ImageReader::with_format(&mut cursor, image::ImageFormat::Hdr);
+    let mut reader = image::ImageReader::with_format(&mut cursor, hdr);
+    // The image crate's default bound (512 MiB) refused maps of more than
+    // about 11 million texels; `check_size` is the bound here.
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(16 * MAX_TEXELS as u64);
+    reader.limits(limits);
     let decoded = reader.decode();
     let at = cursor.position();
     let img = decoded.map_err(|e| {

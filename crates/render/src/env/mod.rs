@@ -44,6 +44,7 @@ mod mapping;
 pub use env_box::{centered_box, exit_direction, exit_t, grounded_box, DEFAULT_BOX_SCALE};
 pub use equirect::EquirectMap;
 pub use error::EnvError;
+pub use load::MAX_TEXELS;
 pub use mapping::{dir_to_uv, uv_to_dir};
 
 use raykit_core::glam::Vec3;
