@@ -566,3 +566,25 @@ fn unusable_numbers_are_refused_by_their_flag() {
         assert!(!out.exists(), "{args:?} wrote an output");
     }
 }
+
+/// One side given, `render` keeps the default's 4:3 shape; both given,
+/// both are used; neither, 800 × 600.
+#[test]
+fn render_keeps_four_to_three_when_one_side_is_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.png");
+    for (flags, want) in [
+        (&["--width", "64"][..], (64, 48)),
+        (&["--height", "90"][..], (120, 90)),
+        (&["--width", "10", "--height", "20"][..], (10, 20)),
+        (&["--width", "1"][..], (1, 1)),
+        (&[][..], (800, 600)),
+    ] {
+        let mut args = vec!["render", "--scene", "builtin:cornell", "--out", s(&out)];
+        args.extend_from_slice(flags);
+        let o = raykit(&args);
+        assert!(o.status.success(), "{flags:?}: {}", stderr(&o));
+        let img = image::open(&out).unwrap();
+        assert_eq!((img.width(), img.height()), want, "{flags:?}");
+    }
+}

@@ -108,12 +108,14 @@ are CPU-only and are refused with an error."
 pub struct RenderArgs {
     #[command(flatten)]
     pub(super) scene: super::setup::SceneArgs,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 800)]
-    pub(super) width: u32,
-    /// Image height in pixels.
-    #[arg(long, default_value_t = 600)]
-    pub(super) height: u32,
+    /// Image width in pixels [default: 800, or 4/3 of --height when only
+    /// that is given].
+    #[arg(long)]
+    pub(super) width: Option<u32>,
+    /// Image height in pixels [default: 600, or 3/4 of --width when only
+    /// that is given].
+    #[arg(long)]
+    pub(super) height: Option<u32>,
     /// Samples per pixel (jittered anti-aliasing).
     #[arg(long, default_value_t = 1)]
     pub(super) spp: u32,
@@ -191,4 +193,19 @@ pub struct RenderArgs {
     pub(super) frames: Option<super::split::FrameRange>,
     #[command(flatten)]
     pub(super) build: raykit_lab::args::build_args::BuildArgs,
+}
+
+impl RenderArgs {
+    /// The image's width and height: as given, 800 × 600 when neither is,
+    /// and the other side at 4:3 when one is.
+    pub(super) fn size(&self) -> (u32, u32) {
+        let scale =
+            |side: u32, by: u64, over: u64| ((side as u64 * by + over / 2) / over).max(1) as u32;
+        match (self.width, self.height) {
+            (Some(w), Some(h)) => (w, h),
+            (Some(w), None) => (w, scale(w, 3, 4)),
+            (None, Some(h)) => (scale(h, 4, 3), h),
+            (None, None) => (800, 600),
+        }
+    }
 }

@@ -30,7 +30,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Render and write the image.
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let max = raykit_io::MAX_IMAGE_SIDE;
-    if args.width == 0 || args.height == 0 || args.width > max || args.height > max {
+    let (width, height) = args.size();
+    if width == 0 || height == 0 || width > max || height > max {
         bail!("--width and --height must be between 1 and {max}");
     }
     if args.spp == 0 || args.spp > 4096 {
@@ -73,7 +74,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             if !aovs.is_empty() || backend == BackendArg::Gpu {
                 bail!("--tile renders on the CPU without --aov");
             }
-            Some(t.window(args.width, args.height)?)
+            Some(t.window(width, height)?)
         }
         None => None,
     };
@@ -83,8 +84,8 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         args.shadows.into()
     };
     let opts = WhittedOptions {
-        width: args.width,
-        height: args.height,
+        width,
+        height,
         samples_per_pixel: args.spp,
         max_depth: args.depth,
         ambient: raykit_core::Vec3::splat(args.ambient),
@@ -100,7 +101,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         gpu::check_args(&opts, test)?;
     }
     let pool = pool(args.threads)?;
-    let aspect = args.width as f32 / args.height as f32;
+    let aspect = width as f32 / height as f32;
     let (setup, load_s) = timed(|| setup::setup(&args.scene, aspect));
     let mut setup = setup?;
     let frames = animation_frames(&setup.camera, &args.out, args.orbit, args.frames)?;
@@ -111,7 +112,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         std::path::Path::new(&args.scene.env),
     ];
     crate::paths::ensure_outputs(&outs, &inputs)?;
-    let window = window.unwrap_or(raykit_render::Tile::whole(args.width, args.height));
+    let window = window.unwrap_or(raykit_render::Tile::whole(width, height));
     let samples = window.pixels() * args.spp as u64 * frames.len() as u64;
     let bar = ProgressBar::new(samples).with_style(
         ProgressStyle::with_template("{bar:30} {percent:>3}% {msg} [{elapsed}<{eta}]")
@@ -211,8 +212,8 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                     y: window.y,
                     width: window.width,
                     height: window.height,
-                    full_width: args.width,
-                    full_height: args.height,
+                    full_width: width,
+                    full_height: height,
                 };
                 raykit_io::write_png_part(out, &part, &frame.image.rgb)?;
             }
@@ -247,8 +248,8 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             maps_note,
             what,
             st.seconds * 1e3,
-            args.width,
-            args.height,
+            width,
+            height,
             args.spp,
             args.depth,
             format!("{shadows:?}").to_lowercase(),
