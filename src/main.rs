@@ -104,11 +104,16 @@ fn remove_unfinished_outputs_on_stop() {
 }
 
 /// Run `stop(128 + signal)` on a thread of its own when SIGINT, SIGTERM or
-/// SIGHUP arrives.
+/// SIGHUP arrives; SIGHUP only where the process was not started ignoring
+/// it, so that a command under `nohup` outlives its terminal.
 #[cfg(unix)]
 fn stop_handler(stop: impl Fn(i32) + Send + 'static) -> std::io::Result<()> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
-    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
+    let mut wanted = vec![SIGINT, SIGTERM];
+    if !ignored(SIGHUP) {
+        wanted.push(SIGHUP);
+    }
+    let mut signals = signal_hook::iterator::Signals::new(wanted)?;
     std::thread::Builder::new()
         .name("stop".into())
         .spawn(move || {
@@ -117,6 +122,18 @@ fn stop_handler(stop: impl Fn(i32) + Send + 'static) -> std::io::Result<()> {
             }
         })?;
     Ok(())
+}
+
+/// Whether `signal` is ignored (`SIG_IGN`), as `nohup` leaves SIGHUP.
+#[cfg(unix)]
+fn ignored(signal: i32) -> bool {
+    // SAFETY: a query only (no new action), into a zeroed `sigaction`,
+    // which is a valid value of that plain C struct.
+    unsafe {
+        let mut old: libc::sigaction = std::mem::zeroed();
+        libc::sigaction(signal, std::ptr::null(), &mut old) == 0
+            && old.sa_sigaction == libc::SIG_IGN
+    }
 }
 
 /// Run `stop(130)` on Ctrl-C or a termination request.

@@ -436,6 +436,43 @@ fn an_output_never_replaces_a_file_an_input_reads() {
 fn a_stopped_command_leaves_no_temporary_file() {
     stopped_by("INT", 130);
     stopped_by("TERM", 143);
+    stopped_by("HUP", 129);
+}
+
+/// Under `nohup`, which starts it ignoring SIGHUP, a command goes on
+/// through a SIGHUP and finishes its output.
+#[cfg(unix)]
+#[test]
+fn a_command_under_nohup_survives_sighup() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rays.bin");
+    let mut child = Command::new("nohup")
+        .arg(env!("CARGO_BIN_EXE_raykit"))
+        .args(["rays", "--mesh", "builtin:cornell", "--kind", "incoherent"])
+        .args(["--size", "2048", "--out", s(&out)])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    let temporary = || {
+        std::fs::read_dir(dir.path())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .any(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+    };
+    while !temporary() && child.try_wait().unwrap().is_none() {
+        assert!(started.elapsed().as_secs() < 600, "no output started");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let kill = Command::new("kill")
+        .args(["-HUP", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{:?}: {}", o.status, stderr(&o));
+    assert_eq!(std::fs::metadata(&out).unwrap().len(), 2048 * 2048 * 32);
 }
 
 #[cfg(unix)]
@@ -444,12 +481,21 @@ fn stopped_by(signal: &str, status: i32) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("rays.bin");
     std::fs::write(&out, b"old").unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_raykit"))
+    let mut command = Command::new(env!("CARGO_BIN_EXE_raykit"));
+    command
         .args(["rays", "--mesh", "builtin:cornell", "--kind", "incoherent"])
         .args(["--size", "4096", "--out", s(&out)])
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+        .stderr(std::process::Stdio::piped());
+    // SAFETY: `signal` is async-signal-safe. The child starts with SIGHUP
+    // at its default, whatever this test runner was started with.
+    unsafe {
+        use std::os::unix::process::CommandExt;
+        command.pre_exec(|| {
+            libc::signal(libc::SIGHUP, libc::SIG_DFL);
+            Ok(())
+        });
+    }
+    let mut child = command.spawn().unwrap();
     let temporary = || {
         std::fs::read_dir(dir.path())
             .unwrap()
