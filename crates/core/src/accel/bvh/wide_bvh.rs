@@ -269,19 +269,11 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     ) -> Reach {
         let (mut tfar, mut best) = (reach.t, reach.hit());
         let any = self.traverse_on::<ANY>(start, ray, path, &mut tfar, &mut best);
-        match (ANY, best) {
-            (true, _) => Reach {
-                t: tfar,
-                u: 0.0,
-                v: 0.0,
-                prim: if any { 0 } else { Reach::NONE },
-            },
-            (false, Some(h)) => Reach {
-                t: tfar,
-                ..Reach::from(h)
-            },
-            (false, None) => Reach::new(tfar, None),
+        let mut out = Reach::new(tfar, if ANY { None } else { best });
+        if any {
+            out.prim = 0;
         }
+        out
     }
 
     #[inline(always)]
