@@ -102,8 +102,8 @@ pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadErro
 
 /// Walk the default scene (or the first scene, or else every root node)
 /// depth first, children in order, calling `visit` with each node and its
-/// world transform (its own composed with its parents'). A cycle in the
-/// hierarchy is an error naming the node.
+/// world transform (its own composed with its parents'). A node reached
+/// twice (two parents, listed twice, a cycle) is an error naming it.
 pub(crate) fn walk_nodes(
     path: &Path,
     doc: &Document,
@@ -122,24 +122,29 @@ pub(crate) fn walk_nodes(
             doc.nodes().filter(|n| !is_child[n.index()]).collect()
         }
     };
-    let mut stack: Vec<(::gltf::Node<'_>, Mat4, usize)> = roots
+    let mut stack: Vec<(::gltf::Node<'_>, Mat4)> = roots
         .into_iter()
         .rev()
-        .map(|n| (n, Mat4::IDENTITY, 0))
+        .map(|n| (n, Mat4::IDENTITY))
         .collect();
-    while let Some((node, parent, depth)) = stack.pop() {
-        if depth > n_nodes {
+    // glTF 2.0's nodes form disjoint trees: a node reached twice (a child
+    // of two nodes, listed twice, or in a cycle) is refused, since walking
+    // it again could copy a mesh exponentially often.
+    let mut reached = vec![false; n_nodes];
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut reached[node.index()], true) {
             return Err(LoadError::at_json(
                 path,
-                format!("nodes[{}].children", node.index()),
-                "the node hierarchy has a cycle",
+                format!("nodes[{}]", node.index()),
+                "the node is reached twice (a child of two nodes, listed twice in the scene, or in a \
+                 cycle); glTF nodes form disjoint trees",
             ));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         visit(&node, &world)?;
         let children: Vec<_> = node.children().collect();
         for c in children.into_iter().rev() {
-            stack.push((c, world, depth + 1));
+            stack.push((c, world));
         }
     }
     Ok(())

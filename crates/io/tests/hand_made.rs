@@ -257,3 +257,53 @@ fn gltf_quantized_positions_need_their_extension() {
     let floats = load(&local("transforms.gltf")).unwrap().mesh;
     assert_eq!(m.num_triangles(), floats.num_triangles());
 }
+
+/// A one-triangle glTF (data-URI buffer) with `nodes` (the last carries the
+/// mesh) and `scene` as the scene's root list.
+fn gltf_with_nodes(nodes: &[String], scene: &str) -> String {
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},
+"buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}}],
+"bufferViews":[{{"buffer":0,"byteLength":36}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+"nodes":[{}],"scenes":[{{"nodes":[{scene}]}}],"scene":0}}"#,
+        nodes.join(",")
+    )
+}
+
+/// Nodes form disjoint trees in glTF 2.0. A node that two parents share,
+/// nesting 40 deep, would be walked 2^40 times (a 1.4 KB file made the
+/// loader abort asking for gigabytes); it, a root listed twice and a cycle
+/// are refused naming the node, and the same tree without the sharing
+/// loads its one triangle.
+#[test]
+fn gltf_nodes_reached_twice_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let chain = |children: &dyn Fn(usize) -> String| -> Vec<String> {
+        (0..40)
+            .map(|i| format!(r#"{{"children":[{}]}}"#, children(i)))
+            .chain([r#"{"mesh":0}"#.to_string()])
+            .collect()
+    };
+    let shared = chain(&|i| format!("{0},{0}", i + 1));
+    let single = chain(&|i| format!("{}", i + 1));
+    let cycle = vec![
+        r#"{"children":[1]}"#.to_string(),
+        r#"{"children":[0],"mesh":0}"#.to_string(),
+    ];
+    for (name, nodes, scene, node) in [
+        ("shared", &shared, "0", 40),
+        ("twice", &single, "0,0", 0),
+        ("cycle", &cycle, "0", 0),
+    ] {
+        let path = dir.path().join(format!("{name}.gltf"));
+        std::fs::write(&path, gltf_with_nodes(nodes, scene)).unwrap();
+        let e = load(&path).unwrap_err().to_string();
+        assert!(e.contains("reached twice"), "{name}: {e}");
+        assert!(e.contains(&format!("nodes[{node}]")), "{name}: {e}");
+    }
+    let path = dir.path().join("single.gltf");
+    std::fs::write(&path, gltf_with_nodes(&single, "0")).unwrap();
+    assert_eq!(load(&path).unwrap().mesh.num_triangles(), 1);
+}
