@@ -268,3 +268,34 @@ fn a_dem_larger_than_memory_allows_is_an_error_not_an_abort() {
     );
     assert!(!out.exists());
 }
+
+/// Heights that fit in memory while the pyramid built over them would not
+/// are refused at load, naming the size: a sparse 16384² float file (1 GiB
+/// of heights, 2.7 GiB of max-mipmap pyramid) under a 3 GiB limit, where
+/// the pyramid's allocation used to abort the process.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_dem_whose_pyramid_would_not_fit_is_an_error_not_an_abort() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("wide.r32");
+    let file = std::fs::File::create(&dem).unwrap();
+    file.set_len(16384 * 16384 * 4).unwrap();
+    let out = dir.path().join("m.tif");
+    let script = format!(
+        "ulimit -v 3145728; exec {} terrain shadow {} --sun 135,30 --out {}",
+        env!("CARGO_BIN_EXE_raykit"),
+        s(&dem),
+        s(&out)
+    );
+    let o = std::process::Command::new("bash")
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("wide.r32") && e.contains("16384×16384") && e.contains("cannot be allocated"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}

@@ -60,10 +60,16 @@ pub fn zeroed_heights(
     Ok(vec![0.0; width * height])
 }
 
+/// Bytes per sample that the terrain commands allocate over the heights
+/// once read: the max-mipmap pyramid (`[max, min]` per cell, 8 bytes, and
+/// a third more for its coarser levels) and a mask byte, rounded up.
+pub const WORK_BYTES_PER_SAMPLE: usize = 12;
+
 /// Fail, naming the size, when `bytes_per_sample` bytes for each of the
-/// `width` × `height` samples of `path` cannot be allocated now (the memory
-/// a decoder is about to ask for), rather than let the allocation abort the
-/// process.
+/// `width` × `height` samples of `path` (the memory a decoder is about to
+/// ask for), and [`WORK_BYTES_PER_SAMPLE`] more for what is built over the
+/// heights, cannot be allocated now, rather than let a later allocation
+/// abort the process.
 pub fn ensure_room(
     path: &Path,
     at: &str,
@@ -71,13 +77,14 @@ pub fn ensure_room(
     height: usize,
     bytes_per_sample: usize,
 ) -> Result<(), DemError> {
-    let bytes = (width * height).saturating_mul(bytes_per_sample);
+    let bytes = (width * height).saturating_mul(bytes_per_sample + WORK_BYTES_PER_SAMPLE);
     if Vec::<u8>::new().try_reserve_exact(bytes).is_err() {
         return Err(DemError::new(
             path,
             at,
             format!(
-                "raster is {width}×{height}: reading it needs {} MiB, which cannot be allocated",
+                "raster is {width}×{height}: reading it and the pyramid over it need {} MiB, which \
+                 cannot be allocated",
                 bytes >> 20
             ),
         ));
