@@ -6,10 +6,10 @@
 use crate::format::is_gzip_path;
 use crate::gltf_glb::{is_glb, split_glb};
 use crate::input::gunzip;
-use crate::mtl::texture_path;
+use crate::mtl::{texture_path, MAX_LIBRARY_FILE};
 use crate::obj::library_names;
 use crate::text::{Lines, Tokens};
-use crate::uri::external_file;
+use crate::uri::{external_file, read_external};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -96,7 +96,7 @@ fn obj_files(dir: &Path, data: &[u8]) -> Vec<PathBuf> {
         }
         for name in library_names(dir, toks.rest()) {
             let library = dir.join(name);
-            let Ok(mtl) = std::fs::read(&library) else {
+            let Ok(mtl) = read_external(&library, MAX_LIBRARY_FILE) else {
                 continue;
             };
             let mtl_dir = library.parent().unwrap_or(Path::new("")).to_path_buf();

@@ -19,18 +19,32 @@
 use crate::error::{show, LoadError};
 use crate::text::{parse_f32, parse_i64, Lines, Tokens};
 use crate::texture_image::{decode_texture, Rows};
+use crate::uri::read_external;
 use raykit_core::{Material, Texture};
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// Parse the MTL library `data` read from `path`: materials and warnings.
+/// Largest texture file read (the decoders bound what it decodes to).
+pub(crate) const MAX_TEXTURE_FILE: u64 = 1 << 30;
+
+/// Largest MTL library read.
+pub(crate) const MAX_LIBRARY_FILE: u64 = 1 << 28;
+
+/// Decoded `map_Kd` textures by file (canonical path where it resolves),
+/// shared by every library of one OBJ file, so that an image named twice,
+/// under two spellings or by two libraries, is decoded once; none where it
+/// could not be.
+pub(crate) type TextureCache = HashMap<PathBuf, Option<Arc<Texture>>>;
+
+/// Parse the MTL library `data` read from `path`: materials and warnings;
+/// textures come from and go to `textures`.
 pub(crate) fn parse_mtl(
     path: &Path,
     data: &[u8],
+    textures: &mut TextureCache,
 ) -> Result<(Vec<Material>, Vec<String>), LoadError> {
     let mut warnings = Vec::new();
-    let mut textures: HashMap<String, Option<Arc<Texture>>> = HashMap::new();
     let mut out: Vec<Material> = Vec::new();
     let mut illum: i64 = 2;
     let dir = path.parent().unwrap_or(Path::new(""));
@@ -128,9 +142,11 @@ pub(crate) fn parse_mtl(
                     ));
                 }
                 let file = String::from_utf8_lossy(file).into_owned();
-                let full = dir.join(file).to_string_lossy().into_owned();
+                let joined = dir.join(file);
+                let full = joined.to_string_lossy().into_owned();
+                let key = std::fs::canonicalize(&joined).unwrap_or(joined);
                 m.base_texture = textures
-                    .entry(full.clone())
+                    .entry(key)
                     .or_insert_with(|| match load_texture(&full) {
                         Ok(t) => Some(Arc::new(t)),
                         Err(why) => {
@@ -155,7 +171,7 @@ pub(crate) fn parse_mtl(
 /// Read and decode the texture file `file` (rows bottom first, see the
 /// module documentation).
 fn load_texture(file: &str) -> Result<Texture, String> {
-    let bytes = std::fs::read(file).map_err(|e| format!("cannot read {file}: {e}"))?;
+    let bytes = read_external(Path::new(file), MAX_TEXTURE_FILE)?;
     decode_texture(file, &bytes, Rows::BottomFirst)
         .map_err(|e| format!("cannot decode {file}: {e}"))
 }
@@ -211,7 +227,7 @@ mod tests {
         let src = b"# lib\nnewmtl red\nKd 1 0 0\nKs 0.5 0.5 0.5\nNs 10\nNi 1.33\nd 0.25\n\
 illum 3\nKe 0 0 2\nmap_Kd -o 0.1 0.2 -bm 1.0 tex/red wood.png\n\
 newmtl gray\nKd 0.3\nTr 0.5\n";
-        let (m, w) = parse_mtl(Path::new("dir/a.mtl"), src).unwrap();
+        let (m, w) = parse_mtl(Path::new("dir/a.mtl"), src, &mut TextureCache::new()).unwrap();
         assert_eq!(w.len(), 1, "{w:?}");
         assert!(
             w[0].starts_with(
@@ -239,7 +255,7 @@ newmtl gray\nKd 0.3\nTr 0.5\n";
     fn values_outside_their_ranges_are_clamped() {
         let src =
             b"newmtl odd\nKd -1 2 0.5\nKs 3\nKe -1 0 5\nNs -20\nNi 0\nnewmtl big\nNs 1e9\nNi 40\n";
-        let (m, _) = parse_mtl(Path::new("a.mtl"), src).unwrap();
+        let (m, _) = parse_mtl(Path::new("a.mtl"), src, &mut TextureCache::new()).unwrap();
         assert_eq!(m[0].diffuse, [0.0, 1.0, 0.5]);
         assert_eq!(m[0].specular, [1.0; 3]);
         assert_eq!(m[0].emission, [0.0, 0.0, 5.0]);
@@ -249,14 +265,24 @@ newmtl gray\nKd 0.3\nTr 0.5\n";
 
     #[test]
     fn errors_name_the_line() {
-        let e = parse_mtl(Path::new("a.mtl"), b"newmtl x\nKd 1 zz 0\n").unwrap_err();
+        let e = parse_mtl(
+            Path::new("a.mtl"),
+            b"newmtl x\nKd 1 zz 0\n",
+            &mut TextureCache::new(),
+        )
+        .unwrap_err();
         assert_eq!(
             e.to_string(),
             "a.mtl:2: expected a number after 'Kd', found 'zz'"
         );
-        let e = parse_mtl(Path::new("a.mtl"), b"Kd 1 1 1\n").unwrap_err();
+        let e = parse_mtl(Path::new("a.mtl"), b"Kd 1 1 1\n", &mut TextureCache::new()).unwrap_err();
         assert!(e.to_string().starts_with("a.mtl:1: "));
-        let e = parse_mtl(Path::new("a.mtl"), b"newmtl x\nNs nan\n").unwrap_err();
+        let e = parse_mtl(
+            Path::new("a.mtl"),
+            b"newmtl x\nNs nan\n",
+            &mut TextureCache::new(),
+        )
+        .unwrap_err();
         assert!(e.to_string().starts_with("a.mtl:2: "));
     }
 }

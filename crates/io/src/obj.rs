@@ -9,8 +9,9 @@
 
 use crate::error::{show, LoadError, Location};
 use crate::hashing::{key3_map, Key3};
-use crate::mtl::parse_mtl;
+use crate::mtl::{parse_mtl, TextureCache, MAX_LIBRARY_FILE};
 use crate::text::{parse_f32, parse_i64, Lines, Tokens};
+use crate::uri::read_external;
 use crate::validate::finish;
 use raykit_core::{Material, Part, TriangleMesh, Vec2, Vec3};
 use std::collections::HashMap;
@@ -63,6 +64,10 @@ struct ObjState<'p> {
     tri_part: Vec<u32>,
     /// Warnings from the MTL libraries.
     warnings: Vec<String>,
+    /// The libraries read so far (canonical paths), each read once.
+    libraries: std::collections::HashSet<std::path::PathBuf>,
+    /// The libraries' decoded textures.
+    textures: TextureCache,
 }
 
 impl<'p> ObjState<'p> {
@@ -93,6 +98,8 @@ impl<'p> ObjState<'p> {
             used_parts: false,
             tri_part: Vec::new(),
             warnings: Vec::new(),
+            libraries: Default::default(),
+            textures: TextureCache::new(),
         }
     }
 
@@ -319,11 +326,19 @@ impl<'p> ObjState<'p> {
         let dir = self.path.parent().unwrap_or(Path::new(""));
         for name in library_names(dir, rest) {
             let file = dir.join(&name);
-            // A missing or unreadable library falls back to default materials.
-            let Ok(bytes) = std::fs::read(&file) else {
+            if !self
+                .libraries
+                .insert(std::fs::canonicalize(&file).unwrap_or(file.clone()))
+            {
+                continue;
+            }
+            // A missing or unreadable library (or one that is not a regular
+            // file, whose reads need not end) falls back to default
+            // materials.
+            let Ok(bytes) = read_external(&file, MAX_LIBRARY_FILE) else {
                 continue;
             };
-            let (materials, warnings) = parse_mtl(&file, &bytes)?;
+            let (materials, warnings) = parse_mtl(&file, &bytes, &mut self.textures)?;
             self.warnings.extend(warnings);
             for m in materials {
                 match self.mat_index.get(&m.name) {

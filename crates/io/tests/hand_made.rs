@@ -307,3 +307,50 @@ fn gltf_nodes_reached_twice_are_refused() {
     std::fs::write(&path, gltf_with_nodes(&single, "0")).unwrap();
     assert_eq!(load(&path).unwrap().mesh.num_triangles(), 1);
 }
+
+/// OBJ material libraries and their textures are read from regular files
+/// only (a FIFO named by `mtllib` made the loader wait forever), each
+/// library once however often it is named, and each texture decoded once
+/// per OBJ file, whatever the spelling of its path or the library naming
+/// it.
+#[cfg(unix)]
+#[test]
+fn obj_libraries_and_textures_are_read_once_from_regular_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    image::RgbImage::from_pixel(4, 2, image::Rgb([200, 100, 50]))
+        .save(d.join("wood.png"))
+        .unwrap();
+    std::fs::write(
+        d.join("a.mtl"),
+        "newmtl a\nmap_Kd wood.png\nnewmtl b\nmap_Kd ./wood.png\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("c.mtl"), "newmtl c\nmap_Kd sub/../wood.png\n").unwrap();
+    std::fs::create_dir(d.join("sub")).unwrap();
+    let fifo = d.join("fifo.mtl");
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let mut obj = String::from("mtllib fifo.mtl\n");
+    for _ in 0..100 {
+        obj.push_str("mtllib a.mtl c.mtl\n");
+    }
+    obj.push_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
+    let path = d.join("m.obj");
+    std::fs::write(&path, obj).unwrap();
+    let scene = load(&path).unwrap();
+    let materials = &scene.mesh.materials;
+    let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["a", "b", "c"]);
+    let textures: Vec<_> = materials
+        .iter()
+        .map(|m| m.base_texture.clone().expect("texture loaded"))
+        .collect();
+    assert!(textures
+        .iter()
+        .all(|t| std::sync::Arc::ptr_eq(t, &textures[0])));
+    assert_eq!((textures[0].width, textures[0].height), (4, 2));
+}
