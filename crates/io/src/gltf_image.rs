@@ -15,10 +15,13 @@ use std::borrow::Cow;
 use std::path::Path;
 use std::sync::Arc;
 
-/// Decoded images by glTF image index, filled on first use.
+/// Decoded images by glTF image index, filled on first use, and by source
+/// (the URI or buffer view), so that images that share their bytes are
+/// decoded once.
 pub(crate) struct ImageCache {
     /// `None`: not tried yet; `Some(None)`: failed (already warned).
     slots: Vec<Option<Option<Arc<Texture>>>>,
+    by_source: std::collections::HashMap<String, Option<Arc<Texture>>>,
 }
 
 impl ImageCache {
@@ -26,6 +29,7 @@ impl ImageCache {
     pub(crate) fn new(count: usize) -> Self {
         ImageCache {
             slots: vec![None; count],
+            by_source: Default::default(),
         }
     }
 
@@ -43,6 +47,18 @@ impl ImageCache {
         if let Some(done) = slot {
             return done.clone();
         }
+        let source = root
+            .images
+            .get(index)
+            .map(|img| match (&img.uri, &img.buffer_view) {
+                (Some(uri), _) => format!("uri {uri}"),
+                (None, Some(v)) => format!("view {}", v.value()),
+                (None, None) => format!("image {index}"),
+            });
+        if let Some(done) = source.as_ref().and_then(|k| self.by_source.get(k)) {
+            *slot = Some(done.clone());
+            return done.clone();
+        }
         let result = load_image(path, root, buffers, index);
         let tex = match result {
             Ok(t) => Some(Arc::new(t)),
@@ -55,6 +71,9 @@ impl ImageCache {
             }
         };
         *slot = Some(tex.clone());
+        if let Some(k) = source {
+            self.by_source.insert(k, tex.clone());
+        }
         tex
     }
 }

@@ -38,25 +38,26 @@ pub(crate) fn decode_texture(name: &str, bytes: &[u8], rows: Rows) -> Result<Tex
     let img = reader.decode().map_err(|e| e.to_string())?;
     let (w, h) = (img.width(), img.height());
     let sixteen = img.color().bytes_per_pixel() / img.color().channel_count().max(1) >= 2;
-    let mut texels: Vec<Vec4> = if sixteen {
-        img.to_rgba16()
-            .pixels()
-            .map(|p| texel(p.0.map(|c| c as f32 / 65535.0)))
-            .collect()
+    // Reserved fallibly: the linear texels take four times the decoder's
+    // bytes, and several textures may be held at once.
+    let mut texels: Vec<Vec4> = Vec::new();
+    texels
+        .try_reserve_exact(w as usize * h as usize)
+        .map_err(|_| format!("no memory for its {w}×{h} texels"))?;
+    if sixteen {
+        let img = img.into_rgba16();
+        texels.extend(img.pixels().map(|p| texel(p.0.map(|c| c as f32 / 65535.0))));
     } else {
-        img.to_rgba8()
-            .pixels()
-            .map(|p| texel(p.0.map(|c| c as f32 / 255.0)))
-            .collect()
-    };
+        let img = img.into_rgba8();
+        texels.extend(img.pixels().map(|p| texel(p.0.map(|c| c as f32 / 255.0))));
+    }
     if rows == Rows::BottomFirst && w > 0 {
-        let flipped: Vec<Vec4> = texels
-            .chunks_exact(w as usize)
-            .rev()
-            .flatten()
-            .copied()
-            .collect();
-        texels = flipped;
+        // In place: the top and bottom rows swapped pairwise.
+        let (w, h) = (w as usize, h as usize);
+        for r in 0..h / 2 {
+            let (top, bottom) = texels.split_at_mut((h - 1 - r) * w);
+            top[r * w..(r + 1) * w].swap_with_slice(&mut bottom[..w]);
+        }
     }
     if texels.len() != w as usize * h as usize {
         return Err(format!("decoded {} texels for {w}x{h}", texels.len()));

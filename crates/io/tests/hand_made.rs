@@ -354,3 +354,38 @@ fn obj_libraries_and_textures_are_read_once_from_regular_files() {
         .all(|t| std::sync::Arc::ptr_eq(t, &textures[0])));
     assert_eq!((textures[0].width, textures[0].height), (4, 2));
 }
+
+/// glTF images that share their bytes (the same URI or buffer view) are
+/// decoded once and shared: twelve images of one 250 KB PNG of 8000²
+/// texels took 12 GB and aborted the loader.
+#[test]
+fn gltf_images_with_one_source_are_decoded_once() {
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([10, 20, 30]))
+        .save(dir.path().join("tex.png"))
+        .unwrap();
+    let primitive = |m: usize| format!(r#"{{"attributes":{{"POSITION":0}},"material":{m}}}"#);
+    let json = gltf_with_nodes(&[r#"{"mesh":0}"#.to_string()], "0").replace(
+        &format!(r#""meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}]"#),
+        &format!(
+            r#""meshes":[{{"primitives":[{},{}]}}],
+"images":[{{"uri":"tex.png"}},{{"uri":"tex.png"}}],
+"textures":[{{"source":0}},{{"source":1}}],
+"materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}}}},
+{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":1}}}}}}]"#,
+            primitive(0),
+            primitive(1)
+        ),
+    );
+    let path = dir.path().join("two.gltf");
+    std::fs::write(&path, json).unwrap();
+    let scene = load(&path).unwrap();
+    let textures: Vec<_> = scene
+        .mesh
+        .materials
+        .iter()
+        .map(|m| m.base_texture.clone().expect("texture loaded"))
+        .collect();
+    assert_eq!(textures.len(), 2);
+    assert!(std::sync::Arc::ptr_eq(&textures[0], &textures[1]));
+}
