@@ -366,7 +366,7 @@ fn gltf_images_with_one_source_are_decoded_once() {
         .unwrap();
     let primitive = |m: usize| format!(r#"{{"attributes":{{"POSITION":0}},"material":{m}}}"#);
     let json = gltf_with_nodes(&[r#"{"mesh":0}"#.to_string()], "0").replace(
-        &format!(r#""meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}]"#),
+        r#""meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]"#,
         &format!(
             r#""meshes":[{{"primitives":[{},{}]}}],
 "images":[{{"uri":"tex.png"}},{{"uri":"tex.png"}}],
