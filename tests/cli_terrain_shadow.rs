@@ -245,28 +245,7 @@ fn the_default_nodata_value_steps_aside_for_the_mask_values() {
 #[cfg(target_os = "linux")]
 #[test]
 fn a_dem_larger_than_memory_allows_is_an_error_not_an_abort() {
-    let dir = tempfile::tempdir().unwrap();
-    let dem = dir.path().join("big.r32");
-    let file = std::fs::File::create(&dem).unwrap();
-    file.set_len(32768 * 32768 * 4).unwrap();
-    let out = dir.path().join("m.tif");
-    let script = format!(
-        "ulimit -v 2097152; exec {} terrain shadow {} --sun 135,30 --out {}",
-        env!("CARGO_BIN_EXE_raykit"),
-        s(&dem),
-        s(&out)
-    );
-    let o = std::process::Command::new("bash")
-        .args(["-c", &script])
-        .output()
-        .unwrap();
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{e}");
-    assert!(
-        e.contains("big.r32") && e.contains("32768×32768") && e.contains("cannot be allocated"),
-        "{e}"
-    );
-    assert!(!out.exists());
+    refused_under_limit(32768, 2097152);
 }
 
 /// Heights that fit in memory while the pyramid built over them would not
@@ -276,13 +255,21 @@ fn a_dem_larger_than_memory_allows_is_an_error_not_an_abort() {
 #[cfg(target_os = "linux")]
 #[test]
 fn a_dem_whose_pyramid_would_not_fit_is_an_error_not_an_abort() {
+    refused_under_limit(16384, 3145728);
+}
+
+/// `terrain shadow` on a sparse `side`² float file under `ulimit -v
+/// limit_kib` ends with status 1, naming the file and its size, and writes
+/// nothing.
+#[cfg(target_os = "linux")]
+fn refused_under_limit(side: u64, limit_kib: u64) {
     let dir = tempfile::tempdir().unwrap();
-    let dem = dir.path().join("wide.r32");
+    let dem = dir.path().join("big.r32");
     let file = std::fs::File::create(&dem).unwrap();
-    file.set_len(16384 * 16384 * 4).unwrap();
+    file.set_len(side * side * 4).unwrap();
     let out = dir.path().join("m.tif");
     let script = format!(
-        "ulimit -v 3145728; exec {} terrain shadow {} --sun 135,30 --out {}",
+        "ulimit -v {limit_kib}; exec {} terrain shadow {} --sun 135,30 --out {}",
         env!("CARGO_BIN_EXE_raykit"),
         s(&dem),
         s(&out)
@@ -293,8 +280,9 @@ fn a_dem_whose_pyramid_would_not_fit_is_an_error_not_an_abort() {
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{e}");
+    let size = format!("{side}×{side}");
     assert!(
-        e.contains("wide.r32") && e.contains("16384×16384") && e.contains("cannot be allocated"),
+        e.contains("big.r32") && e.contains(&size) && e.contains("cannot be allocated"),
         "{e}"
     );
     assert!(!out.exists());
