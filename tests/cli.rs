@@ -634,3 +634,54 @@ fn render_keeps_four_to_three_when_one_side_is_given() {
         assert_eq!((img.width(), img.height()), want, "{flags:?}");
     }
 }
+
+/// A glTF camera so far from the origin that its target rounds onto its
+/// eye is reported as the scene's camera, with the flags that replace it;
+/// with them the render goes ahead.
+#[test]
+fn an_unusable_scene_camera_is_named_as_the_scenes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("far.gltf");
+    std::fs::write(
+        &scene,
+        r#"{"asset":{"version":"2.0"},
+"buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+"bufferViews":[{"buffer":0,"byteLength":36}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+"nodes":[{"mesh":0,"children":[1]},{"camera":0,"translation":[0,0,1e20]}],
+"scenes":[{"nodes":[0]}],"scene":0,
+"cameras":[{"type":"perspective","perspective":{"yfov":0.8,"znear":0.01}}]}"#,
+    )
+    .unwrap();
+    let out = dir.path().join("o.png");
+    let o = raykit(&[
+        "render",
+        "--scene",
+        s(&scene),
+        "--width",
+        "16",
+        "--out",
+        s(&out),
+    ]);
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(
+        e.contains("the camera of scene 'far.gltf'") && e.contains("give --eye and --target"),
+        "{e}"
+    );
+    let o = raykit(&[
+        "render",
+        "--scene",
+        s(&scene),
+        "--width",
+        "16",
+        "--eye",
+        "0.3,0.3,2",
+        "--target",
+        "0.3,0.3,0",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -181,6 +181,14 @@ pub fn setup(mut scene: Scene, args: &SceneOptions, aspect: f32) -> Result<Rende
         camera.target = target;
     }
     if camera.eye == camera.target {
+        if args.eye.is_none() && args.target.is_none() && scene.camera.is_some() {
+            bail!(
+                "the camera of scene '{}' has its eye and target at the same point {} (in f32, \
+                 a camera far from the origin can lose its direction): give --eye and --target",
+                scene.name,
+                camera.eye
+            );
+        }
         bail!(
             "the camera's eye and target are the same point {}: it looks nowhere (--eye, --target)",
             camera.eye
