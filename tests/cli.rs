@@ -428,8 +428,8 @@ fn an_output_never_replaces_a_file_an_input_reads() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
-/// Stopped by SIGINT or SIGTERM while it writes its output, a command
-/// removes the temporary file, keeps the old output and ends with the
+/// Stopped by SIGINT, SIGTERM or SIGHUP while it writes its output, a
+/// command removes the temporary file, keeps the old output and ends with the
 /// shell's status for the signal, 128 + its number.
 #[cfg(unix)]
 #[test]
@@ -454,22 +454,7 @@ fn a_command_under_nohup_survives_sighup() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let started = std::time::Instant::now();
-    let temporary = || {
-        std::fs::read_dir(dir.path())
-            .unwrap()
-            .filter_map(|e| e.ok())
-            .any(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
-    };
-    while !temporary() && child.try_wait().unwrap().is_none() {
-        assert!(started.elapsed().as_secs() < 600, "no output started");
-        std::thread::sleep(std::time::Duration::from_millis(2));
-    }
-    let kill = Command::new("kill")
-        .args(["-HUP", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
+    signal_while_writing(&mut child, dir.path(), "HUP");
     let o = child.wait_with_output().unwrap();
     assert!(o.status.success(), "{:?}: {}", o.status, stderr(&o));
     assert_eq!(std::fs::metadata(&out).unwrap().len(), 2048 * 2048 * 32);
@@ -496,14 +481,34 @@ fn stopped_by(signal: &str, status: i32) {
         });
     }
     let mut child = command.spawn().unwrap();
-    let temporary = || {
-        std::fs::read_dir(dir.path())
-            .unwrap()
-            .filter_map(|e| e.ok())
-            .any(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
-    };
+    signal_while_writing(&mut child, dir.path(), signal);
+    let o = child.wait_with_output().unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(
+        o.status.code(),
+        Some(status),
+        "SIG{signal}: {:?}: {e}",
+        o.status.signal()
+    );
+    assert!(!has_temporary(dir.path()), "a temporary file was left");
+    assert_eq!(std::fs::read(&out).unwrap(), b"old");
+}
+
+/// Whether `dir` holds a temporary output file.
+#[cfg(unix)]
+fn has_temporary(dir: &Path) -> bool {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .any(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+}
+
+/// Send `signal` to `child` once its temporary output file exists in
+/// `dir`, while it is still running.
+#[cfg(unix)]
+fn signal_while_writing(child: &mut std::process::Child, dir: &Path, signal: &str) {
     let started = std::time::Instant::now();
-    while !temporary() && child.try_wait().unwrap().is_none() {
+    while !has_temporary(dir) && child.try_wait().unwrap().is_none() {
         assert!(started.elapsed().as_secs() < 600, "no output started");
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
@@ -516,16 +521,6 @@ fn stopped_by(signal: &str, status: i32) {
         .status()
         .unwrap();
     assert!(kill.success());
-    let o = child.wait_with_output().unwrap();
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(
-        o.status.code(),
-        Some(status),
-        "SIG{signal}: {:?}: {e}",
-        o.status.signal()
-    );
-    assert!(!temporary(), "a temporary file was left");
-    assert_eq!(std::fs::read(&out).unwrap(), b"old");
 }
 
 /// Numbers no render, trace or benchmark can use are refused by their
@@ -655,33 +650,26 @@ fn an_unusable_scene_camera_is_named_as_the_scenes() {
     )
     .unwrap();
     let out = dir.path().join("o.png");
-    let o = raykit(&[
-        "render",
-        "--scene",
-        s(&scene),
-        "--width",
-        "16",
-        "--out",
-        s(&out),
-    ]);
+    let render = |flags: &[&str]| {
+        let mut args = vec![
+            "render",
+            "--scene",
+            s(&scene),
+            "--width",
+            "16",
+            "--out",
+            s(&out),
+        ];
+        args.extend_from_slice(flags);
+        raykit(&args)
+    };
+    let o = render(&[]);
     let e = stderr(&o);
     assert!(!o.status.success(), "{e}");
     assert!(
         e.contains("the camera of scene 'far.gltf'") && e.contains("give --eye and --target"),
         "{e}"
     );
-    let o = raykit(&[
-        "render",
-        "--scene",
-        s(&scene),
-        "--width",
-        "16",
-        "--eye",
-        "0.3,0.3,2",
-        "--target",
-        "0.3,0.3,0",
-        "--out",
-        s(&out),
-    ]);
+    let o = render(&["--eye", "0.3,0.3,2", "--target", "0.3,0.3,0"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
