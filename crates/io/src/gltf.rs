@@ -17,6 +17,7 @@ use crate::error::{ErrorKind, LoadError, Location};
 use crate::gltf_accessor::{read_floats, read_indices};
 use crate::gltf_glb::{is_glb, split_glb};
 use crate::gltf_image::ImageCache;
+use crate::gltf_integers::check_integer_range;
 use crate::gltf_scene::{check_scene_indices, SceneCollector};
 use crate::gltf_support::{check_required, unsupported_warnings};
 use crate::uri::{data_uri_payload, external_file, read_external};
@@ -158,6 +159,7 @@ pub(crate) fn walk_nodes(
 fn parse_document(path: &Path, json: &[u8], glb: bool) -> Result<Document, LoadError> {
     let root = ::gltf::json::Root::from_slice(json)
         .map_err(|e| json_error(path, ::gltf::Error::Deserialize(e), glb))?;
+    check_integer_range(path, json, glb)?;
     check_required(path, &root)?;
     check_scene_indices(path, &root)?;
     let positions = ::gltf::json::validation::Checked::Valid(Semantic::Positions);

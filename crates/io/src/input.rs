@@ -42,11 +42,17 @@ pub(crate) fn gunzip(path: &Path, data: &[u8]) -> Result<Vec<u8>, LoadError> {
     let mut dec = MultiGzDecoder::new(data);
     if let Err(e) = dec.read_to_end(&mut out) {
         let consumed = data.len() - dec.get_ref().len();
-        return Err(LoadError::at_byte(
-            path,
-            consumed as u64,
-            format!("gzip data is corrupt or truncated: {e}"),
-        ));
+        let message = if e.kind() == std::io::ErrorKind::OutOfMemory {
+            format!(
+                "the decompressed data outgrew the memory the process may use \
+                 ({} MiB decompressed so far, {:.0} times the compressed bytes read)",
+                out.len() >> 20,
+                out.len() as f64 / consumed.max(1) as f64
+            )
+        } else {
+            format!("gzip data is corrupt or truncated: {e}")
+        };
+        return Err(LoadError::at_byte(path, consumed as u64, message));
     }
     Ok(out)
 }

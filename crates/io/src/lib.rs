@@ -32,6 +32,7 @@ mod gltf_accessor;
 mod gltf_glb;
 mod gltf_image;
 mod gltf_instances;
+mod gltf_integers;
 mod gltf_scene;
 mod gltf_support;
 mod hashing;

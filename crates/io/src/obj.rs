@@ -240,6 +240,16 @@ impl<'p> ObjState<'p> {
         key: &str,
     ) -> Result<u32, LoadError> {
         let Some(i) = parse_i64(part) else {
+            let digits = part.strip_prefix(b"-").unwrap_or(part);
+            if !digits.is_empty() && digits.iter().all(u8::is_ascii_digit) {
+                return Err(self.err(
+                    line,
+                    format!(
+                        "{what} index {} is out of range: only {count} '{key}' are defined before this line",
+                        String::from_utf8_lossy(part)
+                    ),
+                ));
+            }
             return Err(self.err(
                 line,
                 format!(

@@ -2,7 +2,7 @@
 //! tokens and numbers, all as byte slices of the file.
 
 /// Lines of a byte buffer with their 1-based numbers, without the line end
-/// (`\n` or `\r\n`).
+/// (`\n`, `\r\n`, or a lone `\r` as classic Mac OS wrote).
 pub(crate) struct Lines<'a> {
     data: &'a [u8],
     pos: usize,
@@ -34,13 +34,11 @@ impl<'a> Iterator for Lines<'a> {
             return None;
         }
         let rest = &self.data[self.pos..];
-        let (mut line, advance) = match rest.iter().position(|&b| b == b'\n') {
+        let (line, advance) = match memchr::memchr2(b'\n', b'\r', rest) {
+            Some(i) if rest[i] == b'\r' && rest.get(i + 1) == Some(&b'\n') => (&rest[..i], i + 2),
             Some(i) => (&rest[..i], i + 1),
             None => (rest, rest.len()),
         };
-        if let [head @ .., b'\r'] = line {
-            line = head;
-        }
         self.pos += advance;
         self.line += 1;
         Some((self.line, line))
@@ -114,7 +112,7 @@ impl<'a> TokenStream<'a> {
         let d = self.data;
         let mut i = self.pos;
         while i < d.len() && d[i].is_ascii_whitespace() {
-            if d[i] == b'\n' {
+            if d[i] == b'\n' || (d[i] == b'\r' && d.get(i + 1) != Some(&b'\n')) {
                 self.line += 1;
             }
             i += 1;
@@ -134,7 +132,7 @@ impl<'a> TokenStream<'a> {
     /// The rest of the current line (trimmed), consuming it but not its line end.
     pub(crate) fn rest_of_line(&mut self) -> &'a [u8] {
         let d = &self.data[self.pos..];
-        let end = d.iter().position(|&b| b == b'\n').unwrap_or(d.len());
+        let end = memchr::memchr2(b'\n', b'\r', d).unwrap_or(d.len());
         self.pos += end;
         d[..end].trim_ascii()
     }
@@ -163,15 +161,20 @@ pub(crate) fn parse_i64(token: &[u8]) -> Option<i64> {
     if digits.is_empty() || digits.len() > 19 {
         return None;
     }
-    let mut v: i64 = 0;
+    let mut v: u64 = 0;
     for &c in digits {
         let d = c.wrapping_sub(b'0');
         if d > 9 {
             return None;
         }
-        v = v.checked_mul(10)?.checked_add(d as i64)?;
+        v = v.checked_mul(10)?.checked_add(d as u64)?;
     }
-    Some(if neg { -v } else { v })
+    if neg {
+        // `i64::MIN` has no positive counterpart, so it is negated in u64.
+        (v <= 1 << 63).then(|| (v as i64).wrapping_neg())
+    } else {
+        i64::try_from(v).ok()
+    }
 }
 
 /// Parse an unsigned decimal integer.
@@ -209,6 +212,28 @@ mod tests {
     }
 
     #[test]
+    fn every_line_end_ends_a_line() {
+        let data = b"a\nb\r\nc\rd\r\re";
+        let got: Vec<_> = Lines::new(data, 1).collect();
+        let want: Vec<(usize, &[u8])> = vec![
+            (1, b"a"),
+            (2, b"b"),
+            (3, b"c"),
+            (4, b"d"),
+            (5, b""),
+            (6, b"e"),
+        ];
+        assert_eq!(got, want);
+        let mut s = TokenStream::new(data, 1);
+        let tokens: Vec<_> = std::iter::from_fn(|| s.next_token().map(|t| (t, s.line()))).collect();
+        let lines: Vec<usize> = tokens.iter().map(|&(_, l)| l).collect();
+        assert_eq!(lines, [1, 2, 3, 4, 6]);
+        let mut s = TokenStream::new(b"x rest\ry", 1);
+        s.next_token();
+        assert_eq!(s.rest_of_line(), b"rest");
+    }
+
+    #[test]
     fn token_stream_tracks_lines() {
         let mut s = TokenStream::new(b"a b\n\n c\nd rest of line\ne", 1);
         assert_eq!(s.next_token(), Some(&b"a"[..]));
@@ -233,6 +258,8 @@ mod tests {
         assert_eq!(parse_i64(b"+7"), Some(7));
         assert_eq!(parse_i64(b"9223372036854775807"), Some(i64::MAX));
         assert_eq!(parse_i64(b"9223372036854775808"), None);
+        assert_eq!(parse_i64(b"-9223372036854775808"), Some(i64::MIN));
+        assert_eq!(parse_i64(b"-9223372036854775809"), None);
         assert_eq!(parse_i64(b"1.0"), None);
         assert_eq!(parse_i64(b"-"), None);
         assert_eq!(parse_u64(b"-1"), None);

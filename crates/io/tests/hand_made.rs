@@ -308,6 +308,62 @@ fn gltf_nodes_reached_twice_are_refused() {
     assert_eq!(load(&path).unwrap().mesh.num_triangles(), 1);
 }
 
+/// glTF indices are 32-bit. The `gltf` crate reads `"mesh": 4294967296`
+/// as mesh 0; such a file is refused at the index's line, and the same file
+/// with index 0 loads.
+#[test]
+fn gltf_indices_beyond_32_bits_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (mesh, wraps) in [
+        ("0", false),
+        ("4294967296", true),
+        ("18446744073709551615", true),
+    ] {
+        let path = dir.path().join(format!("m{mesh}.gltf"));
+        let text = gltf_with_nodes(&[format!("{{\"mesh\":{mesh}}}")], "0");
+        std::fs::write(&path, &text).unwrap();
+        match load(&path) {
+            Ok(m) => assert!(!wraps && m.mesh.num_triangles() == 1, "{mesh} loaded"),
+            Err(e) => {
+                assert!(wraps, "{mesh}: {e}");
+                let line = text.lines().position(|l| l.contains(mesh)).unwrap() + 1;
+                let e = e.to_string();
+                assert!(e.contains(&format!(".gltf:{line}: ")), "{e}");
+                assert!(e.contains(&format!("\"mesh\": {mesh} is beyond")), "{e}");
+            }
+        }
+    }
+}
+
+/// Text formats end a line at `\n`, `\r\n` or a lone `\r` (classic Mac
+/// OS), so an OBJ or ASCII STL written with any of them loads the same
+/// triangles, and errors name the same line.
+#[test]
+fn every_line_end_convention_loads_the_same_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n";
+    let stl = "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
+               vertex 0 1 0\nendloop\nendfacet\nendsolid s\n";
+    for (name, text) in [("m.obj", obj), ("m.stl", stl)] {
+        let mut loaded = Vec::new();
+        for end in ["\n", "\r\n", "\r"] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text.replace('\n', end)).unwrap();
+            let m = load(&path)
+                .unwrap_or_else(|e| panic!("{name} {end:?}: {e}"))
+                .mesh;
+            loaded.push((m.positions, m.indices));
+            let broken = text.replacen("0 1 0", "0 x 0", 1).replace('\n', end);
+            std::fs::write(&path, broken).unwrap();
+            let e = load(&path).unwrap_err().to_string();
+            let line = text.lines().position(|l| l.contains("0 1 0")).unwrap() + 1;
+            assert!(e.contains(&format!("{name}:{line}: ")), "{end:?}: {e}");
+        }
+        assert!(loaded.iter().all(|m| *m == loaded[0]), "{name}");
+        assert!(!loaded[0].1.is_empty(), "{name}");
+    }
+}
+
 /// OBJ material libraries and their textures are read from regular files
 /// only (a FIFO named by `mtllib` made the loader wait forever), each
 /// library once however often it is named, and each texture decoded once

@@ -120,6 +120,14 @@ property float z\nelement face {nf}\nproperty list uchar int vertex_indices\nend
     glb.extend(4_000_000_000u32.to_le_bytes());
     glb.extend([0u8; 40]);
     cases.push(("h.glb", glb));
+    // A gzip bomb: 1,024 members of 1 MiB of zeros each, 1 GiB in about 1 MB.
+    let member = {
+        use std::io::Write;
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+        e.write_all(&vec![0u8; 1 << 20]).unwrap();
+        e.finish().unwrap()
+    };
+    cases.push(("h.ply.gz", member.repeat(1024)));
     for (name, bytes) in &cases {
         let e = match parse_mesh(Path::new(name), bytes) {
             Err(e) => e,
@@ -130,5 +138,8 @@ property float z\nelement face {nf}\nproperty list uchar int vertex_indices\nend
         };
         eprintln!("{e}");
         assert_located(&e, name);
+        if name.ends_with(".gz") {
+            assert!(e.to_string().contains("outgrew the memory"), "{e}");
+        }
     }
 }

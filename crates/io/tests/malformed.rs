@@ -295,6 +295,16 @@ fn indices_out_of_range() {
     fails_with(
         "i.obj",
         &format!("{tri}f 1 2 99999999999999999999\n"),
+        "i.obj:4: vertex index 99999999999999999999 is out of range: only 3 'v'",
+    );
+    fails_with(
+        "i.obj",
+        &format!("{tri}f 1 2 -9223372036854775808\n"),
+        "i.obj:4: relative vertex index -9223372036854775808 is out of range",
+    );
+    fails_with(
+        "i.obj",
+        &format!("{tri}f 1 2 3x\n"),
         "i.obj:4: expected vertex indices",
     );
     let ply = |idx: &str| {
