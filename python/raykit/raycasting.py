@@ -347,11 +347,12 @@ class RaycastingScene:
         """Number of triangles each ray crosses for ``t >= 0``.
 
         ``rays`` as in :meth:`cast_rays`; returns an int32 array of shape
-        ``(...)``. Each triangle counts once per ray (textbook
-        Möller–Trumbore without tolerance, so a crossing near a shared edge
-        is not counted on both neighbours; a ray exactly through an edge may
-        count it on both or neither). Rays with NaN or infinite coordinates
-        count 0. ``mask`` as in :meth:`cast_rays`.
+        ``(...)``. Each crossing counts once, rays exactly through a shared
+        edge or corner included (they go to one of the triangles by exact
+        edge signs, Woop et al. 2013, with ties broken alike for all of
+        them), so a ray from outside crosses a closed mesh an even number of
+        times. Rays with NaN or infinite coordinates count 0. ``mask`` as in
+        :meth:`cast_rays`.
         """
         flat, lead = _arrays.rows(rays, "rays", 6)
         mask = _check_mask(mask, "mask")

@@ -224,6 +224,54 @@ def test_count_and_list_intersections_match_brute_force_and_open3d(dragon):
         assert o3l[k].dtype == lx[k].dtype, k
 
 
+def grid_cube(n, seed):
+    """The surface of the cube [0, n]³ as a grid of unit squares, each cut
+    along a random diagonal, corners at integers: a closed, outward-facing
+    mesh whose
+    edges and corners axis-aligned rays through integer points meet
+    exactly, as they meet those of CAD and voxel models."""
+    rng = np.random.default_rng(seed)
+    vertices, triangles = [], []
+    for axis in range(3):
+        for side in (0, n):
+            for i in range(n):
+                for j in range(n):
+                    quad = []
+                    for di, dj in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                        p = [0, 0, 0]
+                        p[axis], p[(axis + 1) % 3], p[(axis + 2) % 3] = side, i + di, j + dj
+                        quad.append(len(vertices))
+                        vertices.append(p)
+                    # Counter-clockwise seen from outside.
+                    a, b, c, d = quad if side else quad[::-1]
+                    triangles += [[a, b, c], [a, c, d]] if rng.integers(2) else [[a, b, d], [b, c, d]]
+    return np.array(vertices, np.float32), np.array(triangles, np.int32)
+
+
+def test_rays_through_shared_edges_and_corners_cross_a_closed_mesh_twice():
+    n = 6
+    v, f = grid_cube(n, seed=3)
+    rng = np.random.default_rng(4)
+    # From outside, through integer points of the cube's inside (corners
+    # and edges of the faces they cross), along each axis and tilted.
+    rows = []
+    for _ in range(600):
+        through = rng.integers(1, n, size=3).astype(np.float32)
+        d = np.zeros(3, np.float32)
+        d[rng.integers(3)] = rng.choice([-1, 1])
+        if rng.integers(2):
+            d += rng.integers(-2, 3, size=3).astype(np.float32) / 8
+        rows.append(np.concatenate([through - 4 * n * d, d]))
+    rays = np.array(rows, np.float32)
+    s = scene_of(v, f)
+    counts = s.count_intersections(rays)
+    assert (counts == 2).all(), np.unique(counts, return_counts=True)
+    lx = s.list_intersections(rays)
+    assert (np.diff(lx["ray_splits"]) == 2).all()
+    inside = s.compute_occupancy(rays[:, :3] + 4 * n * rays[:, 3:])
+    assert (inside == 1).all()
+
+
 def test_bad_points_and_rays_never_crash(bunny):
     v, f, _ = bunny
     s = scene_of(v, f)

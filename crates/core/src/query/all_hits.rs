@@ -3,43 +3,29 @@
 //! any-hit query that asks a filter callback about each hit found (for
 //! example to skip back faces).
 //!
-//! Each triangle is crossed at most once: the tree (a [`SurfaceBvh`]'s
+//! Each crossing of the surface is reported exactly once, rays through
+//! shared edges and corners included. The tree (a [`SurfaceBvh`]'s
 //! ray-casting tree, or any [`Accel`]'s regions) is walked with its box
-//! tests, and the triangles are tested with textbook Möller–Trumbore (1997)
-//! without the tolerance band of the nearest-hit tests, so that two
-//! neighbours do not both report one crossing near their shared edge (a ray
-//! through the shared edge itself may be counted by both or by neither).
-//! When the cap is reached, boxes entered beyond the farthest kept hit are
-//! skipped. [`ray_hits_brute`] is the `f64` reference of the tests.
+//! tests. On the ray-casting tree each triangle is classified by
+//! Möller–Trumbore (1997) with its rounding-error bounds
+//! ([`crate::tri::moller::Moller::crossing`]): without the tolerance band
+//! of the nearest-hit tests, so that two neighbours do not both report one
+//! crossing near their shared edge; and the crossings within rounding
+//! error of an edge or a corner are decided by [`crossing_once`] (Woop et
+//! al. 2013, exact edge signs with their ties broken alike for both
+//! neighbours), which every triangle of an [`Accel`]'s regions goes
+//! through. When the cap is reached, boxes entered beyond the farthest
+//! kept hit are skipped. [`ray_hits_brute`] is the `f64` reference of the
+//! tests.
 
 use super::surface_bvh::{SurfaceBvh, EMPTY, WIDTH};
 use crate::accel::{Accel, BATCH_GRAIN};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
-use glam::{DVec3, Vec3};
+use crate::tri::crossing_once;
+use glam::DVec3;
 use rayon::prelude::*;
-
-/// Möller–Trumbore without tolerance: `(t, u, v)` when the ray meets the
-/// triangle at `t` in `[tnear, tfar]` with `u, v >= 0` and `u + v <= 1`.
-#[inline(always)]
-fn moller(ray: &Ray, tri: &[Vec3; 3], tfar: f32) -> Option<(f32, f32, f32)> {
-    let e1 = tri[1] - tri[0];
-    let e2 = tri[2] - tri[0];
-    let p = ray.dir.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = ray.origin - tri[0];
-    let u = s.dot(p) * inv;
-    let q = s.cross(e1);
-    let v = ray.dir.dot(q) * inv;
-    let t = e2.dot(q) * inv;
-    let ok = u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= ray.tnear && t <= tfar;
-    ok.then_some((t, u, v))
-}
 
 /// Slab test of a ray against the eight boxes of a node: the entry
 /// distances, NaN for boxes missed or unused (so that every comparison
@@ -124,7 +110,7 @@ impl SurfaceBvh {
         let prims = &self.prims;
         self.ray_tree()
             .0
-            .surface_hits::<NEAR_FIRST>(ray, |c, p, reach| {
+            .surface_hits::<NEAR_FIRST>(ray, &self.tris, |c, p, reach| {
                 let hit = Hit {
                     t: c.t,
                     u: c.u,
@@ -207,7 +193,7 @@ impl SurfaceBvh {
         let tree = self.ray_tree().0;
         rays.par_chunks(BATCH_GRAIN)
             .zip(out.par_chunks_mut(BATCH_GRAIN))
-            .for_each(|(rays, out)| tree.count_hits(rays, out));
+            .for_each(|(rays, out)| tree.count_hits(rays, &self.tris, out));
     }
 
     /// [`SurfaceBvh::ray_hits`] for many rays, in parallel: one sorted list
@@ -223,7 +209,7 @@ impl SurfaceBvh {
         rays.par_chunks(BATCH_GRAIN)
             .zip(lists.par_chunks_mut(BATCH_GRAIN))
             .for_each(|(rays, lists)| {
-                tree.hits(rays, |i, found, at| {
+                tree.hits(rays, &self.tris, |i, found, at| {
                     let mut hits: Vec<Hit> = found
                         .iter()
                         .zip(at)
@@ -266,11 +252,11 @@ pub fn ray_hits_in(accel: &dyn Accel, mesh: &TriangleMesh, ray: &Ray, max_hits: 
         &mut |prims| {
             for &t in prims {
                 if (t as usize) < n {
-                    if let Some((th, u, v)) = moller(ray, &mesh.triangle(t as usize), ray.tfar) {
+                    if let Some(h) = crossing_once(&mesh.triangle(t as usize), ray, ray.tfar) {
                         hits.push(Hit {
-                            t: th,
-                            u,
-                            v,
+                            t: h.t,
+                            u: h.u,
+                            v: h.v,
                             prim: t,
                         });
                     }

@@ -18,7 +18,7 @@ use crate::accel::bvh::{BuildOptions, Bvh8, CrossingVisitor};
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::tri::moller::Crossing;
-use crate::tri::Moller;
+use crate::tri::{crossing_once, Moller};
 use glam::Vec3;
 
 /// Which way the crossing rays of occupancy leave a point: along the axis
@@ -107,44 +107,61 @@ impl RayTree {
             + self.cap.as_ref().map_or(0, |c| c.stats().bytes)
     }
 
-    /// Walk the surface's hits along `ray` (the textbook test's):
-    /// `visit(c, p, reach)` with `p` the triangle's position in the point
-    /// tree's leaf order; see [`Bvh8::crossings`].
+    /// Walk the surface's hits along `ray`: `visit(c, p, reach)` with `p`
+    /// the triangle's position in the point tree's leaf order, whose
+    /// corners are `corners[p]`; see [`Bvh8::crossings`] and
+    /// [`Settle::settle`] for which crossings are hits.
     #[inline(always)]
     pub fn surface_hits<const NEAR_FIRST: bool>(
         &self,
         ray: &Ray,
+        corners: &[[Vec3; 3]],
         mut visit: impl FnMut(&Crossing, u32, &mut f32) -> bool,
     ) {
-        let _ = self
-            .surface
-            .crossings::<NEAR_FIRST, false, _>(ray, |c: &Crossing, p, reach: &mut f32| {
-                !c.hit || visit(c, self.position(p), reach)
-            });
+        let settle = self.settle(ray, corners);
+        let _ = self.surface.crossings::<NEAR_FIRST, true, _>(
+            ray,
+            |c: &Crossing, p, reach: &mut f32| match settle.settle(c, p, *reach) {
+                Some(c) => visit(&c, self.position(p), reach),
+                None => true,
+            },
+        );
     }
 
     /// The number of the surface's hits along each of `rays`, walked in
-    /// turn (see [`Bvh8::crossings_batch`]).
-    pub fn count_hits(&self, rays: &[Ray], out: &mut [u32]) {
-        self.surface
-            .crossings_batch::<false, _>(rays, |_| HitCount(0), |i, v| out[i] = v.0);
+    /// turn (see [`Bvh8::crossings_batch`]); `corners` as for
+    /// [`RayTree::surface_hits`].
+    pub fn count_hits(&self, rays: &[Ray], corners: &[[Vec3; 3]], out: &mut [u32]) {
+        self.surface.crossings_batch::<true, _>(
+            rays,
+            |ray| HitCount(0, self.settle(ray, corners)),
+            |i, v| out[i] = v.0,
+        );
     }
 
     /// The surface's hits along each of `rays`, unsorted, with the
     /// triangles' positions in the point tree's leaf order, walked in turn
     /// (see [`Bvh8::crossings_batch`]): `done(i, hits, positions)` may
-    /// take ray `i`'s.
-    pub fn hits(&self, rays: &[Ray], mut done: impl FnMut(usize, &mut Vec<Crossing>, &[u32])) {
-        self.surface.crossings_batch::<false, _>(
+    /// take ray `i`'s; `corners` as for [`RayTree::surface_hits`].
+    pub fn hits(
+        &self,
+        rays: &[Ray],
+        corners: &[[Vec3; 3]],
+        mut done: impl FnMut(usize, &mut Vec<Crossing>, &[u32]),
+    ) {
+        self.surface.crossings_batch::<true, _>(
             rays,
-            |_| HitList::default(),
-            |i, v| {
-                for p in &mut v.prims {
-                    *p = self.position(*p);
-                }
-                done(i, &mut v.hits, &v.prims)
-            },
+            |ray| HitList::new(self.settle(ray, corners)),
+            |i, v| done(i, &mut v.hits, &v.prims),
         );
+    }
+
+    fn settle<'a>(&'a self, ray: &Ray, corners: &'a [[Vec3; 3]]) -> Settle<'a> {
+        Settle {
+            ray: *ray,
+            tree: self,
+            corners,
+        }
     }
 
     /// The position in the point tree's leaf order of the surface tree's
@@ -209,30 +226,76 @@ impl RayTree {
     }
 }
 
-/// Counts hits.
-struct HitCount(u32);
+/// Which of a ray's crossings are hits, each counted once.
+struct Settle<'a> {
+    ray: Ray,
+    tree: &'a RayTree,
+    corners: &'a [[Vec3; 3]],
+}
 
-impl CrossingVisitor for HitCount {
+impl Settle<'_> {
+    /// The hit that crossing `c` of the surface tree's triangle `p` is, if
+    /// any: the textbook test's where [`Moller::crossing`] is sure of it,
+    /// else [`crossing_once`]'s on the triangle's corners, which counts a
+    /// ray through a shared edge or corner exactly once. Unsure crossings
+    /// are rare (within rounding error of an edge or a corner).
     #[inline(always)]
-    fn visit(&mut self, c: &Crossing, _: u32, _: &mut f32) -> bool {
-        self.0 += c.hit as u32;
+    fn settle(&self, c: &Crossing, p: u32, reach: f32) -> Option<Crossing> {
+        if c.sure {
+            return c.hit.then_some(*c);
+        }
+        self.exact(p, reach).map(|h| Crossing {
+            t: h.t,
+            u: h.u,
+            v: h.v,
+            hit: true,
+            ..*c
+        })
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn exact(&self, p: u32, reach: f32) -> Option<crate::tri::TriHit> {
+        let at = self.tree.position(p);
+        crossing_once(&self.corners[at as usize], &self.ray, reach)
+    }
+}
+
+/// Counts hits.
+struct HitCount<'a>(u32, Settle<'a>);
+
+impl CrossingVisitor for HitCount<'_> {
+    #[inline(always)]
+    fn visit(&mut self, c: &Crossing, p: u32, reach: &mut f32) -> bool {
+        self.0 += self.1.settle(c, p, *reach).is_some() as u32;
         true
     }
 }
 
-/// Collects hits and their triangles.
-#[derive(Default)]
-struct HitList {
+/// Collects hits and their triangles' positions in the point tree's leaf
+/// order.
+struct HitList<'a> {
     hits: Vec<Crossing>,
     prims: Vec<u32>,
+    settle: Settle<'a>,
 }
 
-impl CrossingVisitor for HitList {
+impl<'a> HitList<'a> {
+    fn new(settle: Settle<'a>) -> Self {
+        HitList {
+            hits: Vec::new(),
+            prims: Vec::new(),
+            settle,
+        }
+    }
+}
+
+impl CrossingVisitor for HitList<'_> {
     #[inline(always)]
-    fn visit(&mut self, c: &Crossing, prim: u32, _: &mut f32) -> bool {
-        if c.hit {
-            self.hits.push(*c);
-            self.prims.push(prim);
+    fn visit(&mut self, c: &Crossing, p: u32, reach: &mut f32) -> bool {
+        if let Some(c) = self.settle.settle(c, p, *reach) {
+            self.hits.push(c);
+            self.prims.push(self.settle.tree.position(p));
         }
         true
     }

@@ -39,11 +39,13 @@ use crate::ray::Ray;
 use glam::Vec3;
 use std::fmt::Debug;
 
+pub mod crossing_once;
 pub mod moller;
 pub mod plucker;
 pub mod projection;
 pub mod reference;
 
+pub use crossing_once::crossing_once;
 pub use moller::Moller;
 pub use plucker::Plucker;
 pub use projection::Projection;

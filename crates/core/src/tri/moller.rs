@@ -288,7 +288,13 @@ impl Moller {
         let sm = max_abs(s);
         let eu = c * tri.e2_max * (sm + tri.e1_max);
         let ev = c * tri.e1_max * (sm + tri.e2_max);
-        let et = 3.0 * c * tri.e1_max * tri.e2_max * (sm + tri.e1_max + tri.e2_max) / max_abs(d)
+        // `c / max|d|` is `64u · |inv_det|`: no division.
+        let et = 3.0
+            * PREPARE_FACTOR
+            * inv_det.abs()
+            * tri.e1_max
+            * tri.e2_max
+            * (sm + tri.e1_max + tri.e2_max)
             + 1e-5 * t.abs();
         let near = (u >= -eu) & (v >= -ev) & (u + v <= 1.0 + (eu + ev));
         let in_reach = (t >= ray.tnear - et) & (t <= tfar) & (t < f32::INFINITY);
