@@ -3,10 +3,9 @@
 //! number of hits, and any-hit with a filter callback.
 //!
 //! Each instance's triangles are crossed through its geometry's
-//! [`crate::query::SurfaceBvh`] (made on the first such query) with
-//! textbook Möller–Trumbore, without the tolerance band of the nearest-hit
-//! test, so a crossing near an edge shared by two triangles is counted
-//! once, as [`crate::query::all_hits`] does on one mesh; the filter sees
+//! [`crate::query::SurfaceBvh`] (made on the first such query), which
+//! counts a crossing at an edge or a corner that triangles share once, as
+//! [`crate::query::all_hits`] describes for one mesh; the filter sees
 //! each candidate as a [`SceneHit`], with its ids and world normal.
 
 use super::hit::SceneHit;
