@@ -24,8 +24,26 @@ pub(crate) fn read_file_cause_in_message(path: &Path) -> Result<Vec<u8>, LoadErr
     })
 }
 
-/// Decompress gzip `data` (all members) read from `path`.
+/// Decompress gzip `data` (all members) read from `path`, refusing output
+/// larger than the memory this machine has available now (`MemAvailable`
+/// on Linux; no bound elsewhere): a small file can expand a thousandfold,
+/// and where memory is overcommitted growing past it ends in the kernel
+/// killing the process rather than in an error.
 pub(crate) fn gunzip(path: &Path, data: &[u8]) -> Result<Vec<u8>, LoadError> {
+    gunzip_within(path, data, available_memory().unwrap_or(u64::MAX))
+}
+
+/// The bytes of memory available for new allocations without swapping,
+/// from `/proc/meminfo`; None where that cannot be read.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib.saturating_mul(1024))
+}
+
+/// [`gunzip`] with at most `limit` bytes of output.
+fn gunzip_within(path: &Path, data: &[u8], limit: u64) -> Result<Vec<u8>, LoadError> {
     if data.len() < 2 || data[0] != 0x1f || data[1] != 0x8b {
         let found: Vec<String> = data.iter().take(2).map(|b| format!("{b:02x}")).collect();
         return Err(LoadError::at_byte(
@@ -38,23 +56,39 @@ pub(crate) fn gunzip(path: &Path, data: &[u8]) -> Result<Vec<u8>, LoadError> {
         ));
     }
     // Deflate rarely exceeds 10:1 on meshes; the vector grows if it does.
-    let mut out = Vec::with_capacity(data.len().saturating_mul(4).min(1 << 30));
+    let first = (data.len() as u64)
+        .saturating_mul(4)
+        .min(1 << 30)
+        .min(limit);
+    let mut out = Vec::with_capacity(first as usize);
     let mut dec = MultiGzDecoder::new(data);
-    if let Err(e) = dec.read_to_end(&mut out) {
-        let consumed = data.len() - dec.get_ref().len();
-        let message = if e.kind() == std::io::ErrorKind::OutOfMemory {
-            format!(
-                "the decompressed data outgrew the memory the process may use \
-                 ({} MiB decompressed so far, {:.0} times the compressed bytes read)",
-                out.len() >> 20,
-                out.len() as f64 / consumed.max(1) as f64
-            )
-        } else {
-            format!("gzip data is corrupt or truncated: {e}")
-        };
-        return Err(LoadError::at_byte(path, consumed as u64, message));
+    let read = (&mut dec)
+        .take(limit.saturating_add(1))
+        .read_to_end(&mut out);
+    let consumed = (data.len() - dec.get_ref().len()) as u64;
+    let outgrew = |so_far: usize| {
+        format!(
+            "the decompressed data outgrew the memory available ({} MiB decompressed so far, \
+             {:.0} times the compressed bytes read; at most {} MiB)",
+            so_far >> 20,
+            so_far as f64 / consumed.max(1) as f64,
+            limit >> 20
+        )
+    };
+    match read {
+        Err(e) if e.kind() == std::io::ErrorKind::OutOfMemory => {
+            Err(LoadError::at_byte(path, consumed, outgrew(out.len())))
+        }
+        Err(e) => Err(LoadError::at_byte(
+            path,
+            consumed,
+            format!("gzip data is corrupt or truncated: {e}"),
+        )),
+        Ok(_) if out.len() as u64 > limit => {
+            Err(LoadError::at_byte(path, consumed, outgrew(out.len())))
+        }
+        Ok(_) => Ok(out),
     }
-    Ok(out)
 }
 
 #[cfg(test)]
@@ -87,5 +121,22 @@ mod tests {
             *b ^= 0x5a;
         }
         assert!(gunzip(p, &bad).is_err());
+    }
+
+    /// A gzip bomb (64 members of 1 MiB of zeros, about 64 KB) decompresses
+    /// within a bound of 128 MiB and is refused, at the byte where it
+    /// passed it, under 16 MiB.
+    #[test]
+    fn output_is_bounded() {
+        let p = Path::new("b.ply.gz");
+        let bomb = gz(&vec![0u8; 1 << 20]).repeat(64);
+        assert_eq!(gunzip_within(p, &bomb, 128 << 20).unwrap().len(), 64 << 20);
+        let e = gunzip_within(p, &bomb, 16 << 20).unwrap_err().to_string();
+        assert!(e.starts_with("b.ply.gz: byte "), "{e}");
+        assert!(
+            e.contains("outgrew the memory available") && e.contains("at most 16 MiB"),
+            "{e}"
+        );
+        assert!(available_memory().is_some_and(|m| m > 0) || !cfg!(target_os = "linux"));
     }
 }
