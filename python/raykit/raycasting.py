@@ -375,7 +375,9 @@ class RaycastingScene:
         ``primitive_uvs`` ``(num_intersections, 2)``. Beyond Open3D:
         ``max_hits`` keeps only the first ``max_hits`` hits of each ray,
         ``mask`` is as in :meth:`cast_rays`, and in a scene with instances
-        ``instance_ids`` gives each hit's instance.
+        ``instance_ids`` gives each hit's instance. A crossing at a shared
+        edge or corner is listed once, as :meth:`count_intersections` counts
+        it.
         """
         flat, _ = _arrays.rows(rays, "rays", 6)
         if max_hits is not None and (
