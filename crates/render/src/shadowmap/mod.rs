@@ -20,12 +20,14 @@
 //! ([`ShadowMapOptions`]).
 
 mod depth;
+mod distinct;
 mod options;
 mod views;
 
 pub use options::ShadowMapOptions;
 
 use depth::DepthMap;
+use distinct::distinct_triangles;
 use raykit_core::{Light, TriangleMesh, Vec3};
 use rayon::prelude::*;
 
@@ -50,7 +52,8 @@ pub struct ShadowMaps {
 
 impl ShadowMaps {
     /// Render the depth maps of every light of `lights` for `mesh`
-    /// (Williams 1978): all maps in parallel, each rasterized in parallel bands.
+    /// (Williams 1978): all maps in parallel, each rasterized in parallel
+    /// bands, from the mesh without repeated triangles (see `distinct.rs`).
     pub fn build(mesh: &TriangleMesh, lights: &[Light], opts: &ShadowMapOptions) -> ShadowMaps {
         let (res, pcf) = opts.clamped();
         let border = views::border(pcf);
@@ -102,9 +105,10 @@ impl ShadowMaps {
                 _ => kinds.push(0),
             }
         }
+        let distinct = distinct_triangles(mesh);
         let mut maps = jobs
             .into_par_iter()
-            .map(|(_, view)| DepthMap::render(mesh, view, res))
+            .map(|(_, view)| DepthMap::render(&distinct, view, res))
             .collect::<Vec<_>>()
             .into_iter();
         let lights = lights
