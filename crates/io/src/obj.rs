@@ -70,6 +70,12 @@ struct ObjState<'p> {
     textures: TextureCache,
 }
 
+/// Whether `token` is a decimal integer, with an optional minus sign.
+fn is_integer(token: &[u8]) -> bool {
+    let digits = token.strip_prefix(b"-").unwrap_or(token);
+    !digits.is_empty() && digits.iter().all(u8::is_ascii_digit)
+}
+
 impl<'p> ObjState<'p> {
     fn new(path: &'p Path) -> Self {
         ObjState {
@@ -239,43 +245,38 @@ impl<'p> ObjState<'p> {
         what: &str,
         key: &str,
     ) -> Result<u32, LoadError> {
-        let Some(i) = parse_i64(part) else {
-            let digits = part.strip_prefix(b"-").unwrap_or(part);
-            if !digits.is_empty() && digits.iter().all(u8::is_ascii_digit) {
+        let resolved = match parse_i64(part) {
+            Some(0) => {
+                return Err(self.err(
+                    line,
+                    format!("{what} index 0 is invalid (OBJ indices start at 1)"),
+                ))
+            }
+            Some(i) if i > 0 => (i as u64 <= count as u64).then(|| i - 1),
+            Some(i) => {
+                let j = count as i64 + i;
+                (j >= 0).then_some(j)
+            }
+            // An integer beyond i64 is out of range like any other.
+            None if is_integer(part) => None,
+            None => {
                 return Err(self.err(
                     line,
                     format!(
-                        "{what} index {} is out of range: only {count} '{key}' are defined before this line",
-                        String::from_utf8_lossy(part)
+                        "expected vertex indices (v, v/vt, v//vn or v/vt/vn) after 'f', found {}",
+                        show(Some(tok))
                     ),
-                ));
+                ))
             }
-            return Err(self.err(
-                line,
-                format!(
-                    "expected vertex indices (v, v/vt, v//vn or v/vt/vn) after 'f', found {}",
-                    show(Some(tok))
-                ),
-            ));
-        };
-        let resolved = if i > 0 {
-            (i as u64 <= count as u64).then(|| i - 1)
-        } else if i < 0 {
-            let j = count as i64 + i;
-            (j >= 0).then_some(j)
-        } else {
-            return Err(self.err(
-                line,
-                format!("{what} index 0 is invalid (OBJ indices start at 1)"),
-            ));
         };
         match resolved.and_then(|j| u32::try_from(j).ok()).filter(|&j| j != NONE) {
             Some(j) => Ok(j),
             None => Err(self.err(
                 line,
                 format!(
-                    "{}{what} index {i} is out of range: only {count} '{key}' are defined before this line",
-                    if i < 0 { "relative " } else { "" }
+                    "{}{what} index {} is out of range: only {count} '{key}' are defined before this line",
+                    if part.starts_with(b"-") { "relative " } else { "" },
+                    String::from_utf8_lossy(part)
                 ),
             )),
         }
