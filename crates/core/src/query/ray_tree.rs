@@ -251,6 +251,7 @@ impl Settle<'_> {
             u: h.u,
             v: h.v,
             hit: true,
+            sure: true,
             ..*c
         })
     }
