@@ -30,6 +30,7 @@ use crate::escape::{
     beam_escapes, escape_direction, fibonacci, is_degenerate, off_surface, RayConfirm,
 };
 use crate::shared_escapes::{SharedEscapes, SHARING_CELLS};
+use crate::unit_scale::at_unit_scale;
 use raykit_core::{Accel, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -463,10 +464,13 @@ pub fn compare(truth: &GroundTruth, kept: &[bool], mesh: &TriangleMesh) -> EvalR
     let n = mesh.num_triangles();
     assert_eq!(kept.len(), n, "one kept flag per triangle");
     assert_eq!(truth.visible.len(), n, "ground truth of this mesh");
+    // In f64, where the area of a triangle a picometre across does not
+    // vanish; which triangles have none is judged at unit scale.
     let area = |t: usize| {
-        let [a, b, c] = mesh.triangle(t);
-        0.5 * f64::from((b - a).cross(c - a).length())
+        let [a, b, c] = mesh.triangle(t).map(|v| v.as_dvec3());
+        0.5 * (b - a).cross(c - a).length()
     };
+    let unit = at_unit_scale(mesh);
     let mut r = EvalReport {
         triangles: n,
         ..Default::default()
@@ -491,7 +495,7 @@ pub fn compare(truth: &GroundTruth, kept: &[bool], mesh: &TriangleMesh) -> EvalR
             r.triangles_removed += 1;
             r.area_removed += at;
         }
-        if is_degenerate(mesh, t) {
+        if is_degenerate(&unit.mesh, t) {
             r.degenerate += 1;
         } else if truth.visible[t] {
             r.truly_visible += 1;

@@ -3,22 +3,28 @@
 //! than the Möller–Trumbore (1997) test the rays mode casts with.
 
 use crate::evaluate::{evaluate_with_progress, EvalOptions, EvalProgress, GroundTruth};
+use crate::unit_scale::at_unit_scale;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::TriangleMesh;
 
 /// The ground truth of `mesh` with `options` ([`evaluate_with_progress`])
-/// through its own 8-wide BVH over the Plücker test; `progress` as there.
+/// through its own 8-wide BVH over the Plücker test, judged at unit scale
+/// ([`at_unit_scale`]); `progress` as there.
 pub fn independent_truth(
     mesh: &TriangleMesh,
     options: &EvalOptions,
     progress: &(dyn Fn(EvalProgress) + Sync),
 ) -> GroundTruth {
+    let unit = at_unit_scale(mesh);
+    let mesh = &*unit.mesh;
     let accel = build_accel(
         AccelKind::Bvh8,
         TestKind::Plucker,
         mesh,
         &BuildOptions::default(),
     );
-    evaluate_with_progress(mesh, accel.as_ref(), options, progress)
+    let mut truth = evaluate_with_progress(mesh, accel.as_ref(), options, progress);
+    truth.beam = unit.to_model(truth.beam);
+    truth
 }

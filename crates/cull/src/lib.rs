@@ -48,6 +48,7 @@ pub mod report;
 pub mod saved_truth;
 pub mod shared_escapes;
 pub mod synthetic;
+pub mod unit_scale;
 pub mod visible;
 
 pub use distance_field::{DirectedDistanceField, DirectedHit, Direction};
@@ -62,6 +63,7 @@ pub use propagate::{propagate, Classification, Tag};
 pub use rays::{visible_by_rays, RayOptions, RayRound, RayStats};
 pub use report::{CullMode, CullReport, Removal};
 pub use saved_truth::{SavedTruth, SavedTruthMismatch};
+pub use unit_scale::at_unit_scale;
 pub use visible::{confirm_frontier, touches_outside, visible_from_outside};
 
 use raykit_core::accel::{build_accel, Accel, AccelKind, BuildOptions};
@@ -193,6 +195,8 @@ pub struct CullResult {
 /// visibility culling). An empty mesh gives an empty result; a mesh failing
 /// [`TriangleMesh::validate`] otherwise gives its error.
 pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, MeshError> {
+    let unit = at_unit_scale(mesh);
+    let mesh = &*unit.mesh;
     let Some((accel, mut stats)) = prepare(mesh, AccelKind::Bvh2)? else {
         return Ok(result_for(mesh, Vec::new(), CullStats::default()));
     };
@@ -238,7 +242,7 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
     stats.visible_seconds = clock.elapsed().as_secs_f64();
 
     stats.grid = grid.dims;
-    stats.spacing = grid.spacing;
+    stats.spacing = unit.to_model(grid.spacing);
     stats.points = grid.len();
     stats.outside_points = class.outside;
     stats.field_hits = field.hit_count();
@@ -252,11 +256,14 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
 /// BVH over Möller–Trumbore packs. An empty mesh gives an empty result; a
 /// mesh failing [`TriangleMesh::validate`] otherwise gives its error.
 pub fn cull_by_rays(mesh: &TriangleMesh, options: &RayOptions) -> Result<CullResult, MeshError> {
+    let unit = at_unit_scale(mesh);
+    let mesh = &*unit.mesh;
     let Some((accel, mut stats)) = prepare(mesh, AccelKind::Bvh8)? else {
         return Ok(result_for(mesh, Vec::new(), CullStats::default()));
     };
     let clock = Instant::now();
-    let (visible, ray_stats) = visible_by_rays(mesh, accel.as_ref(), options);
+    let (visible, mut ray_stats) = visible_by_rays(mesh, accel.as_ref(), options);
+    ray_stats.beam = unit.to_model(ray_stats.beam);
     stats.visible_seconds = clock.elapsed().as_secs_f64();
     stats.rays = Some(ray_stats);
     Ok(result_for(mesh, visible, stats))

@@ -10,7 +10,9 @@ use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::{Aabb, TriangleMesh, Vec3};
 use raykit_cull::synthetic::{assembly, closed_box, copies, icosphere, shell_around, slit_box};
-use raykit_cull::{cull, cull_by_rays, evaluate, CullOptions, EvalOptions, RayOptions};
+use raykit_cull::{
+    compare, cull, cull_by_rays, evaluate, independent_truth, CullOptions, EvalOptions, RayOptions,
+};
 
 /// Small counts for quick tests.
 fn quick() -> RayOptions {
@@ -84,6 +86,53 @@ fn a_closed_shell_keeps_exactly_the_shell() {
         (f * k / 0.05f64.ln().abs() - 1.0).abs() < 0.01,
         "{f} for {k} rays"
     );
+}
+
+/// A model a few picometres across, or far smaller, is the same geometry
+/// as at unit size when every coordinate is a power of two smaller: every
+/// mode keeps exactly the shell of a closed shell around parts, and the
+/// independent ground truth sees exactly the shell too. (Unscaled, at
+/// 2^-40 the rays mode finds every triangle hidden: the ray tests'
+/// products of coordinates fall to the bottom of `f32`'s range.)
+#[test]
+fn tiny_models_are_culled_as_at_unit_size() {
+    let unit = shell_around(&parts_inside(), 0.05, 4, None);
+    let shell: Vec<bool> = (0..unit.num_triangles())
+        .map(|t| unit.part_of(t) == 0)
+        .collect();
+    let wrong = |v: &[bool]| v.iter().zip(&shell).filter(|(a, b)| a != b).count();
+    for e in [40, 100] {
+        let mut tiny = unit.clone();
+        let f = 2f32.powi(-e);
+        for p in &mut tiny.positions {
+            *p *= f;
+        }
+        let rays = cull_by_rays(&tiny, &quick()).unwrap();
+        assert_eq!(wrong(&rays.visible), 0, "rays mode at 2^-{e}");
+        let paper = cull(
+            &tiny,
+            &CullOptions {
+                conservative: false,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(wrong(&paper.visible), 0, "paper mode at 2^-{e}");
+        let options = EvalOptions {
+            points: 4,
+            directions: 32,
+            viewpoints: 400,
+            image: 32,
+            max_rounds: 2,
+            ..Default::default()
+        };
+        let truth = independent_truth(&tiny, &options, &|_| {});
+        assert_eq!(wrong(&truth.visible), 0, "ground truth at 2^-{e}");
+        let report = compare(&truth, &rays.visible, &tiny);
+        assert_eq!(report.degenerate, 0, "2^-{e}");
+        assert_eq!(report.truly_visible, shell.iter().filter(|&&v| v).count());
+        assert_eq!(report.false_removals, 0);
+    }
 }
 
 #[test]
