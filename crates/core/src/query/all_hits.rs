@@ -109,7 +109,6 @@ impl SurfaceBvh {
         }
         let prims = &self.prims;
         self.ray_tree()
-            .0
             .surface_hits::<NEAR_FIRST>(ray, &self.tris, |c, p, reach| {
                 let hit = Hit {
                     t: c.t,
@@ -190,7 +189,7 @@ impl SurfaceBvh {
             out.fill(0);
             return;
         }
-        let tree = self.ray_tree().0;
+        let tree = self.ray_tree();
         rays.par_chunks(BATCH_GRAIN)
             .zip(out.par_chunks_mut(BATCH_GRAIN))
             .for_each(|(rays, out)| tree.count_hits(rays, &self.tris, out));
@@ -205,7 +204,7 @@ impl SurfaceBvh {
         if self.prims.is_empty() || max_hits == 0 {
             return lists;
         }
-        let tree = self.ray_tree().0;
+        let tree = self.ray_tree();
         rays.par_chunks(BATCH_GRAIN)
             .zip(lists.par_chunks_mut(BATCH_GRAIN))
             .for_each(|(rays, lists)| {

@@ -63,16 +63,17 @@ impl QueryKind {
 
 impl SurfaceBvh {
     /// Make now what queries of `kind` would otherwise make on their first
-    /// use: the winding-number moments and the ray-casting trees for
-    /// occupancy and signed distance, the ray-casting trees for counts and
-    /// hit lists (nothing for closest points and distances). A one-shot
+    /// use: the winding-number moments and the ray-casting trees of the
+    /// surface and of its closing cap for occupancy and signed distance,
+    /// the surface's ray-casting tree alone for counts and hit lists
+    /// (nothing for closest points and distances). A one-shot
     /// caller can then time building and answering apart.
     pub fn prepare(&self, kind: QueryKind) {
         match kind {
             QueryKind::Distance | QueryKind::Closest => {}
             QueryKind::SignedDistance | QueryKind::Inside => {
                 self.moments();
-                self.ray_tree();
+                self.closed_trees();
             }
             QueryKind::Count | QueryKind::AllHits => {
                 self.ray_tree();

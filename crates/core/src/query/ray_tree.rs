@@ -1,7 +1,8 @@
 //! The ray-casting trees of a [`super::SurfaceBvh`]: 8-wide BVHs over packs
 //! of four Möller triangles ([`Bvh8`], Wald et al. 2014's layout), made on
-//! the first query that needs them, for the multi-hit ray queries and the
-//! crossing count behind occupancy.
+//! the first query that needs them: the surface's ([`RayTree`]) for the
+//! multi-hit ray queries, and the closing cap's ([`CapTree`]) besides for
+//! the crossing count behind occupancy.
 //!
 //! The point queries' tree keeps the triangles' corners, which the
 //! closest-point and solid-angle kernels need; rays are faster through the
@@ -12,8 +13,9 @@
 //! (see [`RayTree::build`]); the cap that
 //! closes the surface's boundary ([`super::closing`]) has a tree of its
 //! own, so that its triangles, which may be long, never slow the hit
-//! queries.
+//! queries, and a count or a hit list never waits for the cap to be made.
 
+use crate::aabb::Aabb;
 use crate::accel::bvh::{BuildOptions, Bvh8, CrossingVisitor};
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
@@ -27,7 +29,7 @@ use glam::Vec3;
 /// faces and edges.
 const TILT: [f32; 2] = [0.013_1, 0.023_7];
 
-/// A surface's ray-casting tree, with the cap's that closes it.
+/// A surface's ray-casting tree.
 pub(crate) struct RayTree {
     /// Over the surface's triangles with area, in the point tree's leaf
     /// order.
@@ -36,9 +38,18 @@ pub(crate) struct RayTree {
     /// triangles, where some were left out for having no area; none when
     /// all were kept (the positions are the indices).
     positions: Option<Vec<u32>>,
+    /// Triangles in the point tree's leaf order.
+    triangles: usize,
+    /// Bounds of the triangles in `surface`.
+    bounds: Aabb,
+}
+
+/// The ray-casting tree of the cap that closes a surface
+/// ([`super::closing`]), for the crossings behind occupancy.
+pub(crate) struct CapTree {
     /// Over the cap's triangles; none for a closed surface.
     cap: Option<Bvh8<Moller>>,
-    /// Whether crossings are counted at all (see [`RayTree::build`]).
+    /// Whether crossings are counted at all (see [`CapTree::build`]).
     countable: bool,
     /// Bounds of surface and cap.
     lo: Vec3,
@@ -62,19 +73,15 @@ fn soup_tree(tris: &[[Vec3; 3]]) -> (Bvh8<Moller>, TriangleMesh) {
 }
 
 impl RayTree {
-    /// The trees of the `surface` triangles (in the point tree's leaf
-    /// order) and of the `cap` that closes them. A cap of more than a
-    /// quarter as many triangles as the surface (a soup rather than a
-    /// surface with holes) is left out, and crossings are not counted:
-    /// through such a cap, counting costs more than summing the solid
-    /// angles (BENCHMARKS.md).
+    /// The tree of the `surface` triangles (in the point tree's leaf
+    /// order).
     ///
     /// Triangles without area (collinear corners: slivers that CAD
     /// tessellations leave, whose long boxes every ray along them must
     /// open) are left out of the surface's tree; no ray crosses them. An
     /// `f32` Möller test can still report a crossing of one, from rounding
     /// alone; the `f64` references never do, and neither does this tree.
-    pub fn build(surface: &[[Vec3; 3]], cap: &[[Vec3; 3]]) -> Self {
+    pub fn build(surface: &[[Vec3; 3]]) -> Self {
         let kept: Vec<u32> = (0..surface.len() as u32)
             .filter(|&i| has_area(&surface[i as usize]))
             .collect();
@@ -84,29 +91,18 @@ impl RayTree {
             let tris: Vec<[Vec3; 3]> = kept.iter().map(|&i| surface[i as usize]).collect();
             (Some(kept), soup_tree(&tris))
         };
-        let mut b = mesh.bounds();
-        let countable = cap.len() <= surface.len() / 4;
-        let cap = (countable && !cap.is_empty()).then(|| {
-            let (tree, mesh) = soup_tree(cap);
-            b = b.union(mesh.bounds());
-            tree
-        });
         RayTree {
             surface: tree,
             positions,
-            cap,
-            countable,
-            lo: b.min,
-            hi: b.max,
+            triangles: surface.len(),
+            bounds: mesh.bounds(),
         }
     }
 
-    /// Bytes held by both trees.
+    /// Bytes held.
     pub fn bytes(&self) -> usize {
         use crate::accel::Accel;
-        self.surface.stats().bytes
-            + self.positions.as_ref().map_or(0, |p| 4 * p.len())
-            + self.cap.as_ref().map_or(0, |c| c.stats().bytes)
+        self.surface.stats().bytes + self.positions.as_ref().map_or(0, |p| 4 * p.len())
     }
 
     /// Walk the surface's hits along `ray`: `visit(c, p, reach)` with `p`
@@ -172,9 +168,38 @@ impl RayTree {
     fn position(&self, p: u32) -> u32 {
         self.positions.as_ref().map_or(p, |m| m[p as usize])
     }
+}
 
-    /// Whether [`RayTree::signed_crossings`] counts: false when the cap
-    /// was left out (see [`RayTree::build`]).
+impl CapTree {
+    /// The tree of the `cap` that closes `surface` ([`RayTree::build`]'s
+    /// triangles). A cap of more than a quarter as many triangles as the
+    /// surface (a soup rather than a surface with holes) is left out, and
+    /// crossings are not counted: through such a cap, counting costs more
+    /// than summing the solid angles (BENCHMARKS.md).
+    pub fn build(surface: &RayTree, cap: &[[Vec3; 3]]) -> Self {
+        let mut b = surface.bounds;
+        let countable = cap.len() <= surface.triangles / 4;
+        let cap = (countable && !cap.is_empty()).then(|| {
+            let (tree, mesh) = soup_tree(cap);
+            b = b.union(mesh.bounds());
+            tree
+        });
+        CapTree {
+            cap,
+            countable,
+            lo: b.min,
+            hi: b.max,
+        }
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        use crate::accel::Accel;
+        self.cap.as_ref().map_or(0, |c| c.stats().bytes)
+    }
+
+    /// Whether [`CapTree::signed_crossings`] counts: false when the cap
+    /// was left out (see [`CapTree::build`]).
     pub fn countable(&self) -> bool {
         self.countable
     }
@@ -186,7 +211,7 @@ impl RayTree {
     /// of, the rays towards the next two nearest faces are tried. None
     /// when all three are unsure, `q` is not finite, or the tree does not
     /// count.
-    pub fn signed_crossings(&self, q: Vec3) -> Option<i32> {
+    pub fn signed_crossings(&self, surface: &RayTree, q: Vec3) -> Option<i32> {
         if !q.is_finite() || !self.countable {
             return None;
         }
@@ -205,13 +230,13 @@ impl RayTree {
         }
         exits[..3]
             .iter()
-            .find_map(|&(_, face)| self.crossings_towards(q, face))
+            .find_map(|&(_, face)| self.crossings_towards(surface, q, face))
     }
 
     /// The signed crossings of the ray from `q` towards box face `face`
     /// (`+x, -x, +y, -y, +z, -z`), tilted off the axis; None when one is
     /// unsure.
-    fn crossings_towards(&self, q: Vec3, face: usize) -> Option<i32> {
+    fn crossings_towards(&self, surface: &RayTree, q: Vec3, face: usize) -> Option<i32> {
         let (axis, sign) = (face / 2, if face.is_multiple_of(2) { 1.0 } else { -1.0 });
         let mut dir = Vec3::ZERO;
         dir[axis] = sign;
@@ -219,7 +244,7 @@ impl RayTree {
         dir[(axis + 2) % 3] = TILT[1];
         let ray = Ray::new(q, dir.normalize());
         let mut sum = SignedCount::default();
-        for tree in std::iter::once(&self.surface).chain(&self.cap) {
+        for tree in std::iter::once(&surface.surface).chain(&self.cap) {
             if sum.sure {
                 sum = tree.crossings::<false, true, _>(&ray, sum);
             }

@@ -15,7 +15,7 @@
 
 use super::closing::closing_cap;
 use super::moments::Moments;
-use super::ray_tree::RayTree;
+use super::ray_tree::{CapTree, RayTree};
 use crate::aabb::Aabb;
 use crate::accel::bvh::{build, BuildNode, BuildOptions};
 use crate::mesh::TriangleMesh;
@@ -40,9 +40,14 @@ pub struct SurfaceBvh {
     pub(crate) stack_need: usize,
     /// Winding-number moments, made on first use.
     pub(crate) moments: OnceLock<Moments>,
-    /// The ray-casting tree of the multi-hit queries and occupancy, and
-    /// the cap's own tree, made on first use.
-    pub(crate) rays: OnceLock<(RayTree, Option<Box<SurfaceBvh>>)>,
+    /// The ray-casting tree of the multi-hit queries and occupancy, made on
+    /// first use.
+    pub(crate) rays: OnceLock<RayTree>,
+    /// The ray-casting tree of the cap that closes the surface, and the
+    /// cap's point tree for its winding number (none when the surface is
+    /// closed or crossings are not counted), made on the first occupancy
+    /// query.
+    pub(crate) closing: OnceLock<(CapTree, Option<Box<SurfaceBvh>>)>,
 }
 
 impl SurfaceBvh {
@@ -68,6 +73,7 @@ impl SurfaceBvh {
             stack_need: 1,
             moments: OnceLock::new(),
             rays: OnceLock::new(),
+            closing: OnceLock::new(),
         };
         if !bvh.prims.is_empty() {
             bvh.nodes.push(SurfaceNode::default());
@@ -120,18 +126,25 @@ impl SurfaceBvh {
         depth
     }
 
-    /// The ray-casting tree over the triangles and the cap that closes
-    /// them ([`super::closing`]), and the cap's own tree for its winding
-    /// number (none when the surface is closed); made on first use.
-    pub(crate) fn ray_tree(&self) -> (&RayTree, Option<&SurfaceBvh>) {
-        let (tree, cap) = self.rays.get_or_init(|| {
+    /// The ray-casting tree over the triangles; made on first use.
+    pub(crate) fn ray_tree(&self) -> &RayTree {
+        self.rays.get_or_init(|| RayTree::build(&self.tris))
+    }
+
+    /// The ray-casting trees over the triangles and over the cap that
+    /// closes them ([`super::closing`]), and the cap's own point tree for
+    /// its winding number (none when the surface is closed); made on first
+    /// use.
+    pub(crate) fn closed_trees(&self) -> (&RayTree, &CapTree, Option<&SurfaceBvh>) {
+        let tree = self.ray_tree();
+        let (cap_tree, cap) = self.closing.get_or_init(|| {
             let cap = closing_cap(&self.tris);
-            let tree = RayTree::build(&self.tris, &cap);
-            let cap_tree = (tree.countable() && !cap.is_empty())
+            let cap_tree = CapTree::build(tree, &cap);
+            let winding = (cap_tree.countable() && !cap.is_empty())
                 .then(|| Box::new(SurfaceBvh::build(&TriangleMesh::from_triangles(&cap))));
-            (tree, cap_tree)
+            (cap_tree, winding)
         });
-        (tree, cap.as_deref())
+        (tree, cap_tree, cap.as_deref())
     }
 
     /// Bytes held: nodes, corners and triangle indices, and the
@@ -141,10 +154,11 @@ impl SurfaceBvh {
         let own = self.nodes.len() * std::mem::size_of::<SurfaceNode>()
             + self.tris.len() * (std::mem::size_of::<[Vec3; 3]>() + std::mem::size_of::<u32>());
         let moments = self.moments.get().map_or(0, Moments::bytes);
-        let rays = self.rays.get().map_or(0, |(tree, cap)| {
+        let rays = self.rays.get().map_or(0, RayTree::bytes);
+        let closing = self.closing.get().map_or(0, |(tree, cap)| {
             tree.bytes() + cap.as_ref().map_or(0, |c| c.bytes())
         });
-        own + moments + rays
+        own + moments + rays + closing
     }
 
     /// Number of triangles.

@@ -278,8 +278,8 @@ impl SurfaceBvh {
         if self.nodes.is_empty() {
             return q.is_finite().then_some(0.0);
         }
-        let (tree, cap) = self.ray_tree();
-        let count = tree.signed_crossings(q)?;
+        let (tree, cap_tree, cap) = self.closed_trees();
+        let count = cap_tree.signed_crossings(tree, q)?;
         Some(count as f32 - cap.map_or(0.0, |c| c.winding_number(q)))
     }
 
@@ -306,8 +306,8 @@ impl SurfaceBvh {
         if !q.is_finite() {
             return false;
         }
-        let (tree, cap) = self.ray_tree();
-        let count = tree.signed_crossings(q);
+        let (tree, cap_tree, cap) = self.closed_trees();
+        let count = cap_tree.signed_crossings(tree, q);
         let winding = |beta| match count {
             Some(n) => n as f32 - cap.map_or(0.0, |c| c.winding_number_with(q, beta)),
             None => self.winding_number_with(q, beta),
@@ -351,7 +351,7 @@ impl SurfaceBvh {
     /// order.
     pub fn inside_batch(&self, points: &[Vec3], out: &mut [bool]) {
         self.moments();
-        self.ray_tree();
+        self.closed_trees();
         answer_coherent(points, out, |p, _: &mut ()| self.is_inside(p));
     }
 
@@ -359,7 +359,7 @@ impl SurfaceBvh {
     /// distances searched as in [`SurfaceBvh::distances`].
     pub fn signed_distances(&self, points: &[Vec3], out: &mut [f32]) {
         self.moments();
-        self.ray_tree();
+        self.closed_trees();
         answer_coherent(points, out, |p, hint| self.signed_distance_hinted(p, hint));
     }
 }
