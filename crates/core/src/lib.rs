@@ -65,6 +65,7 @@ mod test_soup;
 pub mod texture;
 pub mod tjunction;
 pub mod tri;
+pub mod unit_scale;
 pub mod verify;
 
 pub use aabb::Aabb;
@@ -79,3 +80,4 @@ pub use mesh::{Material, MeshError, Part, TriangleMesh, MAX_COORDINATE};
 pub use ray::Ray;
 pub use texture::Texture;
 pub use tri::TriangleTest;
+pub use unit_scale::UnitScale;

@@ -30,8 +30,7 @@ use crate::escape::{
     beam_escapes, escape_direction, fibonacci, is_degenerate, off_surface, RayConfirm,
 };
 use crate::shared_escapes::{SharedEscapes, SHARING_CELLS};
-use crate::unit_scale::at_unit_scale;
-use raykit_core::{Accel, Ray, TriangleMesh, Vec3};
+use raykit_core::{Accel, Ray, TriangleMesh, UnitScale, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -470,7 +469,7 @@ pub fn compare(truth: &GroundTruth, kept: &[bool], mesh: &TriangleMesh) -> EvalR
         let [a, b, c] = mesh.triangle(t).map(|v| v.as_dvec3());
         0.5 * (b - a).cross(c - a).length()
     };
-    let unit = at_unit_scale(mesh);
+    let unit = UnitScale::for_mesh(mesh).mesh(mesh);
     let mut r = EvalReport {
         triangles: n,
         ..Default::default()
@@ -495,7 +494,7 @@ pub fn compare(truth: &GroundTruth, kept: &[bool], mesh: &TriangleMesh) -> EvalR
             r.triangles_removed += 1;
             r.area_removed += at;
         }
-        if is_degenerate(&unit.mesh, t) {
+        if is_degenerate(&unit, t) {
             r.degenerate += 1;
         } else if truth.visible[t] {
             r.truly_visible += 1;

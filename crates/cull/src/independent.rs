@@ -3,21 +3,22 @@
 //! than the Möller–Trumbore (1997) test the rays mode casts with.
 
 use crate::evaluate::{evaluate_with_progress, EvalOptions, EvalProgress, GroundTruth};
-use crate::unit_scale::at_unit_scale;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
 use raykit_core::TriangleMesh;
+use raykit_core::UnitScale;
 
 /// The ground truth of `mesh` with `options` ([`evaluate_with_progress`])
 /// through its own 8-wide BVH over the Plücker test, judged at unit scale
-/// ([`at_unit_scale`]); `progress` as there.
+/// ([`UnitScale`]); `progress` as there.
 pub fn independent_truth(
     mesh: &TriangleMesh,
     options: &EvalOptions,
     progress: &(dyn Fn(EvalProgress) + Sync),
 ) -> GroundTruth {
-    let unit = at_unit_scale(mesh);
-    let mesh = &*unit.mesh;
+    let unit = UnitScale::for_mesh(mesh);
+    let scaled = unit.mesh(mesh);
+    let mesh = &*scaled;
     let accel = build_accel(
         AccelKind::Bvh8,
         TestKind::Plucker,

@@ -48,7 +48,6 @@ pub mod report;
 pub mod saved_truth;
 pub mod shared_escapes;
 pub mod synthetic;
-pub mod unit_scale;
 pub mod visible;
 
 pub use distance_field::{DirectedDistanceField, DirectedHit, Direction};
@@ -63,12 +62,11 @@ pub use propagate::{propagate, Classification, Tag};
 pub use rays::{visible_by_rays, RayOptions, RayRound, RayStats};
 pub use report::{CullMode, CullReport, Removal};
 pub use saved_truth::{SavedTruth, SavedTruthMismatch};
-pub use unit_scale::at_unit_scale;
 pub use visible::{confirm_frontier, touches_outside, visible_from_outside};
 
 use raykit_core::accel::{build_accel, Accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
-use raykit_core::{MeshError, TriangleMesh};
+use raykit_core::{MeshError, TriangleMesh, UnitScale};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -195,8 +193,9 @@ pub struct CullResult {
 /// visibility culling). An empty mesh gives an empty result; a mesh failing
 /// [`TriangleMesh::validate`] otherwise gives its error.
 pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, MeshError> {
-    let unit = at_unit_scale(mesh);
-    let mesh = &*unit.mesh;
+    let unit = UnitScale::for_mesh(mesh);
+    let scaled = unit.mesh(mesh);
+    let mesh = &*scaled;
     let Some((accel, mut stats)) = prepare(mesh, AccelKind::Bvh2)? else {
         return Ok(result_for(mesh, Vec::new(), CullStats::default()));
     };
@@ -256,8 +255,9 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
 /// BVH over Möller–Trumbore packs. An empty mesh gives an empty result; a
 /// mesh failing [`TriangleMesh::validate`] otherwise gives its error.
 pub fn cull_by_rays(mesh: &TriangleMesh, options: &RayOptions) -> Result<CullResult, MeshError> {
-    let unit = at_unit_scale(mesh);
-    let mesh = &*unit.mesh;
+    let unit = UnitScale::for_mesh(mesh);
+    let scaled = unit.mesh(mesh);
+    let mesh = &*scaled;
     let Some((accel, mut stats)) = prepare(mesh, AccelKind::Bvh8)? else {
         return Ok(result_for(mesh, Vec::new(), CullStats::default()));
     };

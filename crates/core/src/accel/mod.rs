@@ -35,6 +35,7 @@ mod leaf;
 mod linear_boxes;
 pub(crate) mod node_box;
 mod registry;
+mod unit_scaled;
 
 pub use brute::BruteForce;
 pub use bvh::{
@@ -48,6 +49,7 @@ pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
 pub use kind::AccelKind;
 pub use linear_boxes::{LinearBoxes, LINEAR_BOX_SIZE};
 pub use registry::{build_accel, kd_accel_from_tree, load_accel};
+pub use unit_scaled::UnitScaled;
 
 /// Rays per rayon task in the batch queries: large enough to amortise task
 /// overhead, small enough to balance two cores on uneven work.

@@ -5,21 +5,25 @@ use super::kdtree::{KdBuildNode, KdTree};
 use super::kind::AccelKind;
 use super::{
     Accel, BruteForce, BuildOptions, Bvh2, Bvh4, Bvh8, KdBacktrack, KdRestart, KdRopes, KdStack,
-    PersistError, ThreadedBvh,
+    PersistError, ThreadedBvh, UnitScaled,
 };
 use crate::aabb::Aabb;
 use crate::mesh::TriangleMesh;
 use crate::tri::TestKind;
+use crate::unit_scale::UnitScale;
 use crate::with_test;
 
-/// Build the structure `kind` over `mesh` with triangle test `test`.
+/// Build the structure `kind` over `mesh` with triangle test `test`; over
+/// the mesh at unit scale when it is less than 1 across ([`UnitScaled`]).
 pub fn build_accel(
     kind: AccelKind,
     test: TestKind,
     mesh: &TriangleMesh,
     options: &BuildOptions,
 ) -> Box<dyn Accel> {
-    with_test!(test, T => match kind {
+    let scale = UnitScale::for_mesh(mesh);
+    let mesh = &*scale.mesh(mesh);
+    let accel = with_test!(test, T => match kind {
         AccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)) as Box<dyn Accel>,
         AccelKind::Bvh2 => Box::new(Bvh2::<T>::build(mesh, options)),
         AccelKind::Bvh4 => Box::new(Bvh4::<T>::build(mesh, options)),
@@ -29,7 +33,8 @@ pub fn build_accel(
         AccelKind::KdRopes => Box::new(KdRopes::<T>::build(mesh, &options.kd)),
         AccelKind::KdRestart => Box::new(KdRestart::<T>::build(mesh, &options.kd)),
         AccelKind::KdBacktrack => Box::new(KdBacktrack::<T>::build(mesh, &options.kd)),
-    })
+    });
+    UnitScaled::wrap(accel, scale)
 }
 
 /// Load a structure saved with [`Accel::save`] over `mesh`, of the
@@ -40,12 +45,14 @@ pub fn load_accel(
     mesh: &TriangleMesh,
 ) -> Result<(AccelKind, TestKind, Box<dyn Accel>), PersistError> {
     let (kind, test) = super::bvh::saved_kind(path)?;
+    let scale = UnitScale::for_mesh(mesh);
+    let mesh = &*scale.mesh(mesh);
     with_test!(test, T => {
         let accel = match kind {
             AccelKind::Bvh4 => Box::new(Bvh4::<T>::load(path, mesh)?) as Box<dyn Accel>,
             _ => Box::new(Bvh8::<T>::load(path, mesh)?),
         };
-        Ok((kind, test, accel))
+        Ok((kind, test, UnitScaled::wrap(accel, scale)))
     })
 }
 

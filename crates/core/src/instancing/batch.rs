@@ -16,7 +16,7 @@
 
 use super::hit::SceneHit;
 use super::scene::InstancedScene;
-use crate::accel::{Accel, BATCH_GRAIN};
+use crate::accel::BATCH_GRAIN;
 use crate::hit::Hit;
 use crate::query::batch::answer_each;
 use crate::ray::Ray;
@@ -199,9 +199,7 @@ impl InstancedScene {
             }));
             found.clear();
             found.resize(moved.len(), None);
-            self.geometries[inst.geometry as usize]
-                .bvh()
-                .intersect_batch(&moved, &mut found);
+            self.geometries[inst.geometry as usize].intersect_batch(&moved, &mut found);
             for (&k, h) in group.iter().zip(&found) {
                 if let Some(h) = h {
                     let b = &mut best[k as usize];
@@ -235,9 +233,7 @@ impl InstancedScene {
             }
             found.clear();
             found.resize(moved.len(), false);
-            self.geometries[inst.geometry as usize]
-                .bvh()
-                .occluded_batch(&moved, &mut found);
+            self.geometries[inst.geometry as usize].occluded_batch(&moved, &mut found);
             for (&k, &o) in open.iter().zip(&found) {
                 occluded[k] |= o;
             }

@@ -3,9 +3,12 @@
 
 use crate::aabb::Aabb;
 use crate::accel::{Accel, BuildOptions, Bvh8};
+use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::query::SurfaceBvh;
+use crate::ray::Ray;
 use crate::tri::{Moller, MAX_EDGE_TOLERANCE};
+use crate::unit_scale::UnitScale;
 use glam::Vec3;
 use std::sync::OnceLock;
 
@@ -15,7 +18,11 @@ use std::sync::OnceLock;
 /// [`SurfaceBvh`] behind all-hits, counts and filtered any-hit queries.
 pub struct Geometry {
     mesh: TriangleMesh,
+    /// The BVH over the mesh at `scale` ([`UnitScale`]: a mesh less than
+    /// 1 across is scaled up, so that the triangle tests' products stay in
+    /// `f32`'s range); its queries scale rays in and hits back.
     bvh: Bvh8<Moller>,
+    scale: UnitScale,
     /// Bounds padded by the triangle tests' tolerance band, as the BVHs'
     /// own node boxes are (`accel/node_box.rs`).
     bounds: Aabb,
@@ -26,7 +33,8 @@ pub struct Geometry {
 impl Geometry {
     /// Build the bottom-level BVH over `mesh` (checked by the caller).
     pub(crate) fn build(mesh: TriangleMesh, mask: u32, options: &BuildOptions) -> Self {
-        let bvh = Bvh8::build(&mesh, options);
+        let scale = UnitScale::for_mesh(&mesh);
+        let bvh = Bvh8::build(&scale.mesh(&mesh), options);
         let b = mesh.bounds();
         let bounds = if mesh.indices.is_empty() {
             Aabb::EMPTY
@@ -37,6 +45,7 @@ impl Geometry {
         Geometry {
             mesh,
             bvh,
+            scale,
             bounds,
             mask,
             surface: OnceLock::new(),
@@ -48,9 +57,27 @@ impl Geometry {
         &self.mesh
     }
 
-    /// The bottom-level BVH.
-    pub fn bvh(&self) -> &Bvh8<Moller> {
-        &self.bvh
+    /// The nearest hit of `ray` (in object space) on the geometry.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let hit = self.bvh.intersect(&self.scale.ray(ray))?;
+        Some(self.scale.hit_to_model(hit))
+    }
+
+    /// Whether `ray` (in object space) hits the geometry.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.bvh.occluded(&self.scale.ray(ray))
+    }
+
+    /// [`Geometry::intersect`] for many rays (the bottom-level BVH's
+    /// packet path).
+    pub fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        self.bvh.intersect_batch(&self.scale.rays(rays), hits);
+        self.scale.hits_to_model(hits);
+    }
+
+    /// [`Geometry::occluded`] for many rays.
+    pub fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
+        self.bvh.occluded_batch(&self.scale.rays(rays), occluded);
     }
 
     /// The mesh's bounds widened by the triangle tests' tolerance band
@@ -71,9 +98,13 @@ impl Geometry {
         self.surface.get_or_init(|| SurfaceBvh::build(&self.mesh))
     }
 
-    /// `e1 × e2` of triangle `prim` in object space.
+    /// `e1 × e2` of triangle `prim` in object space, at the BVH's scale
+    /// (the direction is the same; its length does not underflow).
     pub(crate) fn face_cross(&self, prim: u32) -> Vec3 {
-        let [a, b, c] = self.mesh.triangle(prim as usize);
+        let [a, b, c] = self
+            .mesh
+            .triangle(prim as usize)
+            .map(|p| self.scale.point(p));
         (b - a).cross(c - a)
     }
 

@@ -4,7 +4,6 @@
 
 use super::hit::SceneHit;
 use super::scene::InstancedScene;
-use crate::accel::Accel;
 use crate::hit::Hit;
 use crate::ray::Ray;
 
@@ -43,7 +42,7 @@ impl InstancedScene {
                 }
                 let oray = inst.transform.object_ray(ray, best_t.get());
                 let g = &self.geometries[inst.geometry as usize];
-                if let Some(h) = g.bvh().intersect(&oray) {
+                if let Some(h) = g.intersect(&oray) {
                     if best.is_none_or(|(b, _)| h.t < b.t) {
                         best_t.set(h.t);
                         best = Some((h, i));
@@ -68,9 +67,7 @@ impl InstancedScene {
                     return true;
                 }
                 let oray = inst.transform.object_ray(ray, ray.tfar);
-                hit = self.geometries[inst.geometry as usize]
-                    .bvh()
-                    .occluded(&oray);
+                hit = self.geometries[inst.geometry as usize].occluded(&oray);
                 !hit
             },
         );

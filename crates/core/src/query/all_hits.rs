@@ -107,16 +107,21 @@ impl SurfaceBvh {
         if self.prims.is_empty() {
             return;
         }
-        let prims = &self.prims;
+        let (prims, scale) = (&self.prims, self.scale);
+        // The walk is at the tree's scale; `visit` sees hits and the reach
+        // in the mesh's units.
         self.ray_tree()
-            .surface_hits::<NEAR_FIRST>(ray, &self.tris, |c, p, reach| {
+            .surface_hits::<NEAR_FIRST>(&scale.ray(ray), &self.tris, |c, p, reach| {
                 let hit = Hit {
-                    t: c.t,
+                    t: scale.to_model(c.t),
                     u: c.u,
                     v: c.v,
                     prim: prims[p as usize],
                 };
-                visit(hit, reach)
+                let mut model_reach = scale.to_model(*reach);
+                let more = visit(hit, &mut model_reach);
+                *reach = scale.length(model_reach);
+                more
             });
     }
 
@@ -192,7 +197,7 @@ impl SurfaceBvh {
         let tree = self.ray_tree();
         rays.par_chunks(BATCH_GRAIN)
             .zip(out.par_chunks_mut(BATCH_GRAIN))
-            .for_each(|(rays, out)| tree.count_hits(rays, &self.tris, out));
+            .for_each(|(rays, out)| tree.count_hits(&self.scale.rays(rays), &self.tris, out));
     }
 
     /// [`SurfaceBvh::ray_hits`] for many rays, in parallel: one sorted list
@@ -208,12 +213,12 @@ impl SurfaceBvh {
         rays.par_chunks(BATCH_GRAIN)
             .zip(lists.par_chunks_mut(BATCH_GRAIN))
             .for_each(|(rays, lists)| {
-                tree.hits(rays, &self.tris, |i, found, at| {
+                tree.hits(&self.scale.rays(rays), &self.tris, |i, found, at| {
                     let mut hits: Vec<Hit> = found
                         .iter()
                         .zip(at)
                         .map(|(c, &p)| Hit {
-                            t: c.t,
+                            t: self.scale.to_model(c.t),
                             u: c.u,
                             v: c.v,
                             prim: self.prims[p as usize],

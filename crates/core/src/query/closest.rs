@@ -293,12 +293,25 @@ impl SurfaceBvh {
     /// is not finite. Ties between triangles at the same distance (a shared
     /// edge or corner) go to either.
     pub fn closest_point(&self, p: Vec3, max_distance: f32) -> Option<ClosestPoint> {
-        self.nearest_triangle(p, max_distance, None)
-            .map(|t| answer(p, &self.tris[t], self.prims[t]))
+        let q = self.scale.point(p);
+        self.nearest_triangle(q, self.scale.length(max_distance), None)
+            .map(|t| self.closest_on(q, t))
+    }
+
+    /// The closest point of triangle `t` (leaf order) to `q` (both at
+    /// [`SurfaceBvh::scale`]), in the mesh's units.
+    fn closest_on(&self, q: Vec3, t: usize) -> ClosestPoint {
+        let c = answer(q, &self.tris[t], self.prims[t]);
+        ClosestPoint {
+            point: self.scale.point_to_model(c.point),
+            distance: self.scale.to_model(c.distance),
+            ..c
+        }
     }
 
     /// The search behind [`SurfaceBvh::closest_point`]: the nearest
-    /// triangle's index in leaf order. `hint`, a triangle near `p` (in leaf
+    /// triangle's index in leaf order, `p` and `max_distance` at
+    /// [`SurfaceBvh::scale`]. `hint`, a triangle near `p` (in leaf
     /// order; the answer for a neighbouring point), starts the search with
     /// its distance as the bound, which prunes the tree from the first node
     /// on; the answer is the same with or without it.
@@ -389,10 +402,12 @@ impl SurfaceBvh {
         max_distance: f32,
         out: &mut [Option<ClosestPoint>],
     ) {
+        let max_distance = self.scale.length(max_distance);
         answer_coherent(points, out, |p, hint: &mut Option<usize>| {
-            let found = self.nearest_triangle(p, max_distance, *hint);
+            let q = self.scale.point(p);
+            let found = self.nearest_triangle(q, max_distance, *hint);
             *hint = found.or(*hint);
-            found.map(|t| answer(p, &self.tris[t], self.prims[t]))
+            found.map(|t| self.closest_on(q, t))
         });
     }
 
@@ -408,11 +423,10 @@ impl SurfaceBvh {
         if !p.is_finite() {
             return f32::NAN;
         }
-        let found = self.nearest_triangle(p, f32::INFINITY, *hint);
+        let q = self.scale.point(p);
+        let found = self.nearest_triangle(q, f32::INFINITY, *hint);
         *hint = found.or(*hint);
-        found.map_or(f32::INFINITY, |t| {
-            answer(p, &self.tris[t], self.prims[t]).distance
-        })
+        found.map_or(f32::INFINITY, |t| self.closest_on(q, t).distance)
     }
 }
 

@@ -19,6 +19,7 @@ use super::ray_tree::{CapTree, RayTree};
 use crate::aabb::Aabb;
 use crate::accel::bvh::{build, BuildNode, BuildOptions};
 use crate::mesh::TriangleMesh;
+use crate::unit_scale::UnitScale;
 use glam::Vec3;
 use std::sync::OnceLock;
 
@@ -30,10 +31,15 @@ pub(crate) use super::surface_node::{stack_of, SurfaceNode, EMPTY, SMALL_STACK};
 /// that leaf as its only child); an empty mesh has no nodes.
 pub struct SurfaceBvh {
     pub(crate) nodes: Vec<SurfaceNode>,
-    /// Corners of the triangles in leaf order.
+    /// The scale the tree, the corners and the trees made from them are
+    /// at ([`UnitScale`]): every query scales its points or rays in and
+    /// its lengths back.
+    pub(crate) scale: UnitScale,
+    /// Corners of the triangles in leaf order, at [`SurfaceBvh::scale`].
     pub(crate) tris: Vec<[Vec3; 3]>,
     /// Mesh triangle index of each triangle in leaf order.
     pub(crate) prims: Vec<u32>,
+    /// Bounds of the triangles, in the mesh's units.
     pub(crate) bounds: Aabb,
     /// Most traversal stack entries a query can need (each inner node
     /// visited pushes at most eight and pops one).
@@ -57,19 +63,24 @@ impl SurfaceBvh {
     }
 
     /// Build over all triangles of `mesh` (the binned SAH or linear BVH that
-    /// `options.quality` names, leaves of up to `options.max_leaf_size`).
+    /// `options.quality` names, leaves of up to `options.max_leaf_size`),
+    /// at unit scale when the mesh is less than 1 across ([`UnitScale`]).
     pub fn build_with(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        let scale = UnitScale::for_mesh(mesh);
+        let mesh = &*scale.mesh(mesh);
         let tree = build::build(mesh, options);
         let tris: Vec<[Vec3; 3]> = tree
             .order
             .iter()
             .map(|&t| mesh.triangle(t as usize))
             .collect();
+        let bounds = tree.root.bounds();
         let mut bvh = SurfaceBvh {
             nodes: Vec::new(),
+            scale,
             tris,
             prims: tree.order,
-            bounds: tree.root.bounds(),
+            bounds: scale.aabb_to_model(&bounds),
             stack_need: 1,
             moments: OnceLock::new(),
             rays: OnceLock::new(),
@@ -247,6 +258,7 @@ mod tests {
                     for t in r {
                         seen[bvh.prims[t] as usize] += 1;
                         assert_eq!(bvh.tris[t], mesh.triangle(bvh.prims[t] as usize));
+                        assert!(bvh.scale.is_one());
                     }
                 } else {
                     stack.push(node.child[k] as usize);

@@ -203,6 +203,12 @@ impl SurfaceBvh {
     /// gives the exact sum). NaN for a point that is not finite; 0 for an
     /// empty mesh.
     pub fn winding_number_with(&self, q: Vec3, beta: f32) -> f32 {
+        self.winding_at_scale(self.scale.point(q), beta)
+    }
+
+    /// [`SurfaceBvh::winding_number_with`] of `q` at
+    /// [`SurfaceBvh::scale`].
+    fn winding_at_scale(&self, q: Vec3, beta: f32) -> f32 {
         if !q.is_finite() {
             return f32::NAN;
         }
@@ -278,6 +284,7 @@ impl SurfaceBvh {
         if self.nodes.is_empty() {
             return q.is_finite().then_some(0.0);
         }
+        let q = self.scale.point(q);
         let (tree, cap_tree, cap) = self.closed_trees();
         let count = cap_tree.signed_crossings(tree, q)?;
         Some(count as f32 - cap.map_or(0.0, |c| c.winding_number(q)))
@@ -303,14 +310,17 @@ impl SurfaceBvh {
     /// [`DEFAULT_BETA`] only where the coarse winding number is within
     /// [`COARSE_MARGIN`] of ½.
     pub fn is_inside(&self, q: Vec3) -> bool {
+        let q = self.scale.point(q);
         if !q.is_finite() {
             return false;
         }
         let (tree, cap_tree, cap) = self.closed_trees();
         let count = cap_tree.signed_crossings(tree, q);
+        // The cap's tree takes points at this tree's scale, at which it was
+        // made.
         let winding = |beta| match count {
             Some(n) => n as f32 - cap.map_or(0.0, |c| c.winding_number_with(q, beta)),
-            None => self.winding_number_with(q, beta),
+            None => self.winding_at_scale(q, beta),
         };
         let w = winding(COARSE_BETA);
         if (w - 0.5).abs() > COARSE_MARGIN {

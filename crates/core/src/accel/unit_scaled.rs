@@ -1,0 +1,73 @@
+//! [`UnitScaled`]: a structure built over a tiny model at unit scale
+//! ([`crate::unit_scale`]), answering in the model's units.
+
+use super::{Accel, AccelStats, PersistError, RefitError, RefitReport};
+use crate::aabb::Aabb;
+use crate::hit::Hit;
+use crate::mesh::TriangleMesh;
+use crate::ray::Ray;
+use crate::unit_scale::UnitScale;
+
+/// A structure built over a model scaled by [`UnitScale`], so that the
+/// triangle tests' products of coordinates (Möller and Trumbore 1997) stay
+/// in `f32`'s normal range; rays are scaled in and hits, regions and saved
+/// files scaled back, so that it answers exactly as the same structure
+/// over the model at unit size, in the model's units. [`super::build_accel`]
+/// and [`super::load_accel`] wrap a structure in it when the model is less
+/// than 1 across.
+pub struct UnitScaled {
+    inner: Box<dyn Accel>,
+    scale: UnitScale,
+}
+
+impl UnitScaled {
+    /// `inner`, built over a model scaled by `scale`; itself when `scale`
+    /// is one.
+    pub fn wrap(inner: Box<dyn Accel>, scale: UnitScale) -> Box<dyn Accel> {
+        if scale.is_one() {
+            return inner;
+        }
+        Box::new(UnitScaled { inner, scale })
+    }
+}
+
+impl Accel for UnitScaled {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let hit = self.inner.intersect(&self.scale.ray(ray))?;
+        Some(self.scale.hit_to_model(hit))
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.inner.occluded(&self.scale.ray(ray))
+    }
+
+    fn stats(&self) -> AccelStats {
+        self.inner.stats()
+    }
+
+    fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
+        let scale = self.scale;
+        self.inner
+            .visit_regions(&mut |b| enter(&scale.aabb_to_model(b)), leaf);
+    }
+
+    /// Saved over the model at unit scale, as [`super::load_accel`] loads
+    /// it again.
+    fn save(&self, path: &std::path::Path, mesh: &TriangleMesh) -> Result<(), PersistError> {
+        self.inner.save(path, &self.scale.mesh(mesh))
+    }
+
+    /// Refit at the scale the structure was built at.
+    fn refit(&mut self, mesh: &TriangleMesh) -> Result<RefitReport, RefitError> {
+        self.inner.refit(&self.scale.mesh(mesh))
+    }
+
+    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        self.inner.intersect_batch(&self.scale.rays(rays), hits);
+        self.scale.hits_to_model(hits);
+    }
+
+    fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
+        self.inner.occluded_batch(&self.scale.rays(rays), occluded);
+    }
+}

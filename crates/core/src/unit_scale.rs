@@ -1,0 +1,211 @@
+//! A model far smaller than a unit, judged at unit size. The ray-triangle
+//! tests multiply two or three coordinate differences in `f32` (Möller and
+//! Trumbore 1997's determinant, its rounding-error bounds), the closest
+//! point four (Ericson 2005's region tests): on a model a few nanometres
+//! across in metres those products fall to the bottom of `f32`'s range,
+//! and distances, then hits, come out wrong. Scaling the model by a power
+//! of two is exact (the same geometry, no rounding), so the structures
+//! are built over the scaled model and each query is scaled in and its
+//! answer scaled back; the answers are those of the same model at unit
+//! size, divided by the factor. Models whose box is at least 1 across are
+//! used as they are.
+
+use crate::aabb::Aabb;
+use crate::hit::Hit;
+use crate::mesh::TriangleMesh;
+use crate::ray::Ray;
+use glam::Vec3;
+use std::borrow::Cow;
+
+/// The power of two a model is scaled by so that the largest side of its
+/// box lies in `[1, 2)`; one for a model at least 1 across, empty or not
+/// finite.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UnitScale {
+    /// The factor as two powers of two that are each finite in `f32` (a
+    /// box as small as `2⁻¹⁴⁹` needs `2¹⁴⁹`, beyond `f32::MAX`).
+    factor: (f32, f32),
+}
+
+impl UnitScale {
+    /// No scaling.
+    pub const ONE: UnitScale = UnitScale { factor: (1.0, 1.0) };
+
+    /// The scale for a model whose box has `side` as its largest side.
+    pub fn for_side(side: f32) -> Self {
+        if !(side > 0.0 && side < 1.0 && side.is_finite()) {
+            return UnitScale::ONE;
+        }
+        // The exponent that brings `side` into [1, 2): f32 sides are at
+        // least 2^-149, so it is at most 149, applied in two steps that
+        // are each a finite power of two.
+        let k = -(side as f64).log2().floor() as i32;
+        let k = if side as f64 * 2f64.powi(k) < 1.0 {
+            k + 1
+        } else {
+            k
+        };
+        UnitScale {
+            factor: (2f32.powi(k / 2), 2f32.powi(k - k / 2)),
+        }
+    }
+
+    /// The scale for `mesh`, from the box of its vertices (one for a mesh
+    /// without triangles).
+    pub fn for_mesh(mesh: &TriangleMesh) -> Self {
+        if mesh.indices.is_empty() {
+            return UnitScale::ONE;
+        }
+        let b = mesh.positions.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p));
+        Self::for_side((b.max - b.min).max_element())
+    }
+
+    /// Whether this is no scaling at all.
+    pub fn is_one(self) -> bool {
+        self == UnitScale::ONE
+    }
+
+    /// A point of the model at unit scale (not finite when the point is
+    /// so far from the model that scaling overflows `f32`).
+    #[inline]
+    pub fn point(self, p: Vec3) -> Vec3 {
+        p * self.factor.0 * self.factor.1
+    }
+
+    /// A length of the model at unit scale.
+    #[inline]
+    pub fn length(self, l: f32) -> f32 {
+        l * self.factor.0 * self.factor.1
+    }
+
+    /// A length measured at unit scale, in the model's units.
+    #[inline]
+    pub fn to_model(self, l: f32) -> f32 {
+        l / self.factor.0 / self.factor.1
+    }
+
+    /// A point at unit scale, in the model's units.
+    #[inline]
+    pub fn point_to_model(self, p: Vec3) -> Vec3 {
+        p / self.factor.0 / self.factor.1
+    }
+
+    /// `mesh` at unit scale: itself when no scaling is needed.
+    pub fn mesh(self, mesh: &TriangleMesh) -> Cow<'_, TriangleMesh> {
+        if self.is_one() {
+            return Cow::Borrowed(mesh);
+        }
+        let mut scaled = mesh.clone();
+        for p in &mut scaled.positions {
+            *p = self.point(*p);
+        }
+        Cow::Owned(scaled)
+    }
+
+    /// `ray` at unit scale: its origin and its interval scaled, its
+    /// direction kept, so that a hit's `t` is scaled as lengths are.
+    #[inline]
+    pub fn ray(self, ray: &Ray) -> Ray {
+        Ray {
+            origin: self.point(ray.origin),
+            tnear: self.length(ray.tnear),
+            tfar: self.length(ray.tfar),
+            ..*ray
+        }
+    }
+
+    /// `rays` at unit scale: themselves when no scaling is needed.
+    pub fn rays(self, rays: &[Ray]) -> Cow<'_, [Ray]> {
+        if self.is_one() {
+            return Cow::Borrowed(rays);
+        }
+        Cow::Owned(rays.iter().map(|r| self.ray(r)).collect())
+    }
+
+    /// Hits found at unit scale, in the model's units.
+    pub fn hits_to_model(self, hits: &mut [Option<Hit>]) {
+        if self.is_one() {
+            return;
+        }
+        for h in hits.iter_mut().flatten() {
+            *h = self.hit_to_model(*h);
+        }
+    }
+
+    /// A hit found at unit scale, in the model's units.
+    #[inline]
+    pub fn hit_to_model(self, hit: Hit) -> Hit {
+        Hit {
+            t: self.to_model(hit.t),
+            ..hit
+        }
+    }
+
+    /// A box at unit scale, in the model's units.
+    pub fn aabb_to_model(self, b: &Aabb) -> Aabb {
+        Aabb::new(self.point_to_model(b.min), self.point_to_model(b.max))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn side_of(mesh: &TriangleMesh) -> f32 {
+        let b = mesh.bounds();
+        (b.max - b.min).max_element()
+    }
+
+    #[test]
+    fn tiny_models_come_to_unit_size_exactly() {
+        for e in [1, 10, 40, 100, 126, 140] {
+            let s = 2f64.powi(-e) as f32 * 1.5;
+            let tris = [
+                [Vec3::ZERO, Vec3::X * s, Vec3::Y * s * 0.3],
+                [Vec3::Z * s * 0.7, Vec3::X * s, Vec3::Y * s],
+            ];
+            let mesh = TriangleMesh::from_triangles(&tris);
+            let unit = UnitScale::for_mesh(&mesh);
+            let scaled = unit.mesh(&mesh);
+            assert_eq!(unit.to_model(side_of(&scaled)), side_of(&mesh), "2^-{e}");
+            assert!((1.0..2.0).contains(&side_of(&scaled)), "2^-{e}");
+            // Exact: every coordinate is the original times the factor, in f64.
+            let f = side_of(&scaled) as f64 / side_of(&mesh) as f64;
+            assert_eq!(f.log2().fract(), 0.0, "2^-{e}: a power of two");
+            for (p, q) in mesh.positions.iter().zip(&scaled.positions) {
+                for k in 0..3 {
+                    assert_eq!(q[k] as f64, p[k] as f64 * f, "2^-{e}");
+                    assert_eq!(unit.point_to_model(*q)[k], p[k], "2^-{e}");
+                }
+            }
+        }
+        let unit = TriangleMesh::from_triangles(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]);
+        assert!(UnitScale::for_mesh(&unit).is_one());
+        assert!(matches!(
+            UnitScale::for_mesh(&unit).mesh(&unit),
+            Cow::Borrowed(_)
+        ));
+        assert!(UnitScale::for_mesh(&TriangleMesh::default()).is_one());
+        let mut bad = TriangleMesh::from_triangles(&[[Vec3::ZERO, Vec3::X * 1e-9, Vec3::Y * 1e-9]]);
+        bad.indices[0][2] = 7;
+        assert!(!UnitScale::for_mesh(&bad).is_one(), "reads no index");
+    }
+
+    #[test]
+    fn a_ray_scaled_hits_at_the_scaled_distance() {
+        let s = UnitScale::for_side(3e-12);
+        let ray = Ray::segment(Vec3::new(1e-12, -2e-12, 5e-13), Vec3::Z, 1e-13, 4e-12);
+        let r = s.ray(&ray);
+        assert_eq!(r.dir(), ray.dir());
+        assert_eq!(s.to_model(r.tfar), ray.tfar);
+        assert_eq!(s.to_model(r.tnear), ray.tnear);
+        let h = Hit {
+            t: r.tfar,
+            u: 0.25,
+            v: 0.5,
+            prim: 3,
+        };
+        assert_eq!(s.hit_to_model(h).t, ray.tfar);
+        assert_eq!(s.hit_to_model(h).u, 0.25);
+    }
+}
