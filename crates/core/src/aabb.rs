@@ -100,6 +100,19 @@ impl Aabb {
         }
     }
 
+    /// The diagonal as a length to place cameras, lights and ray origins
+    /// by, however small the box: `1e-6` only for a box of no size (one
+    /// point) or the empty box, where the diagonal would put them all at
+    /// one point.
+    pub fn placing_length(&self) -> f32 {
+        let d = self.diagonal();
+        if d > 0.0 && d.is_finite() {
+            d
+        } else {
+            1e-6
+        }
+    }
+
     /// Surface area, the measure the surface area heuristic (SAH) uses;
     /// 0 for the empty box.
     #[inline]

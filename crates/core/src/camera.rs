@@ -24,7 +24,7 @@ impl Camera {
     /// enough that the bounding sphere fills the vertical field of view.
     pub fn framing(bounds: &Aabb, vfov_deg: f32) -> Camera {
         let center = bounds.center();
-        let radius = (bounds.diagonal() * 0.5).max(1e-6);
+        let radius = bounds.placing_length() * 0.5;
         let dir = Vec3::new(0.55, 0.45, 1.0).normalize();
         let half = (vfov_deg.to_radians() * 0.5).max(1e-3);
         let dist = radius / half.sin() * 1.02;
@@ -66,13 +66,24 @@ impl Camera {
             dist.max(x.abs() / tan_h - z).max(y.abs() / tan_v - z)
         });
         let depth = (bounds.extent() * 0.5).dot(forward.abs());
-        camera.eye = center - forward * dist.max(depth * 1.05).max(1e-6);
+        let dist = dist.max(depth * 1.05);
+        if dist > 0.0 && dist.is_finite() {
+            camera.eye = center - forward * dist;
+        }
         camera
     }
 
     /// Orthonormal basis (right, up, forward).
     pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
-        let forward = (self.target - self.eye).normalize();
+        let d = self.target - self.eye;
+        // A camera nanometres from its target and closer: `|d|²` may
+        // underflow, so the direction is normalized from `d` brought to a
+        // largest component of 1.
+        let forward = if d.length_squared() >= f32::MIN_POSITIVE {
+            d.normalize()
+        } else {
+            (d / d.abs().max_element()).normalize()
+        };
         let mut right = forward.cross(self.up);
         if right.length_squared() < 1e-12 {
             right = forward.cross(Vec3::X);
@@ -138,6 +149,9 @@ mod tests {
             Aabb::new(Vec3::new(-1.0, -0.2, -3.0), Vec3::new(2.0, 0.5, 4.0)),
             Aabb::new(Vec3::splat(10.0), Vec3::new(10.1, 13.0, 10.2)),
             Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)),
+            // Nanometres across in metres, and far smaller.
+            Aabb::new(Vec3::splat(1e-12), Vec3::new(3e-12, 2e-12, 1.5e-12)),
+            Aabb::new(Vec3::splat(-1e-30), Vec3::new(2e-30, 1e-30, 1e-30)),
         ];
         for b in boxes {
             for aspect in [0.5f32, 1.0, 16.0 / 9.0] {

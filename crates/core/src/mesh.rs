@@ -3,7 +3,7 @@
 
 use crate::aabb::Aabb;
 use crate::texture::Texture;
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 use std::fmt;
 use std::sync::Arc;
 
@@ -284,18 +284,34 @@ impl TriangleMesh {
         Ok(())
     }
 
-    /// Area-weighted vertex normals, computed when the source had none.
+    /// Unit normal of triangle `i` by its winding (zero for a triangle
+    /// without area). Where `e1 × e2` is too small for `f32` to normalize
+    /// (a model nanometres across), it is computed in `f64`.
+    pub fn unit_normal(&self, i: usize) -> Vec3 {
+        let n = self.face_normal(i);
+        if n.length_squared() >= f32::MIN_POSITIVE {
+            return n.normalize();
+        }
+        let [a, b, c] = self.triangle(i).map(|v| v.as_dvec3());
+        (b - a).cross(c - a).normalize_or_zero().as_vec3()
+    }
+
+    /// Area-weighted vertex normals, computed when the source had none
+    /// (summed in `f64`, where the cross products of a model nanometres
+    /// across do not underflow).
     pub fn compute_vertex_normals(&mut self) {
-        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        let mut sums = vec![DVec3::ZERO; self.positions.len()];
         for i in 0..self.num_triangles() {
-            let n = self.face_normal(i);
+            let [a, b, c] = self.triangle(i).map(|v| v.as_dvec3());
+            let n = (b - a).cross(c - a);
             for &v in &self.indices[i] {
-                normals[v as usize] += n;
+                sums[v as usize] += n;
             }
         }
-        for n in &mut normals {
-            *n = n.normalize_or_zero();
-        }
+        let normals = sums
+            .iter()
+            .map(|n| n.normalize_or_zero().as_vec3())
+            .collect();
         self.normals = Some(normals);
     }
 

@@ -55,7 +55,7 @@ pub fn standard_camera(mesh: &TriangleMesh) -> Camera {
 /// The standard point light for `bounds`: above and to the side of the
 /// scene, one box diagonal from its centre.
 pub fn standard_light(bounds: &Aabb) -> Vec3 {
-    bounds.center() + Vec3::new(0.4, 1.0, 0.6).normalize() * bounds.diagonal().max(1e-6)
+    bounds.center() + Vec3::new(0.4, 1.0, 0.6).normalize() * bounds.placing_length()
 }
 
 /// `size` × `size` primary rays from `camera`, row by row from the top-left.
@@ -71,13 +71,13 @@ pub fn primary(camera: &Camera, size: u32) -> Vec<Ray> {
 /// `1e-4 × scene diagonal`) to `light`, with `tfar` just short of the light.
 /// Primary rays without a hit give no shadow ray.
 pub fn shadow(mesh: &TriangleMesh, primary: &[Ray], hits: &[Option<Hit>], light: Vec3) -> Vec<Ray> {
-    let eps = 1e-4 * mesh.bounds().diagonal().max(1e-6);
+    let eps = 1e-4 * mesh.bounds().placing_length();
     primary
         .iter()
         .zip(hits)
         .filter_map(|(ray, hit)| {
             let hit = (*hit)?;
-            let mut n = mesh.face_normal(hit.prim as usize).normalize_or_zero();
+            let mut n = mesh.unit_normal(hit.prim as usize);
             if n.dot(ray.dir) > 0.0 {
                 n = -n;
             }
@@ -93,7 +93,7 @@ pub fn shadow(mesh: &TriangleMesh, primary: &[Ray], hits: &[Option<Hit>], light:
 pub fn incoherent(bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
     let mut rng = Pcg32::with_stream(seed, 0x1c0e);
     let c = bounds.center();
-    let r = bounds.diagonal().max(1e-6);
+    let r = bounds.placing_length();
     (0..count)
         .map(|_| {
             let origin = c + rng.unit_vector() * r;

@@ -7,8 +7,9 @@
 //! of two is exact (the same geometry, no rounding), so the structures
 //! are built over the scaled model and each query is scaled in and its
 //! answer scaled back; the answers are those of the same model at unit
-//! size, divided by the factor. Models whose box is at least 1 across are
-//! used as they are.
+//! size, divided by the factor. Models whose box is at least
+//! [`SCALED_BELOW`] across are used as they are, so that they pay nothing
+//! (the scaled rays cost a model's one-ray queries about 4%).
 
 use crate::aabb::Aabb;
 use crate::hit::Hit;
@@ -17,9 +18,16 @@ use crate::ray::Ray;
 use glam::Vec3;
 use std::borrow::Cow;
 
-/// The power of two a model is scaled by so that the largest side of its
-/// box lies in `[1, 2)`; one for a model at least 1 across, empty or not
-/// finite.
+/// The size below which a model is scaled: `2⁻¹⁶`, 15 µm in metres. On
+/// the full Stanford dragon (871,414 triangles) shrunk by powers of two,
+/// distances first differed from the unit model's at `2⁻²⁴` across, and
+/// hits at `2⁻³⁶` (BENCHMARKS.md); this leaves a margin of eight binary
+/// orders for finer meshes.
+pub const SCALED_BELOW: f32 = 1.0 / 65_536.0;
+
+/// The power of two a model smaller than [`SCALED_BELOW`] is scaled by so
+/// that the largest side of its box lies in `[1, 2)`; one for any other
+/// model, empty or not finite.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UnitScale {
     /// The factor as two powers of two that are each finite in `f32` (a
@@ -33,7 +41,7 @@ impl UnitScale {
 
     /// The scale for a model whose box has `side` as its largest side.
     pub fn for_side(side: f32) -> Self {
-        if !(side > 0.0 && side < 1.0 && side.is_finite()) {
+        if !(side > 0.0 && side < SCALED_BELOW && side.is_finite()) {
             return UnitScale::ONE;
         }
         // The exponent that brings `side` into [1, 2): f32 sides are at
@@ -158,7 +166,7 @@ mod tests {
 
     #[test]
     fn tiny_models_come_to_unit_size_exactly() {
-        for e in [1, 10, 40, 100, 126, 140] {
+        for e in [17, 40, 100, 126, 140] {
             let s = 2f64.powi(-e) as f32 * 1.5;
             let tris = [
                 [Vec3::ZERO, Vec3::X * s, Vec3::Y * s * 0.3],
@@ -181,6 +189,11 @@ mod tests {
         }
         let unit = TriangleMesh::from_triangles(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]);
         assert!(UnitScale::for_mesh(&unit).is_one());
+        // Small but ordinary models are used as they are.
+        for side in [0.2, 1e-3, SCALED_BELOW] {
+            assert!(UnitScale::for_side(side).is_one(), "{side}");
+        }
+        assert!(!UnitScale::for_side(SCALED_BELOW * 0.99).is_one());
         assert!(matches!(
             UnitScale::for_mesh(&unit).mesh(&unit),
             Cow::Borrowed(_)

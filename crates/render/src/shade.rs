@@ -12,14 +12,15 @@ use raykit_core::{Light, LightSample};
 
 /// Offset of shadow-ray origins along the geometric normal for `mesh`:
 /// `1e-5` times the larger of the bounding-box diagonal and the largest
-/// coordinate magnitude, about a hundred float spacings at that magnitude.
+/// coordinate magnitude, about a hundred float spacings at that magnitude
+/// (so a model nanometres across gets an offset of its own scale).
 pub fn shadow_bias(mesh: &TriangleMesh) -> f32 {
     let b = mesh.bounds();
     if b.is_empty() {
         return 1e-5;
     }
     let magnitude = b.min.abs().max(b.max.abs()).max_element();
-    1e-5 * b.diagonal().max(magnitude).max(1e-3)
+    (1e-5 * b.diagonal().max(magnitude)).max(f32::MIN_POSITIVE)
 }
 
 /// Shades rays against one mesh, its accel and its lights.

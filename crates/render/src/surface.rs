@@ -35,7 +35,7 @@ impl<'a> Surface<'a> {
         let (u, v) = (hit.u, hit.v);
         let w = 1.0 - u - v;
         let point = a * w + b * u + c * v;
-        let mut ng = (b - a).cross(c - a).normalize_or_zero();
+        let mut ng = mesh.unit_normal(prim);
         let front_face = ng.dot(ray.dir()) <= 0.0;
         if !front_face {
             ng = -ng;

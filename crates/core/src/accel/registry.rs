@@ -14,7 +14,7 @@ use crate::unit_scale::UnitScale;
 use crate::with_test;
 
 /// Build the structure `kind` over `mesh` with triangle test `test`; over
-/// the mesh at unit scale when it is less than 1 across ([`UnitScaled`]).
+/// the mesh at unit scale when it is tiny ([`UnitScaled`]).
 pub fn build_accel(
     kind: AccelKind,
     test: TestKind,

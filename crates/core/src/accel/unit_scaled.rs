@@ -13,8 +13,8 @@ use crate::unit_scale::UnitScale;
 /// in `f32`'s normal range; rays are scaled in and hits, regions and saved
 /// files scaled back, so that it answers exactly as the same structure
 /// over the model at unit size, in the model's units. [`super::build_accel`]
-/// and [`super::load_accel`] wrap a structure in it when the model is less
-/// than 1 across.
+/// and [`super::load_accel`] wrap a structure in it when the model is
+/// smaller than [`crate::unit_scale::SCALED_BELOW`].
 pub struct UnitScaled {
     inner: Box<dyn Accel>,
     scale: UnitScale,

@@ -64,7 +64,7 @@ impl SurfaceBvh {
 
     /// Build over all triangles of `mesh` (the binned SAH or linear BVH that
     /// `options.quality` names, leaves of up to `options.max_leaf_size`),
-    /// at unit scale when the mesh is less than 1 across ([`UnitScale`]).
+    /// at unit scale when the mesh is tiny ([`UnitScale`]).
     pub fn build_with(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
         let scale = UnitScale::for_mesh(mesh);
         let mesh = &*scale.mesh(mesh);

@@ -39,7 +39,7 @@ pub(super) fn scene_extras(
         let (right, up, forward) = c.basis();
         let q = Quat::from_mat3(&Mat3::from_cols(right, up, -forward)).normalize();
         let b = mesh.bounds();
-        let znear = (b.diagonal() * 1e-4).max(1e-6);
+        let znear = b.placing_length() * 1e-4;
         out += &format!(
             r#""cameras":[{{"type":"perspective","perspective":{{"yfov":{},"znear":{znear}}}}}],"#,
             c.vfov_deg.to_radians()

@@ -14,7 +14,7 @@ pub fn write_stl(w: &mut dyn Write, mesh: &TriangleMesh, enc: StlEncoding) -> io
         StlEncoding::Ascii => {
             writeln!(w, "solid raykit")?;
             for i in 0..mesh.num_triangles() {
-                let n = mesh.face_normal(i).normalize_or_zero();
+                let n = mesh.unit_normal(i);
                 writeln!(w, " facet normal {} {} {}\n  outer loop", n.x, n.y, n.z)?;
                 for p in mesh.triangle(i) {
                     writeln!(w, "   vertex {} {} {}", p.x, p.y, p.z)?;
@@ -34,7 +34,7 @@ pub fn write_stl(w: &mut dyn Write, mesh: &TriangleMesh, enc: StlEncoding) -> io
             w.write_all(&n.to_le_bytes())?;
             let mut rec = [0u8; 50];
             for i in 0..mesh.num_triangles() {
-                let nrm = mesh.face_normal(i).normalize_or_zero();
+                let nrm = mesh.unit_normal(i);
                 let [a, b, c] = mesh.triangle(i);
                 for (k, v) in [nrm, a, b, c].iter().enumerate() {
                     for (j, x) in v.to_array().iter().enumerate() {

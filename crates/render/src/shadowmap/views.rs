@@ -93,7 +93,7 @@ pub(crate) fn orthographic(dir: Vec3, bounds: &Aabb, res: u32, border: u32) -> R
         lo = lo.min(q);
         hi = hi.max(q);
     }
-    let diag = bounds.diagonal().max(1e-6);
+    let diag = bounds.placing_length();
     let side = (hi.x - lo.x).max(hi.y - lo.y).max(1e-6 * diag) * 1.01;
     let inner = (res.saturating_sub(2 * border)).max(1) as f32;
     let full = side * res as f32 / inner;
