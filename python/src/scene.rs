@@ -19,7 +19,7 @@ use raykit_core::accel::bvh::DEFAULT_MAX_DEGRADATION;
 use raykit_core::accel::{build_accel, load_accel, AccelKind, BuildOptions, RefitError};
 use raykit_core::query::SurfaceBvh;
 use raykit_core::tri::TestKind;
-use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, UnitScale, Vec3};
+use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::{OnceLock, RwLock, RwLockReadGuard};
@@ -59,17 +59,12 @@ impl Built {
     }
 }
 
-/// Unit normal of each triangle of `mesh`, from its corners at unit scale
-/// ([`UnitScale`]: on a mesh nanometres across, `e1 × e2` underflows).
+/// Unit normal of each triangle of `mesh` ([`TriangleMesh::unit_normal`]).
 fn face_normals(mesh: &TriangleMesh) -> Vec<Vec3> {
-    let scale = UnitScale::for_mesh(mesh);
     (0..mesh.num_triangles())
         .into_par_iter()
         .with_min_len(GRAIN)
-        .map(|i| {
-            let [a, b, c] = mesh.triangle(i).map(|p| scale.point(p));
-            (b - a).cross(c - a).normalize_or_zero()
-        })
+        .map(|i| mesh.unit_normal(i))
         .collect()
 }
 

@@ -18,9 +18,9 @@ use std::sync::OnceLock;
 /// [`SurfaceBvh`] behind all-hits, counts and filtered any-hit queries.
 pub struct Geometry {
     mesh: TriangleMesh,
-    /// The BVH over the mesh at `scale` ([`UnitScale`]: a mesh less than
-    /// 1 across is scaled up, so that the triangle tests' products stay in
-    /// `f32`'s range); its queries scale rays in and hits back.
+    /// The BVH over the mesh at `scale` ([`UnitScale`]: a tiny mesh is
+    /// scaled up, so that the triangle tests' products stay in `f32`'s
+    /// range); its queries scale rays in and hits back.
     bvh: Bvh8<Moller>,
     scale: UnitScale,
     /// Bounds padded by the triangle tests' tolerance band, as the BVHs'
