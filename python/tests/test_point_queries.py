@@ -323,9 +323,8 @@ def test_a_tiny_model_answers_as_at_unit_size(bunny):
     metres) and 2^-70, exact in float32: every query gives the unit model's
     answers times the factor, bit for bit (normals to rounding), and
     distances agree with the float64 brute force on the tiny model itself.
-    Without the unit scaling
-    in the core, distances were off by up to 0.8% of the model from 2^-32
-    on and hits were lost from 2^-60."""
+    Without the unit scaling in the core, distances were off by up to 0.8%
+    of the model from 2^-32 on and hits were lost from 2^-60."""
     v, f, _ = bunny
     v = np.asarray(v, np.float32)
     lo = v.min(0)
