@@ -118,14 +118,20 @@ impl CullReport {
                 }
             ),
             None => say!(
-                "{}: {} triangles, {} parts; grid {}x{}x{} (spacing {:.4}), {} of {} points outside",
+                "{}: {} triangles, {} parts; grid {}x{}x{} (spacing {}), {} of {} points outside",
                 r.input,
                 r.triangles_in,
                 r.parts_in,
                 s.grid[0],
                 s.grid[1],
                 s.grid[2],
-                s.spacing,
+                // Four decimals, or four digits where those would show
+                // none (a model micrometres across).
+                if s.spacing >= 1e-3 || s.spacing == 0.0 {
+                    format!("{:.4}", s.spacing)
+                } else {
+                    format!("{:.3e}", s.spacing)
+                },
                 s.outside_points,
                 s.points
             ),
