@@ -68,6 +68,13 @@ impl UnitScale {
         Self::for_side((b.max - b.min).max_element())
     }
 
+    /// The scale for `mesh` and `mesh` at that scale: what a structure
+    /// over it is built from.
+    pub fn of(mesh: &TriangleMesh) -> (Self, Cow<'_, TriangleMesh>) {
+        let scale = Self::for_mesh(mesh);
+        (scale, scale.mesh(mesh))
+    }
+
     /// Whether this is no scaling at all.
     pub fn is_one(self) -> bool {
         self == UnitScale::ONE

@@ -469,7 +469,7 @@ pub fn compare(truth: &GroundTruth, kept: &[bool], mesh: &TriangleMesh) -> EvalR
         let [a, b, c] = mesh.triangle(t).map(|v| v.as_dvec3());
         0.5 * (b - a).cross(c - a).length()
     };
-    let unit = UnitScale::for_mesh(mesh).mesh(mesh);
+    let (_, unit) = UnitScale::of(mesh);
     let mut r = EvalReport {
         triangles: n,
         ..Default::default()

@@ -16,8 +16,7 @@ pub fn independent_truth(
     options: &EvalOptions,
     progress: &(dyn Fn(EvalProgress) + Sync),
 ) -> GroundTruth {
-    let unit = UnitScale::for_mesh(mesh);
-    let scaled = unit.mesh(mesh);
+    let (unit, scaled) = UnitScale::of(mesh);
     let mesh = &*scaled;
     let accel = build_accel(
         AccelKind::Bvh8,

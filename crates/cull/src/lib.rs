@@ -193,8 +193,7 @@ pub struct CullResult {
 /// visibility culling). An empty mesh gives an empty result; a mesh failing
 /// [`TriangleMesh::validate`] otherwise gives its error.
 pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, MeshError> {
-    let unit = UnitScale::for_mesh(mesh);
-    let scaled = unit.mesh(mesh);
+    let (unit, scaled) = UnitScale::of(mesh);
     let mesh = &*scaled;
     let Some((accel, mut stats)) = prepare(mesh, AccelKind::Bvh2)? else {
         return Ok(result_for(mesh, Vec::new(), CullStats::default()));
@@ -255,8 +254,7 @@ pub fn cull(mesh: &TriangleMesh, options: &CullOptions) -> Result<CullResult, Me
 /// BVH over Möller–Trumbore packs. An empty mesh gives an empty result; a
 /// mesh failing [`TriangleMesh::validate`] otherwise gives its error.
 pub fn cull_by_rays(mesh: &TriangleMesh, options: &RayOptions) -> Result<CullResult, MeshError> {
-    let unit = UnitScale::for_mesh(mesh);
-    let scaled = unit.mesh(mesh);
+    let (unit, scaled) = UnitScale::of(mesh);
     let mesh = &*scaled;
     let Some((accel, mut stats)) = prepare(mesh, AccelKind::Bvh8)? else {
         return Ok(result_for(mesh, Vec::new(), CullStats::default()));

@@ -21,8 +21,8 @@ pub fn build_accel(
     mesh: &TriangleMesh,
     options: &BuildOptions,
 ) -> Box<dyn Accel> {
-    let scale = UnitScale::for_mesh(mesh);
-    let mesh = &*scale.mesh(mesh);
+    let (scale, scaled) = UnitScale::of(mesh);
+    let mesh = &*scaled;
     let accel = with_test!(test, T => match kind {
         AccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)) as Box<dyn Accel>,
         AccelKind::Bvh2 => Box::new(Bvh2::<T>::build(mesh, options)),
@@ -45,8 +45,8 @@ pub fn load_accel(
     mesh: &TriangleMesh,
 ) -> Result<(AccelKind, TestKind, Box<dyn Accel>), PersistError> {
     let (kind, test) = super::bvh::saved_kind(path)?;
-    let scale = UnitScale::for_mesh(mesh);
-    let mesh = &*scale.mesh(mesh);
+    let (scale, scaled) = UnitScale::of(mesh);
+    let mesh = &*scaled;
     with_test!(test, T => {
         let accel = match kind {
             AccelKind::Bvh4 => Box::new(Bvh4::<T>::load(path, mesh)?) as Box<dyn Accel>,

@@ -14,10 +14,11 @@ use crate::unit_scale::UnitScale;
 /// files scaled back, so that it answers exactly as the same structure
 /// over the model at unit size, in the model's units. [`super::build_accel`]
 /// and [`super::load_accel`] wrap a structure in it when the model is
-/// smaller than [`crate::unit_scale::SCALED_BELOW`].
-pub struct UnitScaled {
-    inner: Box<dyn Accel>,
+/// smaller than [`crate::unit_scale::SCALED_BELOW`]; an instanced scene's
+/// geometries hold their [`super::Bvh8`] in it.
+pub struct UnitScaled<A: Accel + ?Sized = dyn Accel> {
     scale: UnitScale,
+    inner: Box<A>,
 }
 
 impl UnitScaled {
@@ -27,11 +28,27 @@ impl UnitScaled {
         if scale.is_one() {
             return inner;
         }
-        Box::new(UnitScaled { inner, scale })
+        Box::new(UnitScaled { scale, inner })
     }
 }
 
-impl Accel for UnitScaled {
+impl<A: Accel> UnitScaled<A> {
+    /// `inner`, built over a model scaled by `scale` (one for a model of
+    /// ordinary size).
+    pub fn new(inner: A, scale: UnitScale) -> Self {
+        UnitScaled {
+            scale,
+            inner: Box::new(inner),
+        }
+    }
+
+    /// The scale the structure was built at.
+    pub fn scale(&self) -> UnitScale {
+        self.scale
+    }
+}
+
+impl<A: Accel + ?Sized> Accel for UnitScaled<A> {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let hit = self.inner.intersect(&self.scale.ray(ray))?;
         Some(self.scale.hit_to_model(hit))

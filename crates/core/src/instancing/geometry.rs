@@ -2,7 +2,7 @@
 //! bottom-level BVH, stored once however many instances place it.
 
 use crate::aabb::Aabb;
-use crate::accel::{Accel, BuildOptions, Bvh8};
+use crate::accel::{Accel, BuildOptions, Bvh8, UnitScaled};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::query::SurfaceBvh;
@@ -18,11 +18,9 @@ use std::sync::OnceLock;
 /// [`SurfaceBvh`] behind all-hits, counts and filtered any-hit queries.
 pub struct Geometry {
     mesh: TriangleMesh,
-    /// The BVH over the mesh at `scale` ([`UnitScale`]: a tiny mesh is
-    /// scaled up, so that the triangle tests' products stay in `f32`'s
-    /// range); its queries scale rays in and hits back.
-    bvh: Bvh8<Moller>,
-    scale: UnitScale,
+    /// The BVH over the mesh at its [`UnitScale`] (a tiny mesh is scaled
+    /// up, so that the triangle tests' products stay in `f32`'s range).
+    bvh: UnitScaled<Bvh8<Moller>>,
     /// Bounds padded by the triangle tests' tolerance band, as the BVHs'
     /// own node boxes are (`accel/node_box.rs`).
     bounds: Aabb,
@@ -33,8 +31,8 @@ pub struct Geometry {
 impl Geometry {
     /// Build the bottom-level BVH over `mesh` (checked by the caller).
     pub(crate) fn build(mesh: TriangleMesh, mask: u32, options: &BuildOptions) -> Self {
-        let scale = UnitScale::for_mesh(&mesh);
-        let bvh = Bvh8::build(&scale.mesh(&mesh), options);
+        let (scale, scaled) = UnitScale::of(&mesh);
+        let bvh = UnitScaled::new(Bvh8::build(&scaled, options), scale);
         let b = mesh.bounds();
         let bounds = if mesh.indices.is_empty() {
             Aabb::EMPTY
@@ -45,7 +43,6 @@ impl Geometry {
         Geometry {
             mesh,
             bvh,
-            scale,
             bounds,
             mask,
             surface: OnceLock::new(),
@@ -59,25 +56,23 @@ impl Geometry {
 
     /// The nearest hit of `ray` (in object space) on the geometry.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let hit = self.bvh.intersect(&self.scale.ray(ray))?;
-        Some(self.scale.hit_to_model(hit))
+        self.bvh.intersect(ray)
     }
 
     /// Whether `ray` (in object space) hits the geometry.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.bvh.occluded(&self.scale.ray(ray))
+        self.bvh.occluded(ray)
     }
 
     /// [`Geometry::intersect`] for many rays (the bottom-level BVH's
     /// packet path).
     pub fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
-        self.bvh.intersect_batch(&self.scale.rays(rays), hits);
-        self.scale.hits_to_model(hits);
+        self.bvh.intersect_batch(rays, hits);
     }
 
     /// [`Geometry::occluded`] for many rays.
     pub fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
-        self.bvh.occluded_batch(&self.scale.rays(rays), occluded);
+        self.bvh.occluded_batch(rays, occluded);
     }
 
     /// The mesh's bounds widened by the triangle tests' tolerance band
@@ -104,7 +99,7 @@ impl Geometry {
         let [a, b, c] = self
             .mesh
             .triangle(prim as usize)
-            .map(|p| self.scale.point(p));
+            .map(|p| self.bvh.scale().point(p));
         (b - a).cross(c - a)
     }
 

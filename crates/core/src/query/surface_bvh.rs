@@ -66,8 +66,8 @@ impl SurfaceBvh {
     /// `options.quality` names, leaves of up to `options.max_leaf_size`),
     /// at unit scale when the mesh is tiny ([`UnitScale`]).
     pub fn build_with(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
-        let scale = UnitScale::for_mesh(mesh);
-        let mesh = &*scale.mesh(mesh);
+        let (scale, scaled) = UnitScale::of(mesh);
+        let mesh = &*scaled;
         let tree = build::build(mesh, options);
         let tris: Vec<[Vec3; 3]> = tree
             .order
