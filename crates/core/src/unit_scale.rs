@@ -58,13 +58,14 @@ impl UnitScale {
         }
     }
 
-    /// The scale for `mesh`, from the box of its vertices (one for a mesh
-    /// without triangles).
+    /// The scale for `mesh`, from the box of the vertices its triangles
+    /// use (one for a mesh without triangles): a vertex that no triangle
+    /// uses, however far, does not keep a tiny model at its own size.
     pub fn for_mesh(mesh: &TriangleMesh) -> Self {
         if mesh.indices.is_empty() {
             return UnitScale::ONE;
         }
-        let b = mesh.positions.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p));
+        let b = mesh.bounds();
         Self::for_side((b.max - b.min).max_element())
     }
 

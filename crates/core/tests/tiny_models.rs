@@ -302,3 +302,35 @@ fn an_instanced_tiny_geometry_and_a_saved_tiny_structure_answer_as_at_unit_size(
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A vertex that no triangle uses, at unit distance from a tiny model (as
+/// exporters leave them), does not keep the model at its own size: the
+/// structures and the point queries still answer as at unit size.
+#[test]
+fn a_far_vertex_no_triangle_uses_does_not_keep_a_tiny_model_unscaled() {
+    let unit = unit_bunny();
+    let rays = rays(&unit, 1_000);
+    let pts = points(&unit, 500);
+    let options = BuildOptions::default();
+    let at_unit = build_accel(AccelKind::Bvh8, TestKind::Moller, &unit, &options);
+    let surface_at_unit = SurfaceBvh::build(&unit);
+    let e = 60;
+    let f = 2f32.powi(-e);
+    let mut tiny = shrunk(&unit, f);
+    tiny.positions.push(Vec3::ONE);
+    let accel = build_accel(AccelKind::Bvh8, TestKind::Moller, &tiny, &options);
+    let mut hits = 0;
+    for r in &rays {
+        let want = at_unit.intersect(r);
+        hits += usize::from(want.is_some());
+        assert_eq!(accel.intersect(&shrink_ray(r, f)), shrink_hit(want, f));
+    }
+    assert!(hits > 300, "{hits} hits");
+    let surface = SurfaceBvh::build(&tiny);
+    for p in &pts {
+        let want = surface_at_unit.closest_point(*p, f32::INFINITY).unwrap();
+        let got = surface.closest_point(*p * f, f32::INFINITY).unwrap();
+        assert_eq!(got.distance, want.distance * f);
+        assert_eq!(surface.is_inside(*p * f), surface_at_unit.is_inside(*p));
+    }
+}

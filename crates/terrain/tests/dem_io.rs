@@ -409,6 +409,144 @@ fn geotiff_plain_float_strips_read_as_decoded() {
     assert_eq!(back.georef, src.georef);
 }
 
+/// Rewrites a classic little-endian TIFF's block tables (StripOffsets and
+/// StripByteCounts, or TileOffsets and TileByteCounts, LONG values) so that
+/// the blocks `absent(k)` names are stored as no bytes: offset and byte
+/// count 0, as GDAL writes an all-nodata block with `SPARSE_OK=TRUE`.
+/// Returns how many blocks it left out.
+fn leave_out_blocks(data: &mut [u8], absent: impl Fn(usize) -> bool) -> usize {
+    let ifd = Ifd::parse(data);
+    assert!(ifd.le);
+    let (offsets_tag, counts_tag) = if ifd.entries.contains_key(&324) {
+        (324u16, 325u16)
+    } else {
+        (273, 279)
+    };
+    let u32_at = |d: &[u8], i: usize| u32::from_le_bytes(d[i..i + 4].try_into().unwrap());
+    let at = u32_at(data, 4) as usize;
+    let n = u16::from_le_bytes([data[at], data[at + 1]]) as usize;
+    let mut left_out = 0;
+    for k in 0..n {
+        let e = at + 2 + 12 * k;
+        let tag = u16::from_le_bytes([data[e], data[e + 1]]);
+        if tag != offsets_tag && tag != counts_tag {
+            continue;
+        }
+        assert_eq!(u16::from_le_bytes([data[e + 2], data[e + 3]]), 4, "LONG");
+        let count = u32_at(data, e + 4) as usize;
+        let values = if count == 1 {
+            e + 8
+        } else {
+            u32_at(data, e + 8) as usize
+        };
+        for b in (0..count).filter(|&b| absent(b)) {
+            data[values + 4 * b..values + 4 * b + 4].fill(0);
+            left_out += usize::from(tag == offsets_tag);
+        }
+    }
+    left_out
+}
+
+/// A striped float TIFF of `heights` by the `tiff` crate's encoder, eight
+/// rows a strip, with GDAL's nodata tag when `nodata` is given.
+fn write_strips_f32(
+    path: &Path,
+    (w, h): (usize, usize),
+    heights: &[f32],
+    nodata: Option<f64>,
+    compression: tiff::encoder::Compression,
+) {
+    use tiff::encoder::{colortype::Gray32Float, TiffEncoder};
+    let file = std::fs::File::create(path).unwrap();
+    let mut enc = TiffEncoder::new(std::io::BufWriter::new(file))
+        .unwrap()
+        .with_compression(compression);
+    let mut img = enc.new_image::<Gray32Float>(w as u32, h as u32).unwrap();
+    img.rows_per_strip(8).unwrap();
+    if let Some(nd) = nodata {
+        let tag = tiff::tags::Tag::from_u16_exhaustive(42113);
+        img.encoder()
+            .write_tag(tag, format!("{nd}").as_str())
+            .unwrap();
+    }
+    img.write_data(heights).unwrap();
+}
+
+/// GDAL's sparse files (`SPARSE_OK=TRUE`) store a strip or tile whose
+/// samples are all nodata (all zero without a nodata value) as no bytes,
+/// and read it back as such. Before, uncompressed strips read the file's
+/// header as heights and compressed ones were refused as corrupt. For
+/// strips (uncompressed, read straight into place; PackBits and Deflate,
+/// decoded) and tiles (each compression of the writer), with and without
+/// a nodata value, the file with its blank blocks left out reads as the
+/// same file with them written.
+#[test]
+fn geotiff_blocks_stored_as_no_bytes_read_as_nodata_or_zero() {
+    use tiff::encoder::{compression::DeflateLevel, Compression};
+    let dir = TempDir::new("sparse");
+    let src = read_geotiff(terrain_file("lidar_dem_400.tif")).unwrap();
+    let (w, h) = (src.width, src.height);
+    // Rows above `blank` are blank, and so are the blocks wholly above it.
+    let blank = 150;
+    let strips = [
+        ("NONE", Compression::Uncompressed),
+        ("PACKBITS", Compression::Packbits),
+        ("DEFLATE", Compression::Deflate(DeflateLevel::Fast)),
+    ];
+    let layouts = strips
+        .into_iter()
+        .map(Err)
+        .chain(TiffCompression::ALL.into_iter().map(|compression| {
+            Ok(GeoTiffLayout {
+                compression,
+                tile: Some((64, 32)),
+            })
+        }));
+    for layout in layouts {
+        for nodata in [Some(-9999.0), None] {
+            let mut heights = src.heights.clone();
+            // Without a nodata value the blank rows are zero, and the
+            // file's no-data samples are given a height.
+            let fill = if nodata.is_some() { -9999.0 } else { 0.0 };
+            heights
+                .iter_mut()
+                .filter(|x| x.is_nan())
+                .for_each(|x| *x = fill);
+            heights[..blank * w].fill(fill);
+            let what = match &layout {
+                Err((name, _)) => format!("{name}, strips of 8 rows, nodata {nodata:?}"),
+                Ok(l) => format!("{}, nodata {nodata:?}", l.describe()),
+            };
+            let out = dir.join("dense.tif");
+            match &layout {
+                Err((_, c)) => write_strips_f32(&out, (w, h), &heights, nodata, *c),
+                Ok(l) => {
+                    write_geotiff_f32_with(&out, w, h, &heights, &src.georef, nodata, l).unwrap()
+                }
+            }
+            let dense = read_geotiff(&out).unwrap();
+            let mut bytes = std::fs::read(&out).unwrap();
+            let ifd = Ifd::parse(&bytes);
+            let absent = |k: usize| match &layout {
+                Err(_) => (k + 1) * ifd.uints(278).unwrap()[0] as usize <= blank,
+                Ok(l) => {
+                    let (tw, th) = l.tile.unwrap();
+                    (k / w.div_ceil(tw as usize) + 1) * th as usize <= blank
+                }
+            };
+            let left_out = leave_out_blocks(&mut bytes, absent);
+            assert!(left_out >= 4, "{what}: {left_out} blocks left out");
+            let sparse = dir.join("sparse.tif");
+            std::fs::write(&sparse, &bytes).unwrap();
+            let back = read_geotiff(&sparse).unwrap_or_else(|e| panic!("{what}: {e}"));
+            assert_same_heights(&back.heights, &dense.heights);
+            assert_eq!(back.nodata, dense.nodata, "{what}");
+            let blank_height = if nodata.is_some() { f32::NAN } else { 0.0 };
+            assert_same_heights(&back.heights[..blank * w], &vec![blank_height; blank * w]);
+        }
+    }
+}
+
 #[test]
 fn geotiff_round_trip_u8_and_geographic() {
     let dir = TempDir::new("rt-u8");

@@ -11,6 +11,7 @@ use tiff::decoder::{ifd::Value, Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
 use super::geokeys::{geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
+use super::geotiff_sparse::{absent_height, block_byte_counts, read_sparse};
 use super::limits::{check_dimensions, ensure_room, zeroed_heights, MAX_SAMPLES};
 use super::nodata::nodata_as_f32;
 use super::DemError;
@@ -44,7 +45,9 @@ pub const TAG_GDAL_NODATA: u16 = 42113;
 /// GeoAsciiParams are kept raw; `geographic` is GTModelTypeGeoKey (1024) ==
 /// 2. GDAL_NODATA (42113) sets `nodata` and those samples become NaN (a
 /// nodata within 1e-6 of ±f32::MAX, as GDAL writes it in text, matches
-/// ±f32::MAX in float32 data).
+/// ±f32::MAX in float32 data). A strip or tile stored as no bytes (GDAL's
+/// `SPARSE_OK` files) is no data, or zero where there is no nodata value,
+/// as GDAL reads it.
 pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
     let path = path.as_ref();
     let mut file = File::open(path).map_err(|e| DemError::open(path, &e))?;
@@ -132,8 +135,9 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
     };
 
     let plain = little_endian && cfg!(target_endian = "little") && bits == 32 && format == 3;
+    let absent = absent_height(nodata);
     let heights = match plain
-        .then(|| plain_strips(path, &mut dec, &strips_file, width, height))
+        .then(|| plain_strips(path, &mut dec, &strips_file, (width, height), absent))
         .transpose()?
         .flatten()
     {
@@ -152,10 +156,17 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
         None => {
             // The decoded samples and the heights made from them.
             ensure_room(path, "tag 256", width, height, bits as usize / 8 + 4)?;
-            let data = dec.read_image().map_err(|e| {
-                DemError::new(path, "image data", format!("cannot decode samples: {e}"))
-            })?;
-            to_heights(data, nodata)
+            match block_byte_counts(path, &mut dec)? {
+                Some(counts) if counts.contains(&0) => {
+                    read_sparse(path, &mut dec, &counts, (width, height), nodata, to_heights)?
+                }
+                _ => {
+                    let data = dec.read_image().map_err(|e| {
+                        DemError::new(path, "image data", format!("cannot decode samples: {e}"))
+                    })?;
+                    to_heights(data, nodata)
+                }
+            }
         }
     };
     if heights.len() != width * height {
@@ -257,14 +268,15 @@ fn check_header(path: &Path, file: &mut File) -> Result<(u64, bool), DemError> {
 /// stored as uncompressed strips in one plane (gdalwarp's and
 /// gdal_translate's default layout), read from `file` straight into place,
 /// the strips in parallel; none for any other layout, which the `tiff`
-/// crate decodes. A strip that the file ends inside is an error naming its
-/// offset.
+/// crate decodes. A strip stored as no bytes (GDAL's sparse files) is
+/// `absent` throughout. A strip that the file ends inside is an error
+/// naming its offset.
 fn plain_strips<R: Read + Seek>(
     path: &Path,
     dec: &mut Decoder<R>,
     file: &File,
-    width: usize,
-    height: usize,
+    (width, height): (usize, usize),
+    absent: f32,
 ) -> Result<Option<Vec<f32>>, DemError> {
     // No compression, no predictor, one plane: each tag absent or 1.
     let plain = |dec: &mut Decoder<R>, tag: Tag| {
@@ -297,7 +309,9 @@ fn plain_strips<R: Read + Seek>(
     let strips = height.div_ceil(rows);
     let fits = offsets.len() == strips
         && counts.len() == strips
-        && (0..strips).all(|k| counts[k] >= 4 * (strip.min(width * height - k * strip)) as u64);
+        && (0..strips).all(|k| {
+            counts[k] == 0 || counts[k] >= 4 * (strip.min(width * height - k * strip)) as u64
+        });
     if !fits {
         return Ok(None);
     }
@@ -305,8 +319,12 @@ fn plain_strips<R: Read + Seek>(
     use rayon::prelude::*;
     heights
         .par_chunks_mut(strip)
-        .zip(offsets.par_iter())
-        .try_for_each(|(samples, &at)| {
+        .zip(offsets.par_iter().zip(counts.par_iter()))
+        .try_for_each(|(samples, (&at, &count))| {
+            if count == 0 {
+                samples.fill(absent);
+                return Ok(());
+            }
             // SAFETY: any four bytes are a valid f32, and the byte view
             // covers exactly the samples' memory.
             let bytes = unsafe {

@@ -9,6 +9,7 @@ mod geokeys;
 mod geotiff_blocks;
 mod geotiff_layout;
 mod geotiff_read;
+mod geotiff_sparse;
 mod geotiff_write;
 mod hgt;
 mod limits;
