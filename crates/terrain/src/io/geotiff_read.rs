@@ -116,6 +116,18 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
         }
     }
 
+    if let Some(code) = unsigned(path, &mut dec, Tag::Compression)? {
+        if let Some(name) = unsupported_compression(code) {
+            return Err(DemError::new(
+                path,
+                "tag 259",
+                format!(
+                    "{name} compression (code {code}) is not supported; convert with \
+                     `gdal_translate -co COMPRESS=DEFLATE IN OUT` (or ZSTD, LZW)"
+                ),
+            ));
+        }
+    }
     let georef = read_georef(path, &mut dec)?;
     let nodata = match find(path, &mut dec, TAG_GDAL_NODATA)? {
         None => None,
@@ -185,6 +197,20 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
         heights,
         nodata,
         georef,
+    })
+}
+
+/// The name of a compression GDAL writes that the `tiff` crate does not
+/// decode; none for the ones it does (and for codes no writer uses, which
+/// the decoder reports itself).
+fn unsupported_compression(code: u64) -> Option<&'static str> {
+    Some(match code {
+        34712 => "JPEG 2000",
+        34887 => "LERC",
+        34925 => "LZMA",
+        50001 => "WebP",
+        50002 => "JPEG XL",
+        _ => return None,
     })
 }
 
