@@ -400,7 +400,7 @@ fn agrees_with_gdal_viewshed_over_the_curved_earth() {
 #[test]
 fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
     let dir = tempfile::tempdir().unwrap();
-    let dem = load_dem(&data("terrain/lidar_dem_400.tif"), &LoadOptions::default()).unwrap();
+    let dem = load_dem(data("terrain/lidar_dem_400.tif"), &LoadOptions::default()).unwrap();
     let mut heights = dem.heights.clone();
     heights[..150 * dem.width].fill(f32::NAN);
     let src = dir.path().join("src.tif");
