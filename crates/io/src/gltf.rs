@@ -157,10 +157,15 @@ pub(crate) fn walk_nodes(
 /// indices (for clearer messages); any other panic inside the crate's
 /// validation is turned into an error as a last line of defence.
 fn parse_document(path: &Path, json: &[u8], glb: bool) -> Result<Document, LoadError> {
-    let root = ::gltf::json::Root::from_slice(json)
+    let mut root = ::gltf::json::Root::from_slice(json)
         .map_err(|e| json_error(path, ::gltf::Error::Deserialize(e), glb))?;
     check_integer_range(path, json, glb)?;
     check_required(path, &root)?;
+    // The gltf crate's validator refuses every required extension it does
+    // not know, KHR_mesh_quantization among them, which the loader handles
+    // itself (its integer attributes are read by `gltf_accessor`).
+    root.extensions_required
+        .retain(|e| ::gltf::json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()));
     check_scene_indices(path, &root)?;
     let positions = ::gltf::json::validation::Checked::Valid(Semantic::Positions);
     for (m, mesh) in root.meshes.iter().enumerate() {

@@ -16,6 +16,7 @@ pub(crate) const HANDLED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
+    "KHR_mesh_quantization",
 ];
 
 /// An error for the first entry of `extensionsRequired` that is not handled.

@@ -536,6 +536,138 @@ fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
     v
 }
 
+/// `KHR_mesh_quantization` (as gltfpack and glTF-Transform write by
+/// default): the shared bunny's positions as 16-bit integers, signed and
+/// plain in one node, unsigned and normalised in another, each node's
+/// scale and translation undoing the quantization. Every corner loads
+/// where the integers and the node's transform put it, computed here in
+/// `f64`, and within the quantization step of the original corner.
+#[test]
+fn quantized_positions_load_dequantized_by_their_nodes() {
+    let bunny = load(&shared("meshes/bunny_3674.obj")).unwrap().mesh;
+    let (lo, hi) = bunny
+        .positions
+        .iter()
+        .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
+            let p = p.to_array().map(f64::from);
+            (
+                std::array::from_fn(|k| lo[k].min(p[k])),
+                std::array::from_fn(|k| hi[k].max(p[k])),
+            )
+        });
+    let side = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    let centre: [f64; 3] = std::array::from_fn(|k| (lo[k] + hi[k]) / 2.0);
+    // Signed, plain: p = q * step + centre.
+    let step = side / 65534.0;
+    let signed: Vec<[i16; 3]> = bunny
+        .positions
+        .iter()
+        .map(|p| std::array::from_fn(|k| ((p[k] as f64 - centre[k]) / step).round() as i16))
+        .collect();
+    // Unsigned, normalised: p = (q / 65535) * side + lo.
+    let unsigned: Vec<[u16; 3]> = bunny
+        .positions
+        .iter()
+        .map(|p| std::array::from_fn(|k| ((p[k] as f64 - lo[k]) / side * 65535.0).round() as u16))
+        .collect();
+    let mut bin: Vec<u8> = Vec::new();
+    // Vertices of 8 bytes (6 used), as glTF's 4-byte alignment asks.
+    for q in &signed {
+        q.iter()
+            .for_each(|c| bin.extend_from_slice(&c.to_le_bytes()));
+        bin.extend_from_slice(&[0, 0]);
+    }
+    let second = bin.len();
+    for q in &unsigned {
+        q.iter()
+            .for_each(|c| bin.extend_from_slice(&c.to_le_bytes()));
+        bin.extend_from_slice(&[0, 0]);
+    }
+    let indices = bin.len();
+    for t in &bunny.indices {
+        t.iter()
+            .for_each(|i| bin.extend_from_slice(&i.to_le_bytes()));
+    }
+    let n = bunny.positions.len();
+    let min_max = |q: &[[i32; 3]]| {
+        let mn: [i32; 3] = std::array::from_fn(|k| q.iter().map(|v| v[k]).min().unwrap());
+        let mx: [i32; 3] = std::array::from_fn(|k| q.iter().map(|v| v[k]).max().unwrap());
+        (mn, mx)
+    };
+    let (smin, smax) = min_max(&signed.iter().map(|q| q.map(i32::from)).collect::<Vec<_>>());
+    let (umin, umax) = min_max(
+        &unsigned
+            .iter()
+            .map(|q| q.map(i32::from))
+            .collect::<Vec<_>>(),
+    );
+    let json = format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["KHR_mesh_quantization"],
+  "extensionsRequired": ["KHR_mesh_quantization"],
+  "buffers": [{{"byteLength": {len}}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": {second}, "byteStride": 8}},
+    {{"buffer": 0, "byteOffset": {second}, "byteLength": {second}, "byteStride": 8}},
+    {{"buffer": 0, "byteOffset": {indices}, "byteLength": {ilen}}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5122, "count": {n}, "type": "VEC3",
+      "min": {smin:?}, "max": {smax:?}}},
+    {{"bufferView": 1, "componentType": 5123, "normalized": true, "count": {n}, "type": "VEC3",
+      "min": {umin:?}, "max": {umax:?}}},
+    {{"bufferView": 2, "componentType": 5125, "count": {icount}, "type": "SCALAR"}}
+  ],
+  "meshes": [
+    {{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 2}}]}},
+    {{"primitives": [{{"attributes": {{"POSITION": 1}}, "indices": 2}}]}}
+  ],
+  "nodes": [
+    {{"mesh": 0, "translation": {centre:?}, "scale": [{step:e}, {step:e}, {step:e}]}},
+    {{"mesh": 1, "translation": {lo:?}, "scale": [{side:e}, {side:e}, {side:e}]}}
+  ],
+  "scenes": [{{"nodes": [0, 1]}}]
+}}"#,
+        len = bin.len(),
+        ilen = bin.len() - indices,
+        icount = 3 * bunny.indices.len(),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "quantized.glb", &glb(&json, &bin));
+    let loaded = load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        !loaded.warnings.iter().any(|w| w.contains("quantization")),
+        "{:?}",
+        loaded.warnings
+    );
+    let m = &loaded.mesh;
+    let nt = bunny.indices.len();
+    assert_eq!(m.indices.len(), 2 * nt);
+    for (part, tol) in [(0, 1e-6), (1, 1e-6)] {
+        for t in 0..nt {
+            let got = m.triangle(part * nt + t);
+            for (c, &v) in bunny.indices[t].iter().enumerate() {
+                let v = v as usize;
+                let want: [f64; 3] = if part == 0 {
+                    std::array::from_fn(|k| signed[v][k] as f64 * step + centre[k])
+                } else {
+                    std::array::from_fn(|k| unsigned[v][k] as f64 / 65535.0 * side + lo[k])
+                };
+                let original = bunny.positions[v].to_array().map(f64::from);
+                for k in 0..3 {
+                    let g = got[c][k] as f64;
+                    assert!(
+                        (g - want[k]).abs() <= tol * side,
+                        "node {part} triangle {t}"
+                    );
+                    assert!((g - original[k]).abs() <= side / 65534.0 + tol * side);
+                }
+            }
+        }
+    }
+}
+
 /// A GLB whose image 0 is `image` bytes in buffer view 2.
 fn glb_with_image(image: &[u8]) -> Vec<u8> {
     let mut bin = geometry();
