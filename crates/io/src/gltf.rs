@@ -16,6 +16,7 @@
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::gltf_accessor::{read_floats, read_indices};
 use crate::gltf_glb::{is_glb, split_glb};
+use crate::gltf_gpu_instancing::mesh_placements;
 use crate::gltf_image::ImageCache;
 use crate::gltf_integers::check_integer_range;
 use crate::gltf_scene::{check_scene_indices, SceneCollector};
@@ -84,10 +85,12 @@ pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadErro
     let mut b = Builder::new(path, &doc, &buffers, data.len(), &mut warnings);
     walk_nodes(path, &doc, &mut |node, world| {
         b.scene.visit(doc.as_json(), node.index(), world);
-        match node.mesh() {
-            Some(mesh) => b.add_instance(node, &mesh, world),
-            None => Ok(()),
+        if let Some(mesh) = node.mesh() {
+            for placed in mesh_placements(path, &doc, &buffers, data.len(), node, world)? {
+                b.add_instance(node, &mesh, &placed)?;
+            }
         }
+        Ok(())
     })?;
     let (mesh, scene) = b.finish();
     warnings.extend(scene.warnings());

@@ -1,6 +1,7 @@
 //! glTF with its instancing kept: one geometry per glTF mesh (all its
 //! primitives, in the mesh's own coordinates) and one instance per node that
-//! references a mesh, with the node's world transform, ready for an
+//! references a mesh (one per copy of an `EXT_mesh_gpu_instancing` node),
+//! with the node's world transform, ready for an
 //! [`InstancedScene`](raykit_core::instancing::InstancedScene). The flattened
 //! load ([`crate::load_mesh`]) walks the same nodes in the same order, so
 //! instance `i` is the flattened mesh's part `i`, and triangle `p` of its
@@ -8,6 +9,7 @@
 
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::gltf::{open_gltf, walk_nodes, Builder};
+use crate::gltf_gpu_instancing::mesh_placements;
 use raykit_core::glam::{Affine3A, Mat4};
 use raykit_core::instancing::{SceneBuilder, SceneError};
 use raykit_core::TriangleMesh;
@@ -59,7 +61,15 @@ pub fn parse_gltf_instances(path: &Path, data: &[u8]) -> Result<GltfInstances, L
     walk_nodes(path, doc, &mut |node, world| {
         if let Some(mesh) = node.mesh() {
             let name = node.name().or(mesh.name()).unwrap_or("").to_string();
-            nodes.push((node.index() as u32, mesh.index() as u32, *world, name));
+            let placed = mesh_placements(path, doc, &opened.buffers, data.len(), node, world)?;
+            for world in placed {
+                nodes.push((
+                    node.index() as u32,
+                    mesh.index() as u32,
+                    world,
+                    name.clone(),
+                ));
+            }
         }
         Ok(())
     })?;

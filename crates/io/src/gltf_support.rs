@@ -17,6 +17,7 @@ pub(crate) const HANDLED_EXTENSIONS: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
     "KHR_mesh_quantization",
+    "EXT_mesh_gpu_instancing",
 ];
 
 /// An error for the first entry of `extensionsRequired` that is not handled.

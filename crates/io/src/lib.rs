@@ -30,6 +30,7 @@ mod format;
 mod gltf;
 mod gltf_accessor;
 mod gltf_glb;
+mod gltf_gpu_instancing;
 mod gltf_image;
 mod gltf_instances;
 mod gltf_integers;

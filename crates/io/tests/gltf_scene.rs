@@ -668,6 +668,111 @@ fn quantized_positions_load_dequantized_by_their_nodes() {
     }
 }
 
+/// `EXT_mesh_gpu_instancing` (glTF-Transform's `instance`, gltfpack's
+/// `-mi`): one node draws the triangle of [`geometry`] five times, each
+/// copy with its own translation, rotation and scale, all moved by the
+/// node's own transform. Both loads place every copy where the f64 product
+/// of the node's and the copy's TRS puts it: the flattened load as five
+/// parts, the instanced load as five instances of one geometry. Copies of
+/// unequal counts are an error naming the node's field.
+#[test]
+fn gpu_instanced_nodes_load_every_copy() {
+    let copies: Vec<([f64; 3], [f64; 4], [f64; 3])> = (0..5)
+        .map(|i| {
+            let a = i as f64;
+            (
+                [a, 2.0 - a, 0.5 * a],
+                [0.1 * a, 0.3, -0.2 * a, 1.0],
+                [1.0 + a, 0.5, 2.0 - 0.3 * a],
+            )
+        })
+        .collect();
+    let mut bin = geometry();
+    let floats = |v: &[f64]| -> Vec<u8> {
+        v.iter()
+            .flat_map(|&x| (x as f32).to_le_bytes())
+            .collect::<Vec<u8>>()
+    };
+    let t_at = bin.len();
+    bin.extend(floats(&copies.iter().flat_map(|c| c.0).collect::<Vec<_>>()));
+    let r_at = bin.len();
+    // Unit quaternions as f32, as the reference below normalises them too.
+    let unit_q = |q: [f64; 4]| {
+        let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+        q.map(|c| c / n)
+    };
+    bin.extend(floats(
+        &copies.iter().flat_map(|c| unit_q(c.1)).collect::<Vec<_>>(),
+    ));
+    let s_at = bin.len();
+    bin.extend(floats(&copies.iter().flat_map(|c| c.2).collect::<Vec<_>>()));
+    let json = |scale_count: usize| {
+        format!(
+            r#"{{
+  "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+  "buffers": [{{"byteLength": {len}}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": 36}},
+    {{"buffer": 0, "byteOffset": {t_at}, "byteLength": 60}},
+    {{"buffer": 0, "byteOffset": {r_at}, "byteLength": 80}},
+    {{"buffer": 0, "byteOffset": {s_at}, "byteLength": 60}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+      "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 5, "type": "VEC3"}},
+    {{"bufferView": 2, "componentType": 5126, "count": 5, "type": "VEC4"}},
+    {{"bufferView": 3, "componentType": 5126, "count": {scale_count}, "type": "VEC3"}}
+  ],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+  "nodes": [{{"mesh": 0, "translation": [10, 0, -3], "scale": [2, 2, 2],
+    "extensions": {{"EXT_mesh_gpu_instancing":
+      {{"attributes": {{"TRANSLATION": 1, "ROTATION": 2, "SCALE": 3}}}}}}}}],
+  "scenes": [{{"nodes": [0]}}]
+}}"#,
+            len = bin.len()
+        )
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "gpu.glb", &glb(&json(5), &bin));
+    let node = trs([10.0, 0.0, -3.0], [0.0, 0.0, 0.0, 1.0], [2.0; 3]);
+    let corners = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let loaded = load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        !loaded.warnings.iter().any(|w| w.contains("instancing")),
+        "{:?}",
+        loaded.warnings
+    );
+    let m = &loaded.mesh;
+    assert_eq!((m.num_triangles(), m.parts.len()), (5, 5));
+    let instanced = raykit_io::load_gltf_instances(&path).unwrap();
+    assert_eq!(instanced.geometries.len(), 1);
+    assert_eq!(instanced.instances.len(), 5);
+    for (i, (t, q, s)) in copies.iter().enumerate() {
+        let world = mul(&node, &trs(*t, *q, *s));
+        let tri = m.triangle(i);
+        let to_world = instanced.instances[i].to_world;
+        for (c, p) in corners.iter().enumerate() {
+            let want = apply(&world, *p, 1.0);
+            assert_close(tri[c], want, &format!("copy {i} corner {c}"));
+            let placed = to_world.transform_point3(raykit_core::Vec3::new(
+                p[0] as f32,
+                p[1] as f32,
+                p[2] as f32,
+            ));
+            assert_close(placed, want, &format!("instance {i} corner {c}"));
+        }
+    }
+    let (p, e) = load_err(dir.path(), "uneven.glb", &glb(&json(4), &bin));
+    assert_json_error(
+        &p,
+        &e,
+        "nodes[0].extensions.EXT_mesh_gpu_instancing.attributes",
+        "different counts",
+    );
+}
+
 /// A GLB whose image 0 is `image` bytes in buffer view 2.
 fn glb_with_image(image: &[u8]) -> Vec<u8> {
     let mut bin = geometry();
