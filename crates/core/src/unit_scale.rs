@@ -27,17 +27,26 @@ pub const SCALED_BELOW: f32 = 1.0 / 65_536.0;
 
 /// The power of two a model smaller than [`SCALED_BELOW`] is scaled by so
 /// that the largest side of its box lies in `[1, 2)`; one for any other
-/// model, empty or not finite.
+/// model, empty or not finite. For the triangle tests that work on
+/// coordinates rather than on differences from the ray's origin (see
+/// [`UnitScale::for_mesh_near_origin`]), also the point a model far from
+/// the origin is moved from, so that its box's centre is at the origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UnitScale {
     /// The factor as two powers of two that are each finite in `f32` (a
     /// box as small as `2⁻¹⁴⁹` needs `2¹⁴⁹`, beyond `f32::MAX`).
     factor: (f32, f32),
+    /// The point of the model that goes to the origin, in the model's
+    /// units (subtracted before scaling).
+    offset: Vec3,
 }
 
 impl UnitScale {
     /// No scaling.
-    pub const ONE: UnitScale = UnitScale { factor: (1.0, 1.0) };
+    pub const ONE: UnitScale = UnitScale {
+        factor: (1.0, 1.0),
+        offset: Vec3::ZERO,
+    };
 
     /// The scale for a model whose box has `side` as its largest side.
     pub fn for_side(side: f32) -> Self {
@@ -55,24 +64,48 @@ impl UnitScale {
         };
         UnitScale {
             factor: (2f32.powi(k / 2), 2f32.powi(k - k / 2)),
+            offset: Vec3::ZERO,
         }
     }
 
     /// The scale for `mesh`, from the box of the vertices its triangles
     /// use (one for a mesh without triangles): a vertex that no triangle
-    /// uses, however far, does not keep a tiny model at its own size.
+    /// uses, however far, does not keep a tiny model at its own size. An
+    /// index out of range is passed over here (the structures refuse it).
     pub fn for_mesh(mesh: &TriangleMesh) -> Self {
-        if mesh.indices.is_empty() {
-            return UnitScale::ONE;
-        }
-        let b = mesh.bounds();
+        let b = used_bounds(mesh);
         Self::for_side((b.max - b.min).max_element())
+    }
+
+    /// [`UnitScale::for_mesh`], and the centre of the box of `mesh` moved
+    /// to the origin when it is further from it than the box's largest
+    /// side. The Plücker test (Plücker coordinates of edges through the
+    /// origin) and the projection test (planes through it) multiply
+    /// coordinates, not their differences: on a 100 m model at UTM
+    /// coordinates, 3% of the nearest hits of primary rays changed. The
+    /// subtraction is exact in `f32` for every coordinate within a factor
+    /// of two of the centre's (Sterbenz), which holds for a model of that
+    /// kind.
+    pub fn for_mesh_near_origin(mesh: &TriangleMesh) -> Self {
+        let mut scale = Self::for_mesh(mesh);
+        let b = used_bounds(mesh);
+        let (centre, side) = ((b.min + b.max) * 0.5, (b.max - b.min).max_element());
+        if centre.is_finite() && centre.abs().max_element() > side {
+            scale.offset = centre;
+        }
+        scale
     }
 
     /// The scale for `mesh` and `mesh` at that scale: what a structure
     /// over it is built from.
     pub fn of(mesh: &TriangleMesh) -> (Self, Cow<'_, TriangleMesh>) {
         let scale = Self::for_mesh(mesh);
+        (scale, scale.mesh(mesh))
+    }
+
+    /// [`UnitScale::of`] with [`UnitScale::for_mesh_near_origin`].
+    pub fn of_near_origin(mesh: &TriangleMesh) -> (Self, Cow<'_, TriangleMesh>) {
+        let scale = Self::for_mesh_near_origin(mesh);
         (scale, scale.mesh(mesh))
     }
 
@@ -85,7 +118,7 @@ impl UnitScale {
     /// so far from the model that scaling overflows `f32`).
     #[inline]
     pub fn point(self, p: Vec3) -> Vec3 {
-        p * self.factor.0 * self.factor.1
+        (p - self.offset) * self.factor.0 * self.factor.1
     }
 
     /// A length of the model at unit scale.
@@ -103,7 +136,7 @@ impl UnitScale {
     /// A point at unit scale, in the model's units.
     #[inline]
     pub fn point_to_model(self, p: Vec3) -> Vec3 {
-        p / self.factor.0 / self.factor.1
+        p / self.factor.0 / self.factor.1 + self.offset
     }
 
     /// `mesh` at unit scale: itself when no scaling is needed.
@@ -163,6 +196,16 @@ impl UnitScale {
     }
 }
 
+/// The box of the vertices `mesh`'s triangles use, indices out of range
+/// passed over (empty for a mesh without triangles).
+fn used_bounds(mesh: &TriangleMesh) -> Aabb {
+    mesh.indices
+        .iter()
+        .flatten()
+        .filter_map(|&i| mesh.positions.get(i as usize))
+        .fold(Aabb::EMPTY, |b, &p| b.grow(p))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -209,7 +252,7 @@ mod tests {
         assert!(UnitScale::for_mesh(&TriangleMesh::default()).is_one());
         let mut bad = TriangleMesh::from_triangles(&[[Vec3::ZERO, Vec3::X * 1e-9, Vec3::Y * 1e-9]]);
         bad.indices[0][2] = 7;
-        assert!(!UnitScale::for_mesh(&bad).is_one(), "reads no index");
+        assert!(!UnitScale::for_mesh(&bad).is_one(), "an index out of range");
     }
 
     #[test]
@@ -228,5 +271,58 @@ mod tests {
         };
         assert_eq!(s.hit_to_model(h).t, ray.tfar);
         assert_eq!(s.hit_to_model(h).u, 0.25);
+    }
+
+    /// A model far from the origin is moved to it for the tests that need
+    /// it, exactly where its coordinates lie within a factor of two of the
+    /// centre's; one near the origin, or through `for_mesh`, is not.
+    #[test]
+    fn far_models_move_to_the_origin_exactly() {
+        let at = Vec3::new(429_252.0, 5_150_885.0, 300.0);
+        let tris = [
+            [
+                at,
+                at + Vec3::new(96.5, 0.0, 2.0),
+                at + Vec3::new(0.0, 80.0, -1.5),
+            ],
+            [
+                at + Vec3::Z * 50.0,
+                at + Vec3::X * 40.0,
+                at + Vec3::Y * 12.5,
+            ],
+        ];
+        let mesh = TriangleMesh::from_triangles(&tris);
+        assert!(UnitScale::for_mesh(&mesh).is_one());
+        let near = UnitScale::for_mesh_near_origin(&mesh);
+        assert!(!near.is_one());
+        let moved = near.mesh(&mesh);
+        let b = moved.bounds();
+        assert!(b.min.abs().max_element() < 100.0 && b.max.abs().max_element() < 100.0);
+        for (p, q) in mesh.positions.iter().zip(&moved.positions) {
+            assert_eq!(near.point_to_model(*q), *p);
+            for k in 0..3 {
+                assert_eq!(q[k] as f64, p[k] as f64 - near.offset[k] as f64, "exact");
+            }
+        }
+        // Rays keep their direction and interval: hits' t are unchanged.
+        let ray = Ray::segment(at + Vec3::new(10.0, 20.0, 500.0), -Vec3::Z, 1.0, 900.0);
+        let r = near.ray(&ray);
+        assert_eq!((r.dir(), r.tnear, r.tfar), (ray.dir(), ray.tnear, ray.tfar));
+        assert_eq!(near.point_to_model(r.origin), ray.origin);
+        // Near the origin (centre within the box's size), nothing moves.
+        let centred = TriangleMesh::from_triangles(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]);
+        assert!(UnitScale::for_mesh_near_origin(&centred).is_one());
+        // Tiny and far: moved, then scaled.
+        let tiny = TriangleMesh::from_triangles(&[[
+            Vec3::ONE,
+            Vec3::ONE + Vec3::X * 1e-6,
+            Vec3::ONE + Vec3::Y * 1e-6,
+        ]]);
+        let both = UnitScale::for_mesh_near_origin(&tiny);
+        let side = {
+            let b = both.mesh(&tiny).bounds();
+            (b.max - b.min).max_element()
+        };
+        assert!((1.0..2.0).contains(&side), "{side}");
     }
 }

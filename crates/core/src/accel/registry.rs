@@ -13,15 +13,31 @@ use crate::tri::TestKind;
 use crate::unit_scale::UnitScale;
 use crate::with_test;
 
+/// The scale a structure with triangle test `test` is built at: Möller's
+/// test works on differences from the ray's origin and needs only tiny
+/// models scaled ([`UnitScale::of`]); the Plücker and projection tests
+/// also need a model far from the origin moved to it
+/// ([`UnitScale::of_near_origin`]).
+fn unit_scale(
+    test: TestKind,
+    mesh: &TriangleMesh,
+) -> (UnitScale, std::borrow::Cow<'_, TriangleMesh>) {
+    match test {
+        TestKind::Moller => UnitScale::of(mesh),
+        TestKind::Plucker | TestKind::Projection => UnitScale::of_near_origin(mesh),
+    }
+}
+
 /// Build the structure `kind` over `mesh` with triangle test `test`; over
-/// the mesh at unit scale when it is tiny ([`UnitScaled`]).
+/// the mesh at unit scale when it is tiny, and moved to the origin when it
+/// is far from it and the test needs it ([`UnitScaled`]).
 pub fn build_accel(
     kind: AccelKind,
     test: TestKind,
     mesh: &TriangleMesh,
     options: &BuildOptions,
 ) -> Box<dyn Accel> {
-    let (scale, scaled) = UnitScale::of(mesh);
+    let (scale, scaled) = unit_scale(test, mesh);
     let mesh = &*scaled;
     let accel = with_test!(test, T => match kind {
         AccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)) as Box<dyn Accel>,
@@ -45,7 +61,7 @@ pub fn load_accel(
     mesh: &TriangleMesh,
 ) -> Result<(AccelKind, TestKind, Box<dyn Accel>), PersistError> {
     let (kind, test) = super::bvh::saved_kind(path)?;
-    let (scale, scaled) = UnitScale::of(mesh);
+    let (scale, scaled) = unit_scale(test, mesh);
     let mesh = &*scaled;
     with_test!(test, T => {
         let accel = match kind {
