@@ -395,8 +395,9 @@ fn agrees_with_gdal_viewshed_over_the_curved_earth() {
 /// its first 150 rows made no-data, converted by gdal_translate with the
 /// creation options people use for DEMs (ZSTD, the floating-point and
 /// integer predictors, BigTIFF, COG, blocks of no data left out with
-/// `SPARSE_OK`, separate planes), read by the library and compared sample
-/// for sample with GDAL's own decoding of the same file.
+/// `SPARSE_OK`, separate planes) and as an Esri ASCII grid, read by the
+/// library and compared sample for sample with GDAL's own decoding of the
+/// same file.
 #[test]
 fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
     let dir = tempfile::tempdir().unwrap();
@@ -496,6 +497,42 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         };
         assert_eq!(place(&got.georef), place(&dem.georef), "{options:?}");
     }
+    // The same DEM as an Esri ASCII grid written by GDAL (AAIGrid).
+    let asc = dir.path().join("grid.asc");
+    gdal(
+        "gdal_translate",
+        &["-q", "-of", "AAIGrid", s(&src), s(&asc)],
+    );
+    let raw = dir.path().join("grid.raw");
+    gdal(
+        "gdal_translate",
+        &["-q", "-of", "ENVI", "-ot", "Float32", s(&asc), s(&raw)],
+    );
+    let want: Vec<f32> = std::fs::read(&raw)
+        .unwrap()
+        .chunks_exact(4)
+        .map(|b| f32::from_ne_bytes(b.try_into().unwrap()))
+        .map(|x| if x == -9999.0 { f32::NAN } else { x })
+        .collect();
+    let got = load_dem(&asc, &LoadOptions::default()).unwrap();
+    assert_eq!(got.heights.len(), want.len());
+    assert!(got
+        .heights
+        .iter()
+        .zip(&want)
+        .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())));
+    assert_eq!(
+        (
+            got.georef.origin_x,
+            got.georef.origin_y,
+            got.georef.pixel_width
+        ),
+        (
+            dem.georef.origin_x,
+            dem.georef.origin_y,
+            dem.georef.pixel_width
+        )
+    );
     // A compression the decoder lacks is refused by name, with the way out.
     let lerc = dir.path().join("lerc.tif");
     gdal(

@@ -1,9 +1,9 @@
 """Terrain: shadow masks, viewsheds and ray-cast images of height grids
 (raykit-terrain).
 
-A height grid is either a path to a DEM file (GeoTIFF, SRTM ``.hgt``,
-Terragen ``.ter``, 16-bit PNG, ``.r16``/``.r32``; its georeferencing is
-read from the file) or a ``(rows, cols)`` numpy array of heights in
+A height grid is either a path to a DEM file (GeoTIFF, Esri ASCII grid
+``.asc``, SRTM ``.hgt``, Terragen ``.ter``, 16-bit PNG, ``.r16``/``.r32``;
+its georeferencing is read from the file) or a ``(rows, cols)`` numpy array of heights in
 metres, row 0 to the north, with an affine ``transform`` in rasterio's
 convention: ``Affine(a, b, c, d, e, f)`` (or any sequence of those six
 numbers) maps a pixel corner (col, row) to map coordinates

@@ -7,9 +7,9 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use raykit_terrain::io::{
-    load_dem, read_geotiff, read_hgt, read_png, read_raw, read_ter, write_dem_geotiff,
-    write_geotiff_f32, write_geotiff_f32_with, write_geotiff_u8, DemError, GeoTiffLayout,
-    LoadOptions, RawSpec, RawType, TiffCompression,
+    load_dem, read_ascii_grid, read_geotiff, read_hgt, read_png, read_raw, read_ter,
+    write_dem_geotiff, write_geotiff_f32, write_geotiff_f32_with, write_geotiff_u8, DemError,
+    GeoTiffLayout, LoadOptions, RawSpec, RawType, TiffCompression,
 };
 use raykit_terrain::{Dem, GeoRef};
 
@@ -544,6 +544,126 @@ fn geotiff_blocks_stored_as_no_bytes_read_as_nodata_or_zero() {
             let blank_height = if nodata.is_some() { f32::NAN } else { 0.0 };
             assert_same_heights(&back.heights[..blank * w], &vec![blank_height; blank * w]);
         }
+    }
+}
+
+/// Esri ASCII grids: the `…center` keywords, GDAL's `dx`/`dy`, no-data,
+/// rows wrapped over several lines, upper-case keywords and CRLF line
+/// ends read to the heights and corner written here; a `.prj` with a
+/// geographic WKT marks degrees; malformed files are errors naming the
+/// line.
+#[test]
+fn esri_ascii_grids_read_with_their_corner_and_errors_name_the_line() {
+    let dir = TempDir::new("ascii-grid");
+    let (w, h) = (7usize, 5usize);
+    let want: Vec<f32> = (0..w * h)
+        .map(|i| {
+            if i == 9 {
+                f32::NAN
+            } else {
+                100.0 + i as f32 * 0.25 - (i % 3) as f32
+            }
+        })
+        .collect();
+    let token = |x: f32| {
+        if x.is_nan() {
+            "-9999".to_string()
+        } else {
+            format!("{x}")
+        }
+    };
+    // One row per line (read in parallel), with the lower-left centre.
+    let rows: Vec<String> = want
+        .chunks(w)
+        .map(|r| r.iter().map(|&x| token(x)).collect::<Vec<_>>().join(" "))
+        .collect();
+    let text = format!(
+        "ncols {w}\nnrows {h}\nxllcenter 1000.5\nyllcenter 2000.5\ncellsize 1\nNODATA_value -9999\n{}\n",
+        rows.join("\n")
+    );
+    let a = dir.join("centre.asc");
+    std::fs::write(&a, &text).unwrap();
+    let dem = read_ascii_grid(&a).unwrap();
+    assert_eq!((dem.width, dem.height), (w, h));
+    assert_same_heights(&dem.heights, &want);
+    let g = &dem.georef;
+    assert_eq!((g.origin_x, g.origin_y), (1000.0, 2000.0 + h as f64));
+    assert_eq!(
+        (g.pixel_width, g.pixel_height, g.geographic),
+        (1.0, -1.0, false)
+    );
+    assert_eq!(dem.nodata, Some(-9999.0));
+    // Wrapped rows, dx/dy, upper-case keys, CRLF, a geographic .prj.
+    let tokens: Vec<String> = want.iter().map(|&x| token(x)).collect();
+    let wrapped: Vec<String> = tokens.chunks(4).map(|c| c.join("\t")).collect();
+    let text = format!(
+        "NCOLS {w}\r\nNROWS {h}\r\nXLLCORNER -10\r\nYLLCORNER 50\r\nDX 0.25\r\nDY 0.125\r\n\
+         NODATA_VALUE -9999\r\n{}\r\n",
+        wrapped.join("\r\n")
+    );
+    let b = dir.join("wrapped.asc");
+    std::fs::write(&b, &text).unwrap();
+    std::fs::write(
+        dir.join("wrapped.prj"),
+        "GEOGCS[\"GCS_WGS_1984\",DATUM[\"D_WGS_1984\"]]",
+    )
+    .unwrap();
+    let dem = load_dem(&b, &LoadOptions::default()).unwrap();
+    assert_same_heights(&dem.heights, &want);
+    let g = &dem.georef;
+    assert_eq!((g.origin_x, g.origin_y), (-10.0, 50.0 + h as f64 * 0.125));
+    assert_eq!(
+        (g.pixel_width, g.pixel_height, g.geographic),
+        (0.25, -0.125, true)
+    );
+    // Malformed: each error names the line (or the header) and the problem.
+    let header = format!("ncols {w}\nnrows {h}\nxllcorner 0\nyllcorner 0\ncellsize 2\n");
+    let body = rows.join("\n").replace("-9999", "0");
+    let bad = [
+        (
+            format!("nrows {h}\nxllcorner 0\nyllcorner 0\ncellsize 2\n{body}"),
+            "header",
+            "no ncols",
+        ),
+        (
+            format!("{header}{}", body.replacen("100", "1x0", 1)),
+            "line 6",
+            "not a number",
+        ),
+        (
+            format!("{header}{}", &body[..body.rfind(' ').unwrap()]),
+            "line 10",
+            "ends after 34 values",
+        ),
+        (format!("{header}{body} 5"), "line 10", "beyond"),
+        (
+            format!("{header}cellsize 3\n{body}"),
+            "line 6",
+            "given twice",
+        ),
+        (
+            format!("ncols 0\nnrows {h}\nxllcorner 0\nyllcorner 0\ncellsize 2\n{body}"),
+            "line 1",
+            "at least 1",
+        ),
+        (
+            format!("{}{body}", header.replace("cellsize 2", "cellsize -2")),
+            "header",
+            "positive",
+        ),
+        (
+            format!("{}{body}", header.replace("xllcorner", "xllcentre")),
+            "line 3",
+            "unknown header keyword",
+        ),
+    ];
+    for (k, (text, at, needle)) in bad.iter().enumerate() {
+        let p = dir.join(&format!("bad{k}.asc"));
+        std::fs::write(&p, text).unwrap();
+        let e = read_ascii_grid(&p).unwrap_err();
+        assert_eq!(e.path, p);
+        assert_eq!(&e.at, at, "case {k}: {e}");
+        assert!(e.message.contains(needle), "case {k}: {e}");
     }
 }
 

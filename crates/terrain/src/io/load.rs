@@ -2,13 +2,15 @@
 
 use std::path::Path;
 
-use super::{read_geotiff, read_hgt, read_png, read_raw, read_ter, DemError, RawType};
+use super::{
+    read_ascii_grid, read_geotiff, read_hgt, read_png, read_raw, read_ter, DemError, RawType,
+};
 use crate::dem::Dem;
 
 /// The extensions [`load_dem`] understands.
 pub const SUPPORTED_EXTENSIONS: &str =
-    ".tif/.tiff (GeoTIFF), .hgt (SRTM), .ter (Terragen), .png (grayscale), \
-     .raw/.bin/.r16/.r32 (raw samples)";
+    ".tif/.tiff (GeoTIFF), .asc (Esri ASCII grid), .hgt (SRTM), .ter (Terragen), \
+     .png (grayscale), .raw/.bin/.r16/.r32 (raw samples)";
 
 /// Size and sample type of a raw height file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,6 +71,7 @@ fn read_any(path: &Path, options: &LoadOptions) -> Result<Dem, DemError> {
         .unwrap_or_default();
     match ext.as_str() {
         "tif" | "tiff" => read_geotiff(path),
+        "asc" => read_ascii_grid(path),
         "hgt" => read_hgt(path),
         "ter" => read_ter(path),
         "png" => read_png(path, options.png_scale, options.png_offset),

@@ -1,8 +1,9 @@
-//! Reading and writing DEM files: GeoTIFF (read and write), SRTM `.hgt`,
-//! Terragen `.ter`, grayscale PNG and raw grids, with [`load_dem`] choosing
-//! by extension. Every failure is a [`DemError`] naming the file, the
+//! Reading and writing DEM files: GeoTIFF (read and write), Esri ASCII
+//! grids, SRTM `.hgt`, Terragen `.ter`, grayscale PNG and raw grids, with
+//! [`load_dem`] choosing by extension. Every failure is a [`DemError`] naming the file, the
 //! position in it and what was expected; no input makes a reader panic.
 
+mod ascii_grid;
 mod creation_options;
 mod error;
 mod geokeys;
@@ -21,6 +22,7 @@ mod samples;
 mod source;
 mod terragen;
 
+pub use ascii_grid::read_ascii_grid;
 pub use creation_options::layout_from_creation_options;
 pub use error::DemError;
 pub use geokeys::{geo_key_short, KEY_MODEL_TYPE, KEY_RASTER_TYPE};

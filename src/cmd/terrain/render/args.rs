@@ -63,7 +63,7 @@ looks along the path, 10° downward. --out (and --heatmap) must contain {}, repl
 number (from 0, zero-padded to the same width)."
 )]
 pub struct TerrainRenderArgs {
-    /// DEM: GeoTIFF (.tif), SRTM .hgt, Terragen .ter, 16-bit PNG, raw .r16/.r32, or fractal:SIZE[:SEED].
+    /// DEM: GeoTIFF (.tif), Esri ASCII grid (.asc), SRTM .hgt, Terragen .ter, 16-bit PNG, raw .r16/.r32, or fractal:SIZE[:SEED].
     pub(super) dem: String,
     /// Image width in pixels.
     #[arg(long, default_value_t = 1600)]

@@ -37,7 +37,7 @@ raykit terrain shadow N57E011.hgt --sun 135,20 --out sun.tif --preview sun.png\n
 raykit terrain shadow dem.tif --sun-path 2026-06-21,45.5,-93.2 --out hours.tif\n  \
 raykit terrain shadow fractal:2048 --light 10000,10000,50 --compare --out m.tif")]
 pub struct ShadowArgs {
-    /// DEM: GeoTIFF, SRTM .hgt, Terragen .ter, 16-bit PNG, or fractal:SIZE[:SEED].
+    /// DEM: GeoTIFF, Esri ASCII grid (.asc), SRTM .hgt, Terragen .ter, 16-bit PNG, or fractal:SIZE[:SEED].
     pub(super) dem: String,
     /// Point light X,Y,H: map position and height above the ground there (gdal_viewshed's -ox -oy -oz).
     #[arg(long, value_name = "X,Y,H", allow_hyphen_values = true)]
