@@ -47,6 +47,7 @@ mod off;
 mod ply;
 mod ply_header;
 mod png;
+mod polygon;
 mod query_files;
 mod rays;
 mod scene_hits;

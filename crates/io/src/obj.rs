@@ -1,5 +1,5 @@
 //! Wavefront OBJ: `v`, `vt`, `vn`, `f` (all `v`, `v/vt`, `v//vn`, `v/vt/vn`
-//! forms, negative relative indices, polygons fan-triangulated), `o`/`g`
+//! forms, negative relative indices, polygons cut into triangles, see `polygon.rs`), `o`/`g`
 //! (parts), `usemtl`/`mtllib` (materials from MTL files; a missing MTL file
 //! falls back to default materials). Other statements are ignored.
 //!
@@ -10,6 +10,7 @@
 use crate::error::{show, LoadError, Location};
 use crate::hashing::{key3_map, Key3};
 use crate::mtl::{parse_mtl, TextureCache, MAX_LIBRARY_FILE};
+use crate::polygon::Triangulator;
 use crate::text::{parse_f32, parse_i64, Lines, Tokens};
 use crate::uri::read_external;
 use crate::validate::finish;
@@ -43,6 +44,8 @@ struct ObjState<'p> {
     corners: Vec<[u32; 3]>,
     /// Scratch polygon.
     poly: Vec<[u32; 3]>,
+    /// Cuts polygons into triangles.
+    faces: Triangulator,
     any_vt: bool,
     all_vt: bool,
     any_vn: bool,
@@ -85,6 +88,7 @@ impl<'p> ObjState<'p> {
             normals: Vec::new(),
             corners: Vec::new(),
             poly: Vec::new(),
+            faces: Triangulator::default(),
             any_vt: false,
             all_vt: true,
             any_vn: false,
@@ -207,9 +211,10 @@ impl<'p> ObjState<'p> {
             self.all_vn &= vn;
         }
         let part = self.current_part();
-        for k in 1..poly.len() - 1 {
-            self.corners
-                .extend_from_slice(&[poly[0], poly[k], poly[k + 1]]);
+        let positions = &self.positions;
+        let corners = poly.iter().map(|c| positions.get(c[0] as usize).copied());
+        for t in self.faces.cut(corners) {
+            self.corners.extend(t.map(|k| poly[k]));
             self.tri_material.push(self.cur_mat);
             self.tri_part.push(part);
         }

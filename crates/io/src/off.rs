@@ -6,8 +6,9 @@
 //! optional colour). Binary OFF is not read.
 
 use crate::error::{show, ErrorKind, LoadError, Location};
+use crate::polygon::Triangulator;
 use crate::text::{parse_f32, parse_u64, Lines, Tokens};
-use crate::validate::{fan, finish};
+use crate::validate::finish;
 use raykit_core::{TriangleMesh, Vec3};
 use std::path::Path;
 
@@ -156,6 +157,7 @@ pub(crate) fn parse_off(
     }
     let mut indices = Vec::with_capacity((nf as usize).min(data.len() / 8));
     let mut poly: Vec<u32> = Vec::new();
+    let mut faces = Triangulator::default();
     for i in 0..nf {
         let Some((n, l)) = lines.next() else {
             return Err(err(
@@ -203,7 +205,7 @@ pub(crate) fn parse_off(
             }
             poly.push(idx as u32);
         }
-        fan(&poly, &mut indices);
+        faces.cut_face(&poly, &positions, &mut indices);
     }
     let mut warnings = Vec::new();
     if let Some((n, _)) = lines.next() {

@@ -3,14 +3,15 @@
 //! Reads element `vertex` (`x`, `y`, `z` of any numeric type; optional
 //! `nx`/`ny`/`nz`; texture coordinates `u`/`v`, `s`/`t`, `texture_u`/`texture_v`
 //! or `texture_s`/`texture_t`) and element `face` (list `vertex_indices` or
-//! `vertex_index` of any count and index types, polygons fan-triangulated).
+//! `vertex_index` of any count and index types, polygons cut into triangles, see `polygon.rs`).
 //! Other elements and properties, lists included, are skipped.
 
 use crate::error::{show, LoadError, Location};
 use crate::format::PlyEncoding;
 use crate::ply_header::{parse_header, Element, Header, PropKind, Scalar};
+use crate::polygon::Triangulator;
 use crate::text::{parse_f32, parse_f64, parse_i64, TokenStream};
-use crate::validate::{fan, finish};
+use crate::validate::finish;
 use raykit_core::{TriangleMesh, Vec2, Vec3};
 use std::path::Path;
 
@@ -317,6 +318,7 @@ fn read_body<'a, B: Body<'a>>(
     let mut has_normals = false;
     let mut has_uvs = false;
     let mut poly: Vec<u32> = Vec::new();
+    let mut faces = Triangulator::default();
     for el in &header.elements {
         // Cap pre-allocation by what the remaining data can hold.
         let cap = (el.count as usize).min(b.remaining() / el.min_record_size(enc));
@@ -420,7 +422,7 @@ fn read_body<'a, B: Body<'a>>(
                         }
                         poly.push(idx as u32);
                     }
-                    fan(&poly, &mut mesh.indices);
+                    faces.cut_face(&poly, &mesh.positions, &mut mesh.indices);
                 }
             }
         } else if !el.props.is_empty() {

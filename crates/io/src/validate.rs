@@ -31,24 +31,13 @@ pub(crate) fn finish(
     }
 }
 
-/// Append the fan triangulation of polygon `poly` (at least 3 corners) to `out`.
-#[inline]
-pub(crate) fn fan<T: Copy>(poly: &[T], out: &mut Vec<[T; 3]>) {
-    for k in 1..poly.len().saturating_sub(1) {
-        out.push([poly[0], poly[k], poly[k + 1]]);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use raykit_core::Vec3;
 
     #[test]
-    fn fan_of_pentagon_and_empty_error() {
-        let mut out = Vec::new();
-        fan(&[0, 1, 2, 3, 4], &mut out);
-        assert_eq!(out, vec![[0, 1, 2], [0, 2, 3], [0, 3, 4]]);
+    fn an_empty_mesh_is_an_error() {
         let e = finish(
             Path::new("a.obj"),
             TriangleMesh::default(),

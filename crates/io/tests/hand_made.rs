@@ -445,3 +445,73 @@ fn gltf_images_with_one_source_are_decoded_once() {
     assert_eq!(textures.len(), 2);
     assert!(std::sync::Arc::ptr_eq(&textures[0], &textures[1]));
 }
+
+/// A concave face, the L of three unit squares listed from a corner that
+/// does not see the whole face, in OBJ, ASCII PLY and OFF: its triangles
+/// cover the L (area 3) and nothing of the notch [1, 2]² beside it, which
+/// a fan from the first corner would cover. The face is tilted out of the
+/// axis planes, so the cut works in the face's own plane.
+#[test]
+fn concave_faces_are_cut_without_covering_their_notch() {
+    let l2 = [
+        [2.0f32, 0.0],
+        [2.0, 1.0],
+        [1.0, 1.0],
+        [1.0, 2.0],
+        [0.0, 2.0],
+        [0.0, 0.0],
+    ];
+    // The plane z = 0.3 x + 0.2 y.
+    let lift = |p: [f32; 2]| Vec3::new(p[0], p[1], 0.3 * p[0] + 0.2 * p[1]);
+    let verts: Vec<Vec3> = l2.iter().map(|&p| lift(p)).collect();
+    let vlines: String = verts
+        .iter()
+        .map(|v| format!("{} {} {}\n", v.x, v.y, v.z))
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let files = [
+        (
+            "l.obj",
+            format!(
+                "{}f 1 2 3 4 5 6\n",
+                vlines
+                    .lines()
+                    .map(|l| format!("v {l}\n"))
+                    .collect::<String>()
+            ),
+        ),
+        (
+            "l.ply",
+            format!(
+                "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\n\
+                 property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+                 end_header\n{vlines}6 0 1 2 3 4 5\n"
+            ),
+        ),
+        ("l.off", format!("OFF\n6 1 0\n{vlines}6 0 1 2 3 4 5\n")),
+    ];
+    for (name, text) in files {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let m = load_mesh(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.num_triangles(), 4, "{name}");
+        // Areas in the (x, y) projection, wound as the face (counter-clockwise).
+        let mut area = 0.0;
+        let tris: Vec<[Vec3; 3]> = (0..4).map(|i| m.triangle(i)).collect();
+        for [a, b, c] in &tris {
+            let twice = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+            assert!(twice > 0.0, "{name}: a triangle wound against the face");
+            area += twice / 2.0;
+        }
+        assert!((area - 3.0).abs() < 1e-5, "{name}: area {area}");
+        for k in 0..100 {
+            let q = [1.05 + 0.09 * (k % 10) as f32, 1.05 + 0.09 * (k / 10) as f32];
+            let covered = tris.iter().any(|[a, b, c]| {
+                let side =
+                    |p: &Vec3, r: &Vec3| (r.x - p.x) * (q[1] - p.y) - (r.y - p.y) * (q[0] - p.x);
+                side(a, b) >= 0.0 && side(b, c) >= 0.0 && side(c, a) >= 0.0
+            });
+            assert!(!covered, "{name}: the notch at {q:?} is covered");
+        }
+    }
+}
