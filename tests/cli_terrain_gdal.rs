@@ -414,7 +414,7 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         Some(-9999.0),
     )
     .unwrap();
-    let cases: [&[&str]; 10] = [
+    let cases: [&[&str]; 11] = [
         &["-co", "COMPRESS=ZSTD"],
         &[
             "-co",
@@ -455,9 +455,15 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
             "BLOCKXSIZE=64",
         ],
         &["-co", "INTERLEAVE=BAND", "-co", "COMPRESS=PACKBITS"],
+        &["-of", "AAIGrid"],
     ];
     for (k, options) in cases.iter().enumerate() {
-        let tif = dir.path().join(format!("case{k}.tif"));
+        let ext = if options.contains(&"AAIGrid") {
+            "asc"
+        } else {
+            "tif"
+        };
+        let tif = dir.path().join(format!("case{k}.{ext}"));
         let mut args = vec!["-q"];
         args.extend_from_slice(options);
         args.extend_from_slice(&[s(&src), s(&tif)]);
@@ -497,42 +503,6 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         };
         assert_eq!(place(&got.georef), place(&dem.georef), "{options:?}");
     }
-    // The same DEM as an Esri ASCII grid written by GDAL (AAIGrid).
-    let asc = dir.path().join("grid.asc");
-    gdal(
-        "gdal_translate",
-        &["-q", "-of", "AAIGrid", s(&src), s(&asc)],
-    );
-    let raw = dir.path().join("grid.raw");
-    gdal(
-        "gdal_translate",
-        &["-q", "-of", "ENVI", "-ot", "Float32", s(&asc), s(&raw)],
-    );
-    let want: Vec<f32> = std::fs::read(&raw)
-        .unwrap()
-        .chunks_exact(4)
-        .map(|b| f32::from_ne_bytes(b.try_into().unwrap()))
-        .map(|x| if x == -9999.0 { f32::NAN } else { x })
-        .collect();
-    let got = load_dem(&asc, &LoadOptions::default()).unwrap();
-    assert_eq!(got.heights.len(), want.len());
-    assert!(got
-        .heights
-        .iter()
-        .zip(&want)
-        .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())));
-    assert_eq!(
-        (
-            got.georef.origin_x,
-            got.georef.origin_y,
-            got.georef.pixel_width
-        ),
-        (
-            dem.georef.origin_x,
-            dem.georef.origin_y,
-            dem.georef.pixel_width
-        )
-    );
     // A compression the decoder lacks is refused by name, with the way out.
     let lerc = dir.path().join("lerc.tif");
     gdal(

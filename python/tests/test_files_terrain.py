@@ -76,6 +76,31 @@ def test_shadow_of_a_geotiff_equals_shadow_of_gdals_arrays(data):
     assert lit[150, 200] == 1
 
 
+def test_an_esri_ascii_grid_shadows_as_its_arrays(data, tmp_path):
+    """The lidar DEM written here by numpy as an Esri ASCII grid (every
+    float32 in nine digits, the centre keywords, no data as in the GeoTIFF)
+    shadows exactly as the arrays GDAL read from the GeoTIFF."""
+    heights, transform, nodata = read_with_gdal(data / "terrain" / "lidar_dem_400.tif")
+    rows, cols = heights.shape
+    cell = transform.a
+    asc = tmp_path / "lidar.asc"
+    with open(asc, "w") as f:
+        f.write(f"ncols {cols}\nnrows {rows}\n")
+        f.write(f"xllcenter {transform.c + cell / 2!r}\nyllcenter {transform.f - rows * cell + cell / 2!r}\n")
+        f.write(f"cellsize {cell!r}\nNODATA_value {nodata:.9g}\n")
+        np.savetxt(f, heights, fmt="%.9g")
+    from_file = raykit.terrain.shadow(asc, sun=(135, 8))
+    from_arrays = raykit.terrain.shadow(heights, transform, sun=(135, 8), nodata=nodata)
+    np.testing.assert_array_equal(from_file, from_arrays)
+    assert 0.05 < (from_file == 0).mean() < 0.95
+    # A point light places the grid: the corner from the centre keywords.
+    light = (*at(transform, 200.5, 150.5), 30.0)
+    np.testing.assert_array_equal(
+        raykit.terrain.shadow(asc, light=light),
+        raykit.terrain.shadow(heights, transform, light=light, nodata=nodata),
+    )
+
+
 def test_shadow_agrees_with_rays_on_the_same_triangles():
     rng = np.random.default_rng(3)
     rows, cols = 48, 64
