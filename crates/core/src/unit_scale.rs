@@ -73,7 +73,11 @@ impl UnitScale {
     /// uses, however far, does not keep a tiny model at its own size. An
     /// index out of range is passed over here (the structures refuse it).
     pub fn for_mesh(mesh: &TriangleMesh) -> Self {
-        let b = used_bounds(mesh);
+        Self::for_bounds(&used_bounds(mesh))
+    }
+
+    /// The scale for a model whose box is `b`.
+    fn for_bounds(b: &Aabb) -> Self {
         Self::for_side((b.max - b.min).max_element())
     }
 
@@ -87,8 +91,8 @@ impl UnitScale {
     /// of two of the centre's (Sterbenz), which holds for a model of that
     /// kind.
     pub fn for_mesh_near_origin(mesh: &TriangleMesh) -> Self {
-        let mut scale = Self::for_mesh(mesh);
         let b = used_bounds(mesh);
+        let mut scale = Self::for_bounds(&b);
         let (centre, side) = ((b.min + b.max) * 0.5, (b.max - b.min).max_element());
         if centre.is_finite() && centre.abs().max_element() > side {
             scale.offset = centre;

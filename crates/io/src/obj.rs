@@ -1,7 +1,8 @@
 //! Wavefront OBJ: `v`, `vt`, `vn`, `f` (all `v`, `v/vt`, `v//vn`, `v/vt/vn`
-//! forms, negative relative indices, polygons cut into triangles, see `polygon.rs`), `o`/`g`
-//! (parts), `usemtl`/`mtllib` (materials from MTL files; a missing MTL file
-//! falls back to default materials). Other statements are ignored.
+//! forms, negative relative indices, polygons cut into triangles by
+//! `polygon.rs`), `o`/`g` (parts), `usemtl`/`mtllib` (materials from MTL
+//! files; a missing MTL file falls back to default materials). Other
+//! statements are ignored.
 //!
 //! Positions are kept as in the file when faces use no `vt`/`vn`; otherwise
 //! each distinct `(v, vt, vn)` triple becomes one vertex so that normals and

@@ -3,7 +3,8 @@
 //! Reads element `vertex` (`x`, `y`, `z` of any numeric type; optional
 //! `nx`/`ny`/`nz`; texture coordinates `u`/`v`, `s`/`t`, `texture_u`/`texture_v`
 //! or `texture_s`/`texture_t`) and element `face` (list `vertex_indices` or
-//! `vertex_index` of any count and index types, polygons cut into triangles, see `polygon.rs`).
+//! `vertex_index` of any count and index types, polygons cut into
+//! triangles by `polygon.rs`).
 //! Other elements and properties, lists included, are skipped.
 
 use crate::error::{show, LoadError, Location};

@@ -98,7 +98,9 @@ impl<A: Accel + ?Sized> Accel for UnitScaled<A> {
 
 /// Rays scaled in runs of [`RUN`] (a run's copy stays below the
 /// allocator's threshold for mapping fresh pages), each run answered by
-/// `answer` into its part of `out`, the runs in parallel.
+/// `answer` into its part of `out`, the runs in parallel; at scale one
+/// (an instanced geometry of ordinary size), the rays as they are, in one
+/// call.
 fn in_runs<T: Send>(
     rays: &[Ray],
     out: &mut [T],
@@ -106,6 +108,9 @@ fn in_runs<T: Send>(
     answer: impl Fn(&[Ray], &mut [T]) + Sync,
 ) {
     use rayon::prelude::*;
+    if scale.is_one() {
+        return answer(rays, out);
+    }
     rays.par_chunks(RUN)
         .zip(out.par_chunks_mut(RUN))
         .for_each(|(r, o)| answer(&scale.rays(r), o));
