@@ -15,12 +15,14 @@
 
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::gltf_accessor::{read_floats, read_indices};
+use crate::gltf_flat_size::FlatSize;
 use crate::gltf_glb::{is_glb, split_glb};
 use crate::gltf_gpu_instancing::mesh_placements;
 use crate::gltf_image::ImageCache;
 use crate::gltf_integers::check_integer_range;
 use crate::gltf_scene::{check_scene_indices, SceneCollector};
 use crate::gltf_support::{check_required, unsupported_warnings};
+use crate::input::available_memory;
 use crate::uri::{data_uri_payload, external_file, read_external};
 use crate::validate::finish;
 use ::gltf::mesh::Mode;
@@ -83,15 +85,23 @@ pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadErro
         glb,
     } = open_gltf(path, data)?;
     let mut b = Builder::new(path, &doc, &buffers, data.len(), &mut warnings);
+    // Every placement is found and the flattened size checked before any
+    // mesh is copied.
+    let mut placements = Vec::new();
+    let mut size = FlatSize::default();
     walk_nodes(path, &doc, &mut |node, world| {
         b.scene.visit(doc.as_json(), node.index(), world);
         if let Some(mesh) = node.mesh() {
-            for placed in mesh_placements(path, &doc, &buffers, data.len(), node, world)? {
-                b.add_instance(node, &mesh, &placed)?;
-            }
+            let placed = mesh_placements(path, &doc, &buffers, data.len(), node, world)?;
+            size.add_copies(FlatSize::of_mesh(&mesh), placed.len() as u64);
+            placements.extend(placed.into_iter().map(|m| (node.clone(), mesh.clone(), m)));
         }
         Ok(())
     })?;
+    size.check(path, placements.len(), available_memory())?;
+    for (node, mesh, world) in &placements {
+        b.add_instance(node, mesh, world)?;
+    }
     let (mesh, scene) = b.finish();
     warnings.extend(scene.warnings());
     let mesh = finish(path, mesh, Location::Json("scene".into()))?;
@@ -108,13 +118,13 @@ pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadErro
 /// depth first, children in order, calling `visit` with each node and its
 /// world transform (its own composed with its parents'). A node reached
 /// twice (two parents, listed twice, a cycle) is an error naming it.
-pub(crate) fn walk_nodes(
+pub(crate) fn walk_nodes<'a>(
     path: &Path,
-    doc: &Document,
-    visit: &mut dyn FnMut(&::gltf::Node<'_>, &Mat4) -> Result<(), LoadError>,
+    doc: &'a Document,
+    visit: &mut dyn FnMut(&::gltf::Node<'a>, &Mat4) -> Result<(), LoadError>,
 ) -> Result<(), LoadError> {
     let n_nodes = doc.nodes().len();
-    let roots: Vec<::gltf::Node<'_>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+    let roots: Vec<::gltf::Node<'a>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(scene) => scene.nodes().collect(),
         None => {
             let mut is_child = vec![false; n_nodes];
@@ -126,7 +136,7 @@ pub(crate) fn walk_nodes(
             doc.nodes().filter(|n| !is_child[n.index()]).collect()
         }
     };
-    let mut stack: Vec<(::gltf::Node<'_>, Mat4)> = roots
+    let mut stack: Vec<(::gltf::Node<'a>, Mat4)> = roots
         .into_iter()
         .rev()
         .map(|n| (n, Mat4::IDENTITY))

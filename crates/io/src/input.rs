@@ -35,7 +35,7 @@ pub(crate) fn gunzip(path: &Path, data: &[u8]) -> Result<Vec<u8>, LoadError> {
 
 /// The bytes of memory available for new allocations without swapping,
 /// from `/proc/meminfo`; None where that cannot be read.
-fn available_memory() -> Option<u64> {
+pub(crate) fn available_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;

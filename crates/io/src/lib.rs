@@ -29,6 +29,7 @@ mod error;
 mod format;
 mod gltf;
 mod gltf_accessor;
+mod gltf_flat_size;
 mod gltf_glb;
 mod gltf_gpu_instancing;
 mod gltf_image;

@@ -773,6 +773,84 @@ fn gpu_instanced_nodes_load_every_copy() {
     );
 }
 
+/// A small file can place a mesh so often that the flattened scene would
+/// not fit: here a strip of 65,536 vertices drawn by 65,537
+/// `EXT_mesh_gpu_instancing` copies and two plain nodes, more vertices than
+/// 32-bit indices address, from a file of 1.5 MB. The flattened load is
+/// refused before copying, with the counts (computed here from the strip's
+/// length and the copies) and the instanced load to use instead; the
+/// instanced load takes it. The same file with three copies loads as
+/// counted.
+#[test]
+fn scenes_that_flatten_beyond_32_bit_indices_are_refused_with_their_size() {
+    const N: u64 = 65_536;
+    let strip: Vec<u8> = (0..N)
+        .flat_map(|i| [(i / 2) as f32, (i % 2) as f32, 0.0])
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let file = |copies: u64| {
+        let mut bin = strip.clone();
+        let t_at = bin.len();
+        bin.extend(
+            (0..copies)
+                .flat_map(|c| [0.0, 0.0, c as f32])
+                .flat_map(f32::to_le_bytes),
+        );
+        let json = format!(
+            r#"{{
+  "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+  "buffers": [{{"byteLength": {len}}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": {t_at}}},
+    {{"buffer": 0, "byteOffset": {t_at}, "byteLength": {tl}}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": {N}, "type": "VEC3",
+      "min": [0, 0, 0], "max": [{xmax}, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": {copies}, "type": "VEC3"}}
+  ],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "mode": 5}}]}}],
+  "nodes": [
+    {{"mesh": 0, "extensions": {{"EXT_mesh_gpu_instancing": {{"attributes": {{"TRANSLATION": 1}}}}}}}},
+    {{"mesh": 0, "translation": [0, 5, 0]}},
+    {{"mesh": 0, "translation": [0, -5, 0]}}
+  ],
+  "scenes": [{{"nodes": [0, 1, 2]}}]
+}}"#,
+            len = bin.len(),
+            tl = bin.len() - t_at,
+            xmax = (N - 1) / 2,
+        );
+        glb(&json, &bin)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let copies = 65_537;
+    let placements = copies + 2;
+    let (p, e) = load_err(dir.path(), "many.glb", &file(copies));
+    let msg = e.to_string();
+    assert!(msg.starts_with(&p.display().to_string()), "{msg}");
+    for needle in [
+        format!("places meshes {placements} times"),
+        format!(
+            "{} triangles and {} vertices",
+            (N - 2) * placements,
+            N * placements
+        ),
+        "32-bit indices".to_string(),
+        "--instanced".to_string(),
+    ] {
+        assert!(msg.contains(&needle), "{needle:?} not in: {msg}");
+    }
+    let instanced = raykit_io::load_gltf_instances(&p).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(instanced.instances.len() as u64, placements);
+
+    let few = write(dir.path(), "few.glb", &file(3));
+    let loaded = load(&few).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(loaded.mesh.num_triangles() as u64, (N - 2) * 5);
+    assert_eq!(loaded.mesh.positions.len() as u64, N * 5);
+}
+
 /// A GLB whose image 0 is `image` bytes in buffer view 2.
 fn glb_with_image(image: &[u8]) -> Vec<u8> {
     let mut bin = geometry();
