@@ -45,22 +45,42 @@ def _check_real(a: np.ndarray, name: str) -> None:
         )
 
 
-def floats(a, name: str, last: int | None = None, min_ndim: int = 1) -> np.ndarray:
-    """``a`` as C-contiguous, aligned float32 whose last axis has ``last``
-    entries (buffers received over a network, as Dask's, can be contiguous
-    but misaligned; those are copied)."""
+def reals(a, name: str, last: int | None = None, min_ndim: int = 1) -> np.ndarray:
+    """``a`` as a numpy array of real numbers, of any such dtype, whose last
+    axis has ``last`` entries."""
     a = to_numpy(a)
     _check_real(a, name)
     if a.ndim < min_ndim:
         raise ValueError(f"{name} must have at least {min_ndim} dimensions, got shape {a.shape}")
     if last is not None and (a.ndim == 0 or a.shape[-1] != last):
         raise ValueError(f"the last dimension of {name} must be {last}, got shape {a.shape}")
-    return np.require(a, dtype=np.float32, requirements=["C", "A"])
+    return a
 
 
-def rows(a, name: str, width: int, min_ndim: int = 2) -> tuple[np.ndarray, tuple[int, ...]]:
-    """``a`` of shape ``(..., width)`` as ``(n, width)`` float32 and the leading shape."""
-    a = floats(a, name, last=width, min_ndim=min_ndim)
+def floats(
+    a, name: str, last: int | None = None, min_ndim: int = 1, shift: np.ndarray | None = None
+) -> np.ndarray:
+    """``a`` as C-contiguous, aligned float32 whose last axis has ``last``
+    entries (buffers received over a network, as Dask's, can be contiguous
+    but misaligned; those are copied). With ``shift`` (three float64
+    coordinates), the first three entries of the last axis are points that
+    are moved by ``-shift`` in float64 before they are rounded to float32,
+    so points far from the coordinates' origin keep the precision of their
+    input."""
+    a = reals(a, name, last, min_ndim)
+    if shift is None:
+        return np.require(a, dtype=np.float32, requirements=["C", "A"])
+    moved = a.astype(np.float64)
+    moved[..., :3] -= shift
+    return np.ascontiguousarray(moved, dtype=np.float32)
+
+
+def rows(
+    a, name: str, width: int, min_ndim: int = 2, shift: np.ndarray | None = None
+) -> tuple[np.ndarray, tuple[int, ...]]:
+    """``a`` of shape ``(..., width)`` as ``(n, width)`` float32 and the
+    leading shape; ``shift`` as in :func:`floats`."""
+    a = floats(a, name, last=width, min_ndim=min_ndim, shift=shift)
     lead = a.shape[:-1]
     return a.reshape(-1, width), lead
 

@@ -81,7 +81,11 @@ def save_scene(scene, workdir: str | bytes | os.PathLike) -> str:
     stem = os.path.join(workdir, f"scene-{uuid.uuid4().hex}")
     path = stem + ".rkstruct"
     scene.save(path)
-    arrays: dict[str, Any] = {"accel": np.array(scene.accel), "test": np.array(scene.test)}
+    arrays: dict[str, Any] = {
+        "accel": np.array(scene.accel),
+        "test": np.array(scene.test),
+        "origin": scene.origin,
+    }
     for i, (v, t) in enumerate(zip(scene._vertices, scene._triangles)):
         arrays[f"vertices{i}"] = v
         arrays[f"triangles{i}"] = t
@@ -105,9 +109,12 @@ def load_scene(path: str | bytes | os.PathLike, threads: int = 1) -> RaycastingS
             _SCENES.move_to_end(key)
             return scene
         with np.load(path[: -len(".rkstruct")] + ".npz") as z:
-            scene = RaycastingScene(nthreads=threads, accel=str(z["accel"]), test=str(z["test"]))
+            # The geometries are stored as the scene keeps them, relative to
+            # its origin; moved back, they are stored again bit for bit.
+            origin = z["origin"]
+            scene = RaycastingScene(nthreads=threads, accel=str(z["accel"]), test=str(z["test"]), origin=origin)
             for i in range(int(z["count"])):
-                scene.add_triangles(z[f"vertices{i}"], z[f"triangles{i}"])
+                scene.add_triangles(z[f"vertices{i}"].astype(np.float64) + origin, z[f"triangles{i}"])
         scene.load_structure(path)
         _SCENES[key] = scene
         loads += 1

@@ -27,6 +27,17 @@ repeated parts cost memory once. Every placement is an instance: instance
 ids count the placements from 0 in the order they were made, and the
 results of such a scene carry ``instance_ids`` beside ``geometry_ids``
 (the results of a scene without instances keep Open3D's keys exactly).
+
+Far from the coordinates' origin (beyond Open3D): the engine stores
+float32, which at UTM coordinates (millions of metres) is about half a
+metre apart, so a model there loses its shape and its hits. A scene whose
+first geometry lies farther from the origin than four times its own size
+therefore keeps an :attr:`RaycastingScene.origin` near its centre: vertices,
+ray origins, query points and instance placements are moved by it in
+float64 before they are rounded to float32, and closest points are moved
+back (returned as float64). Inputs, outputs and ``t_hit`` stay in the
+caller's coordinates; float64 inputs keep their precision. ``origin=`` fixes
+it instead, e.g. for geometries near zero that instances place far away.
 """
 
 from __future__ import annotations
@@ -88,17 +99,28 @@ class RaycastingScene:
     test : str
         The ray/triangle test: ``"moller"`` (default; Möller and Trumbore
         1997), ``"plucker"`` or ``"projection"``.
+    origin : array_like of 3 floats, optional
+        The point coordinates are stored relative to (see :attr:`origin`);
+        by default chosen from the first geometry when it lies far from
+        zero.
     """
 
     INVALID_ID = INVALID_ID
 
-    def __init__(self, nthreads: int = 0, device=None, *, accel: str = "bvh8", test: str = "moller"):
+    def __init__(
+        self, nthreads: int = 0, device=None, *, accel: str = "bvh8", test: str = "moller", origin=None
+    ):
         if device is not None and "CPU" not in str(device).upper():
             raise ValueError(f"raykit runs on the CPU only; got device {device}")
+        self._origin = None if origin is None else _origin_of(origin)
         self._nthreads = _arrays.threads(nthreads)
         self._accel_name = accel
         self._test_name = test
         self._vertices: list[np.ndarray] = []
+        # Each geometry's vertices are stored relative to this point (None
+        # for zero): the scene's origin, or for a geometry kept for
+        # instances only, its own.
+        self._geometry_origins: list[np.ndarray | None] = []
         self._triangles: list[np.ndarray] = []
         self._geometry_masks: list[int] = []
         # (geometry id, (3, 4) float64 object-to-world matrix or None for
@@ -132,9 +154,17 @@ class RaycastingScene:
         mask = _check_mask(mask, "mask")
         if triangle_indices is None:
             vertex_positions, triangle_indices = _mesh_arrays(vertex_positions)
-        v = _arrays.floats(vertex_positions, "vertex_positions", last=3)
-        if v.ndim != 2:
-            raise ValueError(f"vertex_positions must have shape (n, 3), got {v.shape}")
+        raw = _arrays.reals(vertex_positions, "vertex_positions", last=3)
+        if raw.ndim != 2:
+            raise ValueError(f"vertex_positions must have shape (n, 3), got {raw.shape}")
+        origin = self._origin
+        if not self._vertices and origin is None:
+            origin = _far_origin(raw)
+        # A geometry placed where it is lives in the scene's coordinates; one
+        # kept for instances only has its own origin (zero near zero), which
+        # its instances' placements absorb.
+        own = origin if place else _far_origin(raw)
+        v = _arrays.floats(raw, "vertex_positions", last=3, shift=own)
         t = _arrays.indices(triangle_indices, "triangle_indices")
         if t.size and int(t.max()) >= len(v):
             bad = int(np.argmax(t.max(axis=1) >= len(v)))
@@ -142,7 +172,9 @@ class RaycastingScene:
                 f"triangle {bad} refers to vertex {int(t[bad].max())}, but there are only {len(v)} vertices"
             )
         _check_coordinates(v)
+        self._origin = origin
         self._vertices.append(v)
+        self._geometry_origins.append(own)
         self._triangles.append(t)
         self._geometry_masks.append(mask)
         gid = len(self._vertices) - 1
@@ -174,6 +206,15 @@ class RaycastingScene:
         elif m.shape != (3, 4):
             raise ValueError(f"instance {iid}: the transform must have shape (4, 4) or (3, 4), got {m.shape}")
         mask = _check_mask(mask, "mask")
+        own, world = self._geometry_origins[gid], self._origin
+        if own is not None or world is not None:
+            # The geometry is stored moved by its origin g and the world by
+            # the scene's o: x -> M x + b becomes x' -> M x' + (M g + b - o).
+            m = m.copy()
+            if own is not None:
+                m[:, 3] += m[:, :3] @ own
+            if world is not None:
+                m[:, 3] -= world
         m = np.ascontiguousarray(m)
         # The engine's own check (finite, invertible in float32), on an
         # empty geometry so that it costs nothing.
@@ -298,7 +339,7 @@ class RaycastingScene:
         :meth:`add_instance`) and normals are in world space; ``mask`` is
         the rays' 32-bit mask (see :meth:`add_triangles`).
         """
-        flat, lead = _arrays.rows(rays, "rays", 6)
+        flat, lead = _arrays.rows(rays, "rays", 6, shift=self._origin)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             t, g, inst, p, uv, n = self._built().cast_rays(
@@ -329,7 +370,7 @@ class RaycastingScene:
         ``(...)``. Stops at the first triangle found, so it is faster than
         :meth:`cast_rays`. ``mask`` as in :meth:`cast_rays`.
         """
-        flat, lead = _arrays.rows(rays, "rays", 6)
+        flat, lead = _arrays.rows(rays, "rays", 6, shift=self._origin)
         tnear, tfar = float(tnear), float(tfar)
         if math.isnan(tnear) or math.isnan(tfar):
             raise ValueError(f"tnear and tfar must be numbers, got {tnear} and {tfar}")
@@ -354,7 +395,7 @@ class RaycastingScene:
         times. Rays with NaN or infinite coordinates count 0. ``mask`` as in
         :meth:`cast_rays`.
         """
-        flat, lead = _arrays.rows(rays, "rays", 6)
+        flat, lead = _arrays.rows(rays, "rays", 6, shift=self._origin)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             counts = self._built().count_intersections(flat, mask, _arrays.threads(nthreads))
@@ -379,7 +420,7 @@ class RaycastingScene:
         edge or corner is listed once, as :meth:`count_intersections` counts
         it.
         """
-        flat, _ = _arrays.rows(rays, "rays", 6)
+        flat, _ = _arrays.rows(rays, "rays", 6, shift=self._origin)
         if max_hits is not None and (
             isinstance(max_hits, bool) or not isinstance(max_hits, (int, np.integer))
         ):
@@ -417,16 +458,19 @@ class RaycastingScene:
         ``(..., 3)`` float32, ``geometry_ids`` and ``primitive_ids`` ``(...)``
         uint32, ``primitive_uvs`` ``(..., 2)`` float32 (barycentrics: the
         point is ``(1-u-v)·v0 + u·v1 + v·v2``) and ``primitive_normals``
-        ``(..., 3)`` float32 (the triangle's unit normal). Beyond Open3D:
+        ``(..., 3)`` float32 (the triangle's unit normal); ``points`` are
+        float64 in a scene with an :attr:`origin`. Beyond Open3D:
         ``max_distance`` limits the search; points with no surface within
         it, and points with NaN or infinite coordinates, get NaN points and
         ``INVALID_ID``. In a scene with instances the search covers every
         instance (masks do not apply) and the key ``instance_ids`` says
         which.
         """
-        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
         scene, geometry_of = self._point_scene()
         pts, g, p, uv, n, _ = _raykit.closest_points(scene, flat, float(max_distance), _arrays.threads(nthreads))
+        if self._origin is not None:
+            pts = pts.astype(np.float64) + self._origin
         out = {}
         if geometry_of is not None:
             out["instance_ids"] = _arrays.result(g.reshape(lead))
@@ -442,7 +486,7 @@ class RaycastingScene:
     def compute_distance(self, query_points, nthreads: int = 0):
         """Distance from each query point to the surface: float32 ``(...)``
         (NaN for points with NaN or infinite coordinates)."""
-        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
         d = _raykit.distance(self._point_scene()[0], flat, _arrays.threads(nthreads))
         return _arrays.result(d.reshape(lead))
 
@@ -460,7 +504,7 @@ class RaycastingScene:
         but is not needed.
         """
         _check_nsamples(nsamples)
-        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
         d = _raykit.signed_distance(self._point_scene()[0], flat, _arrays.threads(nthreads))
         return _arrays.result(d.reshape(lead))
 
@@ -470,7 +514,7 @@ class RaycastingScene:
         inside; see :meth:`compute_signed_distance`). ``nsamples`` is
         accepted for Open3D compatibility and must be odd."""
         _check_nsamples(nsamples)
-        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
         occ = _raykit.occupancy(self._point_scene()[0], flat, _arrays.threads(nthreads))
         return _arrays.result(occ.reshape(lead))
 
@@ -480,7 +524,7 @@ class RaycastingScene:
         between near holes. ``beta``: Barill et al.'s accuracy (a cluster of
         triangles is approximated by a dipole when the point is farther than
         ``beta`` times its radius; ``inf`` sums every triangle exactly)."""
-        flat, lead = _arrays.rows(query_points, "query_points", 3)
+        flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
         w = _raykit.winding_number(self._point_scene()[0], flat, float(beta), _arrays.threads(nthreads))
         return _arrays.result(w.reshape(lead))
 
@@ -498,6 +542,16 @@ class RaycastingScene:
         return _arrays.result(_pinhole(*args, **kwargs))
 
     # Beyond Open3D.
+
+    @property
+    def origin(self) -> np.ndarray:
+        """The point the scene's coordinates are stored relative to, float64
+        ``(3,)`` (beyond Open3D): zero, or, for a scene whose first geometry
+        lies far from the coordinates' origin, a point near its centre (a
+        multiple of a power of two near its size, so float32 input moves
+        exactly). Everything the scene takes and returns is in the caller's
+        coordinates."""
+        return np.zeros(3) if self._origin is None else self._origin.copy()
 
     @property
     def accel(self) -> str:
@@ -572,7 +626,7 @@ class RaycastingScene:
         gid = int(geometry_id)
         if not 0 <= gid < len(self._vertices):
             raise ValueError(f"geometry_id {geometry_id} out of range: the scene has {len(self._vertices)} geometries")
-        v = _arrays.floats(vertex_positions, "vertex_positions", last=3)
+        v = _arrays.floats(vertex_positions, "vertex_positions", last=3, shift=self._geometry_origins[gid])
         old = self._vertices[gid]
         if v.shape != old.shape:
             raise ValueError(f"vertex_positions must have shape {old.shape} (geometry {gid}'s), got {v.shape}")
@@ -620,6 +674,33 @@ def _check_coordinates(v: np.ndarray) -> None:
             f"vertex {int(np.argmax(far))} has a coordinate beyond ±{_raykit.MAX_COORDINATE:.0e}, where the "
             "f32 products of the ray and winding-number tests overflow; move or scale the mesh"
         )
+
+
+def _far_origin(v: np.ndarray) -> np.ndarray | None:
+    """The origin a scene whose first geometry has vertices ``v`` keeps:
+    None when its box's centre is within four times its size of zero or it
+    has no finite vertices, else the centre rounded to a multiple of the
+    largest power of two not above the size (float32 coordinates on that
+    grid move by it exactly)."""
+    finite = v[np.isfinite(v).all(axis=1)].astype(np.float64)
+    if not len(finite):
+        return None
+    lo, hi = finite.min(axis=0), finite.max(axis=0)
+    centre = (lo + hi) / 2
+    far = float(np.abs(centre).max())
+    size = max(float((hi - lo).max()), far * 2.0**-40)
+    if far <= 4 * size:
+        return None
+    step = 2.0 ** math.floor(math.log2(size))
+    return np.round(centre / step) * step
+
+
+def _origin_of(origin) -> np.ndarray:
+    """``origin=`` as three finite float64 coordinates, or ValueError."""
+    o = np.asarray(_arrays.to_numpy(origin))
+    if o.dtype.kind not in "fiu" or o.shape != (3,) or not np.isfinite(o).all():
+        raise ValueError(f"origin must be three finite numbers, got {origin!r}")
+    return o.astype(np.float64)
 
 
 def _missed(t, g, p, uv, n):

@@ -8,12 +8,16 @@ from . import _arrays, _raykit
 from .raycasting import RaycastingScene
 
 
-def _vec(x, name):
+def _vec(x, name, origin=None):
+    """Three numbers as a tuple, moved by ``-origin`` (the scene's, so that
+    a point given in the caller's coordinates lands in the scene's)."""
     if x is None:
         return None
     a = np.asarray(_arrays.to_numpy(x), dtype=np.float64).reshape(-1)
     if a.shape != (3,):
         raise ValueError(f"{name} must be three numbers, got {x!r}")
+    if origin is not None:
+        a = a - origin
     return tuple(float(c) for c in a)
 
 
@@ -63,8 +67,8 @@ def render(
         scene._built(),
         int(width),
         int(height),
-        _vec(eye, "eye"),
-        _vec(target, "target"),
+        _vec(eye, "eye", scene.origin),
+        _vec(target, "target", scene.origin),
         _vec(up, "up"),
         float(fov),
         int(samples_per_pixel),

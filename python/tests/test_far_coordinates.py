@@ -1,0 +1,142 @@
+"""Scenes far from the coordinates' origin, as GIS and CAD data come (UTM
+metres are millions): the same model, rays and points moved there in
+float64 must give the answers the model gives at the origin. The
+reference is the scene near zero, where float32 holds the model to a
+fraction of a micrometre; float32 at UTM northings is half a metre apart."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import rays_at
+
+import raykit
+from raykit import distributed
+
+#: A UTM position (zone 32N, metres) and a height.
+FAR = np.array([429252.0, 5150885.0, 312.0])
+
+
+@pytest.fixture(scope="module")
+def model(bunny):
+    """The bunny as a 100 m model with its box's corner at zero, float64."""
+    v, t, _ = bunny
+    v = v.astype(np.float64)
+    return (v - v.min(axis=0)) / np.ptp(v, axis=0).max() * 100.0, t
+
+
+def scene_of(v, t, **kwargs) -> raykit.RaycastingScene:
+    s = raykit.RaycastingScene(**kwargs)
+    s.add_triangles(v, t)
+    return s
+
+
+def assert_same_hits(near: dict, far: dict, rays: np.ndarray, what: str) -> None:
+    """Hits of the far scene against the near scene's: misses and triangles
+    alike but for rays that graze a shared edge (at most 1 in 2,000), and
+    the hit distances within 50 micrometres for half the rays and 2 mm for
+    all: both scenes round the model to float32 near zero (7.6 micrometres
+    apart at 100 m), and a ray that meets the surface at a grazing angle
+    moves along it by more than the rounding."""
+    missed_near = near["primitive_ids"] == raykit.INVALID_ID
+    missed_far = far["primitive_ids"] == raykit.INVALID_ID
+    both = ~missed_near & ~missed_far
+    assert both.sum() > len(rays) // 4, what
+    flips = int((missed_near != missed_far).sum())
+    other = int((near["primitive_ids"][both] != far["primitive_ids"][both]).sum())
+    assert flips + other <= len(rays) // 2000, f"{what}: {flips} hit/miss and {other} triangle differences"
+    length = np.linalg.norm(rays[both, 3:], axis=1)
+    gap = np.abs(near["t_hit"][both].astype(np.float64) - far["t_hit"][both]) * length
+    assert np.median(gap) <= 5e-5 and gap.max() <= 2e-3, f"{what}: distances differ by up to {gap.max()} m"
+
+
+def test_a_model_at_utm_coordinates_answers_as_at_the_origin(model):
+    v, t = model
+    near = scene_of(v, t)
+    far = scene_of(v + FAR, t)
+    assert np.array_equal(near.origin, np.zeros(3))
+    assert np.abs(far.origin - (FAR + 50.0)).max() <= 64.0, far.origin
+
+    rays = rays_at(v, 20000, 1).astype(np.float64)
+    moved = rays.copy()
+    moved[:, :3] += FAR
+    assert_same_hits(near.cast_rays(rays), far.cast_rays(moved), rays, "cast_rays")
+    assert (near.count_intersections(rays) == far.count_intersections(moved)).mean() >= 0.999
+    assert (near.test_occlusions(rays) == far.test_occlusions(moved)).mean() >= 0.999
+
+    rng = np.random.default_rng(2)
+    points = -10.0 + rng.random((5000, 3)) * 120.0
+    close_near = near.compute_closest_points(points)
+    close_far = far.compute_closest_points(points + FAR)
+    assert close_far["points"].dtype == np.float64
+    d_near = np.linalg.norm(close_near["points"] - points, axis=1)
+    d_far = np.linalg.norm(close_far["points"] - FAR - points, axis=1)
+    assert np.abs(d_near - d_far).max() <= 1e-4
+    assert np.abs(near.compute_distance(points) - far.compute_distance(points + FAR)).max() <= 1e-4
+    inside_near = near.compute_occupancy(points)
+    assert inside_near.sum() > 100
+    assert (inside_near == far.compute_occupancy(points + FAR)).mean() >= 0.999
+
+
+def test_float32_input_far_away_is_stored_without_rounding(model):
+    """Float32 coordinates at UTM positions are already rounded; the origin
+    lies on a grid fine enough that moving them by it rounds nothing more."""
+    v, t = model
+    v32 = (v + FAR).astype(np.float32)
+    scene = scene_of(v32, t)
+    stored = scene._vertices[0].astype(np.float64) + scene.origin
+    assert np.array_equal(stored, v32.astype(np.float64))
+
+
+def test_instances_placed_far_away_with_a_given_origin(model):
+    """A geometry near zero placed far away by instances: with ``origin=``
+    its hits are those of the same placements near zero."""
+    v, t = model
+    lift = np.eye(4)
+    lift[:3, 3] = [10.0, -20.0, 5.0]
+    spin = np.array([[0.0, -1.0, 0.0, 150.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    near = raykit.RaycastingScene()
+    far = raykit.RaycastingScene(origin=FAR)
+    for scene, shift in ((near, np.zeros(3)), (far, FAR)):
+        g = scene.add_triangles(v, t, place=False)
+        for m in (lift, spin):
+            placed = m.copy()
+            placed[:3, 3] += shift
+            scene.add_instance(g, placed)
+    corners = np.concatenate([v + lift[:3, 3], v @ spin[:3, :3].T + spin[:3, 3]])
+    rays = rays_at(corners, 8000, 3).astype(np.float64)
+    moved = rays.copy()
+    moved[:, :3] += FAR
+    a, b = near.cast_rays(rays), far.cast_rays(moved)
+    assert_same_hits(a, b, rays, "instances")
+    hit = a["primitive_ids"] != raykit.INVALID_ID
+    assert (a["instance_ids"][hit] == b["instance_ids"][hit]).mean() >= 0.999
+
+
+def test_a_far_scene_saved_for_workers_loads_with_its_origin(model, tmp_path):
+    v, t = model
+    far = scene_of(v + FAR, t)
+    path = distributed.save_scene(far, tmp_path)
+    loaded = distributed.load_scene(path)
+    assert np.array_equal(loaded.origin, far.origin)
+    rays = rays_at(v, 4000, 4).astype(np.float64)
+    rays[:, :3] += FAR
+    a, b = far.cast_rays(rays), loaded.cast_rays(rays)
+    assert np.array_equal(a["primitive_ids"], b["primitive_ids"])
+    assert np.array_equal(a["t_hit"], b["t_hit"])
+
+
+def test_a_far_scene_renders_as_near_zero(model):
+    v, t = model
+    eye, target = np.array([180.0, 140.0, 160.0]), np.array([50.0, 40.0, 50.0])
+    near = raykit.render(scene_of(v, t), 96, 72, eye=eye, target=target)
+    far = raykit.render(scene_of(v + FAR, t), 96, 72, eye=eye + FAR, target=target + FAR)
+    assert near.std() > 10
+    differ = (np.abs(near.astype(int) - far.astype(int)).max(axis=2) > 8).mean()
+    assert differ <= 0.01, f"{differ:.2%} of the pixels differ"
+
+
+def test_origin_must_be_three_finite_numbers():
+    for bad in ([1.0, 2.0], [0.0, np.nan, 0.0], "abc"):
+        with pytest.raises(ValueError, match="origin"):
+            raykit.RaycastingScene(origin=bad)
