@@ -31,9 +31,18 @@ def load_mesh(path: str | bytes | os.PathLike) -> tuple[np.ndarray, np.ndarray, 
     ``(m,)`` uint32 part index per triangle (glTF node, OBJ object or group;
     all 0 when the file has no parts).
 
+    Vertices far from the coordinates' origin (a first vertex with a
+    coordinate of 65,536 or more, as UTM and other projected coordinates
+    are) come as float64 instead, read to the file's digits: float32 is
+    half a metre apart at UTM northings. This holds for OBJ, OFF and PLY
+    (ASCII, or binary ``double``); STL and glTF store float32.
+
     A file that cannot be read raises ``FileNotFoundError`` or ``OSError``;
     one whose contents are wrong raises ``ValueError``. Messages name the
     file and the line, byte offset or JSON element, as ``raykit`` prints
     them.
     """
-    return _raykit.load_mesh(fspath(path))
+    vertices, triangles, parts, origin = _raykit.load_mesh(fspath(path))
+    if any(origin):
+        vertices = vertices.astype(np.float64) + np.asarray(origin)
+    return vertices, triangles, parts

@@ -7,10 +7,11 @@ use pyo3::prelude::*;
 use std::path::PathBuf;
 
 /// Load OBJ, PLY (also `.ply.gz`), STL, OFF, glTF or GLB (chosen by the
-/// extension, as `raykit_io::load_mesh`): `(vertices (n, 3) float32,
-/// triangles (m, 3) uint32, parts (m,) uint32)`, `parts` giving each
-/// triangle's part (glTF node, OBJ object or group; 0 when the file has
-/// none).
+/// extension, as `raykit_io::load_keeping_precision`): `(vertices (n, 3)
+/// float32, triangles (m, 3) uint32, parts (m,) uint32, origin (x, y, z))`,
+/// `parts` giving each triangle's part (glTF node, OBJ object or group; 0
+/// when the file has none), and the vertices relative to `origin` (zero
+/// unless the mesh lies far from the coordinates' origin).
 #[pyfunction]
 #[allow(clippy::type_complexity)]
 pub fn load_mesh(
@@ -20,10 +21,12 @@ pub fn load_mesh(
     Bound<'_, PyArray2<f32>>,
     Bound<'_, PyArray2<u32>>,
     Bound<'_, PyArray1<u32>>,
+    [f64; 3],
 )> {
-    let mesh = py
-        .detach(|| raykit_io::load_mesh(&path))
+    let loaded = py
+        .detach(|| raykit_io::load_keeping_precision(&path))
         .map_err(load_error)?;
+    let mesh = loaded.mesh;
     let n = mesh.positions.len();
     let m = mesh.num_triangles();
     let parts: Vec<u32> = (0..m).map(|i| mesh.part_of(i)).collect();
@@ -35,5 +38,6 @@ pub fn load_mesh(
         v.into_pyarray(py),
         t.into_pyarray(py),
         parts.into_pyarray(py),
+        loaded.origin,
     ))
 }

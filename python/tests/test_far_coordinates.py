@@ -136,6 +136,29 @@ def test_a_far_scene_renders_as_near_zero(model):
     assert differ <= 0.01, f"{differ:.2%} of the pixels differ"
 
 
+def test_load_mesh_keeps_utm_coordinates_to_the_file_digits(model, tmp_path):
+    """An OBJ written at UTM coordinates loads as float64 within float32's
+    spacing at the model's size of what numpy reads from the same lines
+    (float32 at the northing is 0.5 m apart), and near zero as float32."""
+    v, t = model
+    for name, shift in (("far.obj", FAR), ("near.obj", np.zeros(3))):
+        path = tmp_path / name
+        with open(path, "w") as f:
+            for p in v + shift:
+                f.write("v %r %r %r\n" % tuple(float(c) for c in p))
+            for a, b, c in t + 1:
+                f.write(f"f {a} {b} {c}\n")
+        want = np.loadtxt(path, usecols=(1, 2, 3), max_rows=len(v))
+        got, triangles, _ = raykit.load_mesh(path)
+        assert np.array_equal(triangles, t)
+        if name == "far.obj":
+            assert got.dtype == np.float64
+            assert np.abs(got - want).max() <= 1e-5
+        else:
+            assert got.dtype == np.float32
+            assert np.array_equal(got, want.astype(np.float32))
+
+
 def test_origin_must_be_three_finite_numbers():
     for bad in ([1.0, 2.0], [0.0, np.nan, 0.0], "abc"):
         with pytest.raises(ValueError, match="origin"):

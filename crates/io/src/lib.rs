@@ -26,6 +26,7 @@
 mod atomic;
 mod companions;
 mod error;
+mod far_origin;
 mod format;
 mod gltf;
 mod gltf_accessor;
@@ -66,7 +67,7 @@ pub use format::{MeshFormat, PlyEncoding, StlEncoding};
 pub use gltf_instances::{load_gltf_instances, parse_gltf_instances, GltfInstance, GltfInstances};
 pub use image_merge::{merge_png_parts, MergeError};
 pub use image_part::{read_png_part, write_png_part, ImagePart, MAX_IMAGE_SIDE, PART_KEYWORD};
-pub use load::{load, load_mesh, parse_mesh, LoadedMesh};
+pub use load::{load, load_keeping_precision, load_mesh, parse_mesh, LoadedMesh};
 pub use png::{write_png, write_png_indexed};
 pub use query_files::{
     read_points, write_answers, write_closest_points, write_f32s, write_flags, write_hit_lists,

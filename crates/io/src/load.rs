@@ -1,6 +1,7 @@
 //! Loading a mesh file of any supported format, chosen by its extension.
 
 use crate::error::{ErrorKind, LoadError, Location};
+use crate::far_origin::FarOrigin;
 use crate::format::{is_gzip_path, MeshFormat};
 use crate::input::{gunzip, read_file};
 use raykit_core::{Camera, Light, TriangleMesh};
@@ -25,6 +26,11 @@ pub struct LoadedMesh {
     /// The camera the file defines (glTF: the first perspective camera);
     /// `None` for other formats.
     pub camera: Option<Camera>,
+    /// The point the positions are stored relative to: zero, except for a
+    /// mesh loaded by [`load_keeping_precision`] whose first vertex lies far
+    /// from the coordinates' origin, where the file's coordinates are
+    /// `position + origin` in `f64`.
+    pub origin: [f64; 3],
 }
 
 /// Load the triangle mesh in `path`, choosing the format by the extension
@@ -36,24 +42,43 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh, LoadError> {
 
 /// Like [`load_mesh`], also returning the warnings and the detected encoding.
 pub fn load(path: &Path) -> Result<LoadedMesh, LoadError> {
+    load_with(path, FarOrigin::new(false))
+}
+
+/// Like [`load`], but a mesh whose first vertex lies far from the
+/// coordinates' origin (a coordinate of 65,536 or more, as projected GIS
+/// and CAD data do) is read in `f64` and stored relative to an origin near
+/// that vertex ([`LoadedMesh::origin`]), keeping the precision `f32` loses
+/// there: OBJ, OFF and PLY (ASCII, or binary `double`). STL and glTF store
+/// `f32` and load as with [`load`].
+pub fn load_keeping_precision(path: &Path) -> Result<LoadedMesh, LoadError> {
+    load_with(path, FarOrigin::new(true))
+}
+
+fn load_with(path: &Path, far: FarOrigin) -> Result<LoadedMesh, LoadError> {
     // Reject unknown extensions before touching the file.
     format_of(path)?;
     let bytes = read_file(path)?;
-    parse_mesh(path, &bytes)
+    parse_with(path, &bytes, far)
 }
 
 /// Parse `bytes`, the contents of a file named `path`. The name chooses the
 /// format (as in [`load_mesh`]), appears in error messages and is the base
 /// for resources the file refers to (MTL libraries, glTF buffers).
 pub fn parse_mesh(path: &Path, bytes: &[u8]) -> Result<LoadedMesh, LoadError> {
+    parse_with(path, bytes, FarOrigin::new(false))
+}
+
+fn parse_with(path: &Path, bytes: &[u8], far: FarOrigin) -> Result<LoadedMesh, LoadError> {
     let format = format_of(path)?;
     if is_gzip_path(path) {
         let data = gunzip(path, bytes)?;
-        let mut loaded = parse_plain(path, &data, format).map_err(|e| e.in_decompressed(path))?;
+        let mut loaded =
+            parse_plain(path, &data, format, far).map_err(|e| e.in_decompressed(path))?;
         loaded.gzip = true;
         Ok(loaded)
     } else {
-        parse_plain(path, bytes, format)
+        parse_plain(path, bytes, format, far)
     }
 }
 
@@ -69,16 +94,21 @@ fn format_of(path: &Path) -> Result<MeshFormat, LoadError> {
     })
 }
 
-fn parse_plain(path: &Path, data: &[u8], format: MeshFormat) -> Result<LoadedMesh, LoadError> {
+fn parse_plain(
+    path: &Path,
+    data: &[u8],
+    format: MeshFormat,
+    mut far: FarOrigin,
+) -> Result<LoadedMesh, LoadError> {
     let mut lights = Vec::new();
     let mut camera = None;
     let (mesh, warnings, format) = match format {
         MeshFormat::Obj => {
-            let (m, w) = crate::obj::parse_obj(path, data)?;
+            let (m, w) = crate::obj::parse_obj(path, data, &mut far)?;
             (m, w, MeshFormat::Obj)
         }
         MeshFormat::Ply(_) => {
-            let (m, w, enc) = crate::ply::parse_ply(path, data)?;
+            let (m, w, enc) = crate::ply::parse_ply(path, data, &mut far)?;
             (m, w, MeshFormat::Ply(enc))
         }
         MeshFormat::Stl(_) => {
@@ -86,7 +116,7 @@ fn parse_plain(path: &Path, data: &[u8], format: MeshFormat) -> Result<LoadedMes
             (m, Vec::new(), MeshFormat::Stl(enc))
         }
         MeshFormat::Off => {
-            let (m, w) = crate::off::parse_off(path, data)?;
+            let (m, w) = crate::off::parse_off(path, data, &mut far)?;
             (m, w, MeshFormat::Off)
         }
         MeshFormat::Gltf | MeshFormat::Glb => {
@@ -108,5 +138,6 @@ fn parse_plain(path: &Path, data: &[u8], format: MeshFormat) -> Result<LoadedMes
         gzip: false,
         lights,
         camera,
+        origin: far.origin(),
     })
 }

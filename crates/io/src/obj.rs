@@ -9,10 +9,11 @@
 //! texture coordinates are per vertex.
 
 use crate::error::{show, LoadError, Location};
+use crate::far_origin::FarOrigin;
 use crate::hashing::{key3_map, Key3};
 use crate::mtl::{parse_mtl, TextureCache, MAX_LIBRARY_FILE};
 use crate::polygon::Triangulator;
-use crate::text::{parse_f32, parse_i64, Lines, Tokens};
+use crate::text::{parse_i64, Coordinate, Lines, Tokens};
 use crate::uri::read_external;
 use crate::validate::finish;
 use raykit_core::{Material, Part, TriangleMesh, Vec2, Vec3};
@@ -26,18 +27,22 @@ const NONE: u32 = u32::MAX;
 pub(crate) fn parse_obj(
     path: &Path,
     data: &[u8],
+    far: &mut FarOrigin,
 ) -> Result<(TriangleMesh, Vec<String>), LoadError> {
-    let mut st = ObjState::new(path);
+    let mut st = ObjState::new(path, *far);
     let mut lines = Lines::new(data, 1);
     for (line, text) in &mut lines {
         st.statement(line, text)?;
     }
     let last = lines.line().max(1);
+    *far = st.far;
     st.finish(last)
 }
 
 struct ObjState<'p> {
     path: &'p Path,
+    /// Where positions are stored relative to.
+    far: FarOrigin,
     positions: Vec<Vec3>,
     uvs: Vec<Vec2>,
     normals: Vec<Vec3>,
@@ -81,9 +86,10 @@ fn is_integer(token: &[u8]) -> bool {
 }
 
 impl<'p> ObjState<'p> {
-    fn new(path: &'p Path) -> Self {
+    fn new(path: &'p Path, far: FarOrigin) -> Self {
         ObjState {
             path,
+            far,
             positions: Vec::new(),
             uvs: Vec::new(),
             normals: Vec::new(),
@@ -126,15 +132,20 @@ impl<'p> ObjState<'p> {
         };
         match key {
             b"v" => {
-                let p = self.numbers::<3>(line, "v", &mut toks)?;
-                self.positions.push(Vec3::from_array(p));
+                let p = if self.far.keeps_precision() {
+                    let p = self.numbers::<f64, 3>(line, "v", &mut toks)?;
+                    self.far.place(p)
+                } else {
+                    Vec3::from_array(self.numbers(line, "v", &mut toks)?)
+                };
+                self.positions.push(p);
             }
             b"vn" => {
-                let n = self.numbers::<3>(line, "vn", &mut toks)?;
+                let n = self.numbers::<f32, 3>(line, "vn", &mut toks)?;
                 self.normals.push(Vec3::from_array(n));
             }
             b"vt" => {
-                let u = self.numbers::<1>(line, "vt", &mut toks)?[0];
+                let u = self.numbers::<f32, 1>(line, "vt", &mut toks)?[0];
                 let v = match toks.next() {
                     None => 0.0,
                     Some(t) => self.finite(line, "vt", 2, Some(t))?,
@@ -158,8 +169,14 @@ impl<'p> ObjState<'p> {
         Ok(())
     }
 
-    fn finite(&self, line: usize, key: &str, n: usize, t: Option<&[u8]>) -> Result<f32, LoadError> {
-        match t.and_then(parse_f32) {
+    fn finite<T: Coordinate>(
+        &self,
+        line: usize,
+        key: &str,
+        n: usize,
+        t: Option<&[u8]>,
+    ) -> Result<T, LoadError> {
+        match t.and_then(T::parse) {
             Some(x) if x.is_finite() => Ok(x),
             Some(_) => Err(self.err(
                 line,
@@ -176,13 +193,13 @@ impl<'p> ObjState<'p> {
     }
 
     #[inline]
-    fn numbers<const N: usize>(
+    fn numbers<T: Coordinate, const N: usize>(
         &self,
         line: usize,
         key: &str,
         toks: &mut Tokens<'_>,
-    ) -> Result<[f32; N], LoadError> {
-        let mut out = [0.0; N];
+    ) -> Result<[T; N], LoadError> {
+        let mut out = [T::default(); N];
         for o in &mut out {
             *o = self.finite(line, key, N, toks.next())?;
         }
@@ -480,7 +497,7 @@ mod tests {
     use super::*;
 
     fn parse(s: &str) -> Result<TriangleMesh, LoadError> {
-        parse_obj(Path::new("t.obj"), s.as_bytes()).map(|r| r.0)
+        parse_obj(Path::new("t.obj"), s.as_bytes(), &mut FarOrigin::new(false)).map(|r| r.0)
     }
 
     #[test]

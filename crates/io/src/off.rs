@@ -6,8 +6,9 @@
 //! optional colour). Binary OFF is not read.
 
 use crate::error::{show, ErrorKind, LoadError, Location};
+use crate::far_origin::FarOrigin;
 use crate::polygon::Triangulator;
-use crate::text::{parse_f32, parse_u64, Lines, Tokens};
+use crate::text::{parse_f32, parse_f64, parse_u64, Lines, Tokens};
 use crate::validate::finish;
 use raykit_core::{TriangleMesh, Vec3};
 use std::path::Path;
@@ -16,6 +17,7 @@ use std::path::Path;
 pub(crate) fn parse_off(
     path: &Path,
     data: &[u8],
+    far: &mut FarOrigin,
 ) -> Result<(TriangleMesh, Vec<String>), LoadError> {
     let err = |line: usize, msg: String| LoadError::at_line(path, line, msg);
     // Non-blank lines with comments removed.
@@ -125,11 +127,19 @@ pub(crate) fn parse_off(
         };
         last = n;
         let mut toks = Tokens::new(l);
-        let mut read3 = |what: &str| -> Result<Vec3, LoadError> {
-            let mut c = [0.0f32; 3];
+        // Read as f32 (widened exactly), or to the text's digits when the
+        // origin may move to keep them.
+        let wide = far.keeps_precision();
+        let mut read3 = |what: &str| -> Result<[f64; 3], LoadError> {
+            let mut c = [0.0f64; 3];
             for x in &mut c {
                 let t = toks.next();
-                match t.and_then(parse_f32) {
+                let parsed = if wide {
+                    t.and_then(parse_f64)
+                } else {
+                    t.and_then(parse_f32).map(f64::from)
+                };
+                match parsed {
                     Some(v) if v.is_finite() => *x = v,
                     Some(_) => {
                         return Err(err(
@@ -148,11 +158,17 @@ pub(crate) fn parse_off(
                     }
                 }
             }
-            Ok(Vec3::from_array(c))
+            Ok(c)
         };
-        positions.push(read3("vertex")?);
+        let p = read3("vertex")?;
+        positions.push(if wide {
+            far.place(p)
+        } else {
+            Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
+        });
         if normals {
-            nrm.push(read3("normal of vertex")?);
+            let n = read3("normal of vertex")?;
+            nrm.push(Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32));
         }
     }
     let mut indices = Vec::with_capacity((nf as usize).min(data.len() / 8));
@@ -223,7 +239,7 @@ mod tests {
     use super::*;
 
     fn parse(s: &str) -> Result<TriangleMesh, LoadError> {
-        parse_off(Path::new("a.off"), s.as_bytes()).map(|r| r.0)
+        parse_off(Path::new("a.off"), s.as_bytes(), &mut FarOrigin::new(false)).map(|r| r.0)
     }
 
     #[test]

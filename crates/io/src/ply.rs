@@ -8,6 +8,7 @@
 //! Other elements and properties, lists included, are skipped.
 
 use crate::error::{show, LoadError, Location};
+use crate::far_origin::FarOrigin;
 use crate::format::PlyEncoding;
 use crate::ply_header::{parse_header, Element, Header, PropKind, Scalar};
 use crate::polygon::Triangulator;
@@ -20,6 +21,7 @@ use std::path::Path;
 pub(crate) fn parse_ply(
     path: &Path,
     data: &[u8],
+    far: &mut FarOrigin,
 ) -> Result<(TriangleMesh, Vec<String>, PlyEncoding), LoadError> {
     let header = parse_header(path, data)?;
     let body = &data[header.body_start..];
@@ -30,7 +32,9 @@ pub(crate) fn parse_ply(
             &header,
             &mut Ascii {
                 ts: TokenStream::new(body, header.body_line),
+                wide: false,
             },
+            far,
         )?,
         PlyEncoding::BinaryLittleEndian => read_body(
             path,
@@ -39,6 +43,7 @@ pub(crate) fn parse_ply(
                 data,
                 pos: header.body_start,
             },
+            far,
         )?,
         PlyEncoding::BinaryBigEndian => read_body(
             path,
@@ -47,6 +52,7 @@ pub(crate) fn parse_ply(
                 data,
                 pos: header.body_start,
             },
+            far,
         )?,
     };
     Ok((mesh, warnings, enc))
@@ -76,19 +82,29 @@ trait Body<'a> {
     fn remaining(&self) -> usize;
     /// A sentence about data left after the last element, if any.
     fn trailing(&mut self) -> Option<String>;
+    /// Read `float` properties to the digits the text has, where the
+    /// encoding is text.
+    fn read_wide(&mut self, _wide: bool) {}
 }
 
 struct Ascii<'a> {
     ts: TokenStream<'a>,
+    /// Whether `float` properties are read to the digits the text has
+    /// (as `double`), for [`FarOrigin`]'s precision.
+    wide: bool,
 }
 
 impl<'a> Body<'a> for Ascii<'a> {
+    fn read_wide(&mut self, wide: bool) {
+        self.wide = wide;
+    }
+
     #[inline]
     fn f64(&mut self, ty: Scalar) -> Result<f64, Fail<'a>> {
         let t = self.ts.next_token().ok_or(Fail::Eof)?;
         let v = match ty {
-            Scalar::F32 => parse_f32(t).map(f64::from),
-            Scalar::F64 => parse_f64(t),
+            Scalar::F32 if !self.wide => parse_f32(t).map(f64::from),
+            Scalar::F32 | Scalar::F64 => parse_f64(t),
             _ => parse_i64(t).map(|i| i as f64),
         };
         v.ok_or(Fail::Bad(t))
@@ -294,6 +310,7 @@ fn read_body<'a, B: Body<'a>>(
     path: &Path,
     header: &Header,
     b: &mut B,
+    far: &mut FarOrigin,
 ) -> Result<(TriangleMesh, Vec<String>), LoadError> {
     let enc = header.encoding;
     let mut warnings = Vec::new();
@@ -345,6 +362,7 @@ fn read_body<'a, B: Body<'a>>(
             let mut v = [0.0f64; 8];
             for i in 0..el.count {
                 let start = b.mark();
+                b.read_wide(far.keeps_precision());
                 for (p, &role) in el.props.iter().zip(&roles) {
                     let r = match (role, p.kind) {
                         (SKIP, kind) => skip_prop(b, kind),
@@ -359,7 +377,11 @@ fn read_body<'a, B: Body<'a>>(
                         return Err(err(b, fail_message(f, "vertex", i, el.count, &p.name, ty)));
                     }
                 }
-                let pos = Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32);
+                let pos = if far.keeps_precision() {
+                    far.place([v[0], v[1], v[2]])
+                } else {
+                    Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
+                };
                 if !pos.is_finite() {
                     return Err(LoadError::new(
                         path,
@@ -474,7 +496,7 @@ mod tests {
     use super::*;
 
     fn parse(src: &[u8]) -> Result<TriangleMesh, LoadError> {
-        parse_ply(Path::new("t.ply"), src).map(|r| r.0)
+        parse_ply(Path::new("t.ply"), src, &mut FarOrigin::new(false)).map(|r| r.0)
     }
 
     const ASCII: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n\
@@ -554,7 +576,12 @@ property list uint short vertex_index\nend_header\n"
     #[test]
     fn binary_both_endians_any_types() {
         for be in [false, true] {
-            let (m, w, enc) = parse_ply(Path::new("t.ply"), &binary(be, 3)).unwrap();
+            let (m, w, enc) = parse_ply(
+                Path::new("t.ply"),
+                &binary(be, 3),
+                &mut FarOrigin::new(false),
+            )
+            .unwrap();
             assert!(w.is_empty());
             assert_eq!(enc == PlyEncoding::BinaryBigEndian, be);
             assert_eq!(

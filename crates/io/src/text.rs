@@ -150,6 +150,36 @@ pub(crate) fn parse_f64(token: &[u8]) -> Option<f64> {
     std::str::from_utf8(token).ok()?.parse().ok()
 }
 
+/// A floating-point type that coordinates are read as.
+pub(crate) trait Coordinate: Copy + Default {
+    /// The number in `token`, as [`parse_f32`] or [`parse_f64`] reads it.
+    fn parse(token: &[u8]) -> Option<Self>;
+    /// Neither NaN nor infinite.
+    fn is_finite(self) -> bool;
+}
+
+impl Coordinate for f32 {
+    #[inline]
+    fn parse(token: &[u8]) -> Option<Self> {
+        parse_f32(token)
+    }
+    #[inline]
+    fn is_finite(self) -> bool {
+        f32::is_finite(self)
+    }
+}
+
+impl Coordinate for f64 {
+    #[inline]
+    fn parse(token: &[u8]) -> Option<Self> {
+        parse_f64(token)
+    }
+    #[inline]
+    fn is_finite(self) -> bool {
+        f64::is_finite(self)
+    }
+}
+
 /// Parse a signed decimal integer (optional `+`/`-`), without overflow.
 #[inline]
 pub(crate) fn parse_i64(token: &[u8]) -> Option<i64> {
