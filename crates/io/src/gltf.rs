@@ -15,6 +15,7 @@
 
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::gltf_accessor::{read_floats, read_indices};
+use crate::gltf_draco::{decode_primitive, point_placeholders_at_data};
 use crate::gltf_flat_size::FlatSize;
 use crate::gltf_glb::{is_glb, split_glb};
 use crate::gltf_gpu_instancing::mesh_placements;
@@ -179,6 +180,7 @@ fn parse_document(path: &Path, json: &[u8], glb: bool) -> Result<Document, LoadE
     // itself (its integer attributes are read by `gltf_accessor`).
     root.extensions_required
         .retain(|e| ::gltf::json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()));
+    point_placeholders_at_data(path, &mut root)?;
     check_scene_indices(path, &root)?;
     let positions = ::gltf::json::validation::Checked::Valid(Semantic::Positions);
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -407,29 +409,44 @@ impl<'a, 'b> Builder<'a, 'b> {
                     ),
                 ));
             }
-            let pos = read_floats(path, &pos_acc, bufs, 3, limit)?;
-            let nv = pos.len() / 3;
-            let attr =
-                |sem: Semantic, dims: usize, what: &str| -> Result<Option<Vec<f32>>, LoadError> {
-                    let Some(acc) = prim.get(&sem) else {
-                        return Ok(None);
-                    };
-                    let v = read_floats(path, &acc, bufs, dims, limit)?;
-                    if v.len() != nv * dims {
-                        return Err(LoadError::at_json(
-                            path,
-                            format!("{pname}.attributes.{what}"),
-                            format!("has {} elements, but POSITION has {nv}", v.len() / dims),
-                        ));
-                    }
-                    Ok(Some(v))
-                };
-            let normals = attr(Semantic::Normals, 3, "NORMAL")?;
-            let uvs = attr(Semantic::TexCoords(0), 2, "TEXCOORD_0")?;
-            let idx = match prim.indices() {
-                Some(acc) => read_indices(path, &acc, bufs, limit)?,
-                None => (0..nv as u32).collect(),
+            let draco = decode_primitive(path, self.doc, bufs, &prim, &pname)?;
+            let mode = if draco.is_some() {
+                Mode::Triangles
+            } else {
+                mode
             };
+            let (pos, normals, uvs, idx) = match draco {
+                Some(d) => (d.positions, d.normals, d.uvs, d.indices),
+                None => {
+                    let pos = read_floats(path, &pos_acc, bufs, 3, limit)?;
+                    let nv = pos.len() / 3;
+                    let attr = |sem: Semantic,
+                                dims: usize,
+                                what: &str|
+                     -> Result<Option<Vec<f32>>, LoadError> {
+                        let Some(acc) = prim.get(&sem) else {
+                            return Ok(None);
+                        };
+                        let v = read_floats(path, &acc, bufs, dims, limit)?;
+                        if v.len() != nv * dims {
+                            return Err(LoadError::at_json(
+                                path,
+                                format!("{pname}.attributes.{what}"),
+                                format!("has {} elements, but POSITION has {nv}", v.len() / dims),
+                            ));
+                        }
+                        Ok(Some(v))
+                    };
+                    let normals = attr(Semantic::Normals, 3, "NORMAL")?;
+                    let uvs = attr(Semantic::TexCoords(0), 2, "TEXCOORD_0")?;
+                    let idx = match prim.indices() {
+                        Some(acc) => read_indices(path, &acc, bufs, limit)?,
+                        None => (0..nv as u32).collect(),
+                    };
+                    (pos, normals, uvs, idx)
+                }
+            };
+            let nv = pos.len() / 3;
             if let Some((k, &i)) = idx.iter().enumerate().find(|(_, &i)| i as usize >= nv) {
                 return Err(LoadError::at_json(
                     path,

@@ -129,7 +129,11 @@ fn load_image(
 }
 
 /// The bytes of buffer view `v`, checked against its buffer.
-fn view_bytes<'a>(root: &Root, buffers: &'a [Cow<'_, [u8]>], v: usize) -> Result<&'a [u8], String> {
+pub(crate) fn view_bytes<'a>(
+    root: &Root,
+    buffers: &'a [Cow<'_, [u8]>],
+    v: usize,
+) -> Result<&'a [u8], String> {
     let view = root
         .buffer_views
         .get(v)

@@ -18,6 +18,7 @@ pub(crate) const HANDLED_EXTENSIONS: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_mesh_quantization",
     "EXT_mesh_gpu_instancing",
+    "KHR_draco_mesh_compression",
 ];
 
 /// An error for the first entry of `extensionsRequired` that is not handled.

@@ -30,6 +30,7 @@ mod far_origin;
 mod format;
 mod gltf;
 mod gltf_accessor;
+mod gltf_draco;
 mod gltf_flat_size;
 mod gltf_glb;
 mod gltf_gpu_instancing;
