@@ -21,6 +21,7 @@ use crate::gltf_glb::{is_glb, split_glb};
 use crate::gltf_gpu_instancing::mesh_placements;
 use crate::gltf_image::ImageCache;
 use crate::gltf_integers::check_integer_range;
+use crate::gltf_meshopt::MeshoptViews;
 use crate::gltf_scene::{check_scene_indices, SceneCollector};
 use crate::gltf_support::{check_required, unsupported_warnings};
 use crate::input::available_memory;
@@ -66,9 +67,10 @@ pub(crate) fn open_gltf<'a>(path: &Path, data: &'a [u8]) -> Result<OpenedGltf<'a
     } else {
         (data, None, Vec::new())
     };
-    let doc = parse_document(path, json, glb)?;
+    let (doc, meshopt) = parse_document(path, json, glb)?;
     warnings.extend(unsupported_warnings(doc.as_json()));
-    let buffers = load_buffers(path, &doc, bin)?;
+    let mut buffers = load_buffers(path, &doc, bin, &meshopt.empty)?;
+    meshopt.decode(path, &mut buffers)?;
     Ok(OpenedGltf {
         doc,
         buffers,
@@ -170,7 +172,11 @@ pub(crate) fn walk_nodes<'a>(
 /// first, as are unsupported required extensions and camera and light
 /// indices (for clearer messages); any other panic inside the crate's
 /// validation is turned into an error as a last line of defence.
-fn parse_document(path: &Path, json: &[u8], glb: bool) -> Result<Document, LoadError> {
+fn parse_document(
+    path: &Path,
+    json: &[u8],
+    glb: bool,
+) -> Result<(Document, MeshoptViews), LoadError> {
     let mut root = ::gltf::json::Root::from_slice(json)
         .map_err(|e| json_error(path, ::gltf::Error::Deserialize(e), glb))?;
     check_integer_range(path, json, glb)?;
@@ -181,6 +187,7 @@ fn parse_document(path: &Path, json: &[u8], glb: bool) -> Result<Document, LoadE
     root.extensions_required
         .retain(|e| ::gltf::json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()));
     point_placeholders_at_data(path, &mut root)?;
+    let meshopt = MeshoptViews::plan(path, &mut root, available_memory().unwrap_or(u64::MAX))?;
     check_scene_indices(path, &root)?;
     let positions = ::gltf::json::validation::Checked::Valid(Semantic::Positions);
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -203,7 +210,9 @@ fn parse_document(path: &Path, json: &[u8], glb: bool) -> Result<Document, LoadE
     let validated =
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Document::from_json(root)));
     match validated {
-        Ok(r) => r.map_err(|e| json_error(path, e, glb)),
+        Ok(r) => r
+            .map(|d| (d, meshopt))
+            .map_err(|e| json_error(path, e, glb)),
         Err(_) => Err(LoadError::at_json(
             path,
             "document",
@@ -259,11 +268,17 @@ fn load_buffers<'a>(
     path: &Path,
     doc: &Document,
     bin: Option<&'a [u8]>,
+    empty: &[bool],
 ) -> Result<Vec<Cow<'a, [u8]>>, LoadError> {
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut out = Vec::new();
     for buf in doc.buffers() {
         let i = buf.index();
+        if empty.get(i) == Some(&true) {
+            // A meshopt fallback buffer, or one made for decoded bytes.
+            out.push(Cow::Borrowed(&[][..]));
+            continue;
+        }
         let data: Cow<'a, [u8]> = match buf.source() {
             ::gltf::buffer::Source::Bin => Cow::Borrowed(bin.ok_or_else(|| {
                 LoadError::at_json(

@@ -19,6 +19,8 @@ pub(crate) const HANDLED_EXTENSIONS: &[&str] = &[
     "KHR_mesh_quantization",
     "EXT_mesh_gpu_instancing",
     "KHR_draco_mesh_compression",
+    "EXT_meshopt_compression",
+    "KHR_meshopt_compression",
 ];
 
 /// An error for the first entry of `extensionsRequired` that is not handled.

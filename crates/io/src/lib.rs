@@ -37,6 +37,7 @@ mod gltf_gpu_instancing;
 mod gltf_image;
 mod gltf_instances;
 mod gltf_integers;
+mod gltf_meshopt;
 mod gltf_scene;
 mod gltf_support;
 mod hashing;

@@ -1043,14 +1043,14 @@ fn malformed_scenes_name_the_file_and_field() {
     let (p, e) = load_err(d, "camera.gltf", camera.as_bytes());
     assert_json_error(&p, &e, "nodes[0].camera", "camera index 2 is out of range");
 
-    let meshopt = gltf(
+    let basisu = gltf(
         None,
-        r#""extensionsUsed": ["EXT_meshopt_compression"],
-  "extensionsRequired": ["KHR_materials_ior", "EXT_meshopt_compression"],
+        r#""extensionsUsed": ["KHR_texture_basisu"],
+  "extensionsRequired": ["KHR_materials_ior", "KHR_texture_basisu"],
   "nodes": [{"mesh": 0}]"#,
     );
-    let (p, e) = load_err(d, "meshopt.gltf", meshopt.as_bytes());
-    assert_json_error(&p, &e, "extensionsRequired[1]", "EXT_meshopt_compression");
+    let (p, e) = load_err(d, "basisu.gltf", basisu.as_bytes());
+    assert_json_error(&p, &e, "extensionsRequired[1]", "KHR_texture_basisu");
     assert_eq!(e.kind(), ErrorKind::Unsupported);
 
     let (p, e) = load_err(

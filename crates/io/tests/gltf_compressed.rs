@@ -1,11 +1,14 @@
-//! `KHR_draco_mesh_compression` as Google's Draco encoder writes it
-//! (`tests/data/bunny_draco.glb`, made from the bunny OBJ by glTF-Transform):
-//! the decoded mesh against the OBJ it was made from, read by a few-line
-//! parser here. Draco renumbers points and triangles and quantizes
-//! positions to 14 bits, so every decoded point must lie within one
-//! quantization step of an OBJ vertex, distinct points on distinct vertices,
-//! and the triangles, mapped to those vertices, must be the OBJ's with
-//! their winding. Damaged Draco data is an error naming the extension.
+//! Compressed glTF as tools write it, from the bunny OBJ
+//! (`tests/data/README.md`): `KHR_draco_mesh_compression` by Google's Draco
+//! encoder through glTF-Transform, and `EXT_meshopt_compression` by
+//! glTF-Transform (quantized positions) and by gltfpack (float positions
+//! through the exponential filter). Each decoded mesh is checked against
+//! the OBJ it was made from, read by a few-line parser here. The encoders
+//! renumber points and triangles and quantize positions, so every decoded
+//! point must lie within one 14-bit step of an OBJ vertex, distinct points
+//! on distinct vertices, and the triangles, mapped to those vertices, must
+//! be the OBJ's with their winding. Damaged data is an error naming the
+//! extension.
 
 mod common;
 
@@ -14,8 +17,10 @@ use raykit_io::load;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-fn fixture() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny_draco.glb")
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
 }
 
 /// Vertices and 0-based triangles of an OBJ of `v x y z` and `f a b c` lines.
@@ -36,8 +41,18 @@ fn obj(path: &Path) -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
 }
 
 #[test]
-fn draco_bunny_decodes_to_the_obj_it_was_made_from() {
-    let loaded = load(&fixture()).unwrap_or_else(|e| panic!("{e}"));
+fn compressed_bunnies_decode_to_the_obj_they_were_made_from() {
+    for name in [
+        "bunny_draco.glb",
+        "bunny_meshopt.glb",
+        "bunny_meshopt_exp.glb",
+    ] {
+        assert_decodes_to_obj(&fixture(name));
+    }
+}
+
+fn assert_decodes_to_obj(path: &Path) {
+    let loaded = load(path).unwrap_or_else(|e| panic!("{e}"));
     let mesh = &loaded.mesh;
     let (v, f) = obj(&shared("meshes/bunny_3674.obj"));
     assert_eq!(mesh.num_triangles(), f.len());
@@ -128,7 +143,7 @@ fn join(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
 
 #[test]
 fn damaged_draco_data_is_an_error_naming_the_extension() {
-    let (json, bin) = split(&std::fs::read(fixture()).unwrap());
+    let (json, bin) = split(&std::fs::read(fixture("bunny_draco.glb")).unwrap());
     let dir = tempfile::tempdir().unwrap();
     let field = "meshes[0].primitives[0].extensions.KHR_draco_mesh_compression";
     let view_len = json["bufferViews"][0]["byteLength"].as_u64().unwrap() as usize;
@@ -158,5 +173,48 @@ fn damaged_draco_data_is_an_error_naming_the_extension() {
         std::fs::write(&path, join(&json, &bin)).unwrap();
         let e = load(&path).expect_err(name).to_string();
         assert!(e.contains(field), "{name}: {e}");
+    }
+}
+
+#[test]
+fn damaged_meshopt_data_is_an_error_naming_the_view() {
+    let (json, bin) = split(&std::fs::read(fixture("bunny_meshopt.glb")).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let ext = |j: &mut serde_json::Value, v: usize| -> serde_json::Value {
+        j["bufferViews"][v]["extensions"]["EXT_meshopt_compression"].take()
+    };
+    let views = json["bufferViews"].as_array().unwrap().len();
+    let mut cases: Vec<(String, serde_json::Value, Vec<u8>, usize)> = Vec::new();
+    for v in 0..views {
+        let mut j = json.clone();
+        let mut e = ext(&mut j, v);
+        let len = e["byteLength"].as_u64().unwrap();
+        // The compressed bytes cut short.
+        e["byteLength"] = serde_json::json!(len / 4);
+        j["bufferViews"][v]["extensions"]["EXT_meshopt_compression"] = e.clone();
+        cases.push((format!("short{v}.glb"), j.clone(), bin.clone(), v));
+        // Running past the end of the buffer.
+        e["byteLength"] = serde_json::json!(bin.len() + 1);
+        j["bufferViews"][v]["extensions"]["EXT_meshopt_compression"] = e.clone();
+        cases.push((format!("past{v}.glb"), j.clone(), bin.clone(), v));
+        // A mode and a stride meshoptimizer does not decode.
+        e["byteLength"] = serde_json::json!(len);
+        e["mode"] = serde_json::json!("TRIANGLES");
+        e["byteStride"] = serde_json::json!(3);
+        j["bufferViews"][v]["extensions"]["EXT_meshopt_compression"] = e;
+        cases.push((format!("stride{v}.glb"), j, bin.clone(), v));
+    }
+    // The compressed bytes overwritten.
+    let mut garbled = bin.clone();
+    garbled.iter_mut().for_each(|b| *b = 0xA5);
+    cases.push(("garbled.glb".into(), json.clone(), garbled, 0));
+    for (name, json, bin, v) in cases {
+        let path = dir.path().join(&name);
+        std::fs::write(&path, join(&json, &bin)).unwrap();
+        let e = load(&path).expect_err(&name).to_string();
+        assert!(
+            e.contains("extensions.EXT_meshopt_compression") && e.contains("bufferViews["),
+            "{name} (view {v}): {e}"
+        );
     }
 }
