@@ -16,7 +16,7 @@ Open3D's ``nthreads=``) says otherwise.
 from . import terrain, trimesh
 from ._raykit import __version__
 from .cull import CullResult, cull
-from .files import load_mesh
+from .files import load_gltf_instances, load_mesh
 from .raycasting import INVALID_ID, RaycastingScene
 from .render import render
 
@@ -26,6 +26,7 @@ __all__ = [
     "RaycastingScene",
     "__version__",
     "cull",
+    "load_gltf_instances",
     "load_mesh",
     "render",
     "terrain",

@@ -5,7 +5,7 @@ low-level calls take arrays already converted to the dtypes named here.
 """
 
 import os
-from typing import Any, Optional, Tuple
+from typing import Any, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -148,6 +148,13 @@ def load_mesh(
     path: str | os.PathLike[str],
 ) -> Tuple[
     npt.NDArray[np.float32], npt.NDArray[np.uint32], npt.NDArray[np.uint32], Tuple[float, float, float]
+]: ...
+def load_gltf_instances(
+    path: str | os.PathLike[str],
+) -> Tuple[
+    List[Tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]],
+    List[Tuple[int, npt.NDArray[np.float64], int, str]],
+    List[str],
 ]: ...
 def load_dem(
     path: str | os.PathLike[str],

@@ -46,3 +46,26 @@ def load_mesh(path: str | bytes | os.PathLike) -> tuple[np.ndarray, np.ndarray, 
     if any(origin):
         vertices = vertices.astype(np.float64) + np.asarray(origin)
     return vertices, triangles, parts
+
+
+def load_gltf_instances(path: str | bytes | os.PathLike) -> tuple[list, list]:
+    """Load a glTF or GLB file with its instancing kept (beyond Open3D):
+    each glTF mesh once, and the nodes that place them.
+
+    Returns ``(geometries, instances)``: ``geometries`` a list of
+    ``(vertices (n, 3) float32, triangles (m, 3) uint32)`` in each mesh's
+    own coordinates; ``instances`` a list of ``(geometry, matrix, node,
+    name)``, one per node with a mesh (and per copy of an
+    ``EXT_mesh_gpu_instancing`` node), with the (3, 4) float64
+    object-to-world matrix, the node's index in the file and its name, in
+    the order :func:`load_mesh` numbers its parts. A scene that places a
+    large mesh many times, too large for :func:`load_mesh` to flatten,
+    loads this way with each mesh stored once. The loader's warnings are
+    issued as ``UserWarning``; errors as in :func:`load_mesh`.
+    """
+    import warnings
+
+    geometries, instances, notes = _raykit.load_gltf_instances(fspath(path))
+    for note in notes:
+        warnings.warn(f"{fspath(path)}: {note}", stacklevel=2)
+    return geometries, instances

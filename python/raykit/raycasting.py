@@ -226,6 +226,32 @@ class RaycastingScene:
         self._changed()
         return iid
 
+    def add_gltf(self, path, *, mask: int = _MASK_ALL) -> list[int]:
+        """Add a glTF or GLB file with its instancing kept (beyond Open3D):
+        each glTF mesh as a geometry stored once (``place=False``), and one
+        instance per node that places it (see
+        :func:`raykit.files.load_gltf_instances`), with ray mask ``mask``.
+        Returns the instance ids, in the file's node order, which is the
+        order :func:`raykit.load_mesh` numbers its parts. A node whose
+        transform is not invertible (a zero scale hides nodes in many
+        files) places only triangles no ray hits: it is left out with a
+        ``UserWarning``."""
+        import warnings
+
+        from .files import load_gltf_instances
+
+        geometries, instances = load_gltf_instances(path)
+        first = [self.add_triangles(v, t, place=False) for v, t in geometries]
+        ids = []
+        for g, matrix, node, name in instances:
+            try:
+                ids.append(self.add_instance(first[g], matrix, mask=mask))
+            except ValueError as e:
+                if "invertible" not in str(e):
+                    raise
+                warnings.warn(f"{fspath(path)}: nodes[{node}] {name!r} left out: {e}", stacklevel=2)
+        return ids
+
     def _changed(self) -> None:
         """Forget the built structures (rebuilt at the next query)."""
         self._scene = None

@@ -28,6 +28,7 @@ fn _raykit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("INVALID_ID", hit_arrays::INVALID_ID)?;
     m.add("MAX_COORDINATE", raykit_core::MAX_COORDINATE)?;
     m.add_function(wrap_pyfunction!(mesh_io::load_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(mesh_io::load_gltf_instances, m)?)?;
     m.add_function(wrap_pyfunction!(queries::closest_points, m)?)?;
     m.add_function(wrap_pyfunction!(queries::distance, m)?)?;
     m.add_function(wrap_pyfunction!(queries::signed_distance, m)?)?;

@@ -41,3 +41,49 @@ pub fn load_mesh(
         loaded.origin,
     ))
 }
+
+/// A glTF file's meshes, each once, and the nodes placing them: one
+/// geometry per glTF mesh as `(vertices (n, 3) float32, triangles (m, 3)
+/// uint32)` in the mesh's own coordinates, one instance per node with a
+/// mesh (each copy of an `EXT_mesh_gpu_instancing` node) as `(geometry,
+/// (3, 4) float64 object-to-world matrix, node index, name)` in the
+/// flattened load's part order, and the loader's warnings.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub fn load_gltf_instances(
+    py: Python<'_>,
+    path: PathBuf,
+) -> PyResult<(
+    Vec<(Bound<'_, PyArray2<f32>>, Bound<'_, PyArray2<u32>>)>,
+    Vec<(u32, Bound<'_, PyArray2<f64>>, u32, String)>,
+    Vec<String>,
+)> {
+    let loaded = py
+        .detach(|| raykit_io::load_gltf_instances(&path))
+        .map_err(load_error)?;
+    let geometries = loaded
+        .geometries
+        .iter()
+        .map(|g| {
+            let v: Vec<f32> = g.positions.iter().flat_map(|p| p.to_array()).collect();
+            let t: Vec<u32> = g.indices.iter().flatten().copied().collect();
+            let v = Array2::from_shape_vec((g.positions.len(), 3), v).expect("three per vertex");
+            let t = Array2::from_shape_vec((g.num_triangles(), 3), t).expect("three per triangle");
+            (v.into_pyarray(py), t.into_pyarray(py))
+        })
+        .collect();
+    let instances = loaded
+        .instances
+        .iter()
+        .map(|i| {
+            let m = i.to_world.matrix3;
+            let c = i.to_world.translation;
+            let rows: Vec<f64> = (0..3)
+                .flat_map(|r| [m.x_axis[r], m.y_axis[r], m.z_axis[r], c[r]].map(f64::from))
+                .collect();
+            let matrix = Array2::from_shape_vec((3, 4), rows).expect("a 3 × 4 matrix");
+            (i.geometry, matrix.into_pyarray(py), i.node, i.name.clone())
+        })
+        .collect();
+    Ok((geometries, instances, loaded.warnings))
+}

@@ -235,3 +235,75 @@ def test_bad_instances_are_refused_by_name(bunny):
         scene.save("unused.rkb")
     with pytest.raises(ValueError, match="without instances"):
         raykit.render(scene, 16, 12)
+
+
+def test_a_gltf_added_with_its_instancing_traces_as_its_flattened_load(data):
+    """The engine assembly added with ``add_gltf`` (each glTF mesh once, one
+    instance per node) against the same file flattened by ``load_mesh``:
+    the same hits, and each hit's instance is the part the flattened
+    triangle belongs to."""
+    path = data / "meshes" / "2CylinderEngine.glb"
+    v, t, parts = raykit.load_mesh(path)
+    flat = raykit.RaycastingScene()
+    flat.add_triangles(v, t)
+    scene = raykit.RaycastingScene()
+    ids = scene.add_gltf(path)
+    geometries, instances = raykit.load_gltf_instances(path)
+    assert ids == list(range(len(instances))) and len(instances) == parts.max() + 1
+    assert sum(len(geometries[g][1]) for g, *_ in instances) == len(t)
+    assert scene.stats()["stored_triangles"] < len(t)
+
+    rays = rays_at(v, 20000, 11)
+    a, b = flat.cast_rays(rays), scene.cast_rays(rays)
+    hit_a = a["primitive_ids"] != raykit.INVALID_ID
+    hit_b = b["primitive_ids"] != raykit.INVALID_ID
+    assert hit_a.sum() > 5000
+    assert (hit_a != hit_b).sum() <= 4
+    both = hit_a & hit_b
+    t_a, t_b = a["t_hit"][both], b["t_hit"][both]
+    assert np.quantile(np.abs(t_a - t_b) / t_a, 0.999) < 1e-4
+    same_part = parts[a["primitive_ids"][both]] == b["instance_ids"][both]
+    assert same_part.mean() > 0.999
+
+
+def test_a_gltf_too_large_to_flatten_loads_with_add_gltf(tmp_path):
+    """A strip placed by 40,000 nodes would flatten to more memory than a
+    small file should ask for; ``load_mesh`` refuses it by name (on any
+    machine with less than 150 GiB free) and ``add_gltf`` stores the strip
+    once."""
+    import json
+
+    n = 100_000
+    xs = np.arange(n, dtype=np.float32)
+    strip = np.stack([xs // 2, xs % 2, np.zeros(n, np.float32)], axis=1).astype(np.float32)
+    nodes = 40_000
+    gltf = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": strip.nbytes, "uri": "strip.bin"}],
+        "bufferViews": [{"buffer": 0, "byteLength": strip.nbytes}],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": n,
+                "type": "VEC3",
+                "min": strip.min(axis=0).tolist(),
+                "max": strip.max(axis=0).tolist(),
+            }
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 5}]}],
+        "nodes": [{"mesh": 0, "translation": [0.0, 0.0, float(k)]} for k in range(nodes)],
+        "scenes": [{"nodes": list(range(nodes))}],
+    }
+    strip.tofile(tmp_path / "strip.bin")
+    path = tmp_path / "many.gltf"
+    path.write_text(json.dumps(gltf))
+    with pytest.raises(ValueError, match="add_gltf"):
+        raykit.load_mesh(path)
+    scene = raykit.RaycastingScene()
+    assert len(scene.add_gltf(path)) == nodes
+    assert scene.stats()["stored_triangles"] == n - 2
+    rays = np.array([[10.25, 0.5, -5.0, 0.0, 0.0, 1.0], [10.25, 0.5, nodes + 5.0, 0.0, 0.0, -1.0]], np.float32)
+    ans = scene.cast_rays(rays)
+    assert np.allclose(ans["t_hit"], [5.0, 6.0])
+    assert ans["instance_ids"].tolist() == [0, nodes - 1]

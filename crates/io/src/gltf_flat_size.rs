@@ -96,7 +96,8 @@ impl FlatSize {
                 "the scene places meshes {placements} times (nodes and EXT_mesh_gpu_instancing \
                  copies); flattened into one mesh it would hold {} triangles and {} vertices, \
                  about {:.1} GiB: {why}. Load it as an instanced scene, which stores each mesh \
-                 once: `raykit trace --instanced` or `raykit query count|all-hits --instanced`",
+                 once: `raykit trace --instanced`, `raykit query count|all-hits --instanced`, or \
+                 from Python `RaycastingScene.add_gltf`",
                 self.triangles,
                 self.vertices,
                 gib(self.bytes())
