@@ -12,7 +12,7 @@
 
 mod common;
 
-use common::shared;
+use common::{glb, shared};
 use raykit_io::load;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -119,26 +119,7 @@ fn split(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
 }
 
 fn join(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    let mut j = serde_json::to_vec(json).unwrap();
-    while !j.len().is_multiple_of(4) {
-        j.push(b' ');
-    }
-    let mut b = bin.to_vec();
-    while !b.len().is_multiple_of(4) {
-        b.push(0);
-    }
-    let total = 12 + 8 + j.len() + 8 + b.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((j.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(&j);
-    out.extend((b.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(&b);
-    out
+    glb(&json.to_string(), bin)
 }
 
 #[test]

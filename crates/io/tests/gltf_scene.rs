@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{assert_located, shared};
+use common::{assert_located, glb, shared};
 use raykit_core::{Light, Vec2};
 use raykit_io::{load, parse_mesh, ErrorKind, LoadError, LoadedMesh, Location};
 use std::io::Cursor;
@@ -513,27 +513,6 @@ fn data_uri_png_is_decoded() {
         l.mesh.materials[0].base_texture.as_ref().unwrap(),
         "data uri",
     );
-}
-
-fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
-    let mut json = json.as_bytes().to_vec();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut v = b"glTF".to_vec();
-    for x in [2, total as u32, json.len() as u32, 0x4E4F_534A] {
-        v.extend_from_slice(&x.to_le_bytes());
-    }
-    v.extend_from_slice(&json);
-    v.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    v.extend_from_slice(&0x004E_4942u32.to_le_bytes());
-    v.extend_from_slice(&bin);
-    v
 }
 
 /// `KHR_mesh_quantization` (as gltfpack and glTF-Transform write by

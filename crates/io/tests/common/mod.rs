@@ -100,3 +100,25 @@ pub fn area_of(tris: &[[Vec3; 3]]) -> f64 {
         })
         .sum()
 }
+
+/// A GLB of `json` and the binary chunk `bin`, each padded to four bytes.
+pub fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut json = json.as_bytes().to_vec();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut v = b"glTF".to_vec();
+    for x in [2, total as u32, json.len() as u32, 0x4E4F_534A] {
+        v.extend_from_slice(&x.to_le_bytes());
+    }
+    v.extend_from_slice(&json);
+    v.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    v.extend_from_slice(&0x004E_4942u32.to_le_bytes());
+    v.extend_from_slice(&bin);
+    v
+}
