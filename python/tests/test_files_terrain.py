@@ -5,6 +5,7 @@ method, and a BVH over the same surface as triangles."""
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,6 +31,27 @@ def test_load_mesh_matches_trimesh(data):
     # A bytes path, as open() takes it, gives the same mesh.
     vb, fb, pb = raykit.load_mesh(os.fsencode(data / "meshes" / "2CylinderEngine.glb"))
     assert np.array_equal(vb, v) and np.array_equal(fb, f) and np.array_equal(pb, parts)
+
+
+def test_compressed_gltf_loads_as_the_mesh_it_was_made_from(data):
+    """The bunny as Draco and meshopt GLBs (written by glTF-Transform and
+    gltfpack; crates/io/tests/data) loads with the OBJ's triangles: the same
+    count, and each triangle's surface within the encoders' quantization of
+    the OBJ's surface (its corners' distances to the OBJ, by Open3D)."""
+    import open3d as o3d
+
+    obj = trimesh.load(data / "meshes" / "bunny_3674.obj", process=False, force="mesh")
+    surface = o3d.t.geometry.RaycastingScene()
+    surface.add_triangles(
+        o3d.core.Tensor(np.asarray(obj.vertices, np.float32)), o3d.core.Tensor(np.asarray(obj.faces, np.uint32))
+    )
+    fixtures = Path(__file__).resolve().parents[2] / "crates" / "io" / "tests" / "data"
+    step = obj.scale / 2**14
+    for name in ("bunny_draco.glb", "bunny_meshopt.glb", "bunny_meshopt_exp.glb"):
+        v, f, _ = raykit.load_mesh(fixtures / name)
+        assert len(f) == len(obj.faces), name
+        distance = surface.compute_distance(o3d.core.Tensor(v.astype(np.float32))).numpy()
+        assert distance.max() <= step, f"{name}: {distance.max()} against {step}"
 
 
 def test_load_mesh_errors_name_the_file(tmp_path):
