@@ -35,9 +35,9 @@ impl FarOrigin {
     }
 
     /// Whether coordinates should be read as `f64` and passed to
-    /// [`Self::place`]: when asked to keep precision, until the first vertex
-    /// has left the origin at zero. Otherwise they are read as `f32`, as
-    /// [`crate::load`] reads them.
+    /// [`Self::place`]: when asked to keep precision, unless the first
+    /// vertex was near enough to keep the origin at zero. Otherwise they
+    /// are read as `f32`, as [`crate::load`] reads them.
     #[inline]
     pub(crate) fn keeps_precision(&self) -> bool {
         self.keep_precision && self.origin != Some(DVec3::ZERO)
