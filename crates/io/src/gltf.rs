@@ -15,7 +15,7 @@
 
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::gltf_accessor::{read_floats, read_indices};
-use crate::gltf_draco::{decode_primitive, point_placeholders_at_data};
+use crate::gltf_draco::{decode_primitive, point_placeholders_at_data, DracoPrimitive};
 use crate::gltf_flat_size::FlatSize;
 use crate::gltf_glb::{is_glb, split_glb};
 use crate::gltf_gpu_instancing::mesh_placements;
@@ -32,7 +32,9 @@ use ::gltf::{Document, Semantic};
 use raykit_core::glam::{Mat3, Mat4};
 use raykit_core::{Camera, Light, Material, Part, Texture, TriangleMesh, Vec2, Vec3};
 use std::borrow::Cow;
+use std::collections::HashMap;
 use std::path::Path;
+use std::rc::Rc;
 use std::sync::Arc;
 
 /// What a glTF file gives: geometry, lights, camera and warnings.
@@ -341,6 +343,9 @@ pub(crate) struct Builder<'a, 'b> {
     images: ImageCache,
     /// Lights and camera met on the walk.
     scene: SceneCollector,
+    /// Draco-compressed primitives by (mesh, primitive), decoded once
+    /// however many nodes place them.
+    draco: HashMap<(usize, usize), Option<Rc<DracoPrimitive>>>,
     warnings: &'a mut Vec<String>,
 }
 
@@ -367,6 +372,7 @@ impl<'a, 'b> Builder<'a, 'b> {
             material_of: vec![None; doc.materials().len() + 1],
             images: ImageCache::new(doc.images().len()),
             scene: SceneCollector::default(),
+            draco: HashMap::new(),
             warnings,
         }
     }
@@ -424,14 +430,27 @@ impl<'a, 'b> Builder<'a, 'b> {
                     ),
                 ));
             }
-            let draco = decode_primitive(path, self.doc, bufs, &prim, &pname)?;
+            let key = (mesh.index(), prim.index());
+            let draco = match self.draco.get(&key) {
+                Some(d) => d.clone(),
+                None => {
+                    let d = decode_primitive(path, self.doc, bufs, &prim, &pname)?.map(Rc::new);
+                    self.draco.insert(key, d.clone());
+                    d
+                }
+            };
             let mode = if draco.is_some() {
                 Mode::Triangles
             } else {
                 mode
             };
             let (pos, normals, uvs, idx) = match draco {
-                Some(d) => (d.positions, d.normals, d.uvs, d.indices),
+                Some(d) => (
+                    d.positions.clone(),
+                    d.normals.clone(),
+                    d.uvs.clone(),
+                    d.indices.clone(),
+                ),
                 None => {
                     let pos = read_floats(path, &pos_acc, bufs, 3, limit)?;
                     let nv = pos.len() / 3;
