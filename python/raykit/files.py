@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 
 import numpy as np
 
@@ -63,8 +64,6 @@ def load_gltf_instances(path: str | bytes | os.PathLike) -> tuple[list, list]:
     loads this way with each mesh stored once. The loader's warnings are
     issued as ``UserWarning``; errors as in :func:`load_mesh`.
     """
-    import warnings
-
     geometries, instances, notes = _raykit.load_gltf_instances(fspath(path))
     for note in notes:
         warnings.warn(f"{fspath(path)}: {note}", stacklevel=2)

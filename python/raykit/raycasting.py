@@ -44,11 +44,12 @@ from __future__ import annotations
 
 import inspect
 import math
+import warnings
 
 import numpy as np
 
 from . import _arrays, _raykit
-from .files import fspath
+from .files import fspath, load_gltf_instances
 
 INVALID_ID = 4294967295
 """``geometry_ids`` and ``primitive_ids`` of a ray that hits nothing (Open3D's value)."""
@@ -236,10 +237,6 @@ class RaycastingScene:
         transform is not invertible (a zero scale hides nodes in many
         files) places only triangles no ray hits: it is left out with a
         ``UserWarning``."""
-        import warnings
-
-        from .files import load_gltf_instances
-
         geometries, instances = load_gltf_instances(path)
         first = [self.add_triangles(v, t, place=False) for v, t in geometries]
         ids = []
