@@ -36,7 +36,10 @@ def load_mesh(path: str | bytes | os.PathLike) -> tuple[np.ndarray, np.ndarray, 
     coordinate of 65,536 or more, as UTM and other projected coordinates
     are) come as float64 instead, read to the file's digits: float32 is
     half a metre apart at UTM northings. This holds for OBJ, OFF and PLY
-    (ASCII, or binary ``double``); STL and glTF store float32.
+    (ASCII, or binary ``double``), and for glTF placed far by its nodes'
+    transforms (a UTM or geocentric translation on the root node, as
+    geospatial exporters write), which are composed in float64 from the
+    file's digits. STL, and glTF vertex data themselves, store float32.
 
     A file that cannot be read raises ``FileNotFoundError`` or ``OSError``;
     one whose contents are wrong raises ``ValueError``. Messages name the
@@ -58,7 +61,8 @@ def load_gltf_instances(path: str | bytes | os.PathLike) -> tuple[list, list]:
     own coordinates; ``instances`` a list of ``(geometry, matrix, node,
     name)``, one per node with a mesh (and per copy of an
     ``EXT_mesh_gpu_instancing`` node), with the (3, 4) float64
-    object-to-world matrix, the node's index in the file and its name, in
+    object-to-world matrix (composed in float64 from the file's digits),
+    the node's index in the file and its name, in
     the order :func:`load_mesh` numbers its parts. A scene that places a
     large mesh many times, too large for :func:`load_mesh` to flatten,
     loads this way with each mesh stored once. The loader's warnings are

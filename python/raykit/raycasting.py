@@ -236,8 +236,15 @@ class RaycastingScene:
         order :func:`raykit.load_mesh` numbers its parts. A node whose
         transform is not invertible (a zero scale hides nodes in many
         files) places only triangles no ray hits: it is left out with a
-        ``UserWarning``."""
+        ``UserWarning``. Added to an empty scene without ``origin=``, a file
+        placed far from zero by its nodes sets the scene's :attr:`origin`
+        near its first placement, as a far first geometry does."""
         geometries, instances = load_gltf_instances(path)
+        if not self._vertices and self._origin is None and instances:
+            # A file placed far by its nodes (a UTM or geocentric
+            # translation) sets the scene's origin from its first placement.
+            g, matrix, _, _ = instances[0]
+            self._origin = _far_origin(_placed_corners(geometries[g][0], matrix))
         first = [self.add_triangles(v, t, place=False) for v, t in geometries]
         ids = []
         for g, matrix, node, name in instances:
@@ -716,6 +723,17 @@ def _far_origin(v: np.ndarray) -> np.ndarray | None:
         return None
     step = 2.0 ** math.floor(math.log2(size))
     return np.round(centre / step) * step
+
+
+def _placed_corners(v: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """The corners of the box of vertices ``v`` moved by the (3, 4)
+    ``matrix``, in float64 (none when ``v`` has no finite vertex)."""
+    finite = v[np.isfinite(v).all(axis=1)].astype(np.float64)
+    if not len(finite):
+        return np.zeros((0, 3))
+    lo, hi = finite.min(axis=0), finite.max(axis=0)
+    corners = np.array([[(lo, hi)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
+    return corners @ matrix[:, :3].T + matrix[:, 3]
 
 
 def _origin_of(origin) -> np.ndarray:

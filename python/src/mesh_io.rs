@@ -46,7 +46,8 @@ pub fn load_mesh(
 /// geometry per glTF mesh as `(vertices (n, 3) float32, triangles (m, 3)
 /// uint32)` in the mesh's own coordinates, one instance per node with a
 /// mesh (each copy of an `EXT_mesh_gpu_instancing` node) as `(geometry,
-/// (3, 4) float64 object-to-world matrix, node index, name)` in the
+/// (3, 4) float64 object-to-world matrix composed in float64 from the
+/// file's values, node index, name)` in the
 /// flattened load's part order, and the loader's warnings.
 #[pyfunction]
 #[allow(clippy::type_complexity)]
@@ -76,10 +77,10 @@ pub fn load_gltf_instances(
         .instances
         .iter()
         .map(|i| {
-            let m = i.to_world.matrix3;
-            let c = i.to_world.translation;
+            let m = i.to_world_f64.matrix3;
+            let c = i.to_world_f64.translation;
             let rows: Vec<f64> = (0..3)
-                .flat_map(|r| [m.x_axis[r], m.y_axis[r], m.z_axis[r], c[r]].map(f64::from))
+                .flat_map(|r| [m.x_axis[r], m.y_axis[r], m.z_axis[r], c[r]])
                 .collect();
             let matrix = Array2::from_shape_vec((3, 4), rows).expect("a 3 × 4 matrix");
             (i.geometry, matrix.into_pyarray(py), i.node, i.name.clone())

@@ -47,15 +47,21 @@ impl FarOrigin {
     /// origin from `p`.
     #[inline]
     pub(crate) fn place(&mut self, p: [f64; 3]) -> Vec3 {
-        let keep = self.keep_precision;
-        let o = *self
-            .origin
-            .get_or_insert_with(|| if keep { origin_near(p) } else { DVec3::ZERO });
+        let o = self.origin_for(p);
         Vec3::new(
             (p[0] - o.x) as f32,
             (p[1] - o.y) as f32,
             (p[2] - o.z) as f32,
         )
+    }
+
+    /// The origin, chosen from `p` unless a point before chose it.
+    #[inline]
+    pub(crate) fn origin_for(&mut self, p: [f64; 3]) -> DVec3 {
+        let keep = self.keep_precision;
+        *self
+            .origin
+            .get_or_insert_with(|| if keep { origin_near(p) } else { DVec3::ZERO })
     }
 
     /// The origin chosen (zero when none was needed).

@@ -14,6 +14,7 @@
 //! unsupported features are named in warnings ([`crate::gltf_support`]).
 
 use crate::error::{ErrorKind, LoadError, Location};
+use crate::far_origin::FarOrigin;
 use crate::gltf_accessor::{read_floats, read_indices};
 use crate::gltf_draco::{decode_primitive, point_placeholders_at_data, DracoPrimitive};
 use crate::gltf_flat_size::FlatSize;
@@ -22,6 +23,7 @@ use crate::gltf_gpu_instancing::mesh_placements;
 use crate::gltf_image::ImageCache;
 use crate::gltf_integers::check_integer_range;
 use crate::gltf_meshopt::MeshoptViews;
+use crate::gltf_node_transforms::local_transforms;
 use crate::gltf_scene::{check_scene_indices, SceneCollector};
 use crate::gltf_support::{check_required, unsupported_warnings};
 use crate::input::available_memory;
@@ -29,7 +31,7 @@ use crate::uri::{data_uri_payload, external_file, read_external};
 use crate::validate::finish;
 use ::gltf::mesh::Mode;
 use ::gltf::{Document, Semantic};
-use raykit_core::glam::{Mat3, Mat4};
+use raykit_core::glam::{DMat4, DVec3, Mat3, Mat4};
 use raykit_core::{Camera, Light, Material, Part, Texture, TriangleMesh, Vec2, Vec3};
 use std::borrow::Cow;
 use std::collections::HashMap;
@@ -54,6 +56,8 @@ pub(crate) struct GltfScene {
 /// A parsed glTF document with its buffers loaded.
 pub(crate) struct OpenedGltf<'a> {
     pub doc: Document,
+    /// Each node's own transform, in `f64` ([`crate::gltf_node_transforms`]).
+    pub locals: Vec<DMat4>,
     pub buffers: Vec<Cow<'a, [u8]>>,
     pub warnings: Vec<String>,
     pub glb: bool,
@@ -70,11 +74,13 @@ pub(crate) fn open_gltf<'a>(path: &Path, data: &'a [u8]) -> Result<OpenedGltf<'a
         (data, None, Vec::new())
     };
     let (doc, meshopt) = parse_document(path, json, glb)?;
+    let locals = local_transforms(&doc, json);
     warnings.extend(unsupported_warnings(doc.as_json()));
     let mut buffers = load_buffers(path, &doc, bin, &meshopt.empty)?;
     meshopt.decode(path, &mut buffers)?;
     Ok(OpenedGltf {
         doc,
+        locals,
         buffers,
         warnings,
         glb,
@@ -82,20 +88,30 @@ pub(crate) fn open_gltf<'a>(path: &Path, data: &'a [u8]) -> Result<OpenedGltf<'a
 }
 
 /// Parse the glTF or GLB file `data` read from `path`.
-pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadError> {
+/// Vertices, lights and camera are stored relative to the origin that
+/// `far` chooses at the first vertex placed.
+pub(crate) fn parse_gltf(
+    path: &Path,
+    data: &[u8],
+    far: &mut FarOrigin,
+) -> Result<GltfScene, LoadError> {
     let OpenedGltf {
         doc,
+        locals,
         buffers,
         mut warnings,
         glb,
     } = open_gltf(path, data)?;
     let mut b = Builder::new(path, &doc, &buffers, data.len(), &mut warnings);
+    b.far = *far;
     // Every placement is found and the flattened size checked before any
-    // mesh is copied.
+    // mesh is copied. Cameras and lights are placed once the first vertex
+    // has chosen the origin.
     let mut placements = Vec::new();
+    let mut walked = Vec::new();
     let mut size = FlatSize::default();
-    walk_nodes(path, &doc, &mut |node, world| {
-        b.scene.visit(doc.as_json(), node.index(), world);
+    walk_nodes(path, &doc, &locals, &mut |node, world| {
+        walked.push((node.index(), *world));
         if let Some(mesh) = node.mesh() {
             let placed = mesh_placements(path, &doc, &buffers, data.len(), node, world)?;
             size.add_copies(FlatSize::of_mesh(&mesh), placed.len() as u64);
@@ -106,6 +122,12 @@ pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadErro
     size.check(path, placements.len(), available_memory())?;
     for (node, mesh, world) in &placements {
         b.add_instance(node, mesh, world)?;
+    }
+    *far = b.far;
+    let origin = DVec3::from_array(far.origin());
+    for (index, world) in &walked {
+        b.scene
+            .visit(doc.as_json(), *index, &stored_relative(world, origin));
     }
     let (mesh, scene) = b.finish();
     warnings.extend(scene.warnings());
@@ -122,11 +144,14 @@ pub(crate) fn parse_gltf(path: &Path, data: &[u8]) -> Result<GltfScene, LoadErro
 /// Walk the default scene (or the first scene, or else every root node)
 /// depth first, children in order, calling `visit` with each node and its
 /// world transform (its own composed with its parents'). A node reached
-/// twice (two parents, listed twice, a cycle) is an error naming it.
+/// twice (two parents, listed twice, a cycle) is an error naming it. The
+/// transforms are composed in `f64` from `locals`, each node's own
+/// ([`OpenedGltf::locals`]).
 pub(crate) fn walk_nodes<'a>(
     path: &Path,
     doc: &'a Document,
-    visit: &mut dyn FnMut(&::gltf::Node<'a>, &Mat4) -> Result<(), LoadError>,
+    locals: &[DMat4],
+    visit: &mut dyn FnMut(&::gltf::Node<'a>, &DMat4) -> Result<(), LoadError>,
 ) -> Result<(), LoadError> {
     let n_nodes = doc.nodes().len();
     let roots: Vec<::gltf::Node<'a>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
@@ -141,10 +166,10 @@ pub(crate) fn walk_nodes<'a>(
             doc.nodes().filter(|n| !is_child[n.index()]).collect()
         }
     };
-    let mut stack: Vec<(::gltf::Node<'a>, Mat4)> = roots
+    let mut stack: Vec<(::gltf::Node<'a>, DMat4)> = roots
         .into_iter()
         .rev()
-        .map(|n| (n, Mat4::IDENTITY))
+        .map(|n| (n, DMat4::IDENTITY))
         .collect();
     // glTF 2.0's nodes form disjoint trees: a node reached twice (a child
     // of two nodes, listed twice, or in a cycle) is refused, since walking
@@ -159,7 +184,7 @@ pub(crate) fn walk_nodes<'a>(
                  cycle); glTF nodes form disjoint trees",
             ));
         }
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * locals[node.index()];
         visit(&node, &world)?;
         let children: Vec<_> = node.children().collect();
         for c in children.into_iter().rev() {
@@ -346,6 +371,9 @@ pub(crate) struct Builder<'a, 'b> {
     /// Draco-compressed primitives by (mesh, primitive), decoded once
     /// however many nodes place them.
     draco: HashMap<(usize, usize), Option<Rc<DracoPrimitive>>>,
+    /// The origin the vertices are stored relative to, chosen at the first
+    /// vertex (zero unless asked to keep the precision of far scenes).
+    pub(crate) far: FarOrigin,
     warnings: &'a mut Vec<String>,
 }
 
@@ -373,24 +401,25 @@ impl<'a, 'b> Builder<'a, 'b> {
             images: ImageCache::new(doc.images().len()),
             scene: SceneCollector::default(),
             draco: HashMap::new(),
+            far: FarOrigin::new(false),
             warnings,
         }
     }
 
     /// Append the primitives of `mesh`, placed by `node`'s world transform
-    /// `world`, as one part.
+    /// `world`, as one part, relative to the builder's origin.
     pub(crate) fn add_instance(
         &mut self,
         node: &::gltf::Node<'_>,
         mesh: &::gltf::Mesh<'_>,
-        world: &Mat4,
+        world: &DMat4,
     ) -> Result<(), LoadError> {
         let part = self.mesh.parts.len() as u32;
         self.mesh.parts.push(Part {
             name: node.name().or(mesh.name()).unwrap_or("").to_string(),
             node: Some(node.index() as u32),
         });
-        let m3 = Mat3::from_mat4(*world);
+        let m3 = Mat3::from_mat4(world.as_mat4());
         let inv_t = m3.inverse().transpose();
         let normal_m = if inv_t.is_finite() { inv_t } else { m3 };
         let flip = m3.determinant() < 0.0;
@@ -491,6 +520,11 @@ impl<'a, 'b> Builder<'a, 'b> {
                 ));
             }
             let base = self.mesh.positions.len() as u32;
+            if let Some(p) = pos.first_chunk::<3>() {
+                let first = world.transform_point3(DVec3::from_array(p.map(f64::from)));
+                self.far.origin_for(first.to_array());
+            }
+            let world = stored_relative(world, DVec3::from_array(self.far.origin()));
             for (j, p) in pos.chunks_exact(3).enumerate() {
                 let w = world.transform_point3(Vec3::new(p[0], p[1], p[2]));
                 if !w.is_finite() {
@@ -602,6 +636,13 @@ impl<'a, 'b> Builder<'a, 'b> {
         }
         (self.mesh, self.scene)
     }
+}
+
+/// `world` (composed in `f64`) followed by a move by `-origin`, rounded to
+/// `f32` once: what places a node's vertices, camera and lights in stored
+/// coordinates.
+fn stored_relative(world: &DMat4, origin: DVec3) -> Mat4 {
+    (DMat4::from_translation(-origin) * *world).as_mat4()
 }
 
 fn convert_material(

@@ -7,7 +7,7 @@
 use crate::error::LoadError;
 use crate::gltf_accessor::{read_floats, Buffers};
 use ::gltf::Document;
-use raykit_core::glam::{Mat4, Quat, Vec3};
+use raykit_core::glam::{DMat4, DQuat, DVec3};
 use std::path::Path;
 
 /// The extension's name.
@@ -25,8 +25,8 @@ pub(crate) fn mesh_placements(
     buffers: &Buffers<'_>,
     limit: usize,
     node: &::gltf::Node<'_>,
-    world: &Mat4,
-) -> Result<Vec<Mat4>, LoadError> {
+    world: &DMat4,
+) -> Result<Vec<DMat4>, LoadError> {
     let Some(ext) = node.extension_value(EXTENSION) else {
         return Ok(vec![*world]);
     };
@@ -87,12 +87,14 @@ pub(crate) fn mesh_placements(
     }
     (0..n)
         .map(|i| {
-            let v3 = |v: &Option<Vec<f32>>, d: Vec3| {
-                v.as_ref()
-                    .map_or(d, |v| Vec3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]))
+            let v3 = |v: &Option<Vec<f32>>, d: DVec3| {
+                v.as_ref().map_or(d, |v| {
+                    DVec3::new(v[3 * i].into(), v[3 * i + 1].into(), v[3 * i + 2].into())
+                })
             };
-            let q = r.as_ref().map_or(Quat::IDENTITY, |v| {
-                Quat::from_xyzw(v[4 * i], v[4 * i + 1], v[4 * i + 2], v[4 * i + 3])
+            let q = r.as_ref().map_or(DQuat::IDENTITY, |v| {
+                let c = |k: usize| f64::from(v[4 * i + k]);
+                DQuat::from_xyzw(c(0), c(1), c(2), c(3))
             });
             // Quantized rotations are unit only to their precision.
             let len = q.length();
@@ -102,10 +104,10 @@ pub(crate) fn mesh_placements(
                     format!("copy {i}: {q} is not a unit quaternion"),
                 ));
             }
-            let local = Mat4::from_scale_rotation_translation(
-                v3(&s, Vec3::ONE),
+            let local = DMat4::from_scale_rotation_translation(
+                v3(&s, DVec3::ONE),
                 q / len,
-                v3(&t, Vec3::ZERO),
+                v3(&t, DVec3::ZERO),
             );
             Ok(*world * local)
         })

@@ -10,7 +10,7 @@
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::gltf::{open_gltf, walk_nodes, Builder};
 use crate::gltf_gpu_instancing::mesh_placements;
-use raykit_core::glam::{Affine3A, Mat4};
+use raykit_core::glam::{Affine3A, DAffine3, DMat4};
 use raykit_core::instancing::{SceneBuilder, SceneError};
 use raykit_core::TriangleMesh;
 use std::path::{Path, PathBuf};
@@ -20,8 +20,13 @@ use std::path::{Path, PathBuf};
 pub struct GltfInstance {
     /// Index into [`GltfInstances::geometries`].
     pub geometry: u32,
-    /// The node's world transform (its own composed with its parents').
+    /// The node's world transform (its own composed with its parents'),
+    /// rounded to `f32`.
     pub to_world: Affine3A,
+    /// The same transform in `f64`, composed from the file's values: a
+    /// scene placed far from the coordinates' origin (a UTM or geocentric
+    /// translation) keeps its digits here, which `to_world` loses.
+    pub to_world_f64: DAffine3,
     /// The node's index in the file's `nodes`.
     pub node: u32,
     /// The node's name, else its mesh's, else empty.
@@ -57,8 +62,8 @@ pub fn parse_gltf_instances(path: &Path, data: &[u8]) -> Result<GltfInstances, L
     let opened = open_gltf(path, data)?;
     let doc = &opened.doc;
     let mut warnings = opened.warnings.clone();
-    let mut nodes: Vec<(u32, u32, Mat4, String)> = Vec::new();
-    walk_nodes(path, doc, &mut |node, world| {
+    let mut nodes: Vec<(u32, u32, DMat4, String)> = Vec::new();
+    walk_nodes(path, doc, &opened.locals, &mut |node, world| {
         if let Some(mesh) = node.mesh() {
             let name = node.name().or(mesh.name()).unwrap_or("").to_string();
             let placed = mesh_placements(path, doc, &opened.buffers, data.len(), node, world)?;
@@ -84,7 +89,7 @@ pub fn parse_gltf_instances(path: &Path, data: &[u8]) -> Result<GltfInstances, L
                 let gltf_node = doc.nodes().nth(node as usize).expect("walked node");
                 let gltf_mesh = doc.meshes().nth(mesh as usize).expect("node's mesh");
                 let mut b = Builder::new(path, doc, &opened.buffers, data.len(), &mut warnings);
-                b.add_instance(&gltf_node, &gltf_mesh, &Mat4::IDENTITY)?;
+                b.add_instance(&gltf_node, &gltf_mesh, &DMat4::IDENTITY)?;
                 let (m, _) = b.finish();
                 if let Err(e) = m.validate() {
                     if !m.indices.is_empty() {
@@ -104,7 +109,8 @@ pub fn parse_gltf_instances(path: &Path, data: &[u8]) -> Result<GltfInstances, L
         };
         instances.push(GltfInstance {
             geometry,
-            to_world: Affine3A::from_mat4(world),
+            to_world: Affine3A::from_mat4(world.as_mat4()),
+            to_world_f64: DAffine3::from_mat4(world),
             node,
             name,
         });

@@ -38,6 +38,7 @@ mod gltf_image;
 mod gltf_instances;
 mod gltf_integers;
 mod gltf_meshopt;
+mod gltf_node_transforms;
 mod gltf_scene;
 mod gltf_support;
 mod hashing;

@@ -26,7 +26,8 @@ pub struct LoadedMesh {
     /// The camera the file defines (glTF: the first perspective camera);
     /// `None` for other formats.
     pub camera: Option<Camera>,
-    /// The point the positions are stored relative to: zero, except for a
+    /// The point the positions, lights and camera are stored relative to:
+    /// zero, except for a
     /// mesh loaded by [`load_keeping_precision`] whose first vertex lies far
     /// from the coordinates' origin, where the file's coordinates are
     /// `position + origin` in `f64`.
@@ -49,8 +50,10 @@ pub fn load(path: &Path) -> Result<LoadedMesh, LoadError> {
 /// coordinates' origin (a coordinate of 65,536 or more, as projected GIS
 /// and CAD data do) is read in `f64` and stored relative to an origin near
 /// that vertex ([`LoadedMesh::origin`]), keeping the precision `f32` loses
-/// there: OBJ, OFF and PLY (ASCII, or binary `double`). STL and glTF store
-/// `f32` and load as with [`load`].
+/// there: OBJ, OFF and PLY (ASCII, or binary `double`), and glTF placed far
+/// by its nodes' transforms (composed in `f64`; its lights and camera are
+/// stored relative to the same origin). STL stores `f32` and loads as with
+/// [`load`].
 pub fn load_keeping_precision(path: &Path) -> Result<LoadedMesh, LoadError> {
     load_with(path, FarOrigin::new(true))
 }
@@ -120,7 +123,7 @@ fn parse_plain(
             (m, w, MeshFormat::Off)
         }
         MeshFormat::Gltf | MeshFormat::Glb => {
-            let g = crate::gltf::parse_gltf(path, data)?;
+            let g = crate::gltf::parse_gltf(path, data, &mut far)?;
             let f = if g.glb {
                 MeshFormat::Glb
             } else {

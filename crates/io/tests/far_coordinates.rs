@@ -3,9 +3,13 @@
 //! back, in `f64`, the coordinates the test wrote, to the `f32` spacing at
 //! the model's own size; `load` rounds them to `f32` at their magnitude.
 //! Written in OBJ, OFF, ASCII PLY and binary PLY with `double` and `float`
-//! properties.
+//! properties, and as a GLB placed at UTM by its nodes' transforms.
 
-use raykit_io::{load, load_keeping_precision, LoadedMesh};
+mod common;
+
+use raykit_core::glam::{DMat4, DQuat, DVec3};
+use raykit_core::Light;
+use raykit_io::{load, load_gltf_instances, load_keeping_precision, LoadedMesh};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -183,5 +187,150 @@ fn meshes_near_zero_load_as_before() {
         let plain = load(&path).unwrap();
         assert_eq!(kept.origin, [0.0; 3], "{name}");
         assert_eq!(kept.mesh.positions, plain.mesh.positions, "{name}");
+    }
+}
+
+/// The grid near zero as `f32` (the GLB's vertex data), and a GLB placing
+/// it at UTM through two nodes: a root translated to a northing with
+/// millimetre digits, and a child turned by 30° about the vertical and
+/// scaled by 1.5 that holds the mesh, with a point light on a second
+/// child. Returns the GLB, the `f32` local vertices and the two nodes'
+/// world transforms (mesh, light) composed here in `f64`.
+fn placed_glb() -> (Vec<u8>, Vec<[f32; 3]>, DMat4, DMat4) {
+    let local: Vec<[f32; 3]> = vertices()
+        .iter()
+        .map(|p| {
+            [
+                (p[0] - 429_252.0) as f32,
+                (p[1] - 5_150_885.0) as f32,
+                (p[2] - 312.0) as f32,
+            ]
+        })
+        .collect();
+    let tris = triangles();
+    let mut bin = Vec::new();
+    for p in &local {
+        for c in p {
+            bin.extend(c.to_le_bytes());
+        }
+    }
+    let positions_len = bin.len();
+    for t in &tris {
+        for &i in t {
+            bin.extend((i as u32).to_le_bytes());
+        }
+    }
+    let (lo, hi) = local
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1]), lo[2].min(p[2])],
+                [hi[0].max(p[0]), hi[1].max(p[1]), hi[2].max(p[2])],
+            )
+        });
+    let half = 15f64.to_radians();
+    let (qz, qw) = (half.sin(), half.cos());
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+        "extensionsUsed":["KHR_lights_punctual"],
+        "extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"point","intensity":5}}]}}}},
+        "nodes":[
+          {{"translation":[429252.123,5150885.456,312.789],"children":[1,2]}},
+          {{"mesh":0,"rotation":[0,0,{qz},{qw}],"scale":[1.5,1.5,1.5],"translation":[0.25,-0.5,1.125]}},
+          {{"translation":[40.007,60.003,80.001],"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+        "accessors":[
+          {{"bufferView":0,"componentType":5126,"count":{nv},"type":"VEC3","min":{lo:?},"max":{hi:?}}},
+          {{"bufferView":1,"componentType":5125,"count":{ni},"type":"SCALAR"}}],
+        "bufferViews":[{{"buffer":0,"byteLength":{positions_len}}},
+          {{"buffer":0,"byteOffset":{positions_len},"byteLength":{il}}}],
+        "buffers":[{{"byteLength":{total}}}]}}"#,
+        nv = local.len(),
+        ni = 3 * tris.len(),
+        il = bin.len() - positions_len,
+        total = bin.len(),
+    );
+    let root = DMat4::from_translation(DVec3::new(429_252.123, 5_150_885.456, 312.789));
+    let mesh_node = DMat4::from_translation(DVec3::new(0.25, -0.5, 1.125))
+        * DMat4::from_quat(DQuat::from_xyzw(0.0, 0.0, qz, qw))
+        * DMat4::from_scale(DVec3::splat(1.5));
+    let light_node = DMat4::from_translation(DVec3::new(40.007, 60.003, 80.001));
+    (
+        common::glb(&json, &bin),
+        local,
+        root * mesh_node,
+        root * light_node,
+    )
+}
+
+/// A glTF placed at UTM by its nodes: node transforms are composed in
+/// `f64` from the file's digits, so vertices and light come back to a
+/// tenth of a millimetre of the `f64` placement; `load`, which rounds to
+/// `f32` at the northing, is decimetres off. Its instanced load keeps the
+/// `f64` placement too.
+#[test]
+fn gltf_placed_far_by_its_nodes_keeps_its_precision() {
+    let (data, local, mesh_world, light_world) = placed_glb();
+    let want: Vec<[f64; 3]> = local
+        .iter()
+        .map(|p| {
+            mesh_world
+                .transform_point3(DVec3::from_array(p.map(f64::from)))
+                .to_array()
+        })
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "placed.glb", &data);
+    let kept = load_keeping_precision(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(worst(&kept, &want) <= 1e-4, "{} m", worst(&kept, &want));
+    assert!(
+        (kept.origin[1] - want[0][1]).abs() < 1e3,
+        "{:?}",
+        kept.origin
+    );
+    let light_at = |l: &LoadedMesh| match l.lights.as_slice() {
+        [Light::Point(p)] => {
+            DVec3::from_array(p.position.to_array().map(f64::from)) + DVec3::from_array(l.origin)
+        }
+        other => panic!("expected one point light, got {other:?}"),
+    };
+    let light_want = light_world.transform_point3(DVec3::ZERO);
+    assert!((light_at(&kept) - light_want).abs().max_element() <= 1e-4);
+    let rounded = load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(rounded.origin, [0.0; 3]);
+    assert!(
+        worst(&rounded, &want) > 0.05,
+        "{} m",
+        worst(&rounded, &want)
+    );
+
+    let instanced = load_gltf_instances(&path).unwrap_or_else(|e| panic!("{e}"));
+    let [inst] = instanced.instances.as_slice() else {
+        panic!("one instance expected");
+    };
+    let placed = DMat4::from(inst.to_world_f64);
+    assert!(
+        placed.abs_diff_eq(mesh_world, 1e-9),
+        "{placed} against {mesh_world}"
+    );
+}
+
+/// A glTF near zero loads as `load` loads it, position for position: the
+/// shared engine's node hierarchy and the bunny's compressed files.
+#[test]
+fn gltf_near_zero_loads_as_before() {
+    for path in [
+        common::shared("meshes/2CylinderEngine.glb"),
+        common::local("bunny_meshopt.glb"),
+    ] {
+        let kept = load_keeping_precision(&path).unwrap_or_else(|e| panic!("{e}"));
+        let plain = load(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(kept.origin, [0.0; 3], "{}", path.display());
+        assert_eq!(
+            kept.mesh.positions,
+            plain.mesh.positions,
+            "{}",
+            path.display()
+        );
     }
 }
