@@ -238,6 +238,66 @@ fn sun_hours_tiled_lzw_read_back_in_gdal() {
 
 /// Cells where two masks (visible 255, else 0) disagree, among the cells
 /// valid in `dem`, as a percentage.
+/// An ASCII grid as gdal_translate exports it, with a `.prj` in Esri's WKT
+/// (no EPSG code): the shadow mask and the hours of sun computed from it
+/// are in the grid's coordinate system as GDAL reads both, through the
+/// `.aux.xml` written beside them, and a GeoTIFF DEM's masks get none (its
+/// GeoKeys carry the coordinate system).
+#[test]
+fn rasters_from_ascii_grids_keep_the_prj_coordinate_system() {
+    let dir = tempfile::tempdir().unwrap();
+    let tif = data("terrain/lidar_dem_400.tif");
+    let asc = dir.path().join("lidar.asc");
+    let window = ["-srcwin", "0", "0", "120", "90"];
+    gdal(
+        "gdal_translate",
+        &[&["-q", "-of", "AAIGrid"][..], &window, &[s(&tif), s(&asc)]].concat(),
+    );
+    assert!(
+        dir.path().join("lidar.prj").is_file(),
+        "gdal_translate wrote no .prj"
+    );
+    let crs = |p: &Path| {
+        gdalinfo(p)["coordinateSystem"]["wkt"]
+            .as_str()
+            .unwrap_or("")
+            .to_string()
+    };
+    let want = crs(&asc);
+    assert!(
+        want.contains("UTM"),
+        "the grid's coordinate system as GDAL reads it: {want}"
+    );
+    for (name, light) in [
+        ("mask.tif", ["--sun", "135,30"]),
+        ("hours.tif", ["--sun-path", "2026-06-21,45.0,-93.0"]),
+    ] {
+        let out = dir.path().join(name);
+        let o = raykit(
+            &[
+                &["terrain", "shadow", s(&asc), "--out", s(&out)][..],
+                &light,
+            ]
+            .concat(),
+        );
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        assert_eq!(crs(&out), want, "{name}");
+    }
+    let out = dir.path().join("from_tif.tif");
+    let o = raykit(&[
+        "terrain",
+        "shadow",
+        s(&tif),
+        "--out",
+        s(&out),
+        "--sun",
+        "135,30",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(!raykit_terrain::io::crs_sidecar_path(&out).exists());
+    assert_eq!(crs(&out), crs(&tif));
+}
+
 fn percent_differing(a: &[u8], b: &[u8], dem: &Dem) -> f64 {
     let valid: Vec<usize> = (0..a.len()).filter(|&i| !dem.heights[i].is_nan()).collect();
     let differ = valid

@@ -23,6 +23,11 @@ pub struct GeoRef {
     pub geo_doubles: Vec<f64>,
     /// GeoTIFF GeoAsciiParams (tag 34737) as read.
     pub geo_ascii: String,
+    /// The coordinate system as WKT, where the source gives it as text (the
+    /// `.prj` beside an ASCII grid) rather than GeoKeys. GeoTIFFs written
+    /// without GeoKeys carry it in GDAL's `.aux.xml` sidecar
+    /// ([`crate::io::write_crs_sidecar`]), which GDAL, rasterio and QGIS read.
+    pub crs_wkt: Option<String>,
 }
 
 /// Heights on a `width` × `height` grid, row-major from the top (north)

@@ -681,6 +681,7 @@ fn geotiff_round_trip_u8_and_geographic() {
         geo_keys: vec![1, 1, 0, 3, 1024, 0, 1, 2, 1025, 0, 1, 1, 2048, 0, 1, 4326],
         geo_doubles: vec![0.5, 6378137.0],
         geo_ascii: "WGS 84|".to_string(),
+        crs_wkt: None,
     };
     let out = dir.join("bytes.tif");
     write_geotiff_u8(&out, w, h, &data, &georef, Some(255.0)).unwrap();

@@ -3,7 +3,8 @@
 //! `yllcenter`, `cellsize` or GDAL's `dx` and `dy`, optionally
 //! `NODATA_value`), then the heights as text, rows from the north. Lidar
 //! portals, QGIS and ArcGIS export DEMs this way. The grid carries no
-//! coordinate system; a `.prj` beside it whose WKT is geographic (`GEOGCS`
+//! coordinate system; a `.prj` beside it gives it as WKT
+//! ([`crate::dem::GeoRef::crs_wkt`]), and one that is geographic (`GEOGCS`
 //! or `GEOGCRS` at the top) marks the map units as degrees.
 
 use std::path::Path;
@@ -93,8 +94,9 @@ pub fn read_ascii_grid(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             ));
         }
     }
-    let geographic = std::fs::read_to_string(path.with_extension("prj")).is_ok_and(|wkt| {
-        let top = wkt.trim_start().to_ascii_uppercase();
+    let crs_wkt = read_prj(path);
+    let geographic = crs_wkt.as_deref().is_some_and(|wkt| {
+        let top = wkt.to_ascii_uppercase();
         top.starts_with("GEOGCS") || top.starts_with("GEOGCRS") || top.starts_with("GEODCRS")
     });
     let (x0, y0) = header.corner;
@@ -113,8 +115,20 @@ pub fn read_ascii_grid(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             geo_keys: Vec::new(),
             geo_doubles: Vec::new(),
             geo_ascii: String::new(),
+            crs_wkt,
         },
     })
+}
+
+/// The WKT of the `.prj` beside `path`, trimmed: none when there is no such
+/// file, or it is empty, not text, or larger than any coordinate system
+/// (1 MiB).
+fn read_prj(path: &Path) -> Option<String> {
+    let prj = path.with_extension("prj");
+    let small = std::fs::metadata(&prj).is_ok_and(|m| m.len() <= 1 << 20);
+    let text = std::fs::read_to_string(prj).ok().filter(|_| small)?;
+    let wkt = text.trim();
+    (!wkt.is_empty()).then(|| wkt.to_string())
 }
 
 /// One height, read as a double and stored as a float as GDAL reads it:

@@ -534,6 +534,7 @@ fn read_georef<R: Read + std::io::Seek>(
         geo_keys,
         geo_doubles,
         geo_ascii,
+        crs_wkt: None,
     })
 }
 

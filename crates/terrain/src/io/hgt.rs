@@ -119,6 +119,7 @@ pub fn read_hgt(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             geo_keys: vec![1, 1, 0, 3, 1024, 0, 1, 2, 1025, 0, 1, 1, 2048, 0, 1, 4326],
             geo_doubles: Vec::new(),
             geo_ascii: String::new(),
+            crs_wkt: None,
         },
     })
 }

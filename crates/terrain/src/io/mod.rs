@@ -5,6 +5,7 @@
 
 mod ascii_grid;
 mod creation_options;
+mod crs_sidecar;
 mod error;
 mod geokeys;
 mod geotiff_blocks;
@@ -24,6 +25,7 @@ mod terragen;
 
 pub use ascii_grid::read_ascii_grid;
 pub use creation_options::layout_from_creation_options;
+pub use crs_sidecar::{crs_sidecar_path, write_crs_sidecar};
 pub use error::DemError;
 pub use geokeys::{geo_key_short, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
 pub use geotiff_blocks::TileSample;
