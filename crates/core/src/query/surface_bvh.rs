@@ -21,6 +21,7 @@ use crate::accel::bvh::{build, BuildNode, BuildOptions};
 use crate::mesh::TriangleMesh;
 use crate::unit_scale::UnitScale;
 use glam::Vec3;
+use rayon::prelude::*;
 use std::sync::OnceLock;
 
 pub use super::surface_node::WIDTH;
@@ -71,7 +72,7 @@ impl SurfaceBvh {
         let tree = build::build(mesh, options);
         let tris: Vec<[Vec3; 3]> = tree
             .order
-            .iter()
+            .par_iter()
             .map(|&t| mesh.triangle(t as usize))
             .collect();
         let bounds = tree.root.bounds();
@@ -92,49 +93,10 @@ impl SurfaceBvh {
                 BuildNode::Leaf { .. } => vec![&tree.root],
                 BuildNode::Inner { .. } => widen(&tree.root),
             };
-            let depth = bvh.fill(0, &slots);
+            let depth = fill(&mut bvh.nodes, 0, &slots, PAR_LEVELS);
             bvh.stack_need = (WIDTH - 1) * depth + WIDTH + 1;
         }
         bvh
-    }
-
-    /// Fill node `at` with `slots` as children, making their inner nodes;
-    /// returns the number of inner levels from `at` down (1 for a node of
-    /// leaves).
-    fn fill(&mut self, at: usize, slots: &[&BuildNode]) -> usize {
-        let mut node = SurfaceNode::default();
-        let mut inner = Vec::new();
-        for (k, s) in slots.iter().enumerate() {
-            let b = s.bounds();
-            for a in 0..3 {
-                node.min[a][k] = b.min[a];
-                node.max[a][k] = b.max[a];
-            }
-            let (first, total) = s.triangle_range();
-            node.first[k] = first;
-            node.total[k] = total;
-            match s {
-                BuildNode::Leaf { first, count, .. } => {
-                    node.child[k] = *first;
-                    node.count[k] = (*count).max(1);
-                    if *count == 0 {
-                        node.child[k] = EMPTY;
-                        node.count[k] = 0;
-                    }
-                }
-                BuildNode::Inner { .. } => {
-                    node.child[k] = self.nodes.len() as u32;
-                    self.nodes.push(SurfaceNode::default());
-                    inner.push((self.nodes.len() - 1, *s));
-                }
-            }
-        }
-        self.nodes[at] = node;
-        let mut depth = 1;
-        for (idx, s) in inner {
-            depth = depth.max(1 + self.fill(idx, &widen(s)));
-        }
-        depth
     }
 
     /// The ray-casting tree over the triangles; made on first use.
@@ -186,6 +148,79 @@ impl SurfaceBvh {
     pub fn num_nodes(&self) -> usize {
         self.nodes.len()
     }
+}
+
+/// The levels of wide nodes below the root whose subtrees are made in
+/// parallel: each inner child's subtree on its own, appended in slot order.
+const PAR_LEVELS: u32 = 2;
+
+/// Fill node `at` of `nodes` with `slots` as children, making their inner
+/// nodes after it (each node's inner children after it, so moments can be
+/// made children first by walking the nodes backwards); returns the number
+/// of inner levels from `at` down (1 for a node of leaves). For `par`
+/// levels, each inner child's subtree is made on its own in parallel and
+/// appended in slot order, its references moved by its place; the tree
+/// does not depend on the number of threads.
+fn fill(nodes: &mut Vec<SurfaceNode>, at: usize, slots: &[&BuildNode], par: u32) -> usize {
+    let mut node = SurfaceNode::default();
+    let mut inner = Vec::new();
+    for (k, s) in slots.iter().enumerate() {
+        let b = s.bounds();
+        for a in 0..3 {
+            node.min[a][k] = b.min[a];
+            node.max[a][k] = b.max[a];
+        }
+        let (first, total) = s.triangle_range();
+        node.first[k] = first;
+        node.total[k] = total;
+        match s {
+            BuildNode::Leaf { first, count, .. } => {
+                node.child[k] = *first;
+                node.count[k] = (*count).max(1);
+                if *count == 0 {
+                    node.child[k] = EMPTY;
+                    node.count[k] = 0;
+                }
+            }
+            BuildNode::Inner { .. } if par == 0 => {
+                node.child[k] = nodes.len() as u32;
+                nodes.push(SurfaceNode::default());
+                inner.push((nodes.len() - 1, *s));
+            }
+            BuildNode::Inner { .. } => inner.push((k, *s)),
+        }
+    }
+    let mut depth = 1;
+    if par == 0 {
+        nodes[at] = node;
+        for (idx, s) in inner {
+            depth = depth.max(1 + fill(nodes, idx, &widen(s), 0));
+        }
+        return depth;
+    }
+    let subtrees: Vec<(Vec<SurfaceNode>, usize)> = inner
+        .par_iter()
+        .map(|(_, s)| {
+            let mut sub = vec![SurfaceNode::default()];
+            let d = fill(&mut sub, 0, &widen(s), par - 1);
+            (sub, d)
+        })
+        .collect();
+    for ((k, _), (mut sub, d)) in inner.iter().zip(subtrees) {
+        let offset = nodes.len() as u32;
+        for n in &mut sub {
+            for c in 0..WIDTH {
+                if n.count[c] == 0 && n.child[c] != EMPTY {
+                    n.child[c] += offset;
+                }
+            }
+        }
+        node.child[*k] = offset;
+        nodes.append(&mut sub);
+        depth = depth.max(1 + d);
+    }
+    nodes[at] = node;
+    depth
 }
 
 /// The up to eight nodes that replace the inner node `node`: its two

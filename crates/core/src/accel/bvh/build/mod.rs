@@ -206,15 +206,26 @@ impl BuildNode {
     }
 
     /// The subtree's triangles as a range of the build order: `(first,
-    /// count)` (a subtree's leaves are consecutive in that order).
+    /// count)`. A subtree's leaves are consecutive in that order, so the
+    /// range runs from its first leaf's start to its last leaf's end, each
+    /// found down one edge of the subtree (its depth, not its size).
     pub fn triangle_range(&self) -> (u32, u32) {
-        match self {
-            BuildNode::Leaf { first, count, .. } => (*first, *count),
-            BuildNode::Inner { children, .. } => {
-                let (first, a) = children[0].triangle_range();
-                let (_, b) = children[1].triangle_range();
-                (first, a + b)
-            }
+        let mut left = self;
+        while let BuildNode::Inner { children, .. } = left {
+            left = &children[0];
+        }
+        let mut right = self;
+        while let BuildNode::Inner { children, .. } = right {
+            right = &children[1];
+        }
+        match (left, right) {
+            (
+                BuildNode::Leaf { first, .. },
+                BuildNode::Leaf {
+                    first: last, count, ..
+                },
+            ) => (*first, last + count - first),
+            _ => unreachable!("both walks end at leaves"),
         }
     }
 

@@ -77,6 +77,12 @@ fn check_tree(mesh: &TriangleMesh, tree: &BuildTree, opts: &BuildOptions) -> usi
                     let (_, count) = node.triangle_range();
                     assert!(count as usize <= opts.max_leaf_size, "a marked leaf fits");
                 }
+                let (first, count) = node.triangle_range();
+                assert_eq!(
+                    (first, count),
+                    (children[0].triangle_range().0, leaf_total(node)),
+                    "the subtree's range starts at its first leaf and holds every leaf's triangles"
+                );
                 let u = children[0].bounds().union(children[1].bounds());
                 assert_eq!(*bounds, u, "inner box is its children's union");
                 for c in children.iter() {
@@ -217,4 +223,12 @@ fn fast_build_costs_more_but_not_much_more() {
     let (sah, fast) = (cost(BuildQuality::Sah), cost(BuildQuality::Fast));
     assert!(sah < fast, "SAH {sah} vs LBVH {fast}");
     assert!(fast < 2.0 * sah, "SAH {sah} vs LBVH {fast}");
+}
+
+/// The triangles of every leaf under `node`, summed over the whole subtree.
+fn leaf_total(node: &BuildNode) -> u32 {
+    match node {
+        BuildNode::Leaf { count, .. } => *count,
+        BuildNode::Inner { children, .. } => leaf_total(&children[0]) + leaf_total(&children[1]),
+    }
 }
