@@ -36,7 +36,7 @@ pub fn render<'py>(
     window: Option<(u32, u32, u32, u32)>,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
     let built = scene.read();
-    let Some(accel) = &built.accel else {
+    let Some(accel) = built.accel() else {
         return Err(value_error("the scene has no triangles to render"));
     };
     if width == 0 || width > 16384 || height == 0 || height > 16384 {
@@ -117,7 +117,7 @@ pub fn render<'py>(
         ..RenderOptions::default()
     };
     let image = detached(py, threads, || {
-        raykit_render::render(mesh, &lights, accel.as_ref(), &camera, &options, &|_| {})
+        raykit_render::render(mesh, &lights, accel, &camera, &options, &|_| {})
     })?;
     let rgb = Array3::from_shape_vec((image.height as usize, image.width as usize, 3), image.rgb)
         .expect("three bytes a pixel");

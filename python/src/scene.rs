@@ -46,13 +46,31 @@ pub(crate) struct Built {
     /// ones), made once so a hit costs one load instead of an index and
     /// three vertices.
     pub(crate) normals: Vec<Vec3>,
-    pub(crate) accel: Option<Box<dyn Accel>>,
+    kind: AccelKind,
+    test: TestKind,
+    /// The ray structure: loaded with the scene, or built at the first
+    /// query that traces through it, so that a scene asked only point and
+    /// multi-hit queries never builds it; `None` inside for a scene without
+    /// triangles.
+    ray_structure: OnceLock<Option<Box<dyn Accel>>>,
     /// The 8-wide BVH of the point and multi-hit queries, built at the
     /// first such query.
     surface: OnceLock<SurfaceBvh>,
 }
 
 impl Built {
+    /// The ray structure (built on first use); `None` for a scene without
+    /// triangles.
+    pub(crate) fn accel(&self) -> Option<&dyn Accel> {
+        self.ray_structure
+            .get_or_init(|| {
+                (self.mesh.num_triangles() > 0).then(|| {
+                    build_accel(self.kind, self.test, &self.mesh, &BuildOptions::default())
+                })
+            })
+            .as_deref()
+    }
+
     /// The BVH of the point and multi-hit queries (built on first use).
     pub(crate) fn surface(&self) -> &SurfaceBvh {
         self.surface.get_or_init(|| SurfaceBvh::build(&self.mesh))
@@ -86,7 +104,7 @@ impl Scene {
     /// order; [`nearest_by_bands`]).
     fn nearest(&self, built: &Built, rays: &[f32], width: usize) -> HitColumns {
         let n = rays.len() / 6;
-        let Some(a) = &built.accel else {
+        let Some(a) = built.accel() else {
             return HitColumns::misses(n);
         };
         nearest_by_bands(rays, n, width, |traced| {
@@ -170,22 +188,16 @@ impl Scene {
                 "the scene has no triangles to load a structure for",
             ));
         }
-        let options = BuildOptions::default();
-        let (mesh, normals, accel, kind, test_kind) = detached(py, threads, move || {
-            let (kind, test_kind, accel) = match &structure {
+        let (mesh, normals, ray_structure, kind, test_kind) = detached(py, threads, move || {
+            let (kind, test_kind, loaded) = match &structure {
                 Some(path) => {
                     let (k, t, a) = load_accel(path, &mesh).map_err(persist_error)?;
-                    (k, t, Some(a))
+                    (k, t, OnceLock::from(Some(a)))
                 }
-                None => (
-                    kind,
-                    test_kind,
-                    (mesh.num_triangles() > 0)
-                        .then(|| build_accel(kind, test_kind, &mesh, &options)),
-                ),
+                None => (kind, test_kind, OnceLock::new()),
             };
             let normals = face_normals(&mesh);
-            Ok::<_, PyErr>((mesh, normals, accel, kind, test_kind))
+            Ok::<_, PyErr>((mesh, normals, loaded, kind, test_kind))
         })??;
         Ok(Scene {
             offsets,
@@ -194,7 +206,9 @@ impl Scene {
             built: RwLock::new(Built {
                 mesh,
                 normals,
-                accel,
+                kind,
+                test: test_kind,
+                ray_structure,
                 surface: OnceLock::new(),
             }),
         })
@@ -205,7 +219,7 @@ impl Scene {
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         py.detach(|| {
             let built = self.read();
-            let Some(accel) = &built.accel else {
+            let Some(accel) = built.accel() else {
                 return Err(value_error("the scene has no triangles to save"));
             };
             accel.save(&path, &built.mesh).map_err(persist_error)
@@ -218,7 +232,9 @@ impl Scene {
     /// tree's SAH cost passes `max_degradation` times the built tree's, or
     /// when the structure has no refit; the point-query BVH is rebuilt at
     /// its next use. Returns `{"rebuilt": bool, "degradation": float}`
-    /// (degradation NaN when the structure has no refit).
+    /// (degradation NaN when the structure has no refit), or `None` when
+    /// no query has built the ray structure yet (it is built from the new
+    /// vertices at its first use).
     #[pyo3(signature = (vertices, threads=0, max_degradation=DEFAULT_MAX_DEGRADATION))]
     fn refit<'py>(
         &self,
@@ -226,14 +242,14 @@ impl Scene {
         vertices: PyReadonlyArray2<'py, f32>,
         threads: i64,
         max_degradation: f64,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<Option<Bound<'py, PyDict>>> {
         let (v, n) = rows(&vertices, 3, "vertices")?;
         if max_degradation.is_nan() || max_degradation < 1.0 {
             return Err(value_error(format!(
                 "max_degradation must be >= 1, got {max_degradation}"
             )));
         }
-        let (rebuilt, degradation) = detached(py, threads, || {
+        let outcome = detached(py, threads, || {
             let mut built = self.built.write().unwrap_or_else(|e| e.into_inner());
             let have = built.mesh.positions.len();
             if n != have {
@@ -248,36 +264,35 @@ impl Scene {
                 built.mesh.indices.clone(),
             );
             checked(&mesh)?;
-            let (kind, test) = (self.kind, self.test);
-            let rebuild = |accel: &mut Option<Box<dyn Accel>>| {
-                *accel = Some(build_accel(kind, test, &mesh, &BuildOptions::default()));
-            };
-            let outcome = match built.accel.as_mut() {
-                None => (false, 1.0),
-                Some(a) => match a.refit(&mesh) {
+            // A structure not built yet is built from the new vertices at
+            // its first use: nothing to refit.
+            let outcome = match built.ray_structure.get_mut().and_then(|a| a.as_mut()) {
+                None => None,
+                Some(a) => Some(match a.refit(&mesh) {
                     Ok(report) => {
                         let d = report.degradation();
-                        if d > max_degradation {
-                            rebuild(&mut built.accel);
-                        }
                         (d > max_degradation, d)
                     }
-                    Err(RefitError::Unsupported) => {
-                        rebuild(&mut built.accel);
-                        (true, f64::NAN)
-                    }
+                    Err(RefitError::Unsupported) => (true, f64::NAN),
                     Err(e) => return Err(value_error(e.to_string())),
-                },
+                }),
             };
+            if let Some((true, _)) = outcome {
+                let rebuilt = build_accel(self.kind, self.test, &mesh, &BuildOptions::default());
+                built.ray_structure = OnceLock::from(Some(rebuilt));
+            }
             built.normals = face_normals(&mesh);
             built.mesh = mesh;
             built.surface = OnceLock::new();
             Ok(outcome)
         })??;
+        let Some((rebuilt, degradation)) = outcome else {
+            return Ok(None);
+        };
         let d = PyDict::new(py);
         d.set_item("rebuilt", rebuilt)?;
         d.set_item("degradation", degradation)?;
-        Ok(d)
+        Ok(Some(d))
     }
 
     /// Nearest hits of `(n, 6)` float32 rays: `(t_hit, geometry_ids,
@@ -322,7 +337,7 @@ impl Scene {
         width: usize,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let occluded = detached(py, threads, || match &self.read().accel {
+        let occluded = detached(py, threads, || match self.read().accel() {
             Some(a) => occlusion_by_bands(r, n, width, (tnear, tfar), |rays, out| {
                 a.occluded_batch(rays, out)
             }),
@@ -365,7 +380,7 @@ impl Scene {
         }
         let hits: Vec<(u32, Hit)> = detached(py, threads, || {
             let built = self.read();
-            let Some(accel) = &built.accel else {
+            let Some(accel) = built.accel() else {
                 return Vec::new();
             };
             (0..n)
@@ -425,7 +440,7 @@ impl Scene {
     /// columns); empty for a scene without triangles.
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
-        if let Some(a) = &self.read().accel {
+        if let Some(a) = self.read().accel() {
             let s = a.stats();
             d.set_item("nodes", s.nodes)?;
             d.set_item("leaves", s.leaves)?;
