@@ -35,55 +35,59 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// A position as a key: its bits, with `-0.0` read as `0.0`.
-fn key(p: Vec3) -> [u32; 3] {
-    (p + Vec3::ZERO).to_array().map(f32::to_bits)
+/// A corner as a sort key: its position's bits (`-0.0` read as `0.0`) in
+/// the high 96 bits, so that equal positions sort together, then its index.
+fn key(p: Vec3, corner: usize) -> u128 {
+    let [x, y, z] = (p + Vec3::ZERO).to_array().map(f32::to_bits);
+    (x as u128) << 96 | (y as u128) << 64 | (z as u128) << 32 | corner as u128
 }
 
 /// The triangles that close the boundary of the surface `tris` (see the
 /// module documentation): none for a closed surface.
 pub(crate) fn closing_cap(tris: &[[Vec3; 3]]) -> Vec<[Vec3; 3]> {
     // Weld the corners by position: corner `3t + k` gets vertex `ids[..]`.
-    let mut corners: Vec<([u32; 3], u32)> = (0..3 * tris.len())
+    let mut corners: Vec<u128> = (0..3 * tris.len())
         .into_par_iter()
-        .map(|i| (key(tris[i / 3][i % 3]), i as u32))
+        .map(|i| key(tris[i / 3][i % 3], i))
         .collect();
     corners.par_sort_unstable();
     let mut ids = vec![0u32; corners.len()];
     let mut positions: Vec<Vec3> = Vec::new();
-    for (i, (k, corner)) in corners.iter().enumerate() {
-        if i == 0 || *k != corners[i - 1].0 {
-            positions.push(Vec3::from_array(k.map(f32::from_bits)));
+    for (i, &k) in corners.iter().enumerate() {
+        if i == 0 || k >> 32 != corners[i - 1] >> 32 {
+            let bits = [(k >> 96) as u32, (k >> 64) as u32, (k >> 32) as u32];
+            positions.push(Vec3::from_array(bits.map(f32::from_bits)));
         }
-        ids[*corner as usize] = positions.len() as u32 - 1;
+        ids[k as u32 as usize] = positions.len() as u32 - 1;
     }
     drop(corners);
     // Net use of each undirected edge `(lo, hi)`: +1 per triangle running
     // it `lo → hi`, -1 per triangle running it `hi → lo`.
-    let mut edges: Vec<(u32, u32, i32)> = (0..tris.len())
+    let mut edges: Vec<(u64, i32)> = (0..tris.len())
         .into_par_iter()
         .flat_map_iter(|t| {
             let v = [ids[3 * t], ids[3 * t + 1], ids[3 * t + 2]];
             (0..3).map(move |k| {
                 let (a, b) = (v[k], v[(k + 1) % 3]);
                 if a < b {
-                    (a, b, 1)
+                    ((a as u64) << 32 | b as u64, 1)
                 } else {
-                    (b, a, -1)
+                    ((b as u64) << 32 | a as u64, -1)
                 }
             })
         })
-        .filter(|&(a, b, _)| a != b)
+        .filter(|&(e, _)| e >> 32 != e & 0xffff_ffff)
         .collect();
-    edges.par_sort_unstable_by_key(|&(a, b, _)| (a, b));
+    edges.par_sort_unstable_by_key(|&(e, _)| e);
     // The boundary edges `a → b`, each as often as its net use.
     let mut boundary: Vec<(u32, u32)> = Vec::new();
     let mut i = 0;
     while i < edges.len() {
-        let (a, b) = (edges[i].0, edges[i].1);
+        let e = edges[i].0;
+        let (a, b) = ((e >> 32) as u32, e as u32);
         let mut net = 0i64;
-        while i < edges.len() && (edges[i].0, edges[i].1) == (a, b) {
-            net += edges[i].2 as i64;
+        while i < edges.len() && edges[i].0 == e {
+            net += edges[i].1 as i64;
             i += 1;
         }
         let (from, to) = if net > 0 { (a, b) } else { (b, a) };
@@ -158,12 +162,17 @@ mod tests {
     use super::*;
     use crate::icosphere::Icosphere;
 
+    /// A position's bits, `-0.0` read as `0.0`.
+    fn bits(p: Vec3) -> [u32; 3] {
+        (p + Vec3::ZERO).to_array().map(f32::to_bits)
+    }
+
     /// Net use of every undirected edge of `tris`, welded by position.
     fn net_uses(tris: &[[Vec3; 3]]) -> std::collections::HashMap<([u32; 3], [u32; 3]), i32> {
         let mut net = std::collections::HashMap::new();
         for t in tris {
             for k in 0..3 {
-                let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+                let (a, b) = (bits(t[k]), bits(t[(k + 1) % 3]));
                 if a == b {
                     continue;
                 }
