@@ -63,8 +63,10 @@ impl QueryKind {
 
 impl SurfaceBvh {
     /// Make now what queries of `kind` would otherwise make on their first
-    /// use: the winding-number moments and the ray-casting trees of the
-    /// surface and of its closing cap for occupancy and signed distance,
+    /// use: the ray-casting trees of the surface and of its closing cap for
+    /// occupancy and signed distance (with the winding-number moments when
+    /// the surface's crossings are not counted; otherwise they are made
+    /// only if some point's crossings are too close to an edge to count),
     /// the surface's ray-casting tree alone for counts and hit lists
     /// (nothing for closest points and distances). A one-shot
     /// caller can then time building and answering apart.
@@ -72,8 +74,9 @@ impl SurfaceBvh {
         match kind {
             QueryKind::Distance | QueryKind::Closest => {}
             QueryKind::SignedDistance | QueryKind::Inside => {
-                self.moments();
-                self.closed_trees();
+                if !self.closed_trees().1.countable() {
+                    self.moments();
+                }
             }
             QueryKind::Count | QueryKind::AllHits => {
                 self.ray_tree();

@@ -113,8 +113,13 @@ impl SurfaceBvh {
         let (cap_tree, cap) = self.closing.get_or_init(|| {
             let cap = closing_cap(&self.tris);
             let cap_tree = CapTree::build(tree, &cap);
-            let winding = (cap_tree.countable() && !cap.is_empty())
-                .then(|| Box::new(SurfaceBvh::build(&TriangleMesh::from_triangles(&cap))));
+            let winding = (cap_tree.countable() && !cap.is_empty()).then(|| {
+                let cap = Box::new(SurfaceBvh::build(&TriangleMesh::from_triangles(&cap)));
+                // Made here rather than at the cap's first winding number,
+                // which the batches ask for inside their parallel loops.
+                cap.moments();
+                cap
+            });
             (cap_tree, winding)
         });
         (tree, cap_tree, cap.as_deref())

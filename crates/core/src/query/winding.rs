@@ -310,23 +310,53 @@ impl SurfaceBvh {
     /// [`DEFAULT_BETA`] only where the coarse winding number is within
     /// [`COARSE_MARGIN`] of ½.
     pub fn is_inside(&self, q: Vec3) -> bool {
+        self.inside_if_counted(q)
+            .unwrap_or_else(|| self.inside_summed(q))
+    }
+
+    /// [`SurfaceBvh::is_inside`] where the winding number can be counted
+    /// (and for points that are not finite); `None` where it must be
+    /// summed.
+    fn inside_if_counted(&self, q: Vec3) -> Option<bool> {
         let q = self.scale.point(q);
         if !q.is_finite() {
-            return false;
+            return Some(false);
         }
         let (tree, cap_tree, cap) = self.closed_trees();
-        let count = cap_tree.signed_crossings(tree, q);
+        let n = cap_tree.signed_crossings(tree, q)?;
         // The cap's tree takes points at this tree's scale, at which it was
         // made.
-        let winding = |beta| match count {
-            Some(n) => n as f32 - cap.map_or(0.0, |c| c.winding_number_with(q, beta)),
-            None => self.winding_at_scale(q, beta),
-        };
-        let w = winding(COARSE_BETA);
-        if (w - 0.5).abs() > COARSE_MARGIN {
-            return w >= 0.5;
+        Some(half_or_more(|beta| {
+            n as f32 - cap.map_or(0.0, |c| c.winding_number_with(q, beta))
+        }))
+    }
+
+    /// [`SurfaceBvh::is_inside`] by the summed winding number.
+    fn inside_summed(&self, q: Vec3) -> bool {
+        let q = self.scale.point(q);
+        q.is_finite() && half_or_more(|beta| self.winding_at_scale(q, beta))
+    }
+
+    /// The insides that `counted` leaves open (`None`) summed, the others
+    /// as counted. The moments that summing needs are made here, outside
+    /// any parallel loop, and only when some point needs them: a closed
+    /// surface's crossings are sure at all but points within rounding error
+    /// of an edge.
+    fn summed_where_open(&self, points: &[Vec3], counted: &[Option<bool>]) -> Vec<bool> {
+        let mut inside: Vec<bool> = counted.iter().map(|c| c.unwrap_or(false)).collect();
+        let open: Vec<usize> = (0..points.len())
+            .filter(|&i| counted[i].is_none())
+            .collect();
+        if !open.is_empty() {
+            self.moments();
+            let at: Vec<Vec3> = open.iter().map(|&i| points[i]).collect();
+            let mut summed = vec![false; at.len()];
+            answer_coherent(&at, &mut summed, |p, _: &mut ()| self.inside_summed(p));
+            for (&i, s) in open.iter().zip(summed) {
+                inside[i] = s;
+            }
         }
-        winding(DEFAULT_BETA) >= 0.5
+        inside
     }
 
     /// Signed distance: the unsigned distance, negative inside (by
@@ -340,14 +370,7 @@ impl SurfaceBvh {
     /// from the start by triangle `hint`, as in [`SurfaceBvh::distances`].
     fn signed_distance_hinted(&self, q: Vec3, hint: &mut Option<usize>) -> f32 {
         let d = self.distance_hinted(q, hint);
-        if d.is_nan() {
-            return d;
-        }
-        if self.is_inside(q) {
-            -d
-        } else {
-            d
-        }
+        signed(d, !d.is_nan() && self.is_inside(q))
     }
 
     /// [`SurfaceBvh::winding_number`] for many points, in parallel, in
@@ -360,17 +383,57 @@ impl SurfaceBvh {
     /// [`SurfaceBvh::is_inside`] for many points, in parallel, in Morton
     /// order.
     pub fn inside_batch(&self, points: &[Vec3], out: &mut [bool]) {
-        self.moments();
+        assert_eq!(points.len(), out.len(), "one result per point");
         self.closed_trees();
-        answer_coherent(points, out, |p, _: &mut ()| self.is_inside(p));
+        let mut counted = vec![None; points.len()];
+        answer_coherent(points, &mut counted, |p, _: &mut ()| {
+            self.inside_if_counted(p)
+        });
+        out.copy_from_slice(&self.summed_where_open(points, &counted));
     }
 
     /// [`SurfaceBvh::signed_distance`] for many points, in parallel, the
     /// distances searched as in [`SurfaceBvh::distances`].
     pub fn signed_distances(&self, points: &[Vec3], out: &mut [f32]) {
-        self.moments();
+        assert_eq!(points.len(), out.len(), "one result per point");
         self.closed_trees();
-        answer_coherent(points, out, |p, hint| self.signed_distance_hinted(p, hint));
+        let mut first = vec![(0.0f32, None); points.len()];
+        answer_coherent(points, &mut first, |p, hint| {
+            let d = self.distance_hinted(p, hint);
+            (
+                d,
+                if d.is_nan() {
+                    Some(false)
+                } else {
+                    self.inside_if_counted(p)
+                },
+            )
+        });
+        let counted: Vec<Option<bool>> = first.iter().map(|f| f.1).collect();
+        let inside = self.summed_where_open(points, &counted);
+        for ((o, (d, _)), inside) in out.iter_mut().zip(first).zip(inside) {
+            *o = signed(d, inside);
+        }
+    }
+}
+
+/// Whether the winding number that `winding(beta)` gives at accuracy `beta`
+/// is at least ½: at [`COARSE_BETA`] first, again at [`DEFAULT_BETA`] only
+/// within [`COARSE_MARGIN`] of ½.
+fn half_or_more(winding: impl Fn(f32) -> f32) -> bool {
+    let w = winding(COARSE_BETA);
+    if (w - 0.5).abs() > COARSE_MARGIN {
+        return w >= 0.5;
+    }
+    winding(DEFAULT_BETA) >= 0.5
+}
+
+/// The distance `d`, negative when `inside`.
+fn signed(d: f32, inside: bool) -> f32 {
+    if inside {
+        -d
+    } else {
+        d
     }
 }
 
