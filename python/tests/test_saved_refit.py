@@ -177,6 +177,25 @@ def test_update_vertices_of_one_geometry_and_point_queries(bunny, dragon):
     np.testing.assert_array_equal(a["geometry_ids"], b["geometry_ids"])
 
 
+def test_update_vertices_before_any_ray_query(dragon):
+    """A scene asked only point queries has no ray structure yet: moving its
+    vertices refits nothing (``None``), and the first ray query builds the
+    structure from the new vertices, answering as a fresh scene."""
+    v, f, _ = dragon
+    moved = displaced(v, 0.03, seed=43)
+    points = rays_at(moved, 2000, seed=44)[:, :3] * 0.5
+    scene = scene_of((v, f))
+    scene.compute_distance(points)
+    assert scene.update_vertices(0, moved) is None
+    fresh = scene_of((moved, f))
+    rays = rays_at(moved, 5000, seed=45)
+    a, b = scene.cast_rays(rays), fresh.cast_rays(rays)
+    assert np.isfinite(b["t_hit"]).sum() > 1000
+    np.testing.assert_array_equal(a["t_hit"], b["t_hit"])
+    np.testing.assert_array_equal(a["primitive_ids"], b["primitive_ids"])
+    np.testing.assert_array_equal(scene.compute_distance(points), fresh.compute_distance(points))
+
+
 def test_update_vertices_rebuilds_past_the_degradation_limit(bunny):
     v, f, _ = bunny
     # Vertices scattered at random: the refit boxes overlap everywhere.
