@@ -32,8 +32,6 @@ const GRAIN: usize = 4096;
 #[pyclass(module = "raykit._raykit", frozen)]
 pub struct Scene {
     offsets: Vec<u32>,
-    kind: AccelKind,
-    test: TestKind,
     /// The mesh and its structures; queries read it, a refit
     /// ([`Scene::refit`]) writes it.
     built: RwLock<Built>,
@@ -46,6 +44,7 @@ pub(crate) struct Built {
     /// ones), made once so a hit costs one load instead of an index and
     /// three vertices.
     pub(crate) normals: Vec<Vec3>,
+    /// The ray structure's kind and triangle test (`--accel`, `--test`).
     kind: AccelKind,
     test: TestKind,
     /// The ray structure: loaded with the scene, or built at the first
@@ -201,8 +200,6 @@ impl Scene {
         })??;
         Ok(Scene {
             offsets,
-            kind,
-            test: test_kind,
             built: RwLock::new(Built {
                 mesh,
                 normals,
@@ -278,7 +275,7 @@ impl Scene {
                 }),
             };
             if let Some((true, _)) = outcome {
-                let rebuilt = build_accel(self.kind, self.test, &mesh, &BuildOptions::default());
+                let rebuilt = build_accel(built.kind, built.test, &mesh, &BuildOptions::default());
                 built.ray_structure = OnceLock::from(Some(rebuilt));
             }
             built.normals = face_normals(&mesh);
@@ -427,13 +424,13 @@ impl Scene {
     /// The structure's name (`--accel`).
     #[getter]
     fn accel(&self) -> &'static str {
-        self.kind.name()
+        self.read().kind.name()
     }
 
     /// The triangle test's name (`--test`).
     #[getter]
     fn test(&self) -> &'static str {
-        self.test.name()
+        self.read().test.name()
     }
 
     /// Size and quality figures of the structure (`raykit bench`'s
