@@ -244,7 +244,8 @@ class RaycastingScene:
             # A file placed far by its nodes (a UTM or geocentric
             # translation) sets the scene's origin from its first placement.
             g, matrix, _, _ = instances[0]
-            self._origin = _far_origin(_placed_corners(geometries[g][0], matrix))
+            placed = geometries[g][0].astype(np.float64) @ matrix[:, :3].T + matrix[:, 3]
+            self._origin = _far_origin(placed)
         first = [self.add_triangles(v, t, place=False) for v, t in geometries]
         ids = []
         for g, matrix, node, name in instances:
@@ -723,17 +724,6 @@ def _far_origin(v: np.ndarray) -> np.ndarray | None:
         return None
     step = 2.0 ** math.floor(math.log2(size))
     return np.round(centre / step) * step
-
-
-def _placed_corners(v: np.ndarray, matrix: np.ndarray) -> np.ndarray:
-    """The corners of the box of vertices ``v`` moved by the (3, 4)
-    ``matrix``, in float64 (none when ``v`` has no finite vertex)."""
-    finite = v[np.isfinite(v).all(axis=1)].astype(np.float64)
-    if not len(finite):
-        return np.zeros((0, 3))
-    lo, hi = finite.min(axis=0), finite.max(axis=0)
-    corners = np.array([[(lo, hi)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
-    return corners @ matrix[:, :3].T + matrix[:, 3]
 
 
 def _origin_of(origin) -> np.ndarray:
