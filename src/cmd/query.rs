@@ -69,8 +69,9 @@ et al. 2013; far triangles grouped by Barill et al. 2018's fast approximation)\n
 is at least 1/2, which is right on open and self-intersecting meshes too\n  \
 count            per ray, the number of triangles it crosses within [tnear, tfar]\n  \
 all-hits         per ray, every hit within [tnear, tfar], nearest first\n\
-A ray through an edge or a corner that triangles share is counted, and listed, once for each\n\
-of them that its test reports, so a count is no inside/outside parity there (`inside` is).\n\n\
+A ray through an edge or a corner that triangles share crosses the surface there once, and is\n\
+counted and listed once (exact edge tests with one tie rule for both neighbours), so a ray from\n\
+outside a closed surface crosses it an even number of times.\n\n\
 Files (little-endian):\n  \
 point file (--points): per point 3 f32 x y z (12 bytes)\n  \
 ray file (--rays): the ray file of `raykit rays` and `raykit trace` (t counts lengths of the\n    \

@@ -264,6 +264,7 @@ impl InstancedScene {
                 .surface()
                 .count_hits_batch(rays, counts);
         }
+        self.prepare_multi_hit(mask);
         answer_each(rays, counts, |r| self.count_hits(r, mask));
     }
 
@@ -281,6 +282,7 @@ impl InstancedScene {
                 .map(|l| l.iter().map(|h| self.scene_hit(i, h)).collect())
                 .collect();
         }
+        self.prepare_multi_hit(mask);
         rays.par_iter()
             .with_min_len(BATCH_GRAIN)
             .map(|r| self.ray_hits(r, mask, max_hits))

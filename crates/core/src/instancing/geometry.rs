@@ -87,8 +87,8 @@ impl Geometry {
         self.mask
     }
 
-    /// The point-query BVH, which owns the multi-hit queries' ray-casting
-    /// tree, built on first use.
+    /// The surface behind the multi-hit queries, made on first use with
+    /// its trees made on the first query that needs them.
     pub fn surface(&self) -> &SurfaceBvh {
         self.surface.get_or_init(|| SurfaceBvh::build(&self.mesh))
     }

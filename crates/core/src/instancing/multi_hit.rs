@@ -10,6 +10,7 @@
 
 use super::hit::SceneHit;
 use super::scene::InstancedScene;
+use crate::query::QueryKind;
 use crate::ray::Ray;
 
 /// The hits kept: sorted by `(t, instance, prim)`, at most `cap`.
@@ -40,6 +41,21 @@ impl Kept<'_> {
 }
 
 impl InstancedScene {
+    /// Make the surfaces and ray-casting trees of the geometries whose
+    /// instances `mask` sees, which the multi-hit queries would otherwise
+    /// make on first use: the batches call this before their parallel
+    /// loops, where making them could deadlock (see
+    /// [`crate::query::SurfaceBvh`]).
+    pub fn prepare_multi_hit(&self, mask: u32) {
+        let mut made = vec![false; self.geometries.len()];
+        for inst in &self.instances {
+            let g = inst.geometry as usize;
+            if self.visible(inst, mask) && !std::mem::replace(&mut made[g], true) {
+                self.geometries[g].surface().prepare(QueryKind::Count);
+            }
+        }
+    }
+
     /// The hits along `ray` (`t` in `[ray.tnear, ray.tfar]`) on the
     /// instances `mask` sees that `accept` keeps, sorted by `t` (then
     /// instance, then triangle), at most `max_hits` of them (the nearest),

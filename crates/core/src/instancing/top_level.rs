@@ -14,7 +14,7 @@ use crate::aabb::Aabb;
 use crate::accel::bvh::build::{build_over_boxes, BuildNode};
 use crate::accel::BuildOptions;
 use crate::query::all_hits::slab8;
-use crate::query::surface_bvh::widen;
+use crate::query::point_tree::widen;
 use crate::ray::Ray;
 use glam::Vec3;
 

@@ -104,19 +104,19 @@ impl SurfaceBvh {
         ray: &Ray,
         mut visit: V,
     ) {
-        if self.prims.is_empty() {
+        if self.mesh.indices.is_empty() {
             return;
         }
-        let (prims, scale) = (&self.prims, self.scale);
+        let scale = self.scale;
         // The walk is at the tree's scale; `visit` sees hits and the reach
         // in the mesh's units.
         self.ray_tree()
-            .surface_hits::<NEAR_FIRST>(&scale.ray(ray), &self.tris, |c, p, reach| {
+            .surface_hits::<NEAR_FIRST>(&scale.ray(ray), &self.mesh, |c, p, reach| {
                 let hit = Hit {
                     t: scale.to_model(c.t),
                     u: c.u,
                     v: c.v,
-                    prim: prims[p as usize],
+                    prim: p,
                 };
                 let mut model_reach = scale.to_model(*reach);
                 let more = visit(hit, &mut model_reach);
@@ -190,14 +190,14 @@ impl SurfaceBvh {
     /// [`SurfaceBvh::count_hits`] for many rays, in parallel.
     pub fn count_hits_batch(&self, rays: &[Ray], out: &mut [u32]) {
         assert_eq!(rays.len(), out.len(), "one count per ray");
-        if self.prims.is_empty() {
+        if self.mesh.indices.is_empty() {
             out.fill(0);
             return;
         }
         let tree = self.ray_tree();
         rays.par_chunks(BATCH_GRAIN)
             .zip(out.par_chunks_mut(BATCH_GRAIN))
-            .for_each(|(rays, out)| tree.count_hits(&self.scale.rays(rays), &self.tris, out));
+            .for_each(|(rays, out)| tree.count_hits(&self.scale.rays(rays), &self.mesh, out));
     }
 
     /// [`SurfaceBvh::ray_hits`] for many rays, in parallel: one sorted list
@@ -206,14 +206,14 @@ impl SurfaceBvh {
     /// [`SurfaceBvh::ray_hits`] per ray.
     pub fn ray_hits_batch(&self, rays: &[Ray], max_hits: usize) -> Vec<Vec<Hit>> {
         let mut lists: Vec<Vec<Hit>> = (0..rays.len()).map(|_| Vec::new()).collect();
-        if self.prims.is_empty() || max_hits == 0 {
+        if self.mesh.indices.is_empty() || max_hits == 0 {
             return lists;
         }
         let tree = self.ray_tree();
         rays.par_chunks(BATCH_GRAIN)
             .zip(lists.par_chunks_mut(BATCH_GRAIN))
             .for_each(|(rays, lists)| {
-                tree.hits(&self.scale.rays(rays), &self.tris, |i, found, at| {
+                tree.hits(&self.scale.rays(rays), &self.mesh, |i, found, at| {
                     let mut hits: Vec<Hit> = found
                         .iter()
                         .zip(at)
@@ -221,7 +221,7 @@ impl SurfaceBvh {
                             t: self.scale.to_model(c.t),
                             u: c.u,
                             v: c.v,
-                            prim: self.prims[p as usize],
+                            prim: p,
                         })
                         .collect();
                     hits.sort_by(|a, b| {

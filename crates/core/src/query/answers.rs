@@ -63,21 +63,27 @@ impl QueryKind {
 
 impl SurfaceBvh {
     /// Make now what queries of `kind` would otherwise make on their first
-    /// use: the ray-casting trees of the surface and of its closing cap for
-    /// occupancy and signed distance (with the winding-number moments when
-    /// the surface's crossings are not counted; otherwise they are made
-    /// only if some point's crossings are too close to an edge to count),
-    /// the surface's ray-casting tree alone for counts and hit lists
-    /// (nothing for closest points and distances). A one-shot
-    /// caller can then time building and answering apart.
+    /// use: the point tree for closest points and distances; the
+    /// ray-casting tree alone for counts and hit lists; the ray-casting
+    /// trees of the surface and of its closing cap for occupancy, with the
+    /// point tree and its winding-number moments when the surface's
+    /// crossings are not counted (otherwise they are made only if some
+    /// point's crossings are too close to an edge to count); both for
+    /// signed distance. A one-shot caller can then time building and
+    /// answering apart, and a caller that queries one point or ray at a
+    /// time from its own parallel loop must call it first (see
+    /// [`SurfaceBvh`]).
     pub fn prepare(&self, kind: QueryKind) {
         match kind {
-            QueryKind::Distance | QueryKind::Closest => {}
-            QueryKind::SignedDistance | QueryKind::Inside => {
+            QueryKind::Distance | QueryKind::Closest => {
+                self.points();
+            }
+            QueryKind::Inside => {
                 if !self.closed_trees().1.countable() {
-                    self.moments();
+                    self.winding_tree();
                 }
             }
+            QueryKind::SignedDistance => self.signed_trees(),
             QueryKind::Count | QueryKind::AllHits => {
                 self.ray_tree();
             }
@@ -200,16 +206,26 @@ mod tests {
         use QueryKind::*;
         for kind in [Closest, Distance, SignedDistance, Inside, Count, AllHits] {
             let (lazy, ready) = (SurfaceBvh::build(&mesh), SurfaceBvh::build(&mesh));
-            let before = ready.bytes();
             ready.prepare(kind);
-            let made = ready.bytes() > before;
-            let needs = !matches!(kind, QueryKind::Distance | QueryKind::Closest);
-            assert_eq!(made, needs, "{kind:?}");
+            // The sphere is closed: its crossings are counted, so occupancy
+            // needs no point tree, and rays need none either.
+            let points_made = ready.points.get().is_some();
+            assert_eq!(
+                points_made,
+                matches!(kind, Closest | Distance | SignedDistance),
+                "{kind:?}"
+            );
+            let rays_made = ready.rays.get().is_some();
+            assert_eq!(rays_made, !matches!(kind, Closest | Distance), "{kind:?}");
+            let (built, before) = (ready.bytes(), lazy.bytes());
+            assert!(built > before, "{kind:?}: {built} against {before}");
             assert_eq!(
                 lazy.answer(kind, &points, &rays, 4),
                 ready.answer(kind, &points, &rays, 4),
                 "{kind:?}"
             );
+            // Answering made nothing that prepare had not.
+            assert_eq!(ready.bytes(), built, "{kind:?}");
         }
     }
 }

@@ -17,6 +17,7 @@
 
 use super::batch::answer_coherent;
 use super::exact::Triangle64;
+use super::point_tree::PointTree;
 use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::accel::Accel;
 use crate::mesh::TriangleMesh;
@@ -294,14 +295,15 @@ impl SurfaceBvh {
     /// edge or corner) go to either.
     pub fn closest_point(&self, p: Vec3, max_distance: f32) -> Option<ClosestPoint> {
         let q = self.scale.point(p);
-        self.nearest_triangle(q, self.scale.length(max_distance), None)
-            .map(|t| self.closest_on(q, t))
+        let tree = self.points();
+        tree.nearest_triangle(q, self.scale.length(max_distance), None)
+            .map(|t| self.closest_on(tree, q, t))
     }
 
-    /// The closest point of triangle `t` (leaf order) to `q` (both at
-    /// [`SurfaceBvh::scale`]), in the mesh's units.
-    fn closest_on(&self, q: Vec3, t: usize) -> ClosestPoint {
-        let c = answer(q, &self.tris[t], self.prims[t]);
+    /// The closest point of triangle `t` (in `tree`'s leaf order) to `q`
+    /// (both at [`SurfaceBvh::scale`]), in the mesh's units.
+    fn closest_on(&self, tree: &PointTree, q: Vec3, t: usize) -> ClosestPoint {
+        let c = answer(q, &tree.tris[t], tree.prims[t]);
         ClosestPoint {
             point: self.scale.point_to_model(c.point),
             distance: self.scale.to_model(c.distance),
@@ -309,13 +311,72 @@ impl SurfaceBvh {
         }
     }
 
+    /// Unsigned distance from `p` to the surface: `+inf` for an empty mesh,
+    /// NaN for a point that is not finite.
+    pub fn distance(&self, p: Vec3) -> f32 {
+        if !p.is_finite() {
+            return f32::NAN;
+        }
+        self.closest_point(p, f32::INFINITY)
+            .map_or(f32::INFINITY, |c| c.distance)
+    }
+
+    /// [`SurfaceBvh::closest_point`] for many points, in parallel over the
+    /// rayon pool. The points are searched in Morton order, each search
+    /// bounded from the start by the previous point's triangle, which is
+    /// what makes a grid or cloud of points several times faster per point
+    /// than single queries; the answers are the same.
+    pub fn closest_points(
+        &self,
+        points: &[Vec3],
+        max_distance: f32,
+        out: &mut [Option<ClosestPoint>],
+    ) {
+        let max_distance = self.scale.length(max_distance);
+        let tree = self.points();
+        answer_coherent(points, out, |p, hint: &mut Option<usize>| {
+            let q = self.scale.point(p);
+            let found = tree.nearest_triangle(q, max_distance, *hint);
+            *hint = found.or(*hint);
+            found.map(|t| self.closest_on(tree, q, t))
+        });
+    }
+
+    /// [`SurfaceBvh::distance`] for many points, in parallel over the rayon
+    /// pool, searched as [`SurfaceBvh::closest_points`] does.
+    pub fn distances(&self, points: &[Vec3], out: &mut [f32]) {
+        self.points();
+        answer_coherent(points, out, |p, hint| self.distance_hinted(p, hint));
+    }
+
+    /// [`SurfaceBvh::distance`] with the search bounded from the start by
+    /// triangle `hint` (the point tree's leaf order), which becomes the
+    /// nearest triangle.
+    pub(crate) fn distance_hinted(&self, p: Vec3, hint: &mut Option<usize>) -> f32 {
+        if !p.is_finite() {
+            return f32::NAN;
+        }
+        let q = self.scale.point(p);
+        let tree = self.points();
+        let found = tree.nearest_triangle(q, f32::INFINITY, *hint);
+        *hint = found.or(*hint);
+        found.map_or(f32::INFINITY, |t| self.closest_on(tree, q, t).distance)
+    }
+}
+
+impl PointTree {
     /// The search behind [`SurfaceBvh::closest_point`]: the nearest
-    /// triangle's index in leaf order, `p` and `max_distance` at
-    /// [`SurfaceBvh::scale`]. `hint`, a triangle near `p` (in leaf
+    /// triangle's index in leaf order, `p` and `max_distance` at the
+    /// surface's scale. `hint`, a triangle near `p` (in leaf
     /// order; the answer for a neighbouring point), starts the search with
     /// its distance as the bound, which prunes the tree from the first node
     /// on; the answer is the same with or without it.
-    fn nearest_triangle(&self, p: Vec3, max_distance: f32, hint: Option<usize>) -> Option<usize> {
+    pub(crate) fn nearest_triangle(
+        &self,
+        p: Vec3,
+        max_distance: f32,
+        hint: Option<usize>,
+    ) -> Option<usize> {
         if !p.is_finite() || self.nodes.is_empty() || max_distance.is_nan() || max_distance < 0.0 {
             return None;
         }
@@ -379,54 +440,6 @@ impl SurfaceBvh {
             }
         }
         best
-    }
-
-    /// Unsigned distance from `p` to the surface: `+inf` for an empty mesh,
-    /// NaN for a point that is not finite.
-    pub fn distance(&self, p: Vec3) -> f32 {
-        if !p.is_finite() {
-            return f32::NAN;
-        }
-        self.closest_point(p, f32::INFINITY)
-            .map_or(f32::INFINITY, |c| c.distance)
-    }
-
-    /// [`SurfaceBvh::closest_point`] for many points, in parallel over the
-    /// rayon pool. The points are searched in Morton order, each search
-    /// bounded from the start by the previous point's triangle, which is
-    /// what makes a grid or cloud of points several times faster per point
-    /// than single queries; the answers are the same.
-    pub fn closest_points(
-        &self,
-        points: &[Vec3],
-        max_distance: f32,
-        out: &mut [Option<ClosestPoint>],
-    ) {
-        let max_distance = self.scale.length(max_distance);
-        answer_coherent(points, out, |p, hint: &mut Option<usize>| {
-            let q = self.scale.point(p);
-            let found = self.nearest_triangle(q, max_distance, *hint);
-            *hint = found.or(*hint);
-            found.map(|t| self.closest_on(q, t))
-        });
-    }
-
-    /// [`SurfaceBvh::distance`] for many points, in parallel over the rayon
-    /// pool, searched as [`SurfaceBvh::closest_points`] does.
-    pub fn distances(&self, points: &[Vec3], out: &mut [f32]) {
-        answer_coherent(points, out, |p, hint| self.distance_hinted(p, hint));
-    }
-
-    /// [`SurfaceBvh::distance`] with the search bounded from the start by
-    /// triangle `hint` (leaf order), which becomes the nearest triangle.
-    pub(crate) fn distance_hinted(&self, p: Vec3, hint: &mut Option<usize>) -> f32 {
-        if !p.is_finite() {
-            return f32::NAN;
-        }
-        let q = self.scale.point(p);
-        let found = self.nearest_triangle(q, f32::INFINITY, *hint);
-        *hint = found.or(*hint);
-        found.map_or(f32::INFINITY, |t| self.closest_on(q, t).distance)
     }
 }
 

@@ -14,10 +14,11 @@
 //! - [`walk`]: the tree queries through [`Accel::visit_regions`], with
 //!   [`QueryStats`], and the brute-force references.
 //!
-//! - [`surface_bvh`]: [`SurfaceBvh`], the 8-wide BVH of the point and
-//!   multi-hit ray queries below, with its ray-casting tree (`ray_tree`, a
-//!   [`crate::accel::Bvh8`] walked to every crossing) over the surface and
-//!   the cap that closes its boundary (`closing`).
+//! - [`surface_bvh`]: [`SurfaceBvh`], a surface for the point and
+//!   multi-hit ray queries below, with the trees it makes on first use: the
+//!   8-wide point tree (`point_tree`), and the ray-casting trees
+//!   (`ray_tree`, [`crate::accel::Bvh8`]s walked to every crossing) over the
+//!   surface and the cap that closes its boundary (`closing`).
 //! - [`closest`]: closest point on the surface and unsigned distance
 //!   (Ericson 2005), nearest box first.
 //! - [`winding`]: generalized winding number (Jacobson et al. 2013) with
@@ -39,6 +40,7 @@ mod closing;
 pub mod exact;
 pub mod frustum;
 mod moments;
+pub(crate) mod point_tree;
 mod ray_tree;
 pub mod shapes;
 pub mod surface_bvh;

@@ -1,6 +1,7 @@
-//! Far-field moments of a [`super::SurfaceBvh`]'s nodes for the fast
-//! winding number (Barill et al. 2018): per child, the area-weighted centroid,
-//! the radius about it, and the first three terms of the dipole expansion.
+//! Far-field moments of a [`super::point_tree::PointTree`]'s nodes for the
+//! fast winding number (Barill et al. 2018): per child, the area-weighted
+//! centroid, the radius about it, and the first three terms of the dipole
+//! expansion.
 
 use super::surface_node::{SurfaceNode, EMPTY, WIDTH};
 use glam::{DVec3, Vec3};
@@ -25,7 +26,7 @@ pub(crate) struct SlotMoments {
     pub(super) hessian: [[[f32; WIDTH]; 6]; 3],
 }
 
-/// The moments of every node of a [`super::SurfaceBvh`].
+/// The moments of every node of a [`super::point_tree::PointTree`].
 pub(crate) struct Moments(pub(super) Vec<SlotMoments>);
 
 impl Moments {

@@ -9,11 +9,12 @@
 //! ray-casting tree's boxes, compiled box kernels and packs (on the full
 //! dragon the multi-hit walk is bound by memory latency, and these nodes
 //! and leaves are what the nearest-hit engine keeps hot). One tree holds
-//! the surface's triangles that have area, in the point tree's leaf order
-//! (see [`RayTree::build`]); the cap that
-//! closes the surface's boundary ([`super::closing`]) has a tree of its
-//! own, so that its triangles, which may be long, never slow the hit
-//! queries, and a count or a hit list never waits for the cap to be made.
+//! the surface's triangles that have area, built straight from the mesh
+//! (see [`RayTree::build`]), so that a count never waits for the
+//! point tree; the cap that closes the surface's boundary
+//! ([`super::closing`]) has a tree of its own, so that its triangles, which
+//! may be long, never slow the hit queries, and a count or a hit list never
+//! waits for the cap to be made.
 
 use crate::aabb::Aabb;
 use crate::accel::bvh::{BuildOptions, Bvh8, CrossingVisitor};
@@ -22,6 +23,7 @@ use crate::ray::Ray;
 use crate::tri::moller::Crossing;
 use crate::tri::{crossing_once, Moller};
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// Which way the crossing rays of occupancy leave a point: along the axis
 /// to the nearest face of the box, tilted by these fixed amounts towards
@@ -31,14 +33,13 @@ const TILT: [f32; 2] = [0.013_1, 0.023_7];
 
 /// A surface's ray-casting tree.
 pub(crate) struct RayTree {
-    /// Over the surface's triangles with area, in the point tree's leaf
-    /// order.
+    /// Over the surface's triangles with area, in the mesh's order.
     surface: Bvh8<Moller>,
-    /// The position in the point tree's leaf order of each of `surface`'s
-    /// triangles, where some were left out for having no area; none when
-    /// all were kept (the positions are the indices).
-    positions: Option<Vec<u32>>,
-    /// Triangles in the point tree's leaf order.
+    /// The mesh's index of each of `surface`'s triangles, where some were
+    /// left out for having no area; none when all were kept (the indices
+    /// are the same).
+    indices: Option<Vec<u32>>,
+    /// Triangles of the surface, with area or not.
     triangles: usize,
     /// Bounds of the triangles in `surface`.
     bounds: Aabb,
@@ -64,109 +65,112 @@ fn has_area(t: &[Vec3; 3]) -> bool {
     (b - a).cross(c - a) != glam::DVec3::ZERO
 }
 
-/// A tree over a triangle soup, built with the wide nodes' free slots
-/// filled ([`BuildOptions::best`]): a walk to every crossing never stops
-/// early, so every pack test it saves counts.
-fn soup_tree(tris: &[[Vec3; 3]]) -> (Bvh8<Moller>, TriangleMesh) {
-    let mesh = TriangleMesh::from_triangles(tris);
-    (Bvh8::build(&mesh, &BuildOptions::best()), mesh)
+/// A tree over a mesh, built with the wide nodes' free slots filled
+/// ([`BuildOptions::best`]): a walk to every crossing never stops early, so
+/// every pack test it saves counts.
+fn crossing_tree(mesh: &TriangleMesh) -> Bvh8<Moller> {
+    Bvh8::build(mesh, &BuildOptions::best())
 }
 
 impl RayTree {
-    /// The tree of the `surface` triangles (in the point tree's leaf
-    /// order).
+    /// The tree of the `surface` mesh's triangles.
     ///
     /// Triangles without area (collinear corners: slivers that CAD
     /// tessellations leave, whose long boxes every ray along them must
     /// open) are left out of the surface's tree; no ray crosses them. An
     /// `f32` Möller test can still report a crossing of one, from rounding
     /// alone; the `f64` references never do, and neither does this tree.
-    pub fn build(surface: &[[Vec3; 3]]) -> Self {
-        let kept: Vec<u32> = (0..surface.len() as u32)
-            .filter(|&i| has_area(&surface[i as usize]))
+    pub fn build(surface: &TriangleMesh) -> Self {
+        let n = surface.num_triangles();
+        let kept: Vec<u32> = (0..n as u32)
+            .into_par_iter()
+            .filter(|&i| has_area(&surface.triangle(i as usize)))
             .collect();
-        let (positions, (tree, mesh)) = if kept.len() == surface.len() {
-            (None, soup_tree(surface))
+        let (indices, tree, bounds) = if kept.len() == n {
+            (None, crossing_tree(surface), surface.bounds())
         } else {
-            let tris: Vec<[Vec3; 3]> = kept.iter().map(|&i| surface[i as usize]).collect();
-            (Some(kept), soup_tree(&tris))
+            let with_area = TriangleMesh::new(
+                surface.positions.clone(),
+                kept.iter().map(|&i| surface.indices[i as usize]).collect(),
+            );
+            let tree = crossing_tree(&with_area);
+            (Some(kept), tree, with_area.bounds())
         };
         RayTree {
             surface: tree,
-            positions,
-            triangles: surface.len(),
-            bounds: mesh.bounds(),
+            indices,
+            triangles: n,
+            bounds,
         }
     }
 
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         use crate::accel::Accel;
-        self.surface.stats().bytes + self.positions.as_ref().map_or(0, |p| 4 * p.len())
+        self.surface.stats().bytes + self.indices.as_ref().map_or(0, |p| 4 * p.len())
     }
 
     /// Walk the surface's hits along `ray`: `visit(c, p, reach)` with `p`
-    /// the triangle's position in the point tree's leaf order, whose
-    /// corners are `corners[p]`; see [`Bvh8::crossings`] and
-    /// [`Settle::settle`] for which crossings are hits.
+    /// the triangle's index in the `surface` mesh (the tree's); see
+    /// [`Bvh8::crossings`] and [`Settle::settle`] for which crossings are
+    /// hits.
     #[inline(always)]
     pub fn surface_hits<const NEAR_FIRST: bool>(
         &self,
         ray: &Ray,
-        corners: &[[Vec3; 3]],
+        surface: &TriangleMesh,
         mut visit: impl FnMut(&Crossing, u32, &mut f32) -> bool,
     ) {
-        let settle = self.settle(ray, corners);
+        let settle = self.settle(ray, surface);
         let _ = self.surface.crossings::<NEAR_FIRST, true, _>(
             ray,
             |c: &Crossing, p, reach: &mut f32| match settle.settle(c, p, *reach) {
-                Some(c) => visit(&c, self.position(p), reach),
+                Some(c) => visit(&c, self.mesh_index(p), reach),
                 None => true,
             },
         );
     }
 
     /// The number of the surface's hits along each of `rays`, walked in
-    /// turn (see [`Bvh8::crossings_batch`]); `corners` as for
+    /// turn (see [`Bvh8::crossings_batch`]); `surface` as for
     /// [`RayTree::surface_hits`].
-    pub fn count_hits(&self, rays: &[Ray], corners: &[[Vec3; 3]], out: &mut [u32]) {
+    pub fn count_hits(&self, rays: &[Ray], surface: &TriangleMesh, out: &mut [u32]) {
         self.surface.crossings_batch::<true, _>(
             rays,
-            |ray| HitCount(0, self.settle(ray, corners)),
+            |ray| HitCount(0, self.settle(ray, surface)),
             |i, v| out[i] = v.0,
         );
     }
 
     /// The surface's hits along each of `rays`, unsorted, with the
-    /// triangles' positions in the point tree's leaf order, walked in turn
-    /// (see [`Bvh8::crossings_batch`]): `done(i, hits, positions)` may
-    /// take ray `i`'s; `corners` as for [`RayTree::surface_hits`].
+    /// triangles' indices in the mesh, walked in turn (see
+    /// [`Bvh8::crossings_batch`]): `done(i, hits, indices)` may take ray
+    /// `i`'s; `surface` as for [`RayTree::surface_hits`].
     pub fn hits(
         &self,
         rays: &[Ray],
-        corners: &[[Vec3; 3]],
+        surface: &TriangleMesh,
         mut done: impl FnMut(usize, &mut Vec<Crossing>, &[u32]),
     ) {
         self.surface.crossings_batch::<true, _>(
             rays,
-            |ray| HitList::new(self.settle(ray, corners)),
+            |ray| HitList::new(self.settle(ray, surface)),
             |i, v| done(i, &mut v.hits, &v.prims),
         );
     }
 
-    fn settle<'a>(&'a self, ray: &Ray, corners: &'a [[Vec3; 3]]) -> Settle<'a> {
+    fn settle<'a>(&'a self, ray: &Ray, surface: &'a TriangleMesh) -> Settle<'a> {
         Settle {
             ray: *ray,
             tree: self,
-            corners,
+            surface,
         }
     }
 
-    /// The position in the point tree's leaf order of the surface tree's
-    /// triangle `p`.
+    /// The mesh's index of the surface tree's triangle `p`.
     #[inline(always)]
-    fn position(&self, p: u32) -> u32 {
-        self.positions.as_ref().map_or(p, |m| m[p as usize])
+    fn mesh_index(&self, p: u32) -> u32 {
+        self.indices.as_ref().map_or(p, |m| m[p as usize])
     }
 }
 
@@ -180,7 +184,8 @@ impl CapTree {
         let mut b = surface.bounds;
         let countable = cap.len() <= surface.triangles / 4;
         let cap = (countable && !cap.is_empty()).then(|| {
-            let (tree, mesh) = soup_tree(cap);
+            let mesh = TriangleMesh::from_triangles(cap);
+            let tree = crossing_tree(&mesh);
             b = b.union(mesh.bounds());
             tree
         });
@@ -257,7 +262,7 @@ impl CapTree {
 struct Settle<'a> {
     ray: Ray,
     tree: &'a RayTree,
-    corners: &'a [[Vec3; 3]],
+    surface: &'a TriangleMesh,
 }
 
 impl Settle<'_> {
@@ -284,8 +289,8 @@ impl Settle<'_> {
     #[cold]
     #[inline(never)]
     fn exact(&self, p: u32, reach: f32) -> Option<crate::tri::TriHit> {
-        let at = self.tree.position(p);
-        crossing_once(&self.corners[at as usize], &self.ray, reach)
+        let at = self.tree.mesh_index(p);
+        crossing_once(&self.surface.triangle(at as usize), &self.ray, reach)
     }
 }
 
@@ -300,8 +305,7 @@ impl CrossingVisitor for HitCount<'_> {
     }
 }
 
-/// Collects hits and their triangles' positions in the point tree's leaf
-/// order.
+/// Collects hits and their triangles' indices in the mesh.
 struct HitList<'a> {
     hits: Vec<Crossing>,
     prims: Vec<u32>,
@@ -323,7 +327,7 @@ impl CrossingVisitor for HitList<'_> {
     fn visit(&mut self, c: &Crossing, p: u32, reach: &mut f32) -> bool {
         if let Some(c) = self.settle.settle(c, p, *reach) {
             self.hits.push(c);
-            self.prims.push(self.settle.tree.position(p));
+            self.prims.push(self.settle.tree.mesh_index(p));
         }
         true
     }

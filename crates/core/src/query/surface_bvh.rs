@@ -1,107 +1,101 @@
-//! [`SurfaceBvh`]: the 8-wide BVH behind the point queries (closest point,
-//! distance, winding number), and the owner of the ray-casting tree
-//! (`super::ray_tree`) behind the multi-hit ray queries and occupancy.
+//! [`SurfaceBvh`]: a surface's point and multi-hit ray queries, and the
+//! owner of the trees behind them, each made on the first query that needs
+//! it: the point tree (`super::point_tree`) of closest points,
+//! distances and winding numbers; the ray-casting tree
+//! (`super::ray_tree`) of counts, hit lists and occupancy; and the cap
+//! that closes the surface's boundary with its trees (occupancy and signed
+//! distance). Building only keeps the mesh, so a count never waits for the
+//! point tree, nor a closest point for the ray-casting tree.
 //!
-//! It is made by the same binned-SAH build as [`crate::accel::Bvh8`]
-//! (module `accel::bvh::build`), collapsed into nodes of up to eight
-//! children the same way (the largest-area inner child's children pulled
-//! up first), with the children's boxes in structure-of-arrays layout so
-//! that one query point or ray is tested against all eight at once (the
-//! loops over the eight lanes compile to SIMD). Unlike the ray-casting
-//! tree's leaves (packs of precomputed Möller data), its leaves keep the
-//! triangles' corners, which the closest-point and solid-angle kernels
-//! need, and every child slot keeps the range of triangles below it, from
-//! which the winding-number moments are made ([`super::winding`]).
+//! A tree made on first use inside a parallel loop could deadlock: the
+//! thread making it may be handed, while it waits on its own parallel
+//! build, another iteration that waits for the same tree. The batch
+//! queries therefore make what they need before their loops, and
+//! [`SurfaceBvh::prepare`] makes it for callers that query from their own
+//! parallel loops.
 
 use super::closing::closing_cap;
-use super::moments::Moments;
+use super::point_tree::PointTree;
 use super::ray_tree::{CapTree, RayTree};
 use crate::aabb::Aabb;
-use crate::accel::bvh::{build, BuildNode, BuildOptions};
+use crate::accel::bvh::BuildOptions;
 use crate::mesh::TriangleMesh;
 use crate::unit_scale::UnitScale;
 use glam::Vec3;
-use rayon::prelude::*;
 use std::sync::OnceLock;
 
 pub use super::surface_node::WIDTH;
-pub(crate) use super::surface_node::{stack_of, SurfaceNode, EMPTY, SMALL_STACK};
+pub(crate) use super::surface_node::{stack_of, EMPTY, SMALL_STACK};
 
-/// An 8-wide BVH over a mesh's triangles for point and multi-hit ray
-/// queries. The root is node 0 (a mesh of one leaf gets a root node with
-/// that leaf as its only child); an empty mesh has no nodes.
+/// A triangle mesh's surface for point queries (Ericson 2005's closest
+/// point; Jacobson et al. 2013's winding number with Barill et al. 2018's
+/// far field) and multi-hit ray queries, with the trees behind them made
+/// on first use.
 pub struct SurfaceBvh {
-    pub(crate) nodes: Vec<SurfaceNode>,
-    /// The scale the tree, the corners and the trees made from them are
-    /// at ([`UnitScale`]): every query scales its points or rays in and
-    /// its lengths back.
+    /// The scale the mesh and the trees made from it are at
+    /// ([`UnitScale`]): every query scales its points or rays in and its
+    /// lengths back.
     pub(crate) scale: UnitScale,
-    /// Corners of the triangles in leaf order, at [`SurfaceBvh::scale`].
-    pub(crate) tris: Vec<[Vec3; 3]>,
-    /// Mesh triangle index of each triangle in leaf order.
-    pub(crate) prims: Vec<u32>,
+    /// The mesh, at [`SurfaceBvh::scale`].
+    pub(crate) mesh: TriangleMesh,
     /// Bounds of the triangles, in the mesh's units.
     pub(crate) bounds: Aabb,
-    /// Most traversal stack entries a query can need (each inner node
-    /// visited pushes at most eight and pops one).
-    pub(crate) stack_need: usize,
-    /// Winding-number moments, made on first use.
-    pub(crate) moments: OnceLock<Moments>,
+    /// How the point tree is built.
+    options: BuildOptions,
+    /// The point queries' tree, made on first use.
+    pub(crate) points: OnceLock<PointTree>,
     /// The ray-casting tree of the multi-hit queries and occupancy, made on
     /// first use.
     pub(crate) rays: OnceLock<RayTree>,
     /// The ray-casting tree of the cap that closes the surface, and the
-    /// cap's point tree for its winding number (none when the surface is
+    /// cap's own surface for its winding number (none when the surface is
     /// closed or crossings are not counted), made on the first occupancy
     /// query.
-    pub(crate) closing: OnceLock<(CapTree, Option<Box<SurfaceBvh>>)>,
+    closing: OnceLock<(CapTree, Option<Box<SurfaceBvh>>)>,
 }
 
 impl SurfaceBvh {
-    /// Build over all triangles of `mesh` with the default build options.
+    /// The surface of all triangles of `mesh`, its point tree to be built
+    /// with the default build options.
     pub fn build(mesh: &TriangleMesh) -> Self {
         Self::build_with(mesh, &BuildOptions::default())
     }
 
-    /// Build over all triangles of `mesh` (the binned SAH or linear BVH that
-    /// `options.quality` names, leaves of up to `options.max_leaf_size`),
-    /// at unit scale when the mesh is tiny ([`UnitScale`]).
+    /// The surface of all triangles of `mesh`, at unit scale when the mesh
+    /// is tiny ([`UnitScale`]); its point tree, when a query needs it, is
+    /// the binned SAH or linear BVH that `options.quality` names, leaves of
+    /// up to `options.max_leaf_size`.
     pub fn build_with(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
         let (scale, scaled) = UnitScale::of(mesh);
-        let mesh = &*scaled;
-        let tree = build::build(mesh, options);
-        let tris: Vec<[Vec3; 3]> = tree
-            .order
-            .par_iter()
-            .map(|&t| mesh.triangle(t as usize))
-            .collect();
-        let bounds = tree.root.bounds();
-        let mut bvh = SurfaceBvh {
-            nodes: Vec::new(),
+        let mesh = TriangleMesh::new(scaled.positions.clone(), scaled.indices.clone());
+        let bounds = mesh.bounds();
+        SurfaceBvh {
             scale,
-            tris,
-            prims: tree.order,
+            mesh,
             bounds: scale.aabb_to_model(&bounds),
-            stack_need: 1,
-            moments: OnceLock::new(),
+            options: options.clone(),
+            points: OnceLock::new(),
             rays: OnceLock::new(),
             closing: OnceLock::new(),
-        };
-        if !bvh.prims.is_empty() {
-            bvh.nodes.push(SurfaceNode::default());
-            let slots = match &tree.root {
-                BuildNode::Leaf { .. } => vec![&tree.root],
-                BuildNode::Inner { .. } => widen(&tree.root),
-            };
-            let depth = fill(&mut bvh.nodes, 0, &slots, PAR_LEVELS);
-            bvh.stack_need = (WIDTH - 1) * depth + WIDTH + 1;
         }
-        bvh
+    }
+
+    /// The point tree over the triangles; made on first use.
+    pub(crate) fn points(&self) -> &PointTree {
+        self.points
+            .get_or_init(|| PointTree::build(&self.mesh, &self.options))
+    }
+
+    /// The point tree and its winding-number moments; made on first use.
+    pub(crate) fn winding_tree(&self) -> &PointTree {
+        let points = self.points();
+        points.moments();
+        points
     }
 
     /// The ray-casting tree over the triangles; made on first use.
     pub(crate) fn ray_tree(&self) -> &RayTree {
-        self.rays.get_or_init(|| RayTree::build(&self.tris))
+        self.rays.get_or_init(|| RayTree::build(&self.mesh))
     }
 
     /// The ray-casting trees over the triangles and over the cap that
@@ -111,13 +105,16 @@ impl SurfaceBvh {
     pub(crate) fn closed_trees(&self) -> (&RayTree, &CapTree, Option<&SurfaceBvh>) {
         let tree = self.ray_tree();
         let (cap_tree, cap) = self.closing.get_or_init(|| {
-            let cap = closing_cap(&self.tris);
+            let corners: Vec<[Vec3; 3]> = (0..self.mesh.num_triangles())
+                .map(|t| self.mesh.triangle(t))
+                .collect();
+            let cap = closing_cap(&corners);
             let cap_tree = CapTree::build(tree, &cap);
             let winding = (cap_tree.countable() && !cap.is_empty()).then(|| {
                 let cap = Box::new(SurfaceBvh::build(&TriangleMesh::from_triangles(&cap)));
                 // Made here rather than at the cap's first winding number,
                 // which the batches ask for inside their parallel loops.
-                cap.moments();
+                cap.winding_tree();
                 cap
             });
             (cap_tree, winding)
@@ -125,186 +122,26 @@ impl SurfaceBvh {
         (tree, cap_tree, cap.as_deref())
     }
 
-    /// Bytes held: nodes, corners and triangle indices, and the
-    /// winding-number moments and ray-casting trees where they have been
-    /// made.
+    /// Bytes held: the mesh, and the trees and winding-number moments that
+    /// have been made.
     pub fn bytes(&self) -> usize {
-        let own = self.nodes.len() * std::mem::size_of::<SurfaceNode>()
-            + self.tris.len() * (std::mem::size_of::<[Vec3; 3]>() + std::mem::size_of::<u32>());
-        let moments = self.moments.get().map_or(0, Moments::bytes);
+        let own = std::mem::size_of_val(&self.mesh.positions[..])
+            + std::mem::size_of_val(&self.mesh.indices[..]);
+        let points = self.points.get().map_or(0, PointTree::bytes);
         let rays = self.rays.get().map_or(0, RayTree::bytes);
         let closing = self.closing.get().map_or(0, |(tree, cap)| {
             tree.bytes() + cap.as_ref().map_or(0, |c| c.bytes())
         });
-        own + moments + rays + closing
+        own + points + rays + closing
     }
 
     /// Number of triangles.
     pub fn num_triangles(&self) -> usize {
-        self.prims.len()
+        self.mesh.num_triangles()
     }
 
     /// Bounds of all triangles.
     pub fn bounds(&self) -> Aabb {
         self.bounds
-    }
-
-    /// Number of inner nodes.
-    pub fn num_nodes(&self) -> usize {
-        self.nodes.len()
-    }
-}
-
-/// The levels of wide nodes below the root whose subtrees are made in
-/// parallel: each inner child's subtree on its own, appended in slot order.
-const PAR_LEVELS: u32 = 2;
-
-/// Fill node `at` of `nodes` with `slots` as children, making their inner
-/// nodes after it (each node's inner children after it, so moments can be
-/// made children first by walking the nodes backwards); returns the number
-/// of inner levels from `at` down (1 for a node of leaves). For `par`
-/// levels, each inner child's subtree is made on its own in parallel and
-/// appended in slot order, its references moved by its place; the tree
-/// does not depend on the number of threads.
-fn fill(nodes: &mut Vec<SurfaceNode>, at: usize, slots: &[&BuildNode], par: u32) -> usize {
-    let mut node = SurfaceNode::default();
-    let mut inner = Vec::new();
-    for (k, s) in slots.iter().enumerate() {
-        let b = s.bounds();
-        for a in 0..3 {
-            node.min[a][k] = b.min[a];
-            node.max[a][k] = b.max[a];
-        }
-        let (first, total) = s.triangle_range();
-        node.first[k] = first;
-        node.total[k] = total;
-        match s {
-            BuildNode::Leaf { first, count, .. } => {
-                node.child[k] = *first;
-                node.count[k] = (*count).max(1);
-                if *count == 0 {
-                    node.child[k] = EMPTY;
-                    node.count[k] = 0;
-                }
-            }
-            BuildNode::Inner { .. } if par == 0 => {
-                node.child[k] = nodes.len() as u32;
-                nodes.push(SurfaceNode::default());
-                inner.push((nodes.len() - 1, *s));
-            }
-            BuildNode::Inner { .. } => inner.push((k, *s)),
-        }
-    }
-    let mut depth = 1;
-    if par == 0 {
-        nodes[at] = node;
-        for (idx, s) in inner {
-            depth = depth.max(1 + fill(nodes, idx, &widen(s), 0));
-        }
-        return depth;
-    }
-    let subtrees: Vec<(Vec<SurfaceNode>, usize)> = inner
-        .par_iter()
-        .map(|(_, s)| {
-            let mut sub = vec![SurfaceNode::default()];
-            let d = fill(&mut sub, 0, &widen(s), par - 1);
-            (sub, d)
-        })
-        .collect();
-    for ((k, _), (mut sub, d)) in inner.iter().zip(subtrees) {
-        let offset = nodes.len() as u32;
-        for n in &mut sub {
-            for c in 0..WIDTH {
-                if n.count[c] == 0 && n.child[c] != EMPTY {
-                    n.child[c] += offset;
-                }
-            }
-        }
-        node.child[*k] = offset;
-        nodes.append(&mut sub);
-        depth = depth.max(1 + d);
-    }
-    nodes[at] = node;
-    depth
-}
-
-/// The up to eight nodes that replace the inner node `node`: its two
-/// children, then repeatedly the inner one of largest surface area replaced
-/// by its own two children, as the wide collapse of the ray-casting BVHs.
-pub(crate) fn widen(node: &BuildNode) -> Vec<&BuildNode> {
-    let BuildNode::Inner { children, .. } = node else {
-        return vec![node];
-    };
-    let mut slots: Vec<&BuildNode> = vec![&children[0], &children[1]];
-    while slots.len() < WIDTH {
-        let pick = slots
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| matches!(s, BuildNode::Inner { .. }))
-            .max_by(|a, b| {
-                a.1.bounds()
-                    .surface_area()
-                    .total_cmp(&b.1.bounds().surface_area())
-            })
-            .map(|(i, _)| i);
-        let Some(i) = pick else { break };
-        let BuildNode::Inner { children, .. } = slots[i] else {
-            break;
-        };
-        slots[i] = &children[0];
-        slots.push(&children[1]);
-    }
-    slots
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::rng::Pcg32;
-
-    #[test]
-    fn every_triangle_sits_in_exactly_one_leaf_inside_its_boxes() {
-        let mut rng = Pcg32::new(3);
-        let mut pos = Vec::new();
-        let mut idx = Vec::new();
-        for i in 0..3000u32 {
-            let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
-            for _ in 0..3 {
-                pos.push(c + rng.unit_vector() * 0.01);
-            }
-            idx.push([3 * i, 3 * i + 1, 3 * i + 2]);
-        }
-        let mesh = TriangleMesh::new(pos, idx);
-        let bvh = SurfaceBvh::build(&mesh);
-        let mut seen = vec![0u32; mesh.num_triangles()];
-        let mut stack = vec![0usize];
-        while let Some(n) = stack.pop() {
-            let node = &bvh.nodes[n];
-            for k in 0..WIDTH {
-                if node.child[k] == EMPTY {
-                    continue;
-                }
-                let lo = Vec3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
-                let hi = Vec3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
-                let r = node.first[k] as usize..(node.first[k] + node.total[k]) as usize;
-                for t in r.clone() {
-                    for v in bvh.tris[t] {
-                        assert!(v.cmpge(lo).all() && v.cmple(hi).all());
-                    }
-                }
-                if node.count[k] > 0 {
-                    assert_eq!(node.child[k] as usize, r.start);
-                    assert_eq!(node.count[k] as usize, r.len());
-                    for t in r {
-                        seen[bvh.prims[t] as usize] += 1;
-                        assert_eq!(bvh.tris[t], mesh.triangle(bvh.prims[t] as usize));
-                        assert!(bvh.scale.is_one());
-                    }
-                } else {
-                    stack.push(node.child[k] as usize);
-                }
-            }
-        }
-        assert!(seen.iter().all(|&s| s == 1));
     }
 }

@@ -25,8 +25,9 @@
 //! with the moments `N = Σ A_t`, `T_ij = Σ A_t,i ∫(y - p̃)_j dA / a_t` and
 //! `C_ijk = Σ A_t,i ∫(y - p̃)_j (y - p̃)_k dA / a_t`, integrated exactly over
 //! each flat triangle (the terms up to Barill et al.'s "order 2"). A child
-//! of a [`SurfaceBvh`] node whose triangles all lie within `ρ` of `p̃` is
-//! taken in this form when `r > β·ρ` (β = 2 by default, as in the paper);
+//! of a point tree's node (`super::point_tree`) whose triangles all lie
+//! within `ρ` of `p̃` is taken in this form when `r > β·ρ` (β = 2 by
+//! default, as in the paper);
 //! otherwise it is opened, and leaves are summed exactly. The error falls
 //! as `(ρ / r)⁴`; at β = 2 the tests find it below 1% of a unit winding
 //! number, far from the ½ threshold.
@@ -48,7 +49,8 @@
 //! one vector; leaves use an inline arctangent good to 3·10⁻⁷ radians.
 
 use super::batch::answer_coherent;
-use super::moments::{Moments, SlotMoments};
+use super::moments::SlotMoments;
+use super::point_tree::PointTree;
 use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
 use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
@@ -192,11 +194,6 @@ fn far_fields(m: &SlotMoments, q: Vec3, beta2: f32, far: &mut [bool; WIDTH]) -> 
 }
 
 impl SurfaceBvh {
-    pub(super) fn moments(&self) -> &Moments {
-        self.moments
-            .get_or_init(|| Moments::build(&self.nodes, &self.tris))
-    }
-
     /// The generalized winding number of `q` with Barill et al.'s far-field
     /// approximation at accuracy `beta` (a child is approximated when `q` is
     /// farther than `beta` times its radius from its centre; `beta = inf`
@@ -212,59 +209,17 @@ impl SurfaceBvh {
         if !q.is_finite() {
             return f32::NAN;
         }
-        if self.nodes.is_empty() {
+        let tree = self.winding_tree();
+        if tree.nodes.is_empty() {
             return 0.0;
         }
-        let moments = &self.moments().0;
+        let moments = &tree.moments().0;
         #[cfg(target_arch = "x86_64")]
         if crate::accel::bvh::avx2() {
             // SAFETY: the CPU has AVX2 and FMA.
-            return unsafe { self.winding_avx2(moments, q, beta) };
+            return unsafe { tree.winding_avx2(moments, q, beta) };
         }
-        self.winding(moments, q, beta)
-    }
-
-    /// [`SurfaceBvh::winding_number_with`]'s walk compiled for AVX2 and
-    /// FMA, so that a node's eight far fields are one vector each.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn winding_avx2(&self, moments: &[SlotMoments], q: Vec3, beta: f32) -> f32 {
-        self.winding(moments, q, beta)
-    }
-
-    #[inline(always)]
-    #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
-    fn winding(&self, moments: &[SlotMoments], q: Vec3, beta: f32) -> f32 {
-        let beta2 = beta * beta;
-        let mut w = 0.0f32;
-        let (mut small, mut big) = ([0u32; SMALL_STACK], Vec::new());
-        let stack = stack_of(&mut small, &mut big, self.stack_need);
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let ni = stack[sp] as usize;
-            let (node, m) = (&self.nodes[ni], &moments[ni]);
-            let mut far = [false; WIDTH];
-            w += far_fields(m, q, beta2, &mut far);
-            for k in 0..WIDTH {
-                if far[k] || node.child[k] == EMPTY {
-                    continue;
-                }
-                if node.count[k] > 0 {
-                    let first = node.child[k] as usize;
-                    for t in &self.tris[first..first + node.count[k] as usize] {
-                        w += solid_angle32(t[0] - q, t[1] - q, t[2] - q);
-                    }
-                } else if sp < stack.len() {
-                    stack[sp] = node.child[k];
-                    sp += 1;
-                }
-            }
-        }
-        w / (4.0 * std::f32::consts::PI)
+        tree.winding(moments, q, beta)
     }
 
     /// [`SurfaceBvh::winding_number_with`] at [`DEFAULT_BETA`].
@@ -281,7 +236,7 @@ impl SurfaceBvh {
     /// whose cap would hold more than a quarter as many triangles as it
     /// (counting would cost more than summing).
     pub fn winding_number_counted(&self, q: Vec3) -> Option<f32> {
-        if self.nodes.is_empty() {
+        if self.mesh.indices.is_empty() {
             return q.is_finite().then_some(0.0);
         }
         let q = self.scale.point(q);
@@ -348,7 +303,7 @@ impl SurfaceBvh {
             .filter(|&i| counted[i].is_none())
             .collect();
         if !open.is_empty() {
-            self.moments();
+            self.winding_tree();
             let at: Vec<Vec3> = open.iter().map(|&i| points[i]).collect();
             let mut summed = vec![false; at.len()];
             answer_coherent(&at, &mut summed, |p, _: &mut ()| self.inside_summed(p));
@@ -373,10 +328,26 @@ impl SurfaceBvh {
         signed(d, !d.is_nan() && self.is_inside(q))
     }
 
+    /// Make what signed distances need: the point tree, and the
+    /// ray-casting trees of the surface and its closing cap (with the
+    /// winding-number moments when the crossings are not counted), the two
+    /// made side by side, since neither build keeps both cores busy
+    /// throughout.
+    pub(crate) fn signed_trees(&self) {
+        rayon::join(
+            || self.points(),
+            || {
+                if !self.closed_trees().1.countable() {
+                    self.winding_tree();
+                }
+            },
+        );
+    }
+
     /// [`SurfaceBvh::winding_number`] for many points, in parallel, in
     /// Morton order so that neighbouring points share cached nodes.
     pub fn winding_numbers(&self, points: &[Vec3], out: &mut [f32]) {
-        self.moments();
+        self.winding_tree();
         answer_coherent(points, out, |p, _: &mut ()| self.winding_number(p));
     }
 
@@ -396,7 +367,7 @@ impl SurfaceBvh {
     /// distances searched as in [`SurfaceBvh::distances`].
     pub fn signed_distances(&self, points: &[Vec3], out: &mut [f32]) {
         assert_eq!(points.len(), out.len(), "one result per point");
-        self.closed_trees();
+        self.signed_trees();
         let mut first = vec![(0.0f32, None); points.len()];
         answer_coherent(points, &mut first, |p, hint| {
             let d = self.distance_hinted(p, hint);
@@ -414,6 +385,51 @@ impl SurfaceBvh {
         for ((o, (d, _)), inside) in out.iter_mut().zip(first).zip(inside) {
             *o = signed(d, inside);
         }
+    }
+}
+
+impl PointTree {
+    /// [`SurfaceBvh::winding_number_with`]'s walk compiled for AVX2 and
+    /// FMA, so that a node's eight far fields are one vector each.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn winding_avx2(&self, moments: &[SlotMoments], q: Vec3, beta: f32) -> f32 {
+        self.winding(moments, q, beta)
+    }
+
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
+    fn winding(&self, moments: &[SlotMoments], q: Vec3, beta: f32) -> f32 {
+        let beta2 = beta * beta;
+        let mut w = 0.0f32;
+        let (mut small, mut big) = ([0u32; SMALL_STACK], Vec::new());
+        let stack = stack_of(&mut small, &mut big, self.stack_need);
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let ni = stack[sp] as usize;
+            let (node, m) = (&self.nodes[ni], &moments[ni]);
+            let mut far = [false; WIDTH];
+            w += far_fields(m, q, beta2, &mut far);
+            for k in 0..WIDTH {
+                if far[k] || node.child[k] == EMPTY {
+                    continue;
+                }
+                if node.count[k] > 0 {
+                    let first = node.child[k] as usize;
+                    for t in &self.tris[first..first + node.count[k] as usize] {
+                        w += solid_angle32(t[0] - q, t[1] - q, t[2] - q);
+                    }
+                } else if sp < stack.len() {
+                    stack[sp] = node.child[k];
+                    sp += 1;
+                }
+            }
+        }
+        w / (4.0 * std::f32::consts::PI)
     }
 }
 
