@@ -283,7 +283,28 @@ fn rasters_from_ascii_grids_keep_the_prj_coordinate_system() {
         assert!(o.status.success(), "{}", text(&o.stderr));
         assert_eq!(crs(&out), want, "{name}");
     }
+    // A GeoTIFF whose coordinate system is only in its sidecar (the mask
+    // above), taken as a DEM, passes it on.
+    let again = dir.path().join("again.tif");
+    let mask = dir.path().join("mask.tif");
+    let o = raykit(&[
+        "terrain",
+        "shadow",
+        s(&mask),
+        "--out",
+        s(&again),
+        "--sun",
+        "135,30",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(crs(&again), want, "a mask computed from the mask");
     let out = dir.path().join("from_tif.tif");
+    // A sidecar left at the output's path from an earlier file goes.
+    std::fs::copy(
+        raykit_terrain::io::crs_sidecar_path(&mask),
+        raykit_terrain::io::crs_sidecar_path(&out),
+    )
+    .unwrap();
     let o = raykit(&[
         "terrain",
         "shadow",

@@ -724,6 +724,46 @@ fn geotiff_round_trip_u8_and_geographic() {
     );
 }
 
+/// A coordinate system known only as WKT (an ASCII grid's `.prj`) goes
+/// into the GeoTIFF's `.aux.xml` and comes back with the raster, geographic
+/// or projected, through a second write; a raster whose GeoKeys declare a
+/// coordinate system ignores a sidecar, and writing it removes the stale
+/// one.
+#[test]
+fn a_coordinate_system_in_the_sidecar_round_trips() {
+    let dir = TempDir::new("crs-sidecar");
+    let projected = r#"PROJCS["NAD_1983_UTM_Zone_15N",GEOGCS["GCS_North_American_1983",DATUM["D_North_American_1983",SPHEROID["GRS_1980",6378137.0,298.257222101]]],PROJECTION["Transverse_Mercator"],UNIT["Meter",1.0]]"#;
+    let geographic = r#"GEOGCS["GCS_WGS_1984",DATUM["D_WGS_1984",SPHEROID["WGS_1984",6378137.0,298.257223563]],UNIT["Degree",0.0174532925199433]]"#;
+    for (k, wkt) in [projected, geographic].into_iter().enumerate() {
+        let mut dem = Dem::from_heights(3, 2, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        dem.georef.crs_wkt = Some(wkt.to_string());
+        dem.georef.geographic = k == 1;
+        let first = dir.join(&format!("first{k}.tif"));
+        write_dem_geotiff(&first, &dem).unwrap();
+        let back = read_geotiff(&first).unwrap();
+        assert_eq!(back.georef.crs_wkt.as_deref(), Some(wkt), "case {k}");
+        assert_eq!(back.georef.geographic, k == 1, "case {k}");
+        // Written again from what was read: the GeoKeys are now the
+        // minimal directory, which still declares no coordinate system.
+        let second = dir.join(&format!("second{k}.tif"));
+        write_dem_geotiff(&second, &back).unwrap();
+        let again = read_geotiff(&second).unwrap();
+        assert_eq!(again.georef, back.georef, "case {k}");
+    }
+
+    // GeoKeys that declare a coordinate system (EPSG:4326) win over a
+    // sidecar, and a write removes the sidecar left at its path.
+    let mut dem = Dem::from_heights(2, 2, vec![1.0, 2.0, 3.0, 4.0]);
+    dem.georef.geographic = true;
+    dem.georef.geo_keys = vec![1, 1, 0, 3, 1024, 0, 1, 2, 1025, 0, 1, 1, 2048, 0, 1, 4326];
+    let out = dir.join("declared.tif");
+    write_dem_geotiff(&out, &dem).unwrap();
+    raykit_terrain::io::write_crs_sidecar(&out, projected).unwrap();
+    assert_eq!(read_geotiff(&out).unwrap().georef.crs_wkt, None);
+    write_dem_geotiff(&out, &dem).unwrap();
+    assert!(!raykit_terrain::io::crs_sidecar_path(&out).exists());
+}
+
 /// Writes a small GeoTIFF with the `tiff` encoder directly, with whatever
 /// georeferencing tags the test wants.
 fn write_custom_tiff(path: &Path, data: &[i16], w: u32, h: u32, tags: &[(u16, TagValue)]) {

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
+use super::crs_sidecar::wkt_is_geographic;
 use super::limits::{check_dimensions, zeroed_heights};
 use super::nodata::nodata_as_f32;
 use super::DemError;
@@ -95,10 +96,7 @@ pub fn read_ascii_grid(path: impl AsRef<Path>) -> Result<Dem, DemError> {
         }
     }
     let crs_wkt = read_prj(path);
-    let geographic = crs_wkt.as_deref().is_some_and(|wkt| {
-        let top = wkt.to_ascii_uppercase();
-        top.starts_with("GEOGCS") || top.starts_with("GEOGCRS") || top.starts_with("GEODCRS")
-    });
+    let geographic = crs_wkt.as_deref().is_some_and(wkt_is_geographic);
     let (x0, y0) = header.corner;
     let (cw, ch) = header.cell;
     Ok(Dem {

@@ -48,6 +48,17 @@ pub fn set_geo_key_short(keys: &mut [u16], id: u16, value: u16) -> bool {
     }
 }
 
+/// Whether a valid directory declares a coordinate system: any key from
+/// 2048 up (the geographic, projected and vertical coordinate system keys;
+/// those below are the model and raster types and the citation).
+pub fn declares_crs(keys: &[u16]) -> bool {
+    let n = keys.get(3).map_or(0, |&n| n as usize);
+    (0..n)
+        .map(|k| 4 + 4 * k)
+        .take_while(|&i| i + 3 < keys.len())
+        .any(|i| keys[i] >= 2048)
+}
+
 /// Index of the entry for key `id` in a valid directory.
 fn entry_index(keys: &[u16], id: u16) -> Option<usize> {
     let n = *keys.get(3)? as usize;

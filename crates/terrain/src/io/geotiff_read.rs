@@ -10,7 +10,10 @@ use std::path::Path;
 use tiff::decoder::{ifd::Value, Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
-use super::geokeys::{geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
+use super::crs_sidecar::{read_crs_sidecar, wkt_is_geographic};
+use super::geokeys::{
+    declares_crs, geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE,
+};
 use super::geotiff_sparse::{absent_height, block_byte_counts, read_sparse};
 use super::limits::{check_dimensions, ensure_room, zeroed_heights, MAX_SAMPLES};
 use super::nodata::nodata_as_f32;
@@ -525,16 +528,25 @@ fn read_georef<R: Read + std::io::Seek>(
         ox -= 0.5 * pw;
         oy -= 0.5 * ph;
     }
+    // A coordinate system the GeoKeys do not declare may be in GDAL's
+    // sidecar, as this crate writes it for ASCII grids' `.prj`.
+    let crs_wkt = (!declares_crs(&geo_keys))
+        .then(|| read_crs_sidecar(path))
+        .flatten();
+    let geographic = match geo_key_short(&geo_keys, KEY_MODEL_TYPE) {
+        Some(model) => model == 2,
+        None => crs_wkt.as_deref().is_some_and(wkt_is_geographic),
+    };
     Ok(GeoRef {
         origin_x: ox,
         origin_y: oy,
         pixel_width: pw,
         pixel_height: ph,
-        geographic: geo_key_short(&geo_keys, KEY_MODEL_TYPE) == Some(2),
+        geographic,
         geo_keys,
         geo_doubles,
         geo_ascii,
-        crs_wkt: None,
+        crs_wkt,
     })
 }
 

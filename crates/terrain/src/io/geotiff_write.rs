@@ -13,8 +13,8 @@ use tiff::encoder::{
 };
 use tiff::tags::Tag;
 
-use super::crs_sidecar::write_crs_sidecar;
-use super::geokeys::{set_geo_key_short, validate_geo_keys, KEY_RASTER_TYPE};
+use super::crs_sidecar::{remove_crs_sidecar, write_crs_sidecar};
+use super::geokeys::{declares_crs, set_geo_key_short, validate_geo_keys, KEY_RASTER_TYPE};
 use super::geotiff_blocks::{write_strips, write_tiles, TileSample};
 use super::geotiff_layout::{GeoTiffLayout, TiffCompression};
 use super::geotiff_read::{
@@ -96,8 +96,10 @@ pub fn write_geotiff_u8_with(
 /// PixelIsPoint raster type is changed to PixelIsArea (the origin is already
 /// the pixel corner); empty `geo_keys` become a minimal directory (model
 /// type projected or geographic, PixelIsArea), and a coordinate system
-/// known only as WKT (`georef.crs_wkt`) is written beside the file in
-/// GDAL's `.aux.xml` ([`write_crs_sidecar`]). GeoDoubleParams and
+/// known only as WKT (`georef.crs_wkt`, when the GeoKeys declare none) is
+/// written beside the file in GDAL's `.aux.xml` ([`write_crs_sidecar`]);
+/// otherwise an `.aux.xml` left there by an earlier file of that name is
+/// removed. GeoDoubleParams and
 /// GeoAsciiParams are written when non-empty, GDAL_NODATA when `nodata` is
 /// given, and then NaN samples are written as the nodata value. Files over
 /// about 4 GiB are BigTIFF. Samples are written in uncompressed strips
@@ -272,10 +274,11 @@ where
         },
         |e| DemError::new(path, "write", e.to_string()),
     )?;
-    // A coordinate system the GeoKeys do not hold goes beside the file.
+    // A coordinate system the GeoKeys do not hold goes beside the file; a
+    // sidecar left from an earlier file of that name goes.
     match &g.crs_wkt {
-        Some(wkt) if g.geo_keys.is_empty() => write_crs_sidecar(path, wkt),
-        _ => Ok(()),
+        Some(wkt) if !declares_crs(&g.geo_keys) => write_crs_sidecar(path, wkt),
+        _ => remove_crs_sidecar(path),
     }
 }
 

@@ -25,7 +25,9 @@ mod terragen;
 
 pub use ascii_grid::read_ascii_grid;
 pub use creation_options::layout_from_creation_options;
-pub use crs_sidecar::{crs_sidecar_path, write_crs_sidecar};
+pub use crs_sidecar::{
+    crs_sidecar_path, read_crs_sidecar, remove_crs_sidecar, wkt_is_geographic, write_crs_sidecar,
+};
 pub use error::DemError;
 pub use geokeys::{geo_key_short, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
 pub use geotiff_blocks::TileSample;
