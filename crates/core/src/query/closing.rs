@@ -13,9 +13,10 @@
 //! the bunny need no cap at all; the teapot's lid rim and the engine's
 //! open rims and seams get one.
 //!
-//! The boundary is found on the corners welded by their exact position
-//! (two triangles share an edge when its two end points are the same
-//! `f32` triples), with orientation: an edge's net use is the number of
+//! The boundary is found on the mesh's vertices welded by their exact
+//! position (two triangles share an edge when its two end points are the
+//! same `f32` triples, whether or not the mesh shares the vertices), with
+//! orientation: an edge's net use is the number of
 //! triangles running it `a → b` minus those running `b → a`, and every
 //! edge with a net use is boundary, that many times. As many boundary
 //! edges leave each corner as arrive, so the boundary splits into cycles,
@@ -32,69 +33,22 @@
 //! which occupancy adds up instead of summing them (see
 //! [`super::winding`]).
 
+use crate::mesh::TriangleMesh;
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// A corner as a sort key: its position's bits (`-0.0` read as `0.0`) in
+/// A vertex as a sort key: its position's bits (`-0.0` read as `0.0`) in
 /// the high 96 bits, so that equal positions sort together, then its index.
-fn key(p: Vec3, corner: usize) -> u128 {
+fn key(p: Vec3, vertex: usize) -> u128 {
     let [x, y, z] = (p + Vec3::ZERO).to_array().map(f32::to_bits);
-    (x as u128) << 96 | (y as u128) << 64 | (z as u128) << 32 | corner as u128
+    (x as u128) << 96 | (y as u128) << 64 | (z as u128) << 32 | vertex as u128
 }
 
-/// The triangles that close the boundary of the surface `tris` (see the
+/// The triangles that close the boundary of the surface `mesh` (see the
 /// module documentation): none for a closed surface.
-pub(crate) fn closing_cap(tris: &[[Vec3; 3]]) -> Vec<[Vec3; 3]> {
-    // Weld the corners by position: corner `3t + k` gets vertex `ids[..]`.
-    let mut corners: Vec<u128> = (0..3 * tris.len())
-        .into_par_iter()
-        .map(|i| key(tris[i / 3][i % 3], i))
-        .collect();
-    corners.par_sort_unstable();
-    let mut ids = vec![0u32; corners.len()];
-    let mut positions: Vec<Vec3> = Vec::new();
-    for (i, &k) in corners.iter().enumerate() {
-        if i == 0 || k >> 32 != corners[i - 1] >> 32 {
-            let bits = [(k >> 96) as u32, (k >> 64) as u32, (k >> 32) as u32];
-            positions.push(Vec3::from_array(bits.map(f32::from_bits)));
-        }
-        ids[k as u32 as usize] = positions.len() as u32 - 1;
-    }
-    drop(corners);
-    // Net use of each undirected edge `(lo, hi)`: +1 per triangle running
-    // it `lo → hi`, -1 per triangle running it `hi → lo`.
-    let mut edges: Vec<(u64, i32)> = (0..tris.len())
-        .into_par_iter()
-        .flat_map_iter(|t| {
-            let v = [ids[3 * t], ids[3 * t + 1], ids[3 * t + 2]];
-            (0..3).map(move |k| {
-                let (a, b) = (v[k], v[(k + 1) % 3]);
-                if a < b {
-                    ((a as u64) << 32 | b as u64, 1)
-                } else {
-                    ((b as u64) << 32 | a as u64, -1)
-                }
-            })
-        })
-        .filter(|&(e, _)| e >> 32 != e & 0xffff_ffff)
-        .collect();
-    edges.par_sort_unstable_by_key(|&(e, _)| e);
-    // The boundary edges `a → b`, each as often as its net use.
-    let mut boundary: Vec<(u32, u32)> = Vec::new();
-    let mut i = 0;
-    while i < edges.len() {
-        let e = edges[i].0;
-        let (a, b) = ((e >> 32) as u32, e as u32);
-        let mut net = 0i64;
-        while i < edges.len() && edges[i].0 == e {
-            net += edges[i].1 as i64;
-            i += 1;
-        }
-        let (from, to) = if net > 0 { (a, b) } else { (b, a) };
-        for _ in 0..net.unsigned_abs() {
-            boundary.push((from, to));
-        }
-    }
+pub(crate) fn closing_cap(mesh: &TriangleMesh) -> Vec<[Vec3; 3]> {
+    let (ids, positions) = weld(&mesh.positions);
+    let mut boundary = boundary_edges(&mesh.indices, &ids, positions.len());
     if boundary.is_empty() {
         return Vec::new();
     }
@@ -127,6 +81,79 @@ pub(crate) fn closing_cap(tris: &[[Vec3; 3]]) -> Vec<[Vec3; 3]> {
         close_cycle(&corners, &mut cap);
     }
     cap
+}
+
+/// The vertices welded by exact position: each vertex's welded index, and
+/// the welded positions in the order of their keys.
+fn weld(points: &[Vec3]) -> (Vec<u32>, Vec<Vec3>) {
+    let mut keys: Vec<u128> = points
+        .par_iter()
+        .enumerate()
+        .map(|(i, &p)| key(p, i))
+        .collect();
+    keys.par_sort_unstable();
+    let mut ids = vec![0u32; keys.len()];
+    let mut positions: Vec<Vec3> = Vec::new();
+    for (i, &k) in keys.iter().enumerate() {
+        if i == 0 || k >> 32 != keys[i - 1] >> 32 {
+            let bits = [(k >> 96) as u32, (k >> 64) as u32, (k >> 32) as u32];
+            positions.push(Vec3::from_array(bits.map(f32::from_bits)));
+        }
+        ids[k as u32 as usize] = positions.len() as u32 - 1;
+    }
+    (ids, positions)
+}
+
+/// The boundary edges `a → b` of triangles `indices` over `n` welded
+/// vertices (`ids` maps the triangles' vertices to them), each as often as
+/// its net use: the triangles running it `a → b` less those running it
+/// `b → a`. The edges are grouped by their lower vertex (a counting sort)
+/// and each group's uses summed by its upper vertex.
+fn boundary_edges(indices: &[[u32; 3]], ids: &[u32], n: usize) -> Vec<(u32, u32)> {
+    let edges = || {
+        indices.iter().flat_map(|t| {
+            let v = t.map(|i| ids[i as usize]);
+            (0..3).filter_map(move |k| {
+                let (a, b) = (v[k], v[(k + 1) % 3]);
+                (a != b).then_some((a.min(b), a.max(b), if a < b { 1i32 } else { -1 }))
+            })
+        })
+    };
+    let mut start = vec![0u32; n + 1];
+    for (lo, _, _) in edges() {
+        start[lo as usize + 1] += 1;
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut at = start.clone();
+    let mut uses = vec![(0u32, 0i32); start[n] as usize];
+    for (lo, hi, s) in edges() {
+        uses[at[lo as usize] as usize] = (hi, s);
+        at[lo as usize] += 1;
+    }
+    let mut groups: Vec<(u32, &mut [(u32, i32)])> = Vec::with_capacity(n);
+    let mut rest = &mut uses[..];
+    for v in 0..n {
+        let (group, tail) = rest.split_at_mut((start[v + 1] - start[v]) as usize);
+        groups.push((v as u32, group));
+        rest = tail;
+    }
+    groups
+        .into_par_iter()
+        .with_min_len(1 << 12)
+        .flat_map_iter(|(lo, g)| {
+            g.sort_unstable_by_key(|&(hi, _)| hi);
+            let mut open = Vec::new();
+            for run in g.chunk_by(|x, y| x.0 == y.0) {
+                let net: i32 = run.iter().map(|&(_, s)| s).sum();
+                let hi = run[0].0;
+                let edge = if net > 0 { (lo, hi) } else { (hi, lo) };
+                open.extend(std::iter::repeat_n(edge, net.unsigned_abs() as usize));
+            }
+            open
+        })
+        .collect()
 }
 
 /// Appends the triangles that close one boundary cycle `c[0] → c[1] → …
@@ -193,7 +220,64 @@ mod tests {
 
     #[test]
     fn a_closed_surface_needs_no_cap() {
-        assert!(closing_cap(&sphere_tris(2)).is_empty());
+        assert!(closing_cap(&TriangleMesh::from_triangles(&sphere_tris(2))).is_empty());
+    }
+
+    /// An indexed mesh gets the cap of the same triangles as a soup (each
+    /// corner a vertex of its own): welding by position makes them the
+    /// same surface. Edits open the sphere, or keep it closed (a triangle
+    /// and its reverse, a collapsed triangle), as an independent count of
+    /// net edge uses by index says.
+    #[test]
+    fn an_indexed_mesh_and_its_soup_get_one_cap() {
+        let s = Icosphere::new(2);
+        let mut rng = crate::rng::Pcg32::new(9);
+        for round in 0..200 {
+            let mut idx = s.indices.clone();
+            let pick = |rng: &mut crate::rng::Pcg32, idx: &Vec<[u32; 3]>| {
+                idx[rng.below(idx.len() as u32) as usize]
+            };
+            match round % 5 {
+                0 => {
+                    idx.remove(rng.below(idx.len() as u32) as usize);
+                }
+                1 => {
+                    let t = pick(&mut rng, &idx);
+                    idx.push(t);
+                }
+                2 => {
+                    let t = rng.below(idx.len() as u32) as usize;
+                    idx[t].swap(0, 1);
+                }
+                3 => {
+                    let t = pick(&mut rng, &idx);
+                    idx.push(t);
+                    idx.push([t[1], t[0], t[2]]);
+                }
+                _ => {
+                    let t = pick(&mut rng, &idx);
+                    idx.push([t[0], t[0], t[1]]);
+                }
+            }
+            let mut net = std::collections::HashMap::new();
+            for t in &idx {
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    if a != b {
+                        *net.entry((a.min(b), a.max(b))).or_insert(0) += if a < b { 1 } else { -1 };
+                    }
+                }
+            }
+            let closed = net.values().all(|&n| n == 0);
+            assert_eq!(closed, round % 5 >= 3, "round {round}");
+            let mesh = TriangleMesh::new(s.positions.clone(), idx);
+            let tris: Vec<[Vec3; 3]> = (0..mesh.num_triangles())
+                .map(|t| mesh.triangle(t))
+                .collect();
+            let cap = closing_cap(&mesh);
+            assert_eq!(cap, closing_cap(&TriangleMesh::from_triangles(&tris)));
+            assert_eq!(cap.is_empty(), closed, "round {round}");
+        }
     }
 
     #[test]
@@ -207,7 +291,7 @@ mod tests {
         tris[70].swap(0, 1);
         let open = net_uses(&tris).values().filter(|&&n| n != 0).count();
         assert!(open > 0);
-        let cap = closing_cap(&tris);
+        let cap = closing_cap(&TriangleMesh::from_triangles(&tris));
         let mut all = tris.clone();
         all.extend(&cap);
         let left: Vec<_> = net_uses(&all)

@@ -21,7 +21,6 @@ use crate::aabb::Aabb;
 use crate::accel::bvh::BuildOptions;
 use crate::mesh::TriangleMesh;
 use crate::unit_scale::UnitScale;
-use glam::Vec3;
 use std::sync::OnceLock;
 
 pub use super::surface_node::WIDTH;
@@ -105,10 +104,7 @@ impl SurfaceBvh {
     pub(crate) fn closed_trees(&self) -> (&RayTree, &CapTree, Option<&SurfaceBvh>) {
         let tree = self.ray_tree();
         let (cap_tree, cap) = self.closing.get_or_init(|| {
-            let corners: Vec<[Vec3; 3]> = (0..self.mesh.num_triangles())
-                .map(|t| self.mesh.triangle(t))
-                .collect();
-            let cap = closing_cap(&corners);
+            let cap = closing_cap(&self.mesh);
             let cap_tree = CapTree::build(tree, &cap);
             let winding = (cap_tree.countable() && !cap.is_empty()).then(|| {
                 let cap = Box::new(SurfaceBvh::build(&TriangleMesh::from_triangles(&cap)));
