@@ -14,7 +14,7 @@ use crate::aabb::Aabb;
 use crate::accel::bvh::build::{build_over_boxes, BuildNode};
 use crate::accel::BuildOptions;
 use crate::query::all_hits::slab8;
-use crate::query::point_tree::widen;
+use crate::query::point_tree::{root_slots, set_slot_box, stack_need, widen};
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -78,12 +78,8 @@ impl TopLevelBvh {
         let tree = build_over_boxes(boxes, &options);
         top.order = tree.order.iter().map(|&i| ids[i as usize]).collect();
         top.nodes.push(TopNode::default());
-        let slots = match &tree.root {
-            BuildNode::Leaf { .. } => vec![&tree.root],
-            BuildNode::Inner { .. } => widen(&tree.root),
-        };
-        let depth = top.fill(0, &slots);
-        top.stack_need = (WIDTH - 1) * depth + WIDTH + 1;
+        let depth = top.fill(0, &root_slots(&tree.root));
+        top.stack_need = stack_need(depth);
         top
     }
 
@@ -92,11 +88,7 @@ impl TopLevelBvh {
         let mut node = TopNode::default();
         let mut inner = Vec::new();
         for (k, s) in slots.iter().enumerate() {
-            let b = s.bounds();
-            for a in 0..3 {
-                node.min[a][k] = b.min[a];
-                node.max[a][k] = b.max[a];
-            }
+            set_slot_box(&mut node.min, &mut node.max, k, &s.bounds());
             match s {
                 BuildNode::Leaf { first, count, .. } => {
                     node.child[k] = *first;

@@ -15,6 +15,7 @@
 
 use super::moments::Moments;
 use super::surface_node::{SurfaceNode, EMPTY, WIDTH};
+use crate::aabb::Aabb;
 use crate::accel::bvh::{build, BuildNode, BuildOptions};
 use crate::mesh::TriangleMesh;
 use glam::Vec3;
@@ -57,12 +58,8 @@ impl PointTree {
         };
         if !points.prims.is_empty() {
             points.nodes.push(SurfaceNode::default());
-            let slots = match &tree.root {
-                BuildNode::Leaf { .. } => vec![&tree.root],
-                BuildNode::Inner { .. } => widen(&tree.root),
-            };
-            let depth = fill(&mut points.nodes, 0, &slots, PAR_LEVELS);
-            points.stack_need = (WIDTH - 1) * depth + WIDTH + 1;
+            let depth = fill(&mut points.nodes, 0, &root_slots(&tree.root), PAR_LEVELS);
+            points.stack_need = stack_need(depth);
         }
         points
     }
@@ -97,11 +94,7 @@ fn fill(nodes: &mut Vec<SurfaceNode>, at: usize, slots: &[&BuildNode], par: u32)
     let mut node = SurfaceNode::default();
     let mut inner = Vec::new();
     for (k, s) in slots.iter().enumerate() {
-        let b = s.bounds();
-        for a in 0..3 {
-            node.min[a][k] = b.min[a];
-            node.max[a][k] = b.max[a];
-        }
+        set_slot_box(&mut node.min, &mut node.max, k, &s.bounds());
         let (first, total) = s.triangle_range();
         node.first[k] = first;
         node.total[k] = total;
@@ -153,6 +146,35 @@ fn fill(nodes: &mut Vec<SurfaceNode>, at: usize, slots: &[&BuildNode], par: u32)
     }
     nodes[at] = node;
     depth
+}
+
+/// The children of a wide root: the tree's one leaf, or the root widened.
+pub(crate) fn root_slots(root: &BuildNode) -> Vec<&BuildNode> {
+    match root {
+        BuildNode::Leaf { .. } => vec![root],
+        BuildNode::Inner { .. } => widen(root),
+    }
+}
+
+/// The most traversal stack entries a walk of a wide tree `depth` inner
+/// levels deep can need: each inner node visited pushes at most eight and
+/// pops one.
+pub(crate) fn stack_need(depth: usize) -> usize {
+    (WIDTH - 1) * depth + WIDTH + 1
+}
+
+/// Store box `b` as slot `k` of a wide node's boxes in structure of
+/// arrays.
+pub(crate) fn set_slot_box(
+    min: &mut [[f32; WIDTH]; 3],
+    max: &mut [[f32; WIDTH]; 3],
+    k: usize,
+    b: &Aabb,
+) {
+    for a in 0..3 {
+        min[a][k] = b.min[a];
+        max[a][k] = b.max[a];
+    }
 }
 
 /// The up to eight nodes that replace the inner node `node`: its two
