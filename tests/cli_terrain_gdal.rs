@@ -236,8 +236,6 @@ fn sun_hours_tiled_lzw_read_back_in_gdal() {
     }
 }
 
-/// Cells where two masks (visible 255, else 0) disagree, among the cells
-/// valid in `dem`, as a percentage.
 /// An ASCII grid as gdal_translate exports it, with a `.prj` in Esri's WKT
 /// (no EPSG code): the shadow mask and the hours of sun computed from it
 /// are in the grid's coordinate system as GDAL reads both, through the
@@ -319,6 +317,8 @@ fn rasters_from_ascii_grids_keep_the_prj_coordinate_system() {
     assert_eq!(crs(&out), crs(&tif));
 }
 
+/// Cells where two masks (visible 255, else 0) disagree, among the cells
+/// valid in `dem`, as a percentage.
 fn percent_differing(a: &[u8], b: &[u8], dem: &Dem) -> f64 {
     let valid: Vec<usize> = (0..a.len()).filter(|&i| !dem.heights[i].is_nan()).collect();
     let differ = valid

@@ -148,12 +148,7 @@ fn point_values<'py>(
                     .with_min_len(GRAIN)
                     .for_each(|(o, &i)| *o = f32::from(u8::from(i)));
             }
-            PointValue::Winding(beta) => {
-                qp.par_iter()
-                    .zip(out.par_iter_mut())
-                    .with_min_len(GRAIN)
-                    .for_each(|(p, o)| *o = bvh.winding_number_with(*p, beta));
-            }
+            PointValue::Winding(beta) => bvh.winding_numbers_with(&qp, beta, &mut out),
         }
         out
     })?;

@@ -751,6 +751,55 @@ fn a_coordinate_system_in_the_sidecar_round_trips() {
         assert_eq!(again.georef, back.georef, "case {k}");
     }
 
+    // A GeoTIFF with no GeoKeys at all, as other writers make it, takes
+    // its sidecar's coordinate system, and is geographic by its WKT.
+    let bare = dir.join("bare.tif");
+    write_custom_tiff(
+        &bare,
+        &[1, 2, 3, 4],
+        2,
+        2,
+        &[
+            (33550, TagValue::Doubles(vec![0.5, 0.5, 0.0])),
+            (
+                33922,
+                TagValue::Doubles(vec![0.0, 0.0, 0.0, 10.0, 50.0, 0.0]),
+            ),
+        ],
+    );
+    assert!(!read_geotiff(&bare).unwrap().georef.geographic);
+    raykit_terrain::io::write_crs_sidecar(&bare, geographic).unwrap();
+    let back = read_geotiff(&bare).unwrap();
+    assert!(back.georef.geo_keys.is_empty());
+    assert_eq!(back.georef.crs_wkt.as_deref(), Some(geographic));
+    assert!(back.georef.geographic);
+    // A citation alone (GTCitationGeoKey, PCSCitationGeoKey) declares no
+    // coordinate system either.
+    let cited = dir.join("cited.tif");
+    let ascii = "raykit test|".to_string();
+    write_custom_tiff(
+        &cited,
+        &[1, 2, 3, 4],
+        2,
+        2,
+        &[
+            (33550, TagValue::Doubles(vec![0.5, 0.5, 0.0])),
+            (
+                33922,
+                TagValue::Doubles(vec![0.0, 0.0, 0.0, 10.0, 50.0, 0.0]),
+            ),
+            (
+                34735,
+                TagValue::Shorts(vec![1, 1, 0, 2, 1024, 0, 1, 1, 3073, 34737, 12, 0]),
+            ),
+            (34737, TagValue::Ascii(ascii)),
+        ],
+    );
+    raykit_terrain::io::write_crs_sidecar(&cited, projected).unwrap();
+    let back = read_geotiff(&cited).unwrap();
+    assert_eq!(back.georef.crs_wkt.as_deref(), Some(projected));
+    assert!(!back.georef.geographic);
+
     // GeoKeys that declare a coordinate system (EPSG:4326) win over a
     // sidecar, and a write removes the sidecar left at its path.
     let mut dem = Dem::from_heights(2, 2, vec![1.0, 2.0, 3.0, 4.0]);

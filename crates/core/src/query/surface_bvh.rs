@@ -21,6 +21,7 @@ use crate::aabb::Aabb;
 use crate::accel::bvh::BuildOptions;
 use crate::mesh::TriangleMesh;
 use crate::unit_scale::UnitScale;
+use std::borrow::Cow;
 use std::sync::OnceLock;
 
 pub use super::surface_node::WIDTH;
@@ -66,7 +67,10 @@ impl SurfaceBvh {
     /// up to `options.max_leaf_size`.
     pub fn build_with(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
         let (scale, scaled) = UnitScale::of(mesh);
-        let mesh = TriangleMesh::new(scaled.positions.clone(), scaled.indices.clone());
+        let mesh = match scaled {
+            Cow::Owned(m) => TriangleMesh::new(m.positions, m.indices),
+            Cow::Borrowed(m) => TriangleMesh::new(m.positions.clone(), m.indices.clone()),
+        };
         let bounds = mesh.bounds();
         SurfaceBvh {
             scale,

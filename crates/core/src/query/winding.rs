@@ -347,8 +347,18 @@ impl SurfaceBvh {
     /// [`SurfaceBvh::winding_number`] for many points, in parallel, in
     /// Morton order so that neighbouring points share cached nodes.
     pub fn winding_numbers(&self, points: &[Vec3], out: &mut [f32]) {
+        self.winding_numbers_with(points, DEFAULT_BETA, out)
+    }
+
+    /// [`SurfaceBvh::winding_number_with`] at accuracy `beta` for many
+    /// points, as [`SurfaceBvh::winding_numbers`]; the point tree and its
+    /// moments are made before the parallel loop.
+    pub fn winding_numbers_with(&self, points: &[Vec3], beta: f32, out: &mut [f32]) {
+        assert_eq!(points.len(), out.len(), "one result per point");
         self.winding_tree();
-        answer_coherent(points, out, |p, _: &mut ()| self.winding_number(p));
+        answer_coherent(points, out, |p, _: &mut ()| {
+            self.winding_number_with(p, beta)
+        });
     }
 
     /// [`SurfaceBvh::is_inside`] for many points, in parallel, in Morton

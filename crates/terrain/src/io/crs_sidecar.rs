@@ -86,7 +86,12 @@ fn xml_unescaped(text: &str) -> String {
     while let Some(at) = rest.find('&') {
         out.push_str(&rest[..at]);
         rest = &rest[at..];
-        let entity = rest.find(';').map(|end| (&rest[1..end], end));
+        // An entity's name is short; a `;` farther on ends something else.
+        let near = &rest.as_bytes()[..rest.len().min(12)];
+        let entity = near
+            .iter()
+            .position(|&b| b == b';')
+            .map(|end| (&rest[1..end], end));
         let c = entity.and_then(|(name, _)| match name {
             "amp" => Some('&'),
             "lt" => Some('<'),

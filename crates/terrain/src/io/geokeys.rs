@@ -48,15 +48,20 @@ pub fn set_geo_key_short(keys: &mut [u16], id: u16, value: u16) -> bool {
     }
 }
 
-/// Whether a valid directory declares a coordinate system: any key from
-/// 2048 up (the geographic, projected and vertical coordinate system keys;
-/// those below are the model and raster types and the citation).
+/// GeographicTypeGeoKey: the geographic coordinate system's code (32767
+/// for one defined by further keys).
+pub const KEY_GEOGRAPHIC_TYPE: u16 = 2048;
+/// ProjectedCSTypeGeoKey: the projected coordinate system's code (32767
+/// for one defined by further keys).
+pub const KEY_PROJECTED_TYPE: u16 = 3072;
+
+/// Whether a valid directory declares a horizontal coordinate system: it
+/// holds GeographicTypeGeoKey or ProjectedCSTypeGeoKey, by code or as
+/// user-defined. Citations and vertical keys alone declare none.
 pub fn declares_crs(keys: &[u16]) -> bool {
-    let n = keys.get(3).map_or(0, |&n| n as usize);
-    (0..n)
-        .map(|k| 4 + 4 * k)
-        .take_while(|&i| i + 3 < keys.len())
-        .any(|i| keys[i] >= 2048)
+    [KEY_GEOGRAPHIC_TYPE, KEY_PROJECTED_TYPE]
+        .iter()
+        .any(|&id| entry_index(keys, id).is_some())
 }
 
 /// Index of the entry for key `id` in a valid directory.
