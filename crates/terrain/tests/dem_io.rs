@@ -753,20 +753,20 @@ fn a_coordinate_system_in_the_sidecar_round_trips() {
 
     // A GeoTIFF with no GeoKeys at all, as other writers make it, takes
     // its sidecar's coordinate system, and is geographic by its WKT.
-    let bare = dir.join("bare.tif");
-    write_custom_tiff(
-        &bare,
-        &[1, 2, 3, 4],
-        2,
-        2,
-        &[
+    // A 2×2 raster placed by pixel scale and tie point, with `keys` added.
+    let placed = |path: &Path, keys: Vec<(u16, TagValue)>| {
+        let mut tags = vec![
             (33550, TagValue::Doubles(vec![0.5, 0.5, 0.0])),
             (
                 33922,
                 TagValue::Doubles(vec![0.0, 0.0, 0.0, 10.0, 50.0, 0.0]),
             ),
-        ],
-    );
+        ];
+        tags.extend(keys);
+        write_custom_tiff(path, &[1, 2, 3, 4], 2, 2, &tags);
+    };
+    let bare = dir.join("bare.tif");
+    placed(&bare, Vec::new());
     assert!(!read_geotiff(&bare).unwrap().georef.geographic);
     raykit_terrain::io::write_crs_sidecar(&bare, geographic).unwrap();
     let back = read_geotiff(&bare).unwrap();
@@ -776,23 +776,14 @@ fn a_coordinate_system_in_the_sidecar_round_trips() {
     // A citation alone (GTCitationGeoKey, PCSCitationGeoKey) declares no
     // coordinate system either.
     let cited = dir.join("cited.tif");
-    let ascii = "raykit test|".to_string();
-    write_custom_tiff(
+    placed(
         &cited,
-        &[1, 2, 3, 4],
-        2,
-        2,
-        &[
-            (33550, TagValue::Doubles(vec![0.5, 0.5, 0.0])),
-            (
-                33922,
-                TagValue::Doubles(vec![0.0, 0.0, 0.0, 10.0, 50.0, 0.0]),
-            ),
+        vec![
             (
                 34735,
                 TagValue::Shorts(vec![1, 1, 0, 2, 1024, 0, 1, 1, 3073, 34737, 12, 0]),
             ),
-            (34737, TagValue::Ascii(ascii)),
+            (34737, TagValue::Ascii("raykit test|".to_string())),
         ],
     );
     raykit_terrain::io::write_crs_sidecar(&cited, projected).unwrap();

@@ -78,11 +78,7 @@ impl SurfaceBvh {
             QueryKind::Distance | QueryKind::Closest => {
                 self.points();
             }
-            QueryKind::Inside => {
-                if !self.closed_trees().1.countable() {
-                    self.winding_tree();
-                }
-            }
+            QueryKind::Inside => self.inside_trees(),
             QueryKind::SignedDistance => self.signed_trees(),
             QueryKind::Count | QueryKind::AllHits => {
                 self.ray_tree();

@@ -328,20 +328,21 @@ impl SurfaceBvh {
         signed(d, !d.is_nan() && self.is_inside(q))
     }
 
-    /// Make what signed distances need: the point tree, and the
-    /// ray-casting trees of the surface and its closing cap (with the
-    /// winding-number moments when the crossings are not counted), the two
-    /// made side by side, since neither build keeps both cores busy
-    /// throughout.
+    /// Make what occupancy needs: the ray-casting trees of the surface and
+    /// its closing cap, and the point tree with its winding-number moments
+    /// when the crossings are not counted (otherwise those are made only
+    /// if some point's crossings are too close to an edge to count).
+    pub(crate) fn inside_trees(&self) {
+        if !self.closed_trees().1.countable() {
+            self.winding_tree();
+        }
+    }
+
+    /// Make what signed distances need: the point tree and
+    /// [`SurfaceBvh::inside_trees`], side by side, since neither build
+    /// keeps both cores busy throughout.
     pub(crate) fn signed_trees(&self) {
-        rayon::join(
-            || self.points(),
-            || {
-                if !self.closed_trees().1.countable() {
-                    self.winding_tree();
-                }
-            },
-        );
+        rayon::join(|| self.points(), || self.inside_trees());
     }
 
     /// [`SurfaceBvh::winding_number`] for many points, in parallel, in
