@@ -27,10 +27,9 @@
 //! each flat triangle (the terms up to Barill et al.'s "order 2"). A child
 //! of a point tree's node (`super::point_tree`) whose triangles all lie
 //! within `ρ` of `p̃` is taken in this form when `r > β·ρ` (β = 2 by
-//! default, as in the paper);
-//! otherwise it is opened, and leaves are summed exactly. The error falls
-//! as `(ρ / r)⁴`; at β = 2 the tests find it below 1% of a unit winding
-//! number, far from the ½ threshold.
+//! default, as in the paper); otherwise it is opened, and leaves are
+//! summed exactly. The error falls as `(ρ / r)⁴`; at β = 2 the tests find
+//! it below 1% of a unit winding number, far from the ½ threshold.
 //!
 //! Occupancy first counts instead of summing: a surface `M` closed by a
 //! cap `C` ([`super::closing`]) has an integer winding number, the signed
@@ -40,7 +39,9 @@
 //! rounding-error bounds ([`crate::tri::moller::Moller::crossing`]); when
 //! one is too close to an edge, a corner or the point to be sure of, two
 //! other rays are tried, and if they are unsure too the surface's solid
-//! angles are summed. Occupancy needs only the side of ½, so it sums at a
+//! angles are summed: over every triangle when a batch has only a few such
+//! points ([`SUM_DIRECTLY`]), so that they need no point tree, and through
+//! the tree otherwise. Occupancy needs only the side of ½, so it sums at a
 //! coarser accuracy first ([`COARSE_BETA`]) and again at the default only
 //! close to ½.
 //!
@@ -66,6 +67,15 @@ pub const COARSE_BETA: f32 = 1.25;
 /// How far from ½ a winding number found at [`COARSE_BETA`] must be for
 /// occupancy to take it: twenty times the largest error measured there.
 pub const COARSE_MARGIN: f32 = 0.05;
+
+/// At most this many points whose crossings are too close to an edge to
+/// count are summed over every triangle rather than through the point
+/// tree, when the tree and its moments are not made yet. Making them costs
+/// about as much as summing 65-90 points directly (the full dragon and the
+/// 2CylinderEngine, BENCHMARKS.md); a batch that sums at most this many
+/// pays at most about a fifth of that, and a later batch may still make
+/// the tree.
+pub const SUM_DIRECTLY: usize = 16;
 
 /// Barill et al.'s default accuracy: a child is approximated when the
 /// query point is farther than twice its radius from its centre.
@@ -302,16 +312,74 @@ impl SurfaceBvh {
         let open: Vec<usize> = (0..points.len())
             .filter(|&i| counted[i].is_none())
             .collect();
-        if !open.is_empty() {
-            self.winding_tree();
-            let at: Vec<Vec3> = open.iter().map(|&i| points[i]).collect();
-            let mut summed = vec![false; at.len()];
-            answer_coherent(&at, &mut summed, |p, _: &mut ()| self.inside_summed(p));
-            for (&i, s) in open.iter().zip(summed) {
-                inside[i] = s;
+        if open.is_empty() {
+            return inside;
+        }
+        // A few points are summed over every triangle, when the point tree
+        // and its moments are not made yet and would cost more; only the
+        // points whose exact sum lies near ½ are left to the tree, so that
+        // each answer is the one `is_inside` gives.
+        let mut open = open;
+        if open.len() <= SUM_DIRECTLY && !self.winding_tree_made() {
+            let at: Vec<Vec3> = open.iter().map(|&i| self.scale.point(points[i])).collect();
+            let sums = self.winding_numbers_exact(&at);
+            let mut near_half = Vec::new();
+            for (&i, w) in open.iter().zip(sums) {
+                if (w - 0.5).abs() > COARSE_MARGIN {
+                    inside[i] = w >= 0.5;
+                } else {
+                    near_half.push(i);
+                }
             }
+            if near_half.is_empty() {
+                return inside;
+            }
+            open = near_half;
+        }
+        self.winding_tree();
+        let at: Vec<Vec3> = open.iter().map(|&i| points[i]).collect();
+        let mut summed = vec![false; at.len()];
+        answer_coherent(&at, &mut summed, |p, _: &mut ()| self.inside_summed(p));
+        for (&i, s) in open.iter().zip(summed) {
+            inside[i] = s;
         }
         inside
+    }
+
+    /// Whether the point tree and its winding-number moments are made.
+    fn winding_tree_made(&self) -> bool {
+        self.points.get().is_some_and(|p| p.moments.get().is_some())
+    }
+
+    /// The exact winding numbers of `at` (points at [`SurfaceBvh::scale`],
+    /// finite), each triangle's solid angle summed, without the point tree:
+    /// one parallel pass over the triangles for all the points.
+    fn winding_numbers_exact(&self, at: &[Vec3]) -> Vec<f32> {
+        use rayon::prelude::*;
+        let mesh = &self.mesh;
+        let sums = (0..mesh.num_triangles())
+            .into_par_iter()
+            .with_min_len(4096)
+            .fold(
+                || vec![0.0f64; at.len()],
+                |mut acc, t| {
+                    let [a, b, c] = mesh.triangle(t);
+                    for (s, &q) in acc.iter_mut().zip(at) {
+                        *s += solid_angle32(a - q, b - q, c - q) as f64;
+                    }
+                    acc
+                },
+            )
+            .reduce(
+                || vec![0.0f64; at.len()],
+                |mut x, y| {
+                    x.iter_mut().zip(y).for_each(|(x, y)| *x += y);
+                    x
+                },
+            );
+        sums.iter()
+            .map(|s| (s / (4.0 * std::f64::consts::PI)) as f32)
+            .collect()
     }
 
     /// Signed distance: the unsigned distance, negative inside (by
@@ -475,8 +543,56 @@ pub fn winding_number_brute(mesh: &TriangleMesh, q: DVec3) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::atan2;
+    use super::{atan2, winding_number_brute, SurfaceBvh, SUM_DIRECTLY};
+    use crate::icosphere::Icosphere;
+    use crate::mesh::TriangleMesh;
     use crate::rng::Pcg32;
+    use glam::Vec3;
+
+    /// Points on the inner of two nested spheres are within rounding error
+    /// of a crossing on every ray, so occupancy sums them; their winding
+    /// number is 1½. A few are summed over every triangle without making the
+    /// point tree, more through the tree; either way each answer is
+    /// `is_inside`'s and the `f64` sum's, and the points counted keep theirs.
+    #[test]
+    fn points_that_cannot_be_counted_are_summed_directly_or_through_the_tree() {
+        let sphere = Icosphere::new(3);
+        let mut positions = sphere.positions.clone();
+        let mut indices = sphere.indices.clone();
+        let n = positions.len() as u32;
+        positions.extend(sphere.positions.iter().map(|&p| p * 0.5));
+        indices.extend(sphere.indices.iter().map(|t| t.map(|i| i + n)));
+        let mesh = TriangleMesh::new(positions, indices);
+        let inner = sphere.indices.len();
+        let mut rng = Pcg32::new(9);
+        for on_surface in [SUM_DIRECTLY, SUM_DIRECTLY + 1, 3 * SUM_DIRECTLY] {
+            let mut points: Vec<Vec3> = (0..on_surface)
+                .map(|_| {
+                    let t = mesh.triangle(sphere.indices.len() + rng.below(inner as u32) as usize);
+                    (t[0] + t[1] + t[2]) / 3.0
+                })
+                .collect();
+            points.extend((0..200).map(|_| rng.in_box(Vec3::splat(-1.2), Vec3::splat(1.2))));
+            let bvh = SurfaceBvh::build(&mesh);
+            let mut batch = vec![false; points.len()];
+            bvh.inside_batch(&points, &mut batch);
+            let counted = points
+                .iter()
+                .filter(|&&p| bvh.winding_number_counted(p).is_some())
+                .count();
+            assert_eq!(counted, 200, "{on_surface} points on the inner sphere");
+            assert_eq!(
+                bvh.winding_tree_made(),
+                on_surface > SUM_DIRECTLY,
+                "{on_surface} points on the inner sphere"
+            );
+            for (p, &inside) in points.iter().zip(&batch) {
+                let w = winding_number_brute(&mesh, p.as_dvec3());
+                assert_eq!(inside, w >= 0.5, "at {p}: f64 winding number {w}");
+                assert_eq!(inside, bvh.is_inside(*p), "at {p}");
+            }
+        }
+    }
 
     /// The inline arctangent against `f64`'s over every octant, the axes,
     /// the origin and a wide range of magnitudes.
