@@ -196,7 +196,13 @@ fn check_packets<B: PacketTree>(build: impl Fn(&TriangleMesh) -> B) {
         let bvh = build(&mesh);
         let brute = BruteForce::<Moller>::new(&mesh);
         let rays = rays(&mut rng, 5000 + 3 * round);
-        packets += rays.chunks(8).filter(|c| coherent(c).is_some()).count();
+        // Packets of eight that form: one octant, and a full packet's rays
+        // close together.
+        let extent = (mesh.bounds().max - mesh.bounds().min).max_element();
+        packets += rays
+            .chunks(8)
+            .filter(|c| coherent(c).is_some() && (c.len() < 8 || close_together(c, extent)))
+            .count();
         let one: Vec<Option<Hit>> = rays.iter().map(|r| bvh.intersect(r)).collect();
         let one_occ: Vec<bool> = rays.iter().map(|r| bvh.occluded(r)).collect();
         for (i, ray) in rays.iter().enumerate() {

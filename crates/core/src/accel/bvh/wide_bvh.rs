@@ -491,6 +491,9 @@ impl<N: NodeWidth, T: TriangleTest> PacketTree for WideBvh<N, T> {
                 nodes: &self.nodes,
                 root: self.root,
                 leaves: packs,
+                extent: (0..3)
+                    .map(|a| self.root_box.max[a] - self.root_box.min[a])
+                    .fold(0.0, f32::max),
             }),
             _ => None,
         }

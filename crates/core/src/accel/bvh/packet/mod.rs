@@ -10,13 +10,15 @@
 //! over the tree ([`PacketTree`], which supplies the hand-over to its own
 //! single-ray traversal, Benthin et al. 2012).
 //!
-//! A packet is coherent when its rays share the signs of their
+//! A packet is traced together when its rays share the signs of their
 //! reciprocal directions (one octant): the box test then uses the same near
 //! planes for every lane, which is what makes each lane's box test the
-//! single-ray one. Other packets, batches without AVX2 (detected once per
-//! batch, with the width) and trees with other leaves take the single-ray path, one ray
-//! after the other. Incoherent batches (random directions) almost never
-//! form a coherent packet, so they pay only the check.
+//! single-ray one. A full packet must also start or end within a small
+//! part of the scene ([`spread`]): rays of one octant from scattered
+//! points part at the root. Other packets, batches without AVX2 (detected
+//! once per batch, with the width) and trees with other leaves take the
+//! single-ray path, one ray after the other. Incoherent batches (random
+//! directions) almost never form a packet, so they pay only the check.
 //!
 //! Every ray gets the single-ray traversal's answer: the same nearest `t`
 //! bit for bit (the box tests are the same per lane and conservative, the
@@ -28,6 +30,9 @@
 mod gather;
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod kernel;
+mod spread;
+#[cfg(test)]
+pub(super) use spread::close_together;
 
 use super::node4::Node4;
 use super::node8::Node8;
@@ -522,9 +527,15 @@ fn packet_intersect<const L: usize, W: Width<L>, B: PacketTree>(
     hits: &mut [Option<Hit>],
     switch: u32,
 ) -> bool {
+    let Some(view) = bvh.packet_view() else {
+        return false;
+    };
+    if rays.len() == L && !spread::close_together(rays, view.extent) {
+        return false;
+    }
     // SAFETY: the width is one of `widths()`, whose features (AVX among
     // them) this CPU has.
-    let (Some(view), Some(p)) = (bvh.packet_view(), unsafe { coherent_packet::<L>(rays) }) else {
+    let Some(p) = (unsafe { coherent_packet::<L>(rays) }) else {
         return false;
     };
     let mut out = PacketHits::<L>::default();
@@ -549,8 +560,14 @@ fn packet_occluded<const L: usize, W: Width<L>, B: PacketTree>(
     occluded: &mut [bool],
     switch: u32,
 ) -> bool {
+    let Some(view) = bvh.packet_view() else {
+        return false;
+    };
+    if rays.len() == L && !spread::close_together(rays, view.extent) {
+        return false;
+    }
     // SAFETY: as in `packet_intersect`.
-    let (Some(view), Some(p)) = (bvh.packet_view(), unsafe { coherent_packet::<L>(rays) }) else {
+    let Some(p) = (unsafe { coherent_packet::<L>(rays) }) else {
         return false;
     };
     let mut out = PacketHits::<L>::default();
@@ -569,4 +586,6 @@ pub(crate) struct View<'a, N> {
     pub nodes: &'a [N],
     pub root: Child4,
     pub leaves: &'a Tri4Leaves,
+    /// The largest side of the tree's box.
+    pub extent: f32,
 }
