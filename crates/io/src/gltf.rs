@@ -5,7 +5,9 @@
 //! its parents' and applied to positions, and its inverse transpose to
 //! normals. Every node with a mesh becomes a [`Part`] (`node: Some(index)`).
 //! Primitives of mode TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN are loaded;
-//! others are skipped with a warning. Materials take the base colour factor,
+//! others are skipped with a warning. Primitives over the same vertex
+//! accessors share their vertices ([`crate::gltf_shared_vertices`]).
+//! Materials take the base colour factor,
 //! metallic/roughness, emission (times `KHR_materials_emissive_strength`),
 //! transmission, IOR, the base-colour texture URI in `diffuse_texture`
 //! (embedded images have no URI and give `None`) and the decoded image in
@@ -25,6 +27,7 @@ use crate::gltf_integers::check_integer_range;
 use crate::gltf_meshopt::MeshoptViews;
 use crate::gltf_node_transforms::local_transforms;
 use crate::gltf_scene::{check_scene_indices, SceneCollector};
+use crate::gltf_shared_vertices::vertex_key;
 use crate::gltf_support::{check_required, unsupported_warnings};
 use crate::input::available_memory;
 use crate::uri::{data_uri_payload, external_file, read_external};
@@ -423,6 +426,7 @@ impl<'a, 'b> Builder<'a, 'b> {
         let inv_t = m3.inverse().transpose();
         let normal_m = if inv_t.is_finite() { inv_t } else { m3 };
         let flip = m3.determinant() < 0.0;
+        let mut shared = HashMap::new();
         for prim in mesh.primitives() {
             let pname = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
             let mode = prim.mode();
@@ -473,43 +477,26 @@ impl<'a, 'b> Builder<'a, 'b> {
             } else {
                 mode
             };
-            let (pos, normals, uvs, idx) = match draco {
-                Some(d) => (
-                    d.positions.clone(),
-                    d.normals.clone(),
-                    d.uvs.clone(),
-                    d.indices.clone(),
-                ),
-                None => {
-                    let pos = read_floats(path, &pos_acc, bufs, 3, limit)?;
-                    let nv = pos.len() / 3;
-                    let attr = |sem: Semantic,
-                                dims: usize,
-                                what: &str|
-                     -> Result<Option<Vec<f32>>, LoadError> {
-                        let Some(acc) = prim.get(&sem) else {
-                            return Ok(None);
-                        };
-                        let v = read_floats(path, &acc, bufs, dims, limit)?;
-                        if v.len() != nv * dims {
-                            return Err(LoadError::at_json(
-                                path,
-                                format!("{pname}.attributes.{what}"),
-                                format!("has {} elements, but POSITION has {nv}", v.len() / dims),
-                            ));
-                        }
-                        Ok(Some(v))
-                    };
-                    let normals = attr(Semantic::Normals, 3, "NORMAL")?;
-                    let uvs = attr(Semantic::TexCoords(0), 2, "TEXCOORD_0")?;
+            // Primitives over the vertex arrays of one read earlier in this
+            // placement reuse its vertices (`gltf_shared_vertices`).
+            let key = draco.as_ref().map_or_else(|| vertex_key(&prim), |_| None);
+            let (base, nv, idx) = match key.and_then(|k| shared.get(&k).copied()) {
+                Some((base, nv)) => {
                     let idx = match prim.indices() {
                         Some(acc) => read_indices(path, &acc, bufs, limit)?,
                         None => (0..nv as u32).collect(),
                     };
-                    (pos, normals, uvs, idx)
+                    (base, nv, idx)
+                }
+                None => {
+                    let (base, nv, idx) =
+                        self.read_vertices(&prim, &pos_acc, draco, node, world, normal_m, &pname)?;
+                    if let Some(k) = key {
+                        shared.insert(k, (base, nv));
+                    }
+                    (base, nv, idx)
                 }
             };
-            let nv = pos.len() / 3;
             if let Some((k, &i)) = idx.iter().enumerate().find(|(_, &i)| i as usize >= nv) {
                 return Err(LoadError::at_json(
                     path,
@@ -518,45 +505,6 @@ impl<'a, 'b> Builder<'a, 'b> {
                         "index {i} at position {k} is out of range (POSITION has {nv} vertices)"
                     ),
                 ));
-            }
-            let base = self.mesh.positions.len() as u32;
-            if let Some(p) = pos.first_chunk::<3>() {
-                let first = world.transform_point3(DVec3::from_array(p.map(f64::from)));
-                self.far.origin_for(first.to_array());
-            }
-            let world = stored_relative(world, DVec3::from_array(self.far.origin()));
-            for (j, p) in pos.chunks_exact(3).enumerate() {
-                let w = world.transform_point3(Vec3::new(p[0], p[1], p[2]));
-                if !w.is_finite() {
-                    return Err(LoadError::at_json(
-                        path,
-                        format!("accessors[{}]", pos_acc.index()),
-                        format!(
-                            "vertex {j} is NaN or infinite after the transform of nodes[{}]",
-                            node.index()
-                        ),
-                    ));
-                }
-                self.mesh.positions.push(w);
-            }
-            match normals {
-                Some(n) => self.normals.extend(
-                    n.chunks_exact(3)
-                        .map(|c| (normal_m * Vec3::new(c[0], c[1], c[2])).normalize_or_zero()),
-                ),
-                None => {
-                    self.all_normals = false;
-                    self.normals.resize(self.mesh.positions.len(), Vec3::ZERO);
-                }
-            }
-            match uvs {
-                Some(t) => self
-                    .uvs
-                    .extend(t.chunks_exact(2).map(|c| Vec2::new(c[0], c[1]))),
-                None => {
-                    self.all_uvs = false;
-                    self.uvs.resize(self.mesh.positions.len(), Vec2::ZERO);
-                }
             }
             let before = self.mesh.indices.len();
             let mut push = |a: u32, b: u32, c: u32| {
@@ -592,6 +540,100 @@ impl<'a, 'b> Builder<'a, 'b> {
             self.mesh.tri_part.extend(std::iter::repeat_n(part, added));
         }
         Ok(())
+    }
+
+    /// Read the vertices of `prim` (decoded from `draco` when compressed),
+    /// placed by `world`, and append them to the mesh: returns the index of
+    /// the first, their count and the primitive's indices.
+    #[allow(clippy::too_many_arguments)]
+    fn read_vertices(
+        &mut self,
+        prim: &::gltf::Primitive<'_>,
+        pos_acc: &::gltf::Accessor<'_>,
+        draco: Option<Rc<DracoPrimitive>>,
+        node: &::gltf::Node<'_>,
+        world: &DMat4,
+        normal_m: Mat3,
+        pname: &str,
+    ) -> Result<(u32, usize, Vec<u32>), LoadError> {
+        let (path, bufs, limit) = (self.path, self.buffers, self.limit);
+        let (pos, normals, uvs, idx) = match draco {
+            Some(d) => (
+                d.positions.clone(),
+                d.normals.clone(),
+                d.uvs.clone(),
+                d.indices.clone(),
+            ),
+            None => {
+                let pos = read_floats(path, pos_acc, bufs, 3, limit)?;
+                let nv = pos.len() / 3;
+                let attr = |sem: Semantic,
+                            dims: usize,
+                            what: &str|
+                 -> Result<Option<Vec<f32>>, LoadError> {
+                    let Some(acc) = prim.get(&sem) else {
+                        return Ok(None);
+                    };
+                    let v = read_floats(path, &acc, bufs, dims, limit)?;
+                    if v.len() != nv * dims {
+                        return Err(LoadError::at_json(
+                            path,
+                            format!("{pname}.attributes.{what}"),
+                            format!("has {} elements, but POSITION has {nv}", v.len() / dims),
+                        ));
+                    }
+                    Ok(Some(v))
+                };
+                let normals = attr(Semantic::Normals, 3, "NORMAL")?;
+                let uvs = attr(Semantic::TexCoords(0), 2, "TEXCOORD_0")?;
+                let idx = match prim.indices() {
+                    Some(acc) => read_indices(path, &acc, bufs, limit)?,
+                    None => (0..nv as u32).collect(),
+                };
+                (pos, normals, uvs, idx)
+            }
+        };
+        let nv = pos.len() / 3;
+        let base = self.mesh.positions.len() as u32;
+        if let Some(p) = pos.first_chunk::<3>() {
+            let first = world.transform_point3(DVec3::from_array(p.map(f64::from)));
+            self.far.origin_for(first.to_array());
+        }
+        let world = stored_relative(world, DVec3::from_array(self.far.origin()));
+        for (j, p) in pos.chunks_exact(3).enumerate() {
+            let w = world.transform_point3(Vec3::new(p[0], p[1], p[2]));
+            if !w.is_finite() {
+                return Err(LoadError::at_json(
+                    path,
+                    format!("accessors[{}]", pos_acc.index()),
+                    format!(
+                        "vertex {j} is NaN or infinite after the transform of nodes[{}]",
+                        node.index()
+                    ),
+                ));
+            }
+            self.mesh.positions.push(w);
+        }
+        match normals {
+            Some(n) => self.normals.extend(
+                n.chunks_exact(3)
+                    .map(|c| (normal_m * Vec3::new(c[0], c[1], c[2])).normalize_or_zero()),
+            ),
+            None => {
+                self.all_normals = false;
+                self.normals.resize(self.mesh.positions.len(), Vec3::ZERO);
+            }
+        }
+        match uvs {
+            Some(t) => self
+                .uvs
+                .extend(t.chunks_exact(2).map(|c| Vec2::new(c[0], c[1]))),
+            None => {
+                self.all_uvs = false;
+                self.uvs.resize(self.mesh.positions.len(), Vec2::ZERO);
+            }
+        }
+        Ok((base, nv, idx))
     }
 
     /// Our index of the glTF material `m`, converting it on first use.

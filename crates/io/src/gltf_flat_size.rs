@@ -11,8 +11,10 @@
 //! stores each mesh once.
 
 use crate::error::{ErrorKind, LoadError, Location};
+use crate::gltf_shared_vertices::vertex_key;
 use ::gltf::mesh::Mode;
 use ::gltf::Semantic;
+use std::collections::HashSet;
 use std::path::Path;
 
 /// Bytes the flattened load keeps per vertex: position, normal and texture
@@ -35,9 +37,12 @@ impl FlatSize {
     /// What one placement of `mesh` adds: its primitives of the triangle
     /// modes that have positions, counted as the loader reads them (a list
     /// gives a triangle per three indices, a strip or fan one per index
-    /// after the second; without indices the vertices are the indices).
+    /// after the second; without indices the vertices are the indices;
+    /// primitives that share their vertex arrays share their vertices,
+    /// [`crate::gltf_shared_vertices`]).
     pub(crate) fn of_mesh(mesh: &::gltf::Mesh<'_>) -> Self {
         let mut size = Self::default();
+        let mut read = HashSet::new();
         for prim in mesh.primitives() {
             let Some(positions) = prim.get(&Semantic::Positions) else {
                 continue;
@@ -49,7 +54,9 @@ impl FlatSize {
                 Mode::TriangleStrip | Mode::TriangleFan => indices.saturating_sub(2),
                 _ => continue,
             };
-            size.vertices += vertices;
+            if vertex_key(&prim).is_none_or(|key| read.insert(key)) {
+                size.vertices += vertices;
+            }
             size.triangles += triangles;
         }
         size

@@ -40,6 +40,7 @@ mod gltf_integers;
 mod gltf_meshopt;
 mod gltf_node_transforms;
 mod gltf_scene;
+mod gltf_shared_vertices;
 mod gltf_support;
 mod hashing;
 mod image_merge;

@@ -830,6 +830,116 @@ fn scenes_that_flatten_beyond_32_bit_indices_are_refused_with_their_size() {
     assert_eq!(loaded.mesh.positions.len() as u64, N * 5);
 }
 
+/// Primitives that name the same vertex accessors share their vertices.
+/// The writer puts each run of triangles with one material in its own
+/// primitive over the part's vertex arrays; a grid of 257 × 257 vertices
+/// whose quads alternate between two materials is 65,536 primitives over
+/// one array. Copied per primitive, that would be 66,049 · 65,536
+/// vertices, more than 32-bit indices address, and the load was refused.
+/// It reads back as written: the same vertices, triangles and materials,
+/// flattened and instanced. Primitives over the same POSITION but other
+/// NORMAL accessors keep their own vertices.
+#[test]
+fn primitives_over_one_vertex_array_share_its_vertices() {
+    use raykit_core::{Material, TriangleMesh, Vec3};
+    const SIDE: u32 = 257;
+    let positions: Vec<Vec3> = (0..SIDE * SIDE)
+        .map(|i| {
+            Vec3::new(
+                (i % SIDE) as f32,
+                ((i * 7919) % 13) as f32 * 0.1,
+                (i / SIDE) as f32,
+            )
+        })
+        .collect();
+    let mut indices = Vec::new();
+    let mut tri_material = Vec::new();
+    for z in 0..SIDE - 1 {
+        for x in 0..SIDE - 1 {
+            let a = z * SIDE + x;
+            indices.push([a, a + SIDE, a + 1]);
+            indices.push([a + 1, a + SIDE, a + SIDE + 1]);
+            tri_material.extend([(x + z) % 2; 2]);
+        }
+    }
+    let mesh = TriangleMesh {
+        positions,
+        indices,
+        tri_material,
+        materials: vec![
+            Material {
+                diffuse: [0.8, 0.1, 0.1],
+                ..Material::default()
+            },
+            Material {
+                diffuse: [0.1, 0.1, 0.8],
+                ..Material::default()
+            },
+        ],
+        ..TriangleMesh::default()
+    };
+    let runs = mesh.num_triangles() / 2;
+    assert!(
+        (runs * mesh.positions.len()) as u64 > u64::from(u32::MAX),
+        "a copy per primitive must exceed 32-bit indices"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("grid.glb");
+    raykit_io::write_atomic(&path, |w| raykit_io::write_gltf(w, &mesh, true)).unwrap();
+    let back = load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(back.mesh.positions, mesh.positions);
+    assert_eq!(back.mesh.indices, mesh.indices);
+    for t in 0..mesh.num_triangles() {
+        assert_eq!(
+            back.mesh.materials[back.mesh.material_of(t) as usize].diffuse,
+            mesh.materials[mesh.tri_material[t] as usize].diffuse,
+            "triangle {t}"
+        );
+    }
+    let instanced = raykit_io::load_gltf_instances(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(instanced.geometries.len(), 1);
+    assert_eq!(instanced.geometries[0].positions, mesh.positions);
+    assert_eq!(instanced.geometries[0].indices, mesh.indices);
+
+    // Two primitives over one POSITION accessor, the second with normals:
+    // different vertex arrays, each read.
+    let bin: Vec<u8> = [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
+        .iter()
+        .chain(&[[0f32, 0., 1.]; 3])
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let json = r#"{
+  "asset": {"version": "2.0"},
+  "buffers": [{"byteLength": 72}],
+  "bufferViews": [
+    {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+    {"buffer": 0, "byteOffset": 36, "byteLength": 36}
+  ],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+     "min": [0, 0, 0], "max": [1, 1, 0]},
+    {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"}
+  ],
+  "meshes": [{"primitives": [
+    {"attributes": {"POSITION": 0}},
+    {"attributes": {"POSITION": 0}},
+    {"attributes": {"POSITION": 0, "NORMAL": 1}}
+  ]}],
+  "nodes": [{"mesh": 0}],
+  "scenes": [{"nodes": [0]}]
+}"#;
+    let p = write(dir.path(), "mixed.glb", &glb(json, &bin));
+    let l = load(&p).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(l.mesh.num_triangles(), 3);
+    assert_eq!(
+        l.mesh.positions.len(),
+        6,
+        "the first two share, the third has normals"
+    );
+    assert_eq!(l.mesh.indices, vec![[0, 1, 2], [0, 1, 2], [3, 4, 5]]);
+}
+
 /// A GLB whose image 0 is `image` bytes in buffer view 2.
 fn glb_with_image(image: &[u8]) -> Vec<u8> {
     let mut bin = geometry();
@@ -1158,9 +1268,9 @@ fn written_scene_reads_back_with_materials_camera_and_lights() {
         .unwrap();
         let back = raykit_io::load(&path).unwrap();
         assert!(back.warnings.is_empty(), "{:?}", back.warnings);
-        // One primitive per material run: the loader copies the shared
-        // vertices per primitive, so compare corners, not indices.
-        assert_eq!(back.mesh.num_triangles(), 3);
+        // One primitive per material run, over one vertex array read once.
+        assert_eq!(back.mesh.positions, mesh.positions, "{name}");
+        assert_eq!(back.mesh.indices, mesh.indices, "{name}");
         for t in 0..3 {
             assert_eq!(
                 back.mesh.triangle(t),
