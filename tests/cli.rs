@@ -525,13 +525,14 @@ fn signal_while_writing(child: &mut std::process::Child, dir: &Path, signal: &st
 
 /// Numbers no render, trace or benchmark can use are refused by their
 /// flag before any work: sizes that would exhaust memory, NaN costs and
-/// biases, a camera that looks nowhere.
+/// biases, a camera that looks nowhere or has no up direction, and a GPU
+/// structure asked of the CPU.
 #[test]
 fn unusable_numbers_are_refused_by_their_flag() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.png");
     let o = s(&out);
-    let runs: [(&[&str], &str); 9] = [
+    let runs: [(&[&str], &str); 12] = [
         (
             &[
                 "render",
@@ -595,6 +596,28 @@ fn unusable_numbers_are_refused_by_their_flag() {
         ),
         (&["bench", "--size", "100000"], "--size"),
         (&["bench", "--reps", "0"], "--reps"),
+        (
+            &["render", "--up", "0,0,0", "--out", o],
+            "--up must be a direction",
+        ),
+        (
+            &["render", "--eye", "3,1,0", "--up", "0,nan,0", "--out", o],
+            "for '--up <UP>'",
+        ),
+        (
+            &[
+                "trace",
+                "--accel",
+                "cwbvh",
+                "--mesh",
+                "builtin:cornell",
+                "--rays",
+                o,
+                "--out",
+                o,
+            ],
+            "give --backend gpu",
+        ),
     ];
     for (args, needle) in runs {
         let r = raykit(args);

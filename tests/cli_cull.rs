@@ -193,6 +193,10 @@ fn bad_arguments_fail_with_a_clear_message() {
     let same = dir.path().join(".").join("assembly.glb");
     let out = dir.path().join("out.glb");
     let missing = dir.path().join("missing.glb");
+    let report = dir.path().join("r.json");
+    let truth = dir.path().join("t.json");
+    let no_folder = dir.path().join("none").join("t.json");
+    std::fs::write(&truth, "{}").unwrap();
     for (args, want) in [
         (vec![s(&input), s(&same)], "also an input"),
         (vec![s(&input), "out.xyz"], "unknown mesh file extension"),
@@ -222,6 +226,58 @@ fn bad_arguments_fail_with_a_clear_message() {
             ],
             "outside 0..=0.1",
         ),
+        // The labels' file is checked like every output, before any work.
+        (
+            vec![s(&input), s(&out), "--evaluate", "--save-truth", s(&input)],
+            "also an input",
+        ),
+        (
+            vec![s(&input), s(&out), "--evaluate", "--save-truth", s(&out)],
+            "name the same file",
+        ),
+        (
+            vec![
+                s(&input),
+                s(&out),
+                "--evaluate",
+                "--save-truth",
+                s(&report),
+                "--report",
+                s(&report),
+            ],
+            "name the same file",
+        ),
+        (
+            vec![
+                s(&input),
+                s(&out),
+                "--evaluate",
+                "--save-truth",
+                s(&no_folder),
+            ],
+            "does not exist",
+        ),
+        // Saved labels that cannot be used fail before the output is written.
+        (
+            vec![s(&input), s(&out), "--evaluate", "--truth", s(&truth)],
+            "not a ground truth saved by --save-truth",
+        ),
+        (
+            vec![s(&input), s(&out), "--evaluate", "--truth", s(&missing)],
+            "missing.glb",
+        ),
+        (
+            vec![
+                s(&input),
+                s(&out),
+                "--evaluate",
+                "--truth",
+                s(&truth),
+                "--report",
+                s(&truth),
+            ],
+            "also an input",
+        ),
     ] {
         let o = raykit(&[&["cull"], &args[..]].concat());
         assert!(!o.status.success(), "{args:?}");
@@ -229,7 +285,10 @@ fn bad_arguments_fail_with_a_clear_message() {
         assert!(err.contains(want), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{err}");
     }
-    assert!(!out.exists(), "no output is written on errors");
+    assert!(
+        !out.exists() && !report.exists(),
+        "no output is written on errors"
+    );
     assert_eq!(
         std::fs::read(&input).unwrap(),
         bytes,

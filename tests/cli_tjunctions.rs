@@ -153,4 +153,27 @@ fn kd_cut_then_eliminate_gives_a_closed_surface() {
         edge_uses(&fixed).values().all(|&n| n == 2),
         "surface not closed"
     );
+    // The cut mesh and the output are two files: one path for both is
+    // refused before any work, as is --cut-out without a cut.
+    let before = std::fs::read(&output).unwrap();
+    for (extra, want) in [
+        (
+            vec!["--kd-cut", "6", "--cut-out", s(&output)],
+            "name the same file",
+        ),
+        (vec!["--cut-out", s(&output)], "--cut-out needs --kd-cut"),
+    ] {
+        let o = raykit(&[&["tjunctions", s(&input), s(&output)], &extra[..]].concat());
+        assert!(!o.status.success(), "{extra:?}");
+        assert!(
+            text(&o.stderr).contains(want),
+            "{extra:?}: {}",
+            text(&o.stderr)
+        );
+    }
+    assert_eq!(
+        std::fs::read(&output).unwrap(),
+        before,
+        "the output is untouched"
+    );
 }

@@ -96,6 +96,13 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
         );
     }
     crate::paths::ensure_output(&args.output, &[args.input.as_path()])?;
+    if let Some(cut) = &args.cut_out {
+        if args.kd_cut.is_none() {
+            bail!("--cut-out needs --kd-cut H");
+        }
+        crate::paths::ensure_output(cut, &[args.input.as_path()])?;
+        crate::paths::ensure_distinct(&args.output, cut, "the output", "--cut-out")?;
+    }
     let opts = TJunctionOptions {
         tolerance: args.tolerance,
         ulps: args.ulps,
@@ -110,8 +117,6 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
     let mut mesh = mesh?;
     if let Some(h) = args.kd_cut {
         mesh = pool.install(|| kd_cut(&mesh, h, &args))?;
-    } else if args.cut_out.is_some() {
-        bail!("--cut-out needs --kd-cut H");
     }
     let bar = crate::stage::spinner(format!(
         "T-junctions of {} triangles ({})",
@@ -177,7 +182,6 @@ fn kd_cut(
         build_s * 1e3
     );
     if let Some(path) = &args.cut_out {
-        crate::paths::ensure_output(path, &[args.input.as_path()])?;
         raykit_io::save_mesh(path, &cut.mesh)
             .with_context(|| format!("cannot write {}", path.display()))?;
         eprintln!("wrote the cut mesh to {}", path.display());

@@ -163,7 +163,7 @@ impl<'p> ObjState<'p> {
                 self.set_part();
             }
             b"usemtl" => self.use_material(toks.rest()),
-            b"mtllib" => self.material_library(toks.rest())?,
+            b"mtllib" => self.material_library(line, toks.rest())?,
             _ => {}
         }
         Ok(())
@@ -356,7 +356,7 @@ impl<'p> ObjState<'p> {
         };
     }
 
-    fn material_library(&mut self, rest: &[u8]) -> Result<(), LoadError> {
+    fn material_library(&mut self, line: usize, rest: &[u8]) -> Result<(), LoadError> {
         let dir = self.path.parent().unwrap_or(Path::new(""));
         for name in library_names(dir, rest) {
             let file = dir.join(&name);
@@ -368,9 +368,15 @@ impl<'p> ObjState<'p> {
             }
             // A missing or unreadable library (or one that is not a regular
             // file, whose reads need not end) falls back to default
-            // materials.
-            let Ok(bytes) = read_external(&file, MAX_LIBRARY_FILE) else {
-                continue;
+            // materials, with a warning.
+            let bytes = match read_external(&file, MAX_LIBRARY_FILE) {
+                Ok(bytes) => bytes,
+                Err(why) => {
+                    self.warnings.push(format!(
+                        "line {line}: mtllib {name}: {why}; its materials get default colours"
+                    ));
+                    continue;
+                }
             };
             let (materials, warnings) = parse_mtl(&file, &bytes, &mut self.textures)?;
             self.warnings.extend(warnings);

@@ -47,10 +47,17 @@ pub(crate) fn parse_stl(
     Ok((parse_ascii(path, data)?, StlEncoding::Ascii))
 }
 
-/// True when `data` starts with `solid` and its first kilobyte is text.
+/// Whether the token `t` is the keyword `word`, in any case: the format's
+/// keywords are lower case, but some CAD tools write them in capitals.
+fn is(t: Option<&[u8]>, word: &[u8]) -> bool {
+    t.is_some_and(|t| t.eq_ignore_ascii_case(word))
+}
+
+/// True when `data` starts with `solid` (in any case) and its first
+/// kilobyte is text.
 fn looks_ascii(data: &[u8]) -> bool {
     let start = data.trim_ascii_start();
-    start.starts_with(b"solid")
+    is(start.get(..5), b"solid")
         && data
             .iter()
             .take(1024)
@@ -102,7 +109,7 @@ fn parse_ascii(path: &Path, data: &[u8]) -> Result<TriangleMesh, LoadError> {
     let err = |ts: &TokenStream<'_>, msg: String| LoadError::at_line(path, ts.line(), msg);
     let expect = |ts: &mut TokenStream<'_>, word: &[u8], context: &str| {
         let t = ts.next_token();
-        if t == Some(word) {
+        if is(t, word) {
             Ok(())
         } else {
             Err(err(
@@ -116,7 +123,7 @@ fn parse_ascii(path: &Path, data: &[u8]) -> Result<TriangleMesh, LoadError> {
         }
     };
     while let Some(t) = ts.next_token() {
-        if t != b"solid" {
+        if !is(Some(t), b"solid") {
             return Err(err(
                 &ts,
                 format!("expected 'solid', found {}", show(Some(t))),
@@ -127,19 +134,16 @@ fn parse_ascii(path: &Path, data: &[u8]) -> Result<TriangleMesh, LoadError> {
         let part = parts.len() as u32 - 1;
         loop {
             let t = ts.next_token();
-            match t {
-                Some(b"endsolid") => {
-                    ts.rest_of_line();
-                    end_line = ts.line();
-                    break;
-                }
-                Some(b"facet") => {}
-                _ => {
-                    return Err(err(
-                        &ts,
-                        format!("expected 'facet' or 'endsolid', found {}", found(t)),
-                    ))
-                }
+            if is(t, b"endsolid") {
+                ts.rest_of_line();
+                end_line = ts.line();
+                break;
+            }
+            if !is(t, b"facet") {
+                return Err(err(
+                    &ts,
+                    format!("expected 'facet' or 'endsolid', found {}", found(t)),
+                ));
             }
             expect(&mut ts, b"normal", "after 'facet'")?;
             for _ in 0..3 {
@@ -159,15 +163,14 @@ fn parse_ascii(path: &Path, data: &[u8]) -> Result<TriangleMesh, LoadError> {
             poly.clear();
             loop {
                 let t = ts.next_token();
-                match t {
-                    Some(b"endloop") => break,
-                    Some(b"vertex") => {}
-                    _ => {
-                        return Err(err(
-                            &ts,
-                            format!("expected 'vertex' or 'endloop', found {}", found(t)),
-                        ))
-                    }
+                if is(t, b"endloop") {
+                    break;
+                }
+                if !is(t, b"vertex") {
+                    return Err(err(
+                        &ts,
+                        format!("expected 'vertex' or 'endloop', found {}", found(t)),
+                    ));
                 }
                 let mut c = [0.0f32; 3];
                 for x in &mut c {
@@ -256,6 +259,14 @@ mod tests {
         assert_eq!(m.positions.len(), 4);
         assert_eq!(m.indices, vec![[0, 1, 2], [0, 2, 3]]);
         assert!(m.parts.is_empty());
+        // Keywords in capitals, as some CAD tools write them, give the same
+        // mesh; the solid's name keeps its case.
+        let upper = ASCII
+            .to_uppercase()
+            .replace("SOLID CUBE PART", "SOLID cube part");
+        let (u, enc) = parse_stl(Path::new("a.stl"), upper.as_bytes()).unwrap();
+        assert_eq!(enc, StlEncoding::Ascii);
+        assert_eq!((u.positions, u.indices), (m.positions, m.indices));
     }
 
     #[test]

@@ -159,9 +159,14 @@ fn obj_with_mtl_groups_and_vt_vn() {
 }
 
 #[test]
-fn missing_mtl_falls_back_to_default_material_without_warning() {
+fn missing_mtl_falls_back_to_default_material_with_a_warning() {
     let loaded = load(&local("missing_mtl.obj")).unwrap();
-    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    let w = &loaded.warnings[0];
+    assert!(
+        w.contains("mtllib") && w.contains("cannot read") && w.contains("default colours"),
+        "{w}"
+    );
     let m = loaded.mesh;
     assert_eq!(m.materials.len(), 1);
     assert_eq!(m.materials[0].name, "shiny");
@@ -390,7 +395,7 @@ fn obj_libraries_and_textures_are_read_once_from_regular_files() {
         .status()
         .unwrap()
         .success());
-    let mut obj = String::from("mtllib fifo.mtl\n");
+    let mut obj = String::from("mtllib fifo.mtl\nmtllib gone.mtl\n");
     for _ in 0..100 {
         obj.push_str("mtllib a.mtl c.mtl\n");
     }
@@ -401,6 +406,24 @@ fn obj_libraries_and_textures_are_read_once_from_regular_files() {
     let materials = &scene.mesh.materials;
     let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(names, ["a", "b", "c"]);
+    // The libraries that cannot be read are named in warnings, once each.
+    let unread: Vec<&String> = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("default colours"))
+        .collect();
+    assert_eq!(unread.len(), 2, "{:?}", scene.warnings);
+    assert!(
+        unread[0].starts_with("line 1: mtllib fifo.mtl: ")
+            && unread[0].contains("not a regular file"),
+        "{}",
+        unread[0]
+    );
+    assert!(
+        unread[1].starts_with("line 2: mtllib gone.mtl: cannot read "),
+        "{}",
+        unread[1]
+    );
     let textures: Vec<_> = materials
         .iter()
         .map(|m| m.base_texture.clone().expect("texture loaded"))

@@ -161,6 +161,9 @@ pub fn setup(mut scene: Scene, args: &SceneOptions, aspect: f32) -> Result<Rende
         scene.mesh.materials = vec![m];
         scene.mesh.tri_material = vec![0; scene.mesh.num_triangles()];
     }
+    if !args.up.is_finite() || args.up == Vec3::ZERO {
+        bail!("--up must be a direction, not {}", args.up);
+    }
     let bounds = scene.mesh.bounds();
     let fov = args
         .fov

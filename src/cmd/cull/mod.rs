@@ -27,10 +27,22 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
             args.output.display()
         );
     }
-    crate::paths::ensure_output(&args.output, &[args.input.as_path()])?;
+    // Every output is checked before any work: not an input (the mesh or
+    // saved labels), in a folder that takes files, and no two the same.
+    let inputs: Vec<&std::path::Path> = std::iter::once(args.input.as_path())
+        .chain(args.truth.as_deref())
+        .collect();
+    crate::paths::ensure_output(&args.output, &inputs)?;
     if let Some(r) = &args.report {
-        crate::paths::ensure_output(r, &[args.input.as_path(), args.output.as_path()])?;
+        crate::paths::ensure_output(r, &inputs)?;
         crate::paths::ensure_distinct(&args.output, r, "the output", "--report")?;
+    }
+    if let Some(t) = &args.save_truth {
+        crate::paths::ensure_output(t, &inputs)?;
+        crate::paths::ensure_distinct(&args.output, t, "the output", "--save-truth")?;
+        if let Some(r) = &args.report {
+            crate::paths::ensure_distinct(r, t, "--report", "--save-truth")?;
+        }
     }
     let mode = if args.paper {
         ModeArg::Paper
@@ -61,6 +73,16 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
             return Err(e.into());
         }
     };
+    let saved_truth = match (&args.truth, args.evaluate) {
+        (Some(path), true) => match load_truth(path, &args.input, mesh.num_triangles()) {
+            Ok(t) => Some(t),
+            Err(e) => {
+                bar.finish_and_clear();
+                return Err(e);
+            }
+        },
+        _ => None,
+    };
     bar.set_message(match mode {
         ModeArg::Rays => format!("culling {} triangles by rays", mesh.num_triangles()),
         _ => format!(
@@ -83,24 +105,23 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
             args.input.display()
         );
     }
-    let (saved, save_s) = timed(|| raykit_io::save_mesh(&args.output, &kept));
+    // The ground truth first: its labels are written with the mesh, after
+    // all the work, so that a failed run leaves no output behind.
     let (ground_truth, evaluation) = if args.evaluate {
-        let truth = match &args.truth {
-            Some(path) => load_truth(path, &args.input, mesh.num_triangles())?,
-            None => {
-                let truth = evaluate_input(&mesh, &args);
-                if let Some(path) = &args.save_truth {
-                    save_truth(path, &args, &truth)?;
-                }
-                truth
-            }
+        let truth = match saved_truth {
+            Some(truth) => truth,
+            None => evaluate_input(&mesh, &args),
         };
         let eval = compare(&truth, &keep, &mesh);
         (Some(truth), Some(eval))
     } else {
         (None, None)
     };
+    let (saved, save_s) = timed(|| raykit_io::save_mesh(&args.output, &kept));
     saved.with_context(|| format!("cannot write {}", args.output.display()))?;
+    if let (Some(path), Some(truth)) = (&args.save_truth, &ground_truth) {
+        save_truth(path, &args, truth)?;
+    }
     let stats = &result.stats;
     let parts_out = kept.parts.len().max(1);
     let report = CullReport {

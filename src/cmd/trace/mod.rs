@@ -22,6 +22,12 @@ use std::process::ExitCode;
 /// Parse `--accel` and `--test`.
 pub fn parse_names(accel: &str, test: &str) -> Result<(AccelKind, TestKind)> {
     let a = AccelKind::from_name(accel).ok_or_else(|| {
+        if accel == "cwbvh" {
+            return anyhow!(
+                "--accel cwbvh is a GPU structure: give --backend gpu, or a CPU structure ({})",
+                AccelKind::ALL.map(|k| k.name()).join(", ")
+            );
+        }
         let names: Vec<_> = AccelKind::ALL.iter().map(|k| k.name()).collect();
         anyhow!(
             "unknown --accel '{accel}'; expected one of: {}",
