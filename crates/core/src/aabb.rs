@@ -91,12 +91,19 @@ impl Aabb {
         })
     }
 
-    /// Length of the diagonal (0 for the empty box).
+    /// Length of the diagonal (0 for the empty box). Where the squares of
+    /// the sides underflow (a box under about 10⁻¹⁹ across) or overflow,
+    /// they are summed in `f64`.
     pub fn diagonal(&self) -> f32 {
         if self.is_empty() {
-            0.0
+            return 0.0;
+        }
+        let e = self.extent();
+        let d = e.length();
+        if (d > 0.0 && d.is_finite()) || e == Vec3::ZERO {
+            d
         } else {
-            self.extent().length()
+            e.as_dvec3().length() as f32
         }
     }
 
@@ -168,6 +175,27 @@ impl Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The diagonal of a tiny or a huge box is its length, as in `f64`,
+    /// where the squares of its sides underflow or overflow `f32`; a point
+    /// and the empty box have none.
+    #[test]
+    fn the_diagonal_of_tiny_and_huge_boxes() {
+        for side in [1e-30f32, 1e-20, 1e-10, 1.0, 1e10, 1e20, 1e30] {
+            let b = Aabb::new(Vec3::ZERO, Vec3::new(side, 2.0 * side, 2.0 * side));
+            let want = 3.0 * f64::from(side);
+            let got = f64::from(b.diagonal());
+            assert!(
+                (got - want).abs() <= 1e-6 * want,
+                "side {side}: {got} vs {want}"
+            );
+            assert_eq!(b.placing_length(), b.diagonal());
+        }
+        let point = Aabb::new(Vec3::ONE, Vec3::ONE);
+        assert_eq!(point.diagonal(), 0.0);
+        assert_eq!(point.placing_length(), 1e-6);
+        assert_eq!(Aabb::EMPTY.diagonal(), 0.0);
+    }
 
     #[test]
     fn union_with_empty_is_identity() {

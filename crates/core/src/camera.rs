@@ -75,15 +75,8 @@ impl Camera {
 
     /// Orthonormal basis (right, up, forward).
     pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
-        let d = self.target - self.eye;
-        // A camera nanometres from its target and closer: `|d|²` may
-        // underflow, so the direction is normalized from `d` brought to a
-        // largest component of 1.
-        let forward = if d.length_squared() >= f32::MIN_POSITIVE {
-            d.normalize()
-        } else {
-            (d / d.abs().max_element()).normalize()
-        };
+        // A camera nanometres from its target or closer is still pointed.
+        let forward = crate::ray::unit_direction(self.target - self.eye);
         let mut right = forward.cross(self.up);
         if right.length_squared() < 1e-12 {
             right = forward.cross(Vec3::X);

@@ -2,6 +2,19 @@
 
 use glam::Vec3;
 
+/// The unit vector along `d`, also for a `d` so short or so long that
+/// `|d|²` underflows or overflows (models nanometres or 10¹⁹ across): such
+/// a `d` is first brought to a largest component of 1. Not finite for a
+/// zero `d`.
+pub fn unit_direction(d: Vec3) -> Vec3 {
+    let squared = d.length_squared();
+    if (f32::MIN_POSITIVE..=f32::MAX).contains(&squared) {
+        d.normalize()
+    } else {
+        (d / d.abs().max_element()).normalize()
+    }
+}
+
 /// A ray `origin + t * dir` restricted to `t` in `[tnear, tfar]`.
 ///
 /// The ray keeps the component-wise reciprocal of its direction, computed

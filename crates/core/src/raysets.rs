@@ -7,7 +7,7 @@ use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
-use crate::ray::Ray;
+use crate::ray::{unit_direction, Ray};
 use crate::rng::Pcg32;
 use glam::Vec3;
 
@@ -98,7 +98,7 @@ pub fn incoherent(bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
         .map(|_| {
             let origin = c + rng.unit_vector() * r;
             let target = rng.in_box(bounds.min, bounds.max);
-            Ray::new(origin, (target - origin).normalize())
+            Ray::new(origin, unit_direction(target - origin))
         })
         .collect()
 }
@@ -118,4 +118,40 @@ pub fn standard_sets(
     let shad = shadow(mesh, &prim, &hits, standard_light(&bounds));
     let inc = incoherent(&bounds, (size as usize).pow(2), seed);
     [prim, shad, inc]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Incoherent rays around boxes from 10⁻³⁰ to 10³⁰ across start one
+    /// diagonal from the centre (checked in `f64`) with unit directions
+    /// that pass through the box (the slab test in `f64`).
+    #[test]
+    fn incoherent_rays_circle_boxes_of_every_size() {
+        for side in [1e-30f32, 1e-20, 1e-6, 1.0, 1e6, 1e20, 1e30] {
+            let b = Aabb::new(
+                Vec3::splat(side),
+                Vec3::new(2.0 * side, 3.0 * side, 2.5 * side),
+            );
+            let c = b.center().as_dvec3();
+            let diagonal = (b.max - b.min).as_dvec3().length();
+            for ray in incoherent(&b, 200, 7) {
+                let (o, d) = (ray.origin.as_dvec3(), ray.dir().as_dvec3());
+                assert!(
+                    ((o - c).length() / diagonal - 1.0).abs() < 1e-5,
+                    "side {side}"
+                );
+                assert!((d.length() - 1.0).abs() < 1e-6, "side {side}: {d}");
+                let (lo, hi) = (b.min.as_dvec3(), b.max.as_dvec3());
+                let (mut t0, mut t1) = (0f64, f64::INFINITY);
+                for a in 0..3 {
+                    let (ta, tb) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
+                    t0 = t0.max(ta.min(tb));
+                    t1 = t1.min(ta.max(tb));
+                }
+                assert!(t0 <= t1 * (1.0 + 1e-5), "side {side}: misses the box");
+            }
+        }
+    }
 }
