@@ -226,64 +226,38 @@ fn bad_arguments_fail_with_a_clear_message() {
             ],
             "outside 0..=0.1",
         ),
-        // The labels' file is checked like every output, before any work.
-        (
-            vec![s(&input), s(&out), "--evaluate", "--save-truth", s(&input)],
-            "also an input",
-        ),
-        (
-            vec![s(&input), s(&out), "--evaluate", "--save-truth", s(&out)],
-            "name the same file",
-        ),
-        (
-            vec![
-                s(&input),
-                s(&out),
-                "--evaluate",
-                "--save-truth",
-                s(&report),
-                "--report",
-                s(&report),
-            ],
-            "name the same file",
-        ),
-        (
-            vec![
-                s(&input),
-                s(&out),
-                "--evaluate",
-                "--save-truth",
-                s(&no_folder),
-            ],
-            "does not exist",
-        ),
-        // Saved labels that cannot be used fail before the output is written.
-        (
-            vec![s(&input), s(&out), "--evaluate", "--truth", s(&truth)],
-            "not a ground truth saved by --save-truth",
-        ),
-        (
-            vec![s(&input), s(&out), "--evaluate", "--truth", s(&missing)],
-            "missing.glb",
-        ),
-        (
-            vec![
-                s(&input),
-                s(&out),
-                "--evaluate",
-                "--truth",
-                s(&truth),
-                "--report",
-                s(&truth),
-            ],
-            "also an input",
-        ),
     ] {
         let o = raykit(&[&["cull"], &args[..]].concat());
         assert!(!o.status.success(), "{args:?}");
         let err = text(&o.stderr);
         assert!(err.contains(want), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{err}");
+    }
+    // The labels' files: --save-truth is checked like every output, before
+    // any work; saved labels that cannot be used fail before the output is
+    // written.
+    for (extra, want) in [
+        (vec!["--save-truth", s(&input)], "also an input"),
+        (vec!["--save-truth", s(&out)], "name the same file"),
+        (
+            vec!["--save-truth", s(&report), "--report", s(&report)],
+            "name the same file",
+        ),
+        (vec!["--save-truth", s(&no_folder)], "does not exist"),
+        (
+            vec!["--truth", s(&truth)],
+            "not a ground truth saved by --save-truth",
+        ),
+        (vec!["--truth", s(&missing)], "missing.glb"),
+        (
+            vec!["--truth", s(&truth), "--report", s(&truth)],
+            "also an input",
+        ),
+    ] {
+        let o = raykit(&[&["cull", s(&input), s(&out), "--evaluate"], &extra[..]].concat());
+        assert!(!o.status.success(), "{extra:?}");
+        let err = text(&o.stderr);
+        assert!(err.contains(want), "{extra:?}: {err}");
     }
     assert!(
         !out.exists() && !report.exists(),
