@@ -1,6 +1,6 @@
 //! `raykit merge-tiles`: assemble the PNG parts of `raykit render --tile`
 //! into the whole image, refusing parts that overlap, leave pixels
-//! uncovered or belong to pictures of different sizes.
+//! uncovered or belong to pictures of different sizes or contents.
 
 use anyhow::{Context, Result};
 use clap::Args;
@@ -14,7 +14,9 @@ use std::process::ExitCode;
 for i in 0 1 2 3; do raykit render --tile $i/4 --out part$i.png; done\n  \
 raykit merge-tiles render.png part0.png part1.png part2.png part3.png\n\n\
 Each part names its place in the image (a PNG text chunk written by --tile),\n\
-so the parts may be given in any order. The merged image equals the one\n\
+so the parts may be given in any order. Each also holds a fingerprint of the\n\
+geometry, camera, lights and sampling it was rendered with: parts of another\n\
+picture of the same size are refused. The merged image equals the one\n\
 `raykit render` writes in one process with the same options, bit for bit.")]
 pub struct MergeTilesArgs {
     /// The whole image to write (`.png`), atomically.

@@ -1,7 +1,8 @@
 //! Assembling the PNG parts of a picture rendered in bands (each part
 //! names its place, see [`crate::ImagePart`]) into the whole picture,
 //! refusing parts that overlap, leave pixels uncovered or belong to
-//! pictures of different sizes.
+//! pictures of different sizes or, where the parts record it, to different
+//! pictures.
 
 use crate::error::LoadError;
 use crate::image_part::{read_png_part, read_png_placement, ImagePart};
@@ -57,6 +58,21 @@ pub fn merge_png_parts(paths: &[&Path]) -> Result<(u32, u32, Vec<u8>), MergeErro
                 part.full_width,
                 part.full_height,
                 paths[0].display()
+            )));
+        }
+    }
+    // Parts that record what their picture shows must show one picture.
+    let recorded = placements.iter().zip(paths).filter(|(p, _)| p.picture != 0);
+    if let Some((first, first_path)) = recorded.clone().next() {
+        if let Some((_, path)) = recorded
+            .into_iter()
+            .find(|(p, _)| p.picture != first.picture)
+        {
+            return Err(MergeError::Parts(format!(
+                "{}: a part of another picture than {} (rendered from another scene, camera, \
+                 lights or settings)",
+                path.display(),
+                first_path.display()
             )));
         }
     }
@@ -169,12 +185,35 @@ mod tests {
                     height: y1 - y0,
                     full_width: w,
                     full_height: h,
+                    picture: 7,
                 };
                 let path = dir.join(format!("p{i}.png"));
                 write_png_part(&path, &part, &rgb).unwrap();
                 path
             })
             .collect()
+    }
+
+    /// Parts that record different pictures are refused by name; a part
+    /// that records none (written before the record existed) merges with
+    /// the others.
+    #[test]
+    fn parts_of_another_picture_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let paths = write_bands(dir.path(), &[(0, 2), (2, 4)]);
+        let (mut part, rgb) = read_png_part(&paths[1]).unwrap();
+        part.picture = 8;
+        write_png_part(&paths[1], &part, &rgb).unwrap();
+        let refs: Vec<&Path> = paths.iter().map(|p| p.as_path()).collect();
+        let e = merge_png_parts(&refs).unwrap_err().to_string();
+        assert!(
+            e.contains("p1.png") && e.contains("p0.png") && e.contains("another picture"),
+            "{e}"
+        );
+        part.picture = 0;
+        write_png_part(&paths[1], &part, &rgb).unwrap();
+        let (w, h, _) = merge_png_parts(&refs).unwrap();
+        assert_eq!((w, h), (3, 4));
     }
 
     #[test]
@@ -245,6 +284,7 @@ mod tests {
                     height: rh,
                     full_width: w,
                     full_height: h,
+                    picture: 0,
                 };
                 let path = dir.path().join(format!("r{round}-{i}.png"));
                 write_png_part(&path, &part, &rgb).unwrap();
@@ -286,6 +326,7 @@ mod tests {
             height: 1,
             full_width: 16384,
             full_height: 16384,
+            picture: 0,
         };
         let path = dir.path().join("one.png");
         write_png_part(&path, &part, &[1, 2, 3]).unwrap();

@@ -30,16 +30,25 @@ pub struct ImagePart {
     pub full_width: u32,
     /// Height of the whole picture.
     pub full_height: u32,
+    /// What the whole picture shows, as a fingerprint of the scene and
+    /// settings it was rendered from (0: not recorded), so that parts of
+    /// different pictures of one size are not merged.
+    pub picture: u64,
 }
 
 impl ImagePart {
     /// The placement as the text chunk holds it:
-    /// `x=X y=Y width=W height=H of FWxFH`.
+    /// `x=X y=Y width=W height=H of FWxFH`, then ` picture=HEX` where the
+    /// fingerprint is recorded.
     pub fn to_text(&self) -> String {
-        format!(
+        let mut text = format!(
             "x={} y={} width={} height={} of {}x{}",
             self.x, self.y, self.width, self.height, self.full_width, self.full_height
-        )
+        );
+        if self.picture != 0 {
+            text += &format!(" picture={:016x}", self.picture);
+        }
+        text
     }
 
     /// Parse [`ImagePart::to_text`]'s form; `None` if it is not that.
@@ -58,6 +67,10 @@ impl ImagePart {
             return None;
         }
         let (fw, fh) = words.next()?.split_once('x')?;
+        let picture = match words.next() {
+            None => 0,
+            Some(w) => u64::from_str_radix(w.strip_prefix("picture=")?, 16).ok()?,
+        };
         if words.next().is_some() {
             return None;
         }
@@ -68,6 +81,7 @@ impl ImagePart {
             height,
             full_width: fw.parse().ok()?,
             full_height: fh.parse().ok()?,
+            picture,
         })
     }
 
@@ -211,6 +225,7 @@ mod tests {
             height: 4,
             full_width: 9,
             full_height: 20,
+            picture: 0xfeed_0123_4567_89ab,
         };
         let rgb: Vec<u8> = (0..5 * 4 * 3).map(|i| (i * 7 % 253) as u8).collect();
         write_png_part(&p, &part, &rgb).unwrap();
@@ -239,13 +254,23 @@ mod tests {
             height: 120,
             full_width: 640,
             full_height: 480,
+            picture: 0,
         };
         assert_eq!(ImagePart::parse(&part.to_text()), Some(part));
+        let pictured = ImagePart {
+            picture: 0x0123_4567_89ab_cdef,
+            ..part
+        };
+        let text = pictured.to_text();
+        assert!(text.ends_with(" picture=0123456789abcdef"), "{text}");
+        assert_eq!(ImagePart::parse(&text), Some(pictured));
         for bad in [
             "",
             "x=1",
             "x=0 y=7 width=640 height=120 of 640",
             "x=0 y=7 width=640 height=120 of 640x480 extra",
+            "x=0 y=7 width=640 height=120 of 640x480 picture=xyz",
+            "x=0 y=7 width=640 height=120 of 640x480 picture=1 extra",
             "y=0 x=7 width=1 height=1 of 2x2",
         ] {
             assert_eq!(ImagePart::parse(bad), None, "{bad}");

@@ -7,6 +7,7 @@
 
 mod args;
 mod gpu;
+mod picture;
 pub mod split;
 
 use args::BackendArg;
@@ -214,6 +215,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                     height: window.height,
                     full_width: width,
                     full_height: height,
+                    picture: picture::fingerprint(mesh, camera, &setup.lights, &opts),
                 };
                 raykit_io::write_png_part(out, &part, &frame.image.rgb)?;
             }
