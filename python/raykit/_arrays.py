@@ -111,3 +111,14 @@ def threads(n) -> int:
     if not 0 <= n <= MAX_THREADS:
         raise ValueError(f"threads must be between 0 (all cores) and {MAX_THREADS}, got {n}")
     return int(n)
+
+
+def count(n, name: str) -> int:
+    """A whole number for an unsigned 32-bit parameter: a ValueError names
+    ``name`` for a bool, a non-integer, a negative number or one above
+    2**32 - 1 (the extension's own checks then give the finer limits)."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise ValueError(f"{name} must be a whole number, got {n!r}")
+    if not 0 <= n <= np.iinfo(np.uint32).max:
+        raise ValueError(f"{name} must be between 0 and {np.iinfo(np.uint32).max}, got {n}")
+    return int(n)

@@ -50,16 +50,6 @@ class Scene:
         threads: int = 0,
         width: int = 0,
     ) -> npt.NDArray[np.bool_]: ...
-    def all_hits(
-        self,
-        origins: npt.NDArray[np.float32],
-        directions: npt.NDArray[np.float32],
-        min_gap: float,
-        max_hits: int,
-        threads: int = 0,
-    ) -> Tuple[
-        npt.NDArray[np.uint32], npt.NDArray[np.uint32], npt.NDArray[np.float32], npt.NDArray[np.float32]
-    ]: ...
     @property
     def num_triangles(self) -> int: ...
     @property

@@ -118,6 +118,9 @@ class RaycastingScene:
         self._accel_name = accel
         self._test_name = test
         self._vertices: list[np.ndarray] = []
+        # Bounding boxes of geometries by id, with the vertex array each was
+        # taken from (see `_box`).
+        self._boxes: dict = {}
         # Each geometry's vertices are stored relative to this point (None
         # for zero): the scene's origin, or for a geometry kept for
         # instances only, its own.
@@ -223,9 +226,22 @@ class RaycastingScene:
             _raykit.InstancedScene([(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32), 0)], [(0, m, 0)])
         except ValueError as e:
             raise ValueError(f"instance {iid}: {str(e).split(': ', 1)[-1]}") from None
+        _check_placement(self._vertices[gid], self._box(gid), m, iid, gid)
         self._placements.append((gid, m, mask))
         self._changed()
         return iid
+
+    def _box(self, gid: int):
+        """Geometry ``gid``'s bounding box ``(lo, hi)`` in float64, or None
+        when it has no vertices; kept while its vertex array is the same
+        object (instances of one geometry are checked against it)."""
+        v = self._vertices[gid]
+        cached = self._boxes.get(gid)
+        if cached is None or cached[0] is not v:
+            box = (v.min(axis=0).astype(np.float64), v.max(axis=0).astype(np.float64)) if len(v) else None
+            cached = (v, box)
+            self._boxes[gid] = cached
+        return cached[1]
 
     def add_gltf(self, path, *, mask: int = _MASK_ALL) -> list[int]:
         """Add a glTF or GLB file with its instancing kept (beyond Open3D):
@@ -456,7 +472,7 @@ class RaycastingScene:
             isinstance(max_hits, bool) or not isinstance(max_hits, (int, np.integer))
         ):
             raise ValueError(f"max_hits must be a whole number or None, got {max_hits!r}")
-        cap = np.iinfo(np.uint64).max if max_hits is None else int(max_hits)
+        cap = np.iinfo(np.uint64).max if max_hits is None else min(int(max_hits), int(np.iinfo(np.uint64).max))
         if cap < 0:
             raise ValueError(f"max_hits must be >= 0, got {max_hits}")
         mask = _check_mask(mask, "mask")
@@ -704,6 +720,28 @@ def _check_coordinates(v: np.ndarray) -> None:
         raise ValueError(
             f"vertex {int(np.argmax(far))} has a coordinate beyond ±{_raykit.MAX_COORDINATE:.0e}, where the "
             "f32 products of the ray and winding-number tests overflow; move or scale the mesh"
+        )
+
+
+def _check_placement(v: np.ndarray, box, m: np.ndarray, iid: int, gid: int) -> None:
+    """Refuse instance ``iid`` when its transform ``m`` (3×4) places a
+    vertex ``v`` of geometry ``gid`` beyond the coordinates a mesh may hold,
+    as :func:`_check_coordinates` refuses them, naming the instance: the
+    corners of the geometry's ``box`` (``None`` when empty) first, the
+    vertices themselves only where a corner lies beyond."""
+    if box is None:
+        return
+    lo, hi = box
+    corners = np.array([[(lo, hi)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
+    limit = float(_raykit.MAX_COORDINATE)
+    if (np.abs(corners @ m[:, :3].T + m[:, 3]) <= limit).all():
+        return
+    placed = v.astype(np.float64) @ m[:, :3].T + m[:, 3]
+    far = (np.abs(placed) > limit).any(axis=1)
+    if far.any():
+        raise ValueError(
+            f"instance {iid}: places vertex {int(np.argmax(far))} of geometry {gid} beyond ±{limit:.0e}, where "
+            "the f32 products of the ray and winding-number tests overflow; move or scale the placement"
         )
 
 

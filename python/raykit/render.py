@@ -65,14 +65,14 @@ def render(
         )
     return _raykit.render(
         scene._built(),
-        int(width),
-        int(height),
+        _arrays.count(width, "width"),
+        _arrays.count(height, "height"),
         _vec(eye, "eye", scene.origin),
         _vec(target, "target", scene.origin),
         _vec(up, "up"),
         float(fov),
-        int(samples_per_pixel),
+        _arrays.count(samples_per_pixel, "samples_per_pixel"),
         bool(shadows),
         _arrays.threads(threads),
-        None if window is None else tuple(int(c) for c in window),
+        None if window is None else tuple(_arrays.count(c, "window") for c in window),
     )

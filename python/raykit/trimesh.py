@@ -16,12 +16,14 @@ computed in float64 from the hit triangle's own vertices and the
 barycentric coordinates. Directions are normalised, as trimesh's engines
 do.
 
-All hits along a ray (``multiple_hits=True``) are found by repeated
-nearest-hit queries: after a hit at distance ``t`` the ray continues from
-``t + gap`` with ``gap = 1e-6 · mesh.scale`` (at least the next float), so
-a ray through a shared edge or vertex reports that crossing once (on one
-of the triangles there), and two surfaces closer than ``gap`` along the
-ray count as one. trimesh's embreex engine steps past hits the same way.
+All hits along a ray (``multiple_hits=True``) are the ray's crossings of
+the surface, as :meth:`raykit.RaycastingScene.list_intersections` lists
+them: a crossing at a shared edge or vertex is reported once, on one of the
+triangles there, decided exactly. Repeated nearest-hit queries that step
+past each hit by a small gap, as trimesh's embreex engine does, can report
+such a crossing twice: the triangle tests accept hits just beyond a
+triangle's edges, so that no ray slips between two triangles, and at a
+grazing angle the neighbour's hit lies further along the ray than the gap.
 """
 
 from __future__ import annotations
@@ -30,9 +32,8 @@ import numpy as np
 
 from . import _arrays, _raykit
 
-_GAP_FACTOR = 1e-6
-_GAP_FLOOR = 1e-8
-
+# The most hits per ray the engine takes (a u64); larger limits mean no limit.
+_MAX_HITS = 2**64 - 1
 
 class RayMeshIntersector:
     """Ray queries on a ``trimesh.Trimesh``, answered by raykit.
@@ -129,9 +130,13 @@ class RayMeshIntersector:
         ordered by ray, then distance; otherwise the first hit only.
         """
         if multiple_hits:
+            if isinstance(max_hits, bool) or not isinstance(max_hits, (int, np.integer)) or max_hits < 0:
+                raise ValueError(f"max_hits must be a whole number >= 0, got {max_hits!r}")
             o, d = self._rays(ray_origins, ray_directions)
-            gap = max(_GAP_FLOOR, _GAP_FACTOR * float(getattr(self.mesh, "scale", 1.0)))
-            ray, tri, _, uv = self._scene.all_hits(o, d, gap, int(max_hits), self._threads)
+            rays = np.ascontiguousarray(np.concatenate([o, d], axis=1))
+            _, ray, _, _, tri, uv = _raykit.list_intersections(
+                self._scene, rays, min(int(max_hits), _MAX_HITS), self._threads
+            )
         else:
             prim, uv_all = self._first(ray_origins, ray_directions)
             ray = np.flatnonzero(prim != _raykit.INVALID_ID)

@@ -11,7 +11,6 @@ use crate::errors::value_error;
 use crate::hit_arrays::{matrix, HitColumns, INVALID_ID};
 use crate::image_order::{nearest_by_bands, occlusion_by_bands, HitRow};
 use crate::threads::detached;
-use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -19,7 +18,7 @@ use raykit_core::accel::bvh::DEFAULT_MAX_DEGRADATION;
 use raykit_core::accel::{build_accel, load_accel, AccelKind, BuildOptions, RefitError};
 use raykit_core::query::SurfaceBvh;
 use raykit_core::tri::TestKind;
-use raykit_core::{Accel, Hit, MeshError, Ray, TriangleMesh, Vec3};
+use raykit_core::{Accel, MeshError, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::{OnceLock, RwLock, RwLockReadGuard};
@@ -341,78 +340,6 @@ impl Scene {
             None => vec![false; n],
         })?;
         Ok(occluded.into_pyarray(py))
-    }
-
-    /// Every hit along each ray, by repeated nearest-hit queries: after a
-    /// hit at `t` the ray continues from `t + min_gap` (at least the next
-    /// float above `t`), so a ray crossing a shared edge or vertex reports
-    /// it once, and surfaces closer than `min_gap` along the ray merge.
-    /// At most `max_hits` per ray. Returns `(ray_ids, primitive_ids, t_hit,
-    /// primitive_uvs)` ordered by ray, then distance.
-    #[pyo3(signature = (origins, directions, min_gap, max_hits, threads=0))]
-    #[allow(clippy::type_complexity)]
-    fn all_hits<'py>(
-        &self,
-        py: Python<'py>,
-        origins: PyReadonlyArray2<'py, f32>,
-        directions: PyReadonlyArray2<'py, f32>,
-        min_gap: f32,
-        max_hits: usize,
-        threads: i64,
-    ) -> PyResult<(
-        Bound<'py, PyArray1<u32>>,
-        Bound<'py, PyArray1<u32>>,
-        Bound<'py, PyArray1<f32>>,
-        Bound<'py, PyArray2<f32>>,
-    )> {
-        let (o, n) = rows(&origins, 3, "origins")?;
-        let (d, nd) = rows(&directions, 3, "directions")?;
-        if n != nd {
-            return Err(value_error(format!(
-                "origins and directions must have the same shape, got ({n}, 3) and ({nd}, 3)"
-            )));
-        }
-        if min_gap.is_nan() || min_gap < 0.0 {
-            return Err(value_error(format!("min_gap must be >= 0, got {min_gap}")));
-        }
-        let hits: Vec<(u32, Hit)> = detached(py, threads, || {
-            let built = self.read();
-            let Some(accel) = built.accel() else {
-                return Vec::new();
-            };
-            (0..n)
-                .into_par_iter()
-                .with_min_len(64)
-                .flat_map_iter(|i| {
-                    let origin = Vec3::from_slice(&o[3 * i..3 * i + 3]);
-                    let dir = Vec3::from_slice(&d[3 * i..3 * i + 3]);
-                    let mut found = Vec::new();
-                    let mut tnear = 0.0f32;
-                    while found.len() < max_hits && tnear < f32::INFINITY {
-                        let Some(h) =
-                            accel.intersect(&Ray::segment(origin, dir, tnear, f32::INFINITY))
-                        else {
-                            break;
-                        };
-                        found.push((i as u32, h));
-                        tnear = (h.t + min_gap).max(h.t.next_up());
-                    }
-                    found
-                })
-                .collect()
-        })?;
-        let k = hits.len();
-        let ray_ids: Vec<u32> = hits.iter().map(|(i, _)| *i).collect();
-        let prims: Vec<u32> = hits.iter().map(|(_, h)| h.prim).collect();
-        let t: Vec<f32> = hits.iter().map(|(_, h)| h.t).collect();
-        let uv: Vec<f32> = hits.iter().flat_map(|(_, h)| [h.u, h.v]).collect();
-        let uv = Array2::from_shape_vec((k, 2), uv).expect("two per hit");
-        Ok((
-            ray_ids.into_pyarray(py),
-            prims.into_pyarray(py),
-            t.into_pyarray(py),
-            uv.into_pyarray(py),
-        ))
     }
 
     /// Triangles in the scene.

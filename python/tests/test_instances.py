@@ -222,6 +222,16 @@ def test_bad_instances_are_refused_by_name(bunny):
         scene.add_instance(5, np.eye(4))
     with pytest.raises(ValueError, match="mask"):
         scene.add_instance(g, np.eye(4), mask=-1)
+    # A placement beyond the coordinates a mesh may hold is refused at
+    # once, naming the instance, as the point queries would refuse its
+    # vertices; one that only its box's corners would exceed is not.
+    huge = np.diag([1e30, 1e30, 1e30, 1.0])
+    with pytest.raises(ValueError, match=r"instance 1: places vertex \d+ of geometry 0 beyond"):
+        scene.add_instance(g, huge)
+    far = np.eye(4)
+    far[0, 3] = 2e12
+    with pytest.raises(ValueError, match="instance 1: places vertex"):
+        scene.add_instance(g, far)
     with pytest.raises(ValueError, match="mask"):
         scene.cast_rays(rays_at(v, 4, 0), mask=2**32)
     # Nothing refused was added; a good instance still works, and rays with

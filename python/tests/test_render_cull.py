@@ -39,6 +39,17 @@ def test_render_shows_the_mesh_where_rays_hit(bunny):
         raykit.render(scene, fov=0)
     with pytest.raises(ValueError, match="width and height"):
         raykit.render(scene, 0, 10)
+    # Negative, huge and non-integer counts are ValueErrors naming the
+    # argument, not the OverflowError of the conversion to unsigned.
+    for kwargs, name in [
+        (dict(width=-1), "width"),
+        (dict(height=2**40), "height"),
+        (dict(samples_per_pixel=-1), "samples_per_pixel"),
+        (dict(window=(-1, 0, 4, 4)), "window"),
+        (dict(width=32.5), "width"),
+    ]:
+        with pytest.raises(ValueError, match=name):
+            raykit.render(scene, **kwargs)
 
 
 def test_cull_removes_a_box_sealed_inside_another():
@@ -55,8 +66,9 @@ def test_cull_removes_a_box_sealed_inside_another():
     # A box beside the first instead of inside it stays.
     beside = np.concatenate([outer_v, inner_v + [3.0, 0, 0]])
     assert raykit.cull(beside, f, resolution=32).keep.all()
-    with pytest.raises(ValueError, match="resolution"):
-        raykit.cull(v, f, resolution=1)
+    for resolution in (1, -1, 2**70):
+        with pytest.raises(ValueError, match="resolution"):
+            raykit.cull(v, f, resolution=resolution)
     with pytest.raises(ValueError, match="one per triangle"):
         raykit.cull(v, f, parts[:3])
     with pytest.raises(ValueError, match="refers to vertex"):
