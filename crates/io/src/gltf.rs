@@ -7,11 +7,11 @@
 //! Primitives of mode TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN are loaded;
 //! others are skipped with a warning. Primitives over the same vertex
 //! accessors share their vertices ([`crate::gltf_shared_vertices`]).
-//! Materials take the base colour factor,
-//! metallic/roughness, emission (times `KHR_materials_emissive_strength`),
-//! transmission, IOR, the base-colour texture URI in `diffuse_texture`
-//! (embedded images have no URI and give `None`) and the decoded image in
-//! `base_texture` ([`crate::gltf_image`]). Cameras and `KHR_lights_punctual`
+//! Materials take the base colour factor, metallic/roughness, emission
+//! (times `KHR_materials_emissive_strength`), transmission, IOR, the
+//! base-colour texture URI in `diffuse_texture` (embedded images have no
+//! URI and give `None`) and the decoded image in `base_texture`
+//! ([`crate::gltf_image`]). Cameras and `KHR_lights_punctual`
 //! lights on the walked nodes are collected ([`crate::gltf_scene`]), and
 //! unsupported features are named in warnings ([`crate::gltf_support`]).
 
