@@ -122,3 +122,17 @@ def count(n, name: str) -> int:
     if not 0 <= n <= np.iinfo(np.uint32).max:
         raise ValueError(f"{name} must be between 0 and {np.iinfo(np.uint32).max}, got {n}")
     return int(n)
+
+
+def max_hits(n) -> int:
+    """A cap on the hits listed per ray: ``None`` for none; a ValueError
+    for a bool, a non-integer or a negative number; caps beyond the
+    engine's 64-bit count mean no cap."""
+    limit = int(np.iinfo(np.uint64).max)
+    if n is None:
+        return limit
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise ValueError(f"max_hits must be a whole number or None, got {n!r}")
+    if n < 0:
+        raise ValueError(f"max_hits must be >= 0, got {n}")
+    return min(int(n), limit)

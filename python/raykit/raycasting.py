@@ -468,13 +468,7 @@ class RaycastingScene:
         it.
         """
         flat, _ = _arrays.rows(rays, "rays", 6, shift=self._origin)
-        if max_hits is not None and (
-            isinstance(max_hits, bool) or not isinstance(max_hits, (int, np.integer))
-        ):
-            raise ValueError(f"max_hits must be a whole number or None, got {max_hits!r}")
-        cap = np.iinfo(np.uint64).max if max_hits is None else min(int(max_hits), int(np.iinfo(np.uint64).max))
-        if cap < 0:
-            raise ValueError(f"max_hits must be >= 0, got {max_hits}")
+        cap = _arrays.max_hits(max_hits)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             splits, ray_ids, t, g, inst, p, uv = self._built().list_intersections(

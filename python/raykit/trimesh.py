@@ -32,9 +32,6 @@ import numpy as np
 
 from . import _arrays, _raykit
 
-# The most hits per ray the engine takes (a u64); larger limits mean no limit.
-_MAX_HITS = 2**64 - 1
-
 class RayMeshIntersector:
     """Ray queries on a ``trimesh.Trimesh``, answered by raykit.
 
@@ -130,13 +127,10 @@ class RayMeshIntersector:
         ordered by ray, then distance; otherwise the first hit only.
         """
         if multiple_hits:
-            if isinstance(max_hits, bool) or not isinstance(max_hits, (int, np.integer)) or max_hits < 0:
-                raise ValueError(f"max_hits must be a whole number >= 0, got {max_hits!r}")
+            cap = _arrays.max_hits(max_hits)
             o, d = self._rays(ray_origins, ray_directions)
             rays = np.ascontiguousarray(np.concatenate([o, d], axis=1))
-            _, ray, _, _, tri, uv = _raykit.list_intersections(
-                self._scene, rays, min(int(max_hits), _MAX_HITS), self._threads
-            )
+            _, ray, _, _, tri, uv = _raykit.list_intersections(self._scene, rays, cap, self._threads)
         else:
             prim, uv_all = self._first(ray_origins, ray_directions)
             ray = np.flatnonzero(prim != _raykit.INVALID_ID)

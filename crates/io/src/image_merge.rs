@@ -62,12 +62,9 @@ pub fn merge_png_parts(paths: &[&Path]) -> Result<(u32, u32, Vec<u8>), MergeErro
         }
     }
     // Parts that record what their picture shows must show one picture.
-    let recorded = placements.iter().zip(paths).filter(|(p, _)| p.picture != 0);
-    if let Some((first, first_path)) = recorded.clone().next() {
-        if let Some((_, path)) = recorded
-            .into_iter()
-            .find(|(p, _)| p.picture != first.picture)
-        {
+    let mut recorded = placements.iter().zip(paths).filter(|(p, _)| p.picture != 0);
+    if let Some((first, first_path)) = recorded.next() {
+        if let Some((_, path)) = recorded.find(|(p, _)| p.picture != first.picture) {
             return Err(MergeError::Parts(format!(
                 "{}: a part of another picture than {} (rendered from another scene, camera, \
                  lights or settings)",
