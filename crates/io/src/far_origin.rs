@@ -9,7 +9,7 @@
 //! multiple of the `f32` spacing there, so `f32` input moves exactly.
 
 use raykit_core::glam::DVec3;
-use raykit_core::Vec3;
+use raykit_core::{Vec3, MAX_COORDINATE};
 
 /// A first vertex with a coordinate at least this large moves the origin
 /// to it: `f32` is 1/128 apart there, a centimetre in metres.
@@ -68,6 +68,26 @@ impl FarOrigin {
     pub(crate) fn origin(&self) -> [f64; 3] {
         self.origin.unwrap_or(DVec3::ZERO).to_array()
     }
+}
+
+/// Why a vertex read as `read` and stored as `stored` cannot be held: a
+/// stored coordinate that is not finite or lies beyond [`MAX_COORDINATE`]
+/// (a finite `f64` may still overflow `f32`); `None` when it can.
+pub(crate) fn out_of_range(read: [f64; 3], stored: Vec3) -> Option<String> {
+    if stored.is_finite() && stored.abs().max_element() <= MAX_COORDINATE {
+        return None;
+    }
+    // Each as briefly as it was read: an f32 one as an f32.
+    let brief = |c: f64| match c as f32 {
+        f if f64::from(f) == c => format!("{f:e}"),
+        _ => format!("{c:e}"),
+    };
+    let [x, y, z] = read.map(brief);
+    Some(format!(
+        "vertex ({x}, {y}, {z}) lies beyond ±{MAX_COORDINATE:e} (from the first vertex's \
+         origin when far coordinates keep their precision), where the f32 ray tests overflow; \
+         move or scale the mesh"
+    ))
 }
 
 /// The origin for a file whose first vertex is `p`: zero unless `p` is

@@ -9,7 +9,7 @@
 //! texture coordinates are per vertex.
 
 use crate::error::{show, LoadError, Location};
-use crate::far_origin::FarOrigin;
+use crate::far_origin::{out_of_range, FarOrigin};
 use crate::hashing::{key3_map, Key3};
 use crate::mtl::{parse_mtl, TextureCache, MAX_LIBRARY_FILE};
 use crate::polygon::Triangulator;
@@ -132,12 +132,16 @@ impl<'p> ObjState<'p> {
         };
         match key {
             b"v" => {
-                let p = if self.far.keeps_precision() {
+                let (read, p) = if self.far.keeps_precision() {
                     let p = self.numbers::<f64, 3>(line, "v", &mut toks)?;
-                    self.far.place(p)
+                    (p, self.far.place(p))
                 } else {
-                    Vec3::from_array(self.numbers(line, "v", &mut toks)?)
+                    let p = Vec3::from_array(self.numbers(line, "v", &mut toks)?);
+                    (p.as_dvec3().to_array(), p)
                 };
+                if let Some(e) = out_of_range(read, p) {
+                    return Err(self.err(line, e));
+                }
                 self.positions.push(p);
             }
             b"vn" => {

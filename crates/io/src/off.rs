@@ -6,7 +6,7 @@
 //! optional colour). Binary OFF is not read.
 
 use crate::error::{show, ErrorKind, LoadError, Location};
-use crate::far_origin::FarOrigin;
+use crate::far_origin::{out_of_range, FarOrigin};
 use crate::polygon::Triangulator;
 use crate::text::{parse_f32, parse_f64, parse_u64, Lines, Tokens};
 use crate::validate::finish;
@@ -161,11 +161,15 @@ pub(crate) fn parse_off(
             Ok(c)
         };
         let p = read3("vertex")?;
-        positions.push(if wide {
+        let stored = if wide {
             far.place(p)
         } else {
             Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
-        });
+        };
+        if let Some(e) = out_of_range(p, stored) {
+            return Err(err(n, format!("vertex {i} of {nv}: {e}")));
+        }
+        positions.push(stored);
         if normals {
             let n = read3("normal of vertex")?;
             nrm.push(Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32));

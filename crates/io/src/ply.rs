@@ -8,7 +8,7 @@
 //! Other elements and properties, lists included, are skipped.
 
 use crate::error::{show, LoadError, Location};
-use crate::far_origin::FarOrigin;
+use crate::far_origin::{out_of_range, FarOrigin};
 use crate::format::PlyEncoding;
 use crate::ply_header::{parse_header, Element, Header, PropKind, Scalar};
 use crate::polygon::Triangulator;
@@ -382,15 +382,20 @@ fn read_body<'a, B: Body<'a>>(
                 } else {
                     Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
                 };
-                if !pos.is_finite() {
+                let why = if !v[..3].iter().all(|c| c.is_finite()) {
+                    Some(format!(
+                        " has a NaN or infinite coordinate ({}, {}, {})",
+                        v[0], v[1], v[2]
+                    ))
+                } else {
+                    out_of_range([v[0], v[1], v[2]], pos).map(|e| format!(": {e}"))
+                };
+                if let Some(why) = why {
                     return Err(LoadError::new(
                         path,
                         crate::error::ErrorKind::Malformed,
                         b.location_of(start),
-                        format!(
-                            "vertex {i} of {} has a NaN or infinite coordinate ({}, {}, {})",
-                            el.count, v[0], v[1], v[2]
-                        ),
+                        format!("vertex {i} of {}{why}", el.count),
                     ));
                 }
                 mesh.positions.push(pos);

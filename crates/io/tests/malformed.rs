@@ -194,6 +194,45 @@ fn wrong_element_counts() {
     assert!(header_end > 0);
 }
 
+/// Read in `f64` for far coordinates, a vertex finite there but beyond
+/// what `f32` holds from the origin is refused at its line, in every text
+/// format that keeps precision.
+#[test]
+fn coordinates_beyond_f32_are_refused_where_they_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text, needle) in [
+        (
+            "b.obj",
+            "v 0 0 1e300\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "b.obj:1: vertex (0e0, 0e0, 1e300)",
+        ),
+        (
+            "f.obj",
+            "v 5e6 5e6 0\nv 5e6 5e6 1e300\nv 5e6 5.1e6 0\nf 1 2 3\n",
+            "f.obj:2: vertex (5e6, 5e6, 1e300) lies beyond",
+        ),
+        (
+            "b.off",
+            "OFF\n3 1 0\n0 0 5e6\n1e300 0 5e6\n0 1 5e6\n3 0 1 2\n",
+            "b.off:4: vertex 1 of 3: vertex (1e300, 0e0, 5e6) lies beyond",
+        ),
+        (
+            "b.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n\
+property double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0\n1 0 -1e300\n0 1 0\n3 0 1 2\n",
+            "b.ply:11: vertex 1 of 3: vertex (1e0, 0e0, -1e300) lies beyond",
+        ),
+    ] {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        let e = raykit_io::load_keeping_precision(&p)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(needle), "{e}\n(expected: {needle})");
+    }
+}
+
 #[test]
 fn nan_and_infinite_coordinates() {
     fails_with(
@@ -205,6 +244,12 @@ fn nan_and_infinite_coordinates() {
         "n.obj",
         "v 0 0 0\nv 1 1e39 0\nv 0 1 0\nf 1 2 3\n",
         "n.obj:2:",
+    );
+    // Finite, but beyond the coordinates a mesh may hold: located too.
+    fails_with(
+        "n.obj",
+        "v 0 0 0\nv 1 2e12 0\nv 0 1 0\nf 1 2 3\n",
+        "n.obj:2: vertex (1e0, 2e12, 0e0) lies beyond ±1e12",
     );
     let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
 property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
