@@ -152,6 +152,27 @@ fn bad_arguments_name_the_flag() {
             vec!["--light-elevation", "--sun", "10,10"],
             "--light-elevation",
         ),
+        // The mask's options do not apply to the hours of sun.
+        (
+            vec!["--sun-path", "2026-06-21,45,0", "--iv", "9"],
+            "--invisible-value",
+        ),
+        (
+            vec!["--sun-path", "2026-06-21,45,0", "--compare"],
+            "--compare",
+        ),
+        (
+            vec!["--sun-path", "2026-06-21,45,0", "--nodata-value", "7"],
+            "--nodata-value",
+        ),
+        (
+            vec!["--sun", "135,20", "--step-minutes", "5"],
+            "--step-minutes",
+        ),
+        (
+            vec!["--light", "429452,5150685,10", "--cc", "1e30"],
+            "lowered by --curvature-coefficient 1e30",
+        ),
     ] {
         let mut a = vec![s(&dem)];
         a.extend(args.iter().copied());
@@ -194,6 +215,55 @@ fn bad_arguments_name_the_flag() {
         "/no/such/folder",
     );
     assert!(!Path::new(out).exists());
+}
+
+/// A point light over a cell without data has no ground to stand on: its
+/// height above the ground is refused, naming the sample, by the mask and
+/// the render alike, and nothing is written; an absolute elevation works.
+#[test]
+fn a_light_over_no_data_needs_its_elevation() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("g.asc");
+    std::fs::write(
+        &dem,
+        "ncols 4\nnrows 4\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value -9999\n\
+         1 2 3 4\n4 -9999 6 7\n7 8 9 10\n1 1 1 1\n",
+    )
+    .unwrap();
+    let (mask, picture) = (dir.path().join("m.tif"), dir.path().join("r.png"));
+    // The grid points lie at cell centres: (1.5, 2.5) is row 1, column 1.
+    for args in [
+        vec!["shadow", s(&dem), "--light", "1.5,2.5,2", "--out", s(&mask)],
+        vec!["shadow", s(&dem), "--light", "2,2,2", "--out", s(&mask)],
+        vec![
+            "render",
+            s(&dem),
+            "--light",
+            "1.5,2.5,2",
+            "--out",
+            s(&picture),
+        ],
+    ] {
+        let mut a = vec!["terrain"];
+        a.extend(&args);
+        let o = raykit(&a);
+        assert!(
+            !o.status.success() && text(&o.stderr).contains("no height at row 1, column 1"),
+            "{args:?}: {}",
+            text(&o.stderr)
+        );
+        assert!(!mask.exists() && !picture.exists(), "{args:?}");
+    }
+    // Beside the hole, on the edge between two valid samples, the ground is known.
+    for light in ["2.5,3.5,2", "1.5,2.5,2"] {
+        let mut a = vec!["terrain", "shadow", s(&dem), "--light", light];
+        if light == "1.5,2.5,2" {
+            a.push("--light-elevation");
+        }
+        a.extend(["--out", s(&mask)]);
+        let o = raykit(&a);
+        assert!(o.status.success(), "{light}: {}", text(&o.stderr));
+    }
 }
 
 #[test]

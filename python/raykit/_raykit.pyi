@@ -158,6 +158,7 @@ def shadow(
     light_elevation: bool = False,
     method: str = "fast",
     threads: int = 0,
+    observer: bool = False,
 ) -> npt.NDArray[np.uint8]: ...
 def cast(
     heights: npt.NDArray[np.float32],

@@ -23,6 +23,7 @@ diagonal, so the answers are exact for it.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -42,6 +43,25 @@ def _transform(t) -> tuple[float, float, float, float, float, float]:
     if len(terms) != 6:
         raise ValueError(f"transform must be rasterio's Affine(a, b, c, d, e, f), got {len(terms)} terms")
     return tuple(terms)
+
+
+def _naming_the_file(f):
+    """``f`` with its ``ValueError``s about a DEM given as a path (a
+    rotated transform, too few samples, no valid height…) starting with
+    that path, as the loader's own errors do."""
+
+    @functools.wraps(f)
+    def named(heights, *args, **kwargs):
+        try:
+            return f(heights, *args, **kwargs)
+        except ValueError as e:
+            if isinstance(heights, PATH_TYPES):
+                path = fspath(heights, "heights")
+                if not str(e).startswith(path):
+                    raise ValueError(f"{path}: {e}") from None
+            raise
+
+    return named
 
 
 def grid(heights, transform=None, geographic: bool = False, nodata=None):
@@ -70,6 +90,7 @@ def grid(heights, transform=None, geographic: bool = False, nodata=None):
     return np.ascontiguousarray(h, dtype=np.float32), _transform(transform), bool(geographic)
 
 
+@_naming_the_file
 def shadow(
     heights,
     transform=None,
@@ -100,11 +121,31 @@ def shadow(
     ``raykit terrain shadow`` writes its GeoTIFF.
     """
     h, t, geo = grid(heights, transform, geographic, nodata)
-    sun = None if sun is None else tuple(float(x) for x in sun)
-    light = None if light is None else tuple(float(x) for x in light)
+    sun = None if sun is None else _sun(sun)
+    light = None if light is None else _numbers(light, "light", "(x, y, h)")
     return _raykit.shadow(h, t, geo, sun, light, bool(light_elevation), method, _arrays.threads(threads))
 
 
+def _sun(sun) -> tuple[float, float]:
+    """``sun`` as (azimuth, elevation) degrees, checked as the mask checks it."""
+    az, el = _numbers(sun, "sun", "(azimuth, elevation)")
+    if not 0.0 <= el <= 90.0:
+        raise ValueError(f"sun: the elevation must be between 0 and 90 degrees, got {el}")
+    if not math.isfinite(az):
+        raise ValueError(f"sun: the azimuth must be a finite number of degrees, got {az}")
+    return az, el
+
+
+def _numbers(given, what: str, form: str) -> tuple[float, ...]:
+    """``given`` as a tuple of as many floats as ``form`` names."""
+    terms = tuple(float(x) for x in given)
+    n = form.count(",") + 1
+    if len(terms) != n:
+        raise ValueError(f"{what} must be {form}, {n} numbers; got {len(terms)}")
+    return terms
+
+
+@_naming_the_file
 def viewshed(
     heights,
     transform=None,
@@ -121,15 +162,11 @@ def viewshed(
     gdal_viewshed's ``-ox -oy -oz`` with target height 0): the shadow mask
     of a point light at the observer's eye. Returns ``(rows, cols)`` uint8:
     1 visible, 0 hidden, 255 no data."""
-    x, y = (float(c) for c in observer)
-    return shadow(
-        heights,
-        transform,
-        light=(x, y, float(observer_height)),
-        light_elevation=observer_elevation,
-        geographic=geographic,
-        nodata=nodata,
-        threads=threads,
+    h, t, geo = grid(heights, transform, geographic, nodata)
+    x, y = _numbers(observer, "observer", "(x, y)")
+    light = (x, y, float(observer_height))
+    return _raykit.shadow(
+        h, t, geo, None, light, bool(observer_elevation), "fast", _arrays.threads(threads), observer=True
     )
 
 
@@ -152,12 +189,13 @@ def _default_camera(h: np.ndarray, t, fov: float):
     rows, cols = h.shape
     centre = (c + a * cols / 2.0, f + e * rows / 2.0)
     corner = (c + a * 0.5, f + e * (rows - 0.5))
-    zc = float(np.nanmean(h[rows // 2 - 1 : rows // 2 + 1, cols // 2 - 1 : cols // 2 + 1]))
-    zmax = float(np.nanmax(h))
+    zc = float(np.mean(h[rows // 2 - 1 : rows // 2 + 1, cols // 2 - 1 : cols // 2 + 1]))
+    zmax = float(np.max(h))
     eye = (centre[0] + 0.75 * (corner[0] - centre[0]), centre[1] + 0.75 * (corner[1] - centre[1]))
     return eye, centre, zc, zmax
 
 
+@_naming_the_file
 def cast(
     heights,
     transform=None,
@@ -210,6 +248,7 @@ _RAMP = np.array(
 )
 
 
+@_naming_the_file
 def render(
     heights,
     transform=None,
@@ -237,8 +276,16 @@ def render(
     gradient where rays miss. Returns ``(height, width, 3)`` uint8 sRGB.
     """
     h, t, geo = grid(heights, transform, geographic, nodata)
+    if light is None:
+        sun = _sun(sun)
+    else:
+        light = _numbers(light, "light", "(x, y, h)")
+        if not all(math.isfinite(v) for v in light):
+            raise ValueError(f"light {light}: expected finite numbers")
+    # The declared surface: no-data samples at the lowest height.
+    filled = np.where(np.isnan(h), np.nanmin(h), h)
     if eye is None:
-        (ex, ey), (cx, cy), zc, zmax = _default_camera(h, t, fov)
+        (ex, ey), (cx, cy), zc, zmax = _default_camera(filled, t, fov)
         cs = _cell_size(h, t, geo)
         dist = math.hypot((cx - ex) / abs(t[0]) * cs[0], (cy - ey) / abs(t[4]) * cs[1])
         slope = math.tan(math.radians(20.0))
@@ -249,14 +296,13 @@ def render(
             target = (cx, cy, ez - dist * slope)
     elif target is None:
         rows, cols = h.shape
-        target = (t[2] + t[0] * cols / 2.0, t[5] + t[4] * rows / 2.0, float(np.nanmean(h)))
+        target = (t[2] + t[0] * cols / 2.0, t[5] + t[4] * rows / 2.0, float(filled.mean()))
     out = cast(h, t, eye=eye, target=target, width=width, height=height, fov=fov, caster=caster, tau=tau, geographic=geo, threads=threads)
     mask = None
     if shadows:
         mask = shadow(h, t, sun=None if light is not None else sun, light=light, geographic=geo, threads=threads)
         mask = (mask == 1).astype(np.float64)
-    filled = np.where(np.isnan(h), np.nanmin(h), h).astype(np.float64)
-    return _shade(out, filled, t, mask, sun, light)
+    return _shade(out, filled.astype(np.float64), t, mask, sun, light)
 
 
 def _shade(out, z, t, mask, sun, light) -> np.ndarray:

@@ -9,6 +9,7 @@ use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use raykit_terrain::georef::{format_number, MapWorld};
 use raykit_terrain::io::{load_dem as read_dem, LoadOptions};
 use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
 use raykit_terrain::view::{cast_image, Caster};
@@ -104,34 +105,14 @@ fn surface(
     Ok((dem, field))
 }
 
-/// Map position → world metres of the field (x east, y north), refused
-/// outside the grid (the command line's `--light` check).
-fn world_of(dem: &Dem, field: &HeightField, x: f64, y: f64, what: &str) -> PyResult<[f64; 2]> {
-    let (col, row) = dem.map_to_grid(x, y);
-    let (w, h) = ((dem.width - 1) as f64, (dem.height - 1) as f64);
-    if !(0.0..=w).contains(&col) || !(0.0..=h).contains(&row) {
-        let (x0, y0) = dem.grid_to_map(0.0, 0.0);
-        let (x1, y1) = dem.grid_to_map(w, h);
-        return Err(value_error(format!(
-            "{what}: ({x}, {y}) lies outside the DEM, whose grid points span x {x0}..{x1}, y {y1}..{y0}"
-        )));
-    }
-    Ok([col * field.sx, -row * field.sy])
-}
-
-/// Map coordinates (x, y, z) → world metres.
-fn to_world(dem: &Dem, field: &HeightField, m: [f64; 3]) -> [f64; 3] {
-    let (c, r) = dem.map_to_grid(m[0], m[1]);
-    [c * field.sx, -r * field.sy, m[2]]
-}
-
 /// Per grid point 1 where the light is visible from the surface, 0 in
 /// shadow, 255 where the DEM has no data (NaN), as `raykit terrain
 /// shadow` writes it. Exactly one of `sun` (azimuth, elevation in
 /// degrees) and `light` (map x, y and the height above the ground, or
-/// with `light_elevation` the absolute elevation).
+/// with `light_elevation` the absolute elevation). With `observer`, the
+/// light is a viewshed's observer and errors name it so.
 #[pyfunction]
-#[pyo3(signature = (heights, transform, geographic=false, sun=None, light=None, light_elevation=false, method="fast", threads=0))]
+#[pyo3(signature = (heights, transform, geographic=false, sun=None, light=None, light_elevation=false, method="fast", threads=0, observer=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn shadow<'py>(
     py: Python<'py>,
@@ -143,7 +124,12 @@ pub fn shadow<'py>(
     light_elevation: bool,
     method: &str,
     threads: i64,
+    observer: bool,
 ) -> PyResult<Bound<'py, PyArray2<u8>>> {
+    let (what, elevation_flag) = match observer {
+        true => ("observer", "observer_elevation"),
+        false => ("light", "light_elevation"),
+    };
     let method = match method {
         "fast" => ShadowMethod::Fast,
         "brute" => ShadowMethod::BruteForce,
@@ -175,10 +161,14 @@ pub fn shadow<'py>(
             }
         }
         (None, Some((x, y, h))) => {
-            let [wx, wy] = world_of(&dem, &field, x, y, "light")?;
+            let n = format_number;
+            let named = format!("{what} ({}, {}, {})", n(x), n(y), n(h));
+            let [wx, wy] = MapWorld::new(&dem, &field)
+                .inside(x, y, what)
+                .map_err(value_error)?;
             if !h.is_finite() {
                 return Err(value_error(format!(
-                    "light ({x}, {y}, {h}): the height must be a finite number"
+                    "{named}: the height must be a finite number"
                 )));
             }
             let z = if light_elevation {
@@ -186,11 +176,22 @@ pub fn shadow<'py>(
             } else {
                 if h < 0.0 {
                     return Err(value_error(format!(
-                        "light ({x}, {y}, {h}): the height above the ground must be >= 0 \
-                         (use light_elevation=True for an absolute elevation)"
+                        "{named}: the height above the ground must be >= 0 \
+                         (use {elevation_flag}=True for an absolute elevation)"
                     )));
                 }
-                field.height_at(wx / field.sx, -wy / field.sy) + h
+                let (gx, gy) = (wx / field.sx, -wy / field.sy);
+                let given = heights.as_slice().expect("C-contiguous, as dem() checked");
+                if let Some((col, row)) = field
+                    .samples_under(gx, gy)
+                    .find(|&(c, r)| given[r * dem.width + c].is_nan())
+                {
+                    return Err(value_error(format!(
+                        "{named}: the ground there has no data (no height at row \
+                         {row}, column {col}); give the elevation itself with {elevation_flag}=True"
+                    )));
+                }
+                field.height_at(gx, gy) + h
             };
             Light::Point([wx, wy, z])
         }
@@ -267,8 +268,8 @@ pub fn cast<'py>(
     };
     let (dem, field) = surface(&heights, transform, geographic)?;
     let camera = TerrainCamera {
-        eye: to_world(&dem, &field, eye),
-        target: to_world(&dem, &field, target),
+        eye: MapWorld::new(&dem, &field).to_world(eye),
+        target: MapWorld::new(&dem, &field).to_world(target),
         vfov_deg: fov,
         width,
         height,

@@ -5,6 +5,7 @@ method, and a BVH over the same surface as triangles."""
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -168,6 +169,52 @@ def test_no_data_is_255_exactly_where_the_heights_are_nan():
         assert set(np.unique(mask[~np.isnan(h)])) <= {0, 1}
 
 
+def test_a_light_over_no_data_needs_its_elevation():
+    # Pixels of 1 m from (0, 0): grid point (row r, col c) lies at (c + ½, -r - ½).
+    h = np.arange(16, dtype=np.float32).reshape(4, 4)
+    h[1, 1] = np.nan
+    for call in (
+        lambda: raykit.terrain.shadow(h, light=(1.0, -1.0, 2.0)),
+        lambda: raykit.terrain.shadow(h, light=(1.5, -1.5, 2.0)),
+        lambda: raykit.terrain.viewshed(h, observer=(1.0, -1.5)),
+    ):
+        with pytest.raises(ValueError, match="no height at row 1, column 1"):
+            call()
+    with pytest.raises(ValueError, match=r"observer \(1, -1.5, 1.75\).*observer_elevation=True"):
+        raykit.terrain.viewshed(h, observer=(1.0, -1.5))
+    # Where the ground is known, and with an absolute elevation, the light
+    # stands where it was put: the same mask as the brute-force method's.
+    for kw in (dict(light=(2.5, -0.5, 2.0)), dict(light=(1.0, -1.0, 30.0), light_elevation=True)):
+        fast = raykit.terrain.shadow(h, **kw)
+        np.testing.assert_array_equal(fast, raykit.terrain.shadow(h, method="brute", **kw))
+        assert fast[1, 1] == 255
+    with pytest.raises(ValueError, match=r"light must be \(x, y, h\), 3 numbers; got 4"):
+        raykit.terrain.shadow(h, light=(1, 2, 3, 4))
+    with pytest.raises(ValueError, match=r"sun must be \(azimuth, elevation\), 2 numbers; got 1"):
+        raykit.terrain.shadow(h, sun=(1,))
+
+
+def test_render_checks_its_light_and_frames_grids_with_holes(tmp_path):
+    h = np.arange(16, dtype=np.float32).reshape(4, 4)
+    for kw in (dict(sun=(float("nan"), 20)), dict(sun=(135, 200)), dict(light=(1, -1, float("nan")))):
+        for shadows in (True, False):
+            with pytest.raises(ValueError, match="sun|light"):
+                raykit.terrain.render(h, shadows=shadows, width=8, height=6, **kw)
+    # The default camera over a grid whose centre has no data: the filled
+    # surface's view, the same picture as the grid filled by hand.
+    holed = h.copy()
+    holed[1:3, 1:3] = np.nan
+    filled = np.where(np.isnan(holed), np.nanmin(holed), holed)
+    a = raykit.terrain.render(holed, width=16, height=12, shadows=False)
+    b = raykit.terrain.render(filled, width=16, height=12, shadows=False)
+    np.testing.assert_array_equal(a, b)
+    # A DEM file's own faults name the file.
+    path = tmp_path / "tiny.asc"
+    path.write_text("ncols 3\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n")
+    with pytest.raises(ValueError, match=f"^{re.escape(str(path))}: a height field needs at least 2 rows"):
+        raykit.terrain.shadow(str(path), sun=(135, 20))
+
+
 def test_transforms_and_bad_grids():
     h = np.zeros((5, 6), np.float32)
     h[2, 3] = 10.0
@@ -195,7 +242,7 @@ def test_transforms_and_bad_grids():
         raykit.terrain.shadow(h, (1, 0, 1000, 0, -1, 2000), sun=(135, 20), geographic=True)
     with pytest.raises(ValueError, match="lies outside the DEM"):
         raykit.terrain.shadow(h, light=(100, 100, 5))
-    with pytest.raises(ValueError, match="at least 2x2"):
+    with pytest.raises(ValueError, match="at least 2 rows and 2 columns"):
         raykit.terrain.shadow(h[:1], sun=(0, 10))
     with pytest.raises(ValueError, match=r"shape \(rows, cols\)"):
         raykit.terrain.shadow(h[0], sun=(0, 10))

@@ -135,26 +135,42 @@ impl<'a> MapWorld<'a> {
 
     /// Map position (`x`, `y`) (given to `flag`, which the error names) →
     /// world metres (x, y); refused outside the grid points' extent, where
-    /// the surface has no height.
+    /// the surface has no height. A position on the extent's edge counts as
+    /// inside even where the division by the pixel size rounds it a hair
+    /// (10⁻⁹ of the grid) beyond.
     pub fn inside(&self, x: f64, y: f64, flag: &str) -> Result<[f64; 2], String> {
         let dem = self.dem;
         let (col, row) = dem.map_to_grid(x, y);
         let (w, h) = ((dem.width - 1) as f64, (dem.height - 1) as f64);
-        if !(0.0..=w).contains(&col) || !(0.0..=h).contains(&row) {
+        let hair = 1e-9 * w.max(h);
+        let within = |p: f64, end: f64| (-hair..=end + hair).contains(&p);
+        if !within(col, w) || !within(row, h) {
             let (x0, y0) = dem.grid_to_map(0.0, 0.0);
             let (x1, y1) = dem.grid_to_map(w, h);
+            let n = format_number;
             return Err(format!(
-                "{flag}: ({x}, {y}) lies outside the DEM, whose grid points span x {x0}..{x1}, y {y1}..{y0}"
+                "{flag}: ({}, {}) lies outside the DEM, whose grid points span x {}..{}, y {}..{}",
+                n(x),
+                n(y),
+                n(x0),
+                n(x1),
+                n(y1),
+                n(y0)
             ));
         }
+        let (col, row) = (col.clamp(0.0, w), row.clamp(0.0, h));
         Ok([col * self.field.sx, -row * self.field.sy])
     }
 }
 
 /// A coordinate in a message: integers without decimals, others with up to
-/// 6, so that map coordinates read as the user typed them.
+/// 6, so that map coordinates read as the user typed them; magnitudes from
+/// 10¹⁵ up or under 10⁻⁴ in exponent form (1e300, not 301 digits).
 pub fn format_number(x: f64) -> String {
-    if x == x.round() && x.abs() < 1e15 {
+    let a = x.abs();
+    if !x.is_finite() || (a != 0.0 && !(1e-4..1e15).contains(&a)) {
+        format!("{x:e}")
+    } else if x == x.round() {
         format!("{x:.0}")
     } else {
         let s = format!("{x:.6}");
@@ -222,6 +238,23 @@ mod tests {
         // Grid point (2, 1) is at map (429_000 + 2.5·30, 5_151_000 − 1.5·30).
         let w = geo.inside(429_075.0, 5_150_955.0, "--light").unwrap();
         assert!((w[0] - 2.0 * field.sx).abs() < 1e-9 && (w[1] + field.sy).abs() < 1e-9);
+        // Every pixel size, the last grid point's centre is inside.
+        for a in [0.1, 0.3, 0.7, 30.0, 1.0 / 3600.0] {
+            let mut d = Dem::from_heights(4, 3, vec![0.0; 12]);
+            (d.georef.origin_x, d.georef.origin_y) = (1000.0 + a, 2000.0);
+            (d.georef.pixel_width, d.georef.pixel_height) = (a, -a);
+            let f = HeightField::new(&d).unwrap();
+            let g = MapWorld::new(&d, &f);
+            for (c, r) in [(3.5, 0.5), (0.5, 2.5), (3.5, 2.5), (0.5, 0.5)] {
+                let (x, y) = (1000.0 + a + a * c, 2000.0 - a * r);
+                let p = g
+                    .inside(x, y, "--light")
+                    .unwrap_or_else(|e| panic!("{a}: {e}"));
+                let want = [(c - 0.5) * f.sx, -(r - 0.5) * f.sy];
+                assert!((p[0] - want[0]).abs() <= 1e-6 * f.sx, "{a} {c} {r}: {p:?}");
+                assert!((p[1] - want[1]).abs() <= 1e-6 * f.sy, "{a} {c} {r}: {p:?}");
+            }
+        }
         let e = geo.inside(0.0, 0.0, "--light").unwrap_err();
         assert!(e.starts_with("--light: (0, 0) lies outside the DEM"), "{e}");
     }
@@ -251,5 +284,11 @@ mod tests {
             assert_eq!(s.parse::<f64>().unwrap(), x, "{s}");
         }
         assert_eq!(format_number(429_452.0), 429_452.to_string());
+        // Magnitudes beyond the fixed form come back whole, and short.
+        for x in [1e300, -2.5e15, 3e-9, -1e-5, f64::MAX, f64::MIN_POSITIVE] {
+            let s = format_number(x);
+            assert!(s.len() <= 24, "{s}");
+            assert_eq!(s.parse::<f64>().unwrap(), x, "{s}");
+        }
     }
 }

@@ -152,8 +152,11 @@ impl HeightField {
     fn with_heights(dem: &Dem, mut heights: Vec<f32>) -> Result<HeightField, (String, Vec<f32>)> {
         if dem.width < 2 || dem.height < 2 {
             let e = format!(
-                "a height field needs at least 2x2 samples, got {}x{}",
-                dem.width, dem.height
+                "a height field needs at least 2 rows and 2 columns of samples, got {} row{} and {} column{}",
+                dem.height,
+                if dem.height == 1 { "" } else { "s" },
+                dem.width,
+                if dem.width == 1 { "" } else { "s" },
             );
             return Err((e, heights));
         }
@@ -258,6 +261,26 @@ impl HeightField {
         let r = (y.floor().max(0.0) as usize).min(ch - 1);
         let (u, v) = (x - c as f64, y - r as f64);
         self.cell_plane(c, r, u >= v).height(u, v)
+    }
+
+    /// The grid points (col, row) whose heights make the surface at
+    /// grid-unit position (`x`, `y`), as [`HeightField::height_at`] reads
+    /// it: the corners of the triangle under it that carry weight (one at
+    /// a grid point, two on an edge, three inside).
+    pub fn samples_under(&self, x: f64, y: f64) -> impl Iterator<Item = (usize, usize)> {
+        let (cw, ch) = self.cells();
+        let c = (x.floor().max(0.0) as usize).min(cw - 1);
+        let r = (y.floor().max(0.0) as usize).min(ch - 1);
+        let (u, v) = (x - c as f64, y - r as f64);
+        let corners = if u >= v {
+            [(c, r, 1.0 - u), (c + 1, r, u - v), (c + 1, r + 1, v)]
+        } else {
+            [(c, r, 1.0 - v), (c, r + 1, v - u), (c + 1, r + 1, u)]
+        };
+        corners
+            .into_iter()
+            .filter(|&(_, _, w)| w != 0.0)
+            .map(|(c, r, _)| (c, r))
     }
 
     /// World position (metres, x east, y north, z up) of grid point
@@ -444,5 +467,44 @@ mod tests {
         let mut empty = Dem::from_heights(3, 3, vec![f32::NAN; 9]);
         assert!(HeightField::take(&mut empty).is_err());
         assert_eq!(empty.heights.len(), 9, "the heights are given back");
+    }
+
+    /// `samples_under` names exactly the samples whose change moves
+    /// `height_at` there: each sample of a grid is raised in turn, at
+    /// random positions, at grid points, on cell edges and on diagonals.
+    #[test]
+    fn samples_under_are_those_height_at_reads() {
+        let (w, h) = (5, 4);
+        let mut rng = raykit_core::rng::Pcg32::new(17);
+        let base: Vec<f32> = (0..w * h).map(|_| rng.range_f32(0.0, 10.0)).collect();
+        let mut at: Vec<(f64, f64)> = (0..200)
+            .map(|_| {
+                (
+                    rng.range_f32(0.0, 4.0) as f64,
+                    rng.range_f32(0.0, 3.0) as f64,
+                )
+            })
+            .collect();
+        for i in 0..=8 {
+            let q = i as f64 * 0.5;
+            at.extend([
+                (q.min(4.0), 1.0),
+                (2.0, (q * 0.75).min(3.0)),
+                (q.min(3.0), q.min(3.0)),
+            ]);
+            at.push((1.25 + (q * 0.25).min(1.0), 0.25 + (q * 0.25).min(1.0)));
+        }
+        let field = HeightField::new(&Dem::from_heights(w, h, base.clone())).unwrap();
+        for &(x, y) in &at {
+            let named: Vec<(usize, usize)> = field.samples_under(x, y).collect();
+            for i in 0..w * h {
+                let mut raised = base.clone();
+                raised[i] += 100.0;
+                let f = HeightField::new(&Dem::from_heights(w, h, raised)).unwrap();
+                let moved = f.height_at(x, y) != field.height_at(x, y);
+                let listed = named.contains(&(i % w, i / w));
+                assert_eq!(moved, listed, "({x}, {y}), sample {i}: {named:?}");
+            }
+        }
     }
 }

@@ -97,7 +97,7 @@ impl<'a> TerrainRender<'a> {
         options: &TerrainRenderOptions,
     ) -> Result<TerrainRender<'a>, String> {
         let geo = MapWorld::new(dem, field);
-        let light = light(&geo, field, options)?;
+        let light = light(dem, &geo, field, options)?;
         let (mask, mask_seconds) = if options.shadows {
             let start = Instant::now();
             let m = shadow_mask(field, pyramid, &light, ShadowMethod::Fast);
@@ -226,8 +226,10 @@ impl<'a> TerrainRender<'a> {
     }
 }
 
-/// The point light above the ground, or the sun.
+/// The point light above the ground, or the sun. A point light over
+/// `dem`'s no-data cells is refused: the ground under it is unknown.
 fn light(
+    dem: &Dem,
     geo: &MapWorld<'_>,
     field: &HeightField,
     options: &TerrainRenderOptions,
@@ -243,6 +245,19 @@ fn light(
                     geo.describe_extent()
                 )
             })?;
+            let (gx, gy) = (w[0] / field.sx, -w[1] / field.sy);
+            let no_ground = field.samples_under(gx, gy).find(|&(c, r)| {
+                dem.heights
+                    .get(r * dem.width + c)
+                    .is_some_and(|h| h.is_nan())
+            });
+            if let Some((col, row)) = no_ground {
+                return Err(format!(
+                    "--light {},{}: the ground there has no data (no height at row {row}, column {col})",
+                    format_number(l[0]),
+                    format_number(l[1]),
+                ));
+            }
             Light::Point(p)
         }
         None => {

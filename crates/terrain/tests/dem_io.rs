@@ -1401,7 +1401,10 @@ fn load_dem_dispatches_on_extension() {
     let raw = dir.join("grid.raw");
     std::fs::write(&raw, &bytes).unwrap();
     let err = load_dem(&raw, &o).unwrap_err();
-    assert!(err.to_string().contains("LoadOptions::raw"), "{err}");
+    assert!(
+        err.to_string().contains(".r16") && err.to_string().contains("LoadOptions::raw"),
+        "{err}"
+    );
     let spec = RawSpec {
         width: 8,
         height: 2,

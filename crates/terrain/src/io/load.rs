@@ -76,19 +76,20 @@ fn read_any(path: &Path, options: &LoadOptions) -> Result<Dem, DemError> {
         "ter" => read_ter(path),
         "png" => read_png(path, options.png_scale, options.png_offset),
         "raw" | "bin" | "r16" | "r32" => {
-            let spec = match (options.raw, ext.as_str()) {
-                (Some(spec), _) => spec,
-                (None, "r16") => square_raw(path, RawType::U16Le)?,
-                (None, "r32") => square_raw(path, RawType::F32Le)?,
-                (None, _) => {
-                    return Err(DemError::new(
+            let spec =
+                match (options.raw, ext.as_str()) {
+                    (Some(spec), _) => spec,
+                    (None, "r16") => square_raw(path, RawType::U16Le)?,
+                    (None, "r32") => square_raw(path, RawType::F32Le)?,
+                    (None, _) => return Err(DemError::new(
                         path,
                         "file name",
-                        "a raw file carries no size or sample type; expected LoadOptions::raw \
-                         (width, height, type)",
-                    ))
-                }
-            };
+                        "a .raw or .bin grid carries no size or sample type; name a square grid \
+                         of 16-bit samples .r16 or of 32-bit floats .r32 (its side follows from \
+                         its size), convert it to GeoTIFF (gdal_translate), or, from the library, \
+                         give LoadOptions::raw",
+                    )),
+                };
             read_raw(path, spec.width, spec.height, spec.sample)
         }
         _ => Err(DemError::new(
@@ -111,8 +112,8 @@ fn square_raw(path: &Path, sample: RawType) -> Result<RawSpec, DemError> {
             path,
             len,
             format!(
-                "file is {len} bytes, not a square of {} samples; expected LoadOptions::raw \
-                 to give its size",
+                "file is {len} bytes, not a square of {} samples; convert it to GeoTIFF \
+                 (gdal_translate), or, from the library, give its size with LoadOptions::raw",
                 sample.name()
             ),
         ));

@@ -37,7 +37,7 @@ raykit terrain shadow N57E011.hgt --sun 135,20 --out sun.tif --preview sun.png\n
 raykit terrain shadow dem.tif --sun-path 2026-06-21,45.5,-93.2 --out hours.tif\n  \
 raykit terrain shadow fractal:2048 --light 10000,10000,50 --compare --out m.tif")]
 pub struct ShadowArgs {
-    /// DEM: GeoTIFF, Esri ASCII grid (.asc), SRTM .hgt, Terragen .ter, 16-bit PNG, or fractal:SIZE[:SEED].
+    /// DEM: GeoTIFF, Esri ASCII grid (.asc), SRTM .hgt, Terragen .ter, 16-bit PNG, raw .r16/.r32, or fractal:SIZE[:SEED].
     pub(super) dem: String,
     /// Point light X,Y,H: map position and height above the ground there (gdal_viewshed's -ox -oy -oz).
     #[arg(long, value_name = "X,Y,H", allow_hyphen_values = true)]
@@ -52,13 +52,13 @@ pub struct ShadowArgs {
     #[arg(long, value_name = "DATE,LAT,LON", allow_hyphen_values = true)]
     pub(super) sun_path: Option<String>,
     /// Minutes between sun positions for --sun-path.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, requires = "sun_path")]
     pub(super) step_minutes: f64,
     /// Algorithm (both are exact and give identical masks).
     #[arg(long, value_enum, default_value_t = Method::Fast)]
     pub(super) method: Method,
     /// Run both algorithms, report their times and the cells on which they differ.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "sun_path")]
     pub(super) compare: bool,
     /// Height above the ground of the target at every grid point, metres
     /// (gdal_viewshed's -tz): a cell is lit when the light sees that point.
@@ -84,18 +84,36 @@ pub struct ShadowArgs {
     )]
     pub(super) curvature_coefficient: f64,
     /// Mask value of lit cells (gdal_viewshed's -vv).
-    #[arg(long, visible_alias = "vv", default_value_t = 1, value_name = "0-255")]
+    #[arg(
+        long,
+        visible_alias = "vv",
+        default_value_t = 1,
+        value_name = "0-255",
+        conflicts_with = "sun_path"
+    )]
     pub(super) visible_value: u8,
     /// Mask value of cells in shadow (gdal_viewshed's -iv).
-    #[arg(long, visible_alias = "iv", default_value_t = 0, value_name = "0-255")]
+    #[arg(
+        long,
+        visible_alias = "iv",
+        default_value_t = 0,
+        value_name = "0-255",
+        conflicts_with = "sun_path"
+    )]
     pub(super) invisible_value: u8,
     /// Mask value of cells beyond --max-distance (gdal_viewshed's -ov).
-    #[arg(long, visible_alias = "ov", default_value_t = 0, value_name = "0-255")]
+    #[arg(
+        long,
+        visible_alias = "ov",
+        default_value_t = 0,
+        value_name = "0-255",
+        conflicts_with = "sun_path"
+    )]
     pub(super) out_of_range_value: u8,
     /// Mask value, declared as the GeoTIFF's nodata, where the DEM has no data
     /// (gdal_viewshed's -a_nodata); default 255, or the highest value the
     /// other values leave free.
-    #[arg(long, value_name = "0-255")]
+    #[arg(long, value_name = "0-255", conflicts_with = "sun_path")]
     pub(super) nodata_value: Option<u8>,
     /// GeoTIFF creation option KEY=VALUE, repeatable (gdal's -co):
     /// COMPRESS=DEFLATE|LZW|PACKBITS|NONE (default DEFLATE), TILED=YES|NO,

@@ -144,11 +144,14 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     // stay), unless the curvature makes new ones.
     let field = match light_grid {
         Some((c, r)) if args.curvature_coefficient != 0.0 => {
-            HeightField::new(&curvature_corrected(&dem, c, r, args.curvature_coefficient))
+            let cc = args.curvature_coefficient;
+            HeightField::new(&curvature_corrected(&dem, c, r, cc)).map_err(|e| {
+                let cc = raykit_terrain::georef::format_number(cc);
+                anyhow::anyhow!("{}, lowered by --curvature-coefficient {cc}: {e}", args.dem)
+            })
         }
-        _ => HeightField::take(&mut dem),
-    }
-    .map_err(|e| anyhow::anyhow!("{}: {e}", args.dem))?;
+        _ => HeightField::take(&mut dem).map_err(|e| anyhow::anyhow!("{}: {e}", args.dem)),
+    }?;
     let method = match args.method {
         Method::Fast => ShadowMethod::Fast,
         Method::Brute => ShadowMethod::BruteForce,
@@ -186,6 +189,14 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
                 bail!("--light '{s}': the height above the ground must be >= 0 (use --light-elevation for an absolute elevation)");
             }
             let (gx, gy) = geo.world_to_grid(wx, wy);
+            let no_ground = nodata.as_ref().and_then(|nodata| {
+                field
+                    .samples_under(gx, gy)
+                    .find(|&(c, r)| nodata[r * dem.width + c])
+            });
+            if let Some((col, row)) = no_ground {
+                bail!("--light '{s}': the ground there has no data (no height at row {row}, column {col}); give the light's elevation with --light-elevation");
+            }
             field.height_at(gx, gy) + h
         };
         named = format!("point light at {x}, {y}, elevation {z:.2} m");
