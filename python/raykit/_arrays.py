@@ -124,6 +124,17 @@ def count(n, name: str) -> int:
     return int(n)
 
 
+def whole(n, name: str) -> int:
+    """A whole number for a parameter whose range the extension checks (and
+    names): a ValueError names ``name`` for a bool, a non-integer or a
+    number beyond 64 bits."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise ValueError(f"{name} must be a whole number, got {n!r}")
+    if not np.iinfo(np.int64).min <= n <= np.iinfo(np.int64).max:
+        raise ValueError(f"{name} {n} is beyond the 64-bit range")
+    return int(n)
+
+
 def max_hits(n) -> int:
     """A cap on the hits listed per ray: ``None`` for none; a ValueError
     for a bool, a non-integer or a negative number; caps beyond the

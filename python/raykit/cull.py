@@ -62,5 +62,5 @@ def cull(
         if p.size and int(p.max()) > np.iinfo(np.uint32).max:
             raise ValueError(f"parts: the largest part id is {int(p.max())}, above {np.iinfo(np.uint32).max}")
         p = np.ascontiguousarray(p, dtype=np.uint32)
-    keep, part_keep, stats = _raykit.cull(v, t, p, _arrays.count(resolution, "resolution"), bool(conservative), _arrays.threads(threads))
+    keep, part_keep, stats = _raykit.cull(v, t, p, _arrays.whole(resolution, "resolution"), bool(conservative), _arrays.threads(threads))
     return CullResult(keep, part_keep, stats)

@@ -19,7 +19,8 @@ the number of workers, or on a worker lost mid-job (Dask reruns its tasks):
 The scene's acceleration structure is built once, on the client, saved
 (:meth:`raykit.RaycastingScene.save`) with its mesh to ``workdir``, and
 loaded once per worker process (kept in a per-process cache), not rebuilt
-per task. ``workdir`` must be readable by every worker: the default, a
+per task; so the scene's structure must be one with a saved form (``bvh8``,
+the default, or ``bvh4``). ``workdir`` must be readable by every worker: the default, a
 temporary folder, suits a ``LocalCluster``; on a cluster pass a shared
 file system path.
 
@@ -125,6 +126,8 @@ def load_scene(path: str | bytes | os.PathLike, threads: int = 1) -> RaycastingS
 
 def _check_visible(client, path: str) -> None:
     """Fail early, naming ``path``, when a worker cannot read it."""
+    if not callable(getattr(client, "run", None)):
+        raise TypeError(f"client must be a distributed.Client, got {type(client).__name__}")
     seen = client.run(os.path.exists, path)
     blind = sorted(w for w, ok in seen.items() if not ok)
     if blind:
@@ -168,6 +171,8 @@ def orbit(
         raise ValueError(f"frames must be at least 1, got {frames}")
     e, c = np.asarray(eye, np.float64), np.asarray(target, np.float64)
     k = np.asarray(up, np.float64)
+    if k.shape != (3,) or not np.isfinite(k).all() or not np.linalg.norm(k) > 0.0:
+        raise ValueError(f"up must be three finite numbers, not all zero, got {tuple(k.ravel())}")
     k = k / np.linalg.norm(k)
     v = e - c
     path = []
@@ -236,6 +241,8 @@ def render(
         folder = os.path.dirname(fspath(out, "out")) or "."
         if not os.path.isdir(folder):
             raise FileNotFoundError(f"cannot write {fspath(out, 'out')}: the folder {folder} does not exist")
+    if "window" in camera_and_options:
+        raise ValueError("window: the cluster renders whole images in bands (tiles=); crop the result instead")
     own_dir = workdir is None
     workdir = tempfile.mkdtemp(prefix="raykit-dask-") if own_dir else fspath(workdir, "workdir")
     try:
@@ -292,14 +299,16 @@ def cast_rays(
     workdir: str | bytes | os.PathLike | None = None,
     threads: int = 1,
 ) -> dict[str, Any]:
-    """First hits of a dask array of rays, ``(n, 6)`` rows
+    """First hits of a dask array of rays (or an array ``dask.array.asarray``
+    takes, as one chunk), ``(n, 6)`` rows
     ``[ox, oy, oz, dx, dy, dz]`` chunked along rows, as a dict of dask
     arrays chunked alike: ``t_hit`` ``(n,)`` float32, ``geometry_ids`` and
     ``primitive_ids`` ``(n,)`` uint32, ``primitive_uvs`` ``(n, 2)`` and
     ``primitive_normals`` ``(n, 3)`` float32, equal to
     :meth:`raykit.RaycastingScene.cast_rays` on the whole array.
 
-    ``scene``: a :class:`raykit.RaycastingScene` or a mesh; its structure is
+    ``scene``: a :class:`raykit.RaycastingScene` whose structure has a
+    saved form (``bvh8``, the default, or ``bvh4``) or a mesh; its structure is
     built once here, saved to ``workdir`` (default: a new temporary folder,
     left in place because the arrays are lazy) and loaded once per worker.
     One task per chunk casts its rays; the five arrays of a chunk come from
@@ -309,11 +318,19 @@ def cast_rays(
     import dask
     import dask.array as da
 
+    if not isinstance(rays, da.Array):
+        rays = da.asarray(rays)
     if rays.ndim != 2 or rays.shape[1] != 6:
         raise ValueError(f"rays must have shape (n, 6), got {rays.shape}")
-    workdir = tempfile.mkdtemp(prefix="raykit-dask-") if workdir is None else fspath(workdir, "workdir")
-    path = save_scene(scene, workdir)
-    _check_visible(client, path)
+    own_dir = workdir is None
+    workdir = tempfile.mkdtemp(prefix="raykit-dask-") if own_dir else fspath(workdir, "workdir")
+    try:
+        path = save_scene(scene, workdir)
+        _check_visible(client, path)
+    except BaseException:
+        if own_dir:
+            shutil.rmtree(workdir, ignore_errors=True)
+        raise
     rays = rays.rechunk({1: 6})
     blocks = rays.to_delayed().ravel()
     cast = dask.delayed(_cast_block, pure=True)

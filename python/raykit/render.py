@@ -65,13 +65,13 @@ def render(
         )
     return _raykit.render(
         scene._built(),
-        _arrays.count(width, "width"),
-        _arrays.count(height, "height"),
+        _arrays.whole(width, "width"),
+        _arrays.whole(height, "height"),
         _vec(eye, "eye", scene.origin),
         _vec(target, "target", scene.origin),
         _vec(up, "up"),
         float(fov),
-        _arrays.count(samples_per_pixel, "samples_per_pixel"),
+        _arrays.whole(samples_per_pixel, "samples_per_pixel"),
         bool(shadows),
         _arrays.threads(threads),
         None if window is None else tuple(_arrays.count(c, "window") for c in window),

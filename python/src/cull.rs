@@ -28,7 +28,7 @@ pub fn cull<'py>(
     vertices: PyReadonlyArray2<'py, f32>,
     triangles: PyReadonlyArray2<'py, u32>,
     parts: Option<PyReadonlyArray1<'py, u32>>,
-    resolution: usize,
+    resolution: i64,
     conservative: bool,
     threads: i64,
 ) -> PyResult<(
@@ -41,6 +41,7 @@ pub fn cull<'py>(
             "resolution must be between 4 and 2048 grid points, got {resolution}"
         )));
     }
+    let resolution = resolution as usize;
     let (v, _) = rows(&vertices, 3, "vertices")?;
     let (t, m) = rows(&triangles, 3, "triangles")?;
     let mut mesh = TriangleMesh::new(

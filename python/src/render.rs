@@ -24,13 +24,13 @@ use raykit_render::{RenderOptions, Tile};
 pub fn render<'py>(
     py: Python<'py>,
     scene: &Scene,
-    width: u32,
-    height: u32,
+    width: i64,
+    height: i64,
     eye: Option<(f32, f32, f32)>,
     target: Option<(f32, f32, f32)>,
     up: (f32, f32, f32),
     fov: f32,
-    samples_per_pixel: u32,
+    samples_per_pixel: i64,
     shadows: bool,
     threads: i64,
     window: Option<(u32, u32, u32, u32)>,
@@ -39,11 +39,12 @@ pub fn render<'py>(
     let Some(accel) = built.accel() else {
         return Err(value_error("the scene has no triangles to render"));
     };
-    if width == 0 || width > 16384 || height == 0 || height > 16384 {
+    if !(1..=16384).contains(&width) || !(1..=16384).contains(&height) {
         return Err(value_error(format!(
             "width and height must be between 1 and 16384, got {width} x {height}"
         )));
     }
+    let (width, height) = (width as u32, height as u32);
     if !(1.0..179.0).contains(&fov) {
         return Err(value_error(format!(
             "fov must be between 1 and 179 degrees, got {fov}"
@@ -54,6 +55,7 @@ pub fn render<'py>(
             "samples_per_pixel must be between 1 and 4096, got {samples_per_pixel}"
         )));
     }
+    let samples_per_pixel = samples_per_pixel as u32;
     let window = match window {
         None => Tile::whole(width, height),
         Some((x, y, w, h)) => {

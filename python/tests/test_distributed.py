@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import signal
+import tempfile
 
 import numpy as np
 import pytest
@@ -93,6 +94,30 @@ def test_render_bands_and_frames_equal_the_in_process_render(client, scene, bunn
     with pytest.raises(FileNotFoundError, match="the folder .*nowhere does not exist"):
         rkd.render(client, scene, 10, 4, out=missing, progress=lambda d, t: seen.append(d))
     assert seen == []
+
+
+def test_numpy_rays_and_refused_arguments(client, scene, bunny, tmp_path):
+    # A numpy array is one chunk, with the in-process answers.
+    rays = rays_at(bunny[0], 2_000, seed=8)
+    hits = rkd.cast_rays(client, scene, rays)
+    got = dict(zip(hits, dask.compute(*hits.values())))
+    for name, value in scene.cast_rays(rays).items():
+        assert np.array_equal(got[name], np.asarray(value)), name
+    with pytest.raises(TypeError, match="client must be a distributed.Client"):
+        rkd.cast_rays(None, scene, rays, workdir=tmp_path)
+    # A structure without a saved form is refused by name, and the job's
+    # own temporary folder does not stay behind.
+    kd = raykit.RaycastingScene(accel="bvh2")
+    kd.add_triangles(*bunny[:2])
+    folders = set(os.listdir(tempfile.gettempdir()))
+    with pytest.raises(ValueError, match="no saved form"):
+        rkd.cast_rays(client, kd, rays)
+    left = {f for f in set(os.listdir(tempfile.gettempdir())) - folders if f.startswith("raykit-dask-")}
+    assert not left, left
+    with pytest.raises(ValueError, match="window"):
+        rkd.render(client, scene, 32, 24, window=(0, 0, 8, 8), progress=False)
+    with pytest.raises(ValueError, match="up must be three finite numbers"):
+        rkd.orbit(2, eye=(0, 0, 1), target=(0, 0, 0), up=(0, 0, 0))
 
 
 def test_cast_rays_equals_the_in_process_cast_and_loads_once_per_worker(client, scene, bunny):

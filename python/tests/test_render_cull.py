@@ -41,10 +41,12 @@ def test_render_shows_the_mesh_where_rays_hit(bunny):
         raykit.render(scene, 0, 10)
     # Negative, huge and non-integer counts are ValueErrors naming the
     # argument, not the OverflowError of the conversion to unsigned.
+    # Out of range, the message gives the range that holds.
     for kwargs, name in [
-        (dict(width=-1), "width"),
+        (dict(width=-1), "width and height must be between 1 and 16384, got -1"),
         (dict(height=2**40), "height"),
-        (dict(samples_per_pixel=-1), "samples_per_pixel"),
+        (dict(height=2**70), "height"),
+        (dict(samples_per_pixel=-1), "samples_per_pixel must be between 1 and 4096, got -1"),
         (dict(window=(-1, 0, 4, 4)), "window"),
         (dict(width=32.5), "width"),
     ]:
@@ -69,6 +71,8 @@ def test_cull_removes_a_box_sealed_inside_another():
     for resolution in (1, -1, 2**70):
         with pytest.raises(ValueError, match="resolution"):
             raykit.cull(v, f, resolution=resolution)
+    with pytest.raises(ValueError, match="resolution must be between 4 and 2048 grid points, got -1"):
+        raykit.cull(v, f, resolution=-1)
     with pytest.raises(ValueError, match="one per triangle"):
         raykit.cull(v, f, parts[:3])
     with pytest.raises(ValueError, match="refers to vertex"):
