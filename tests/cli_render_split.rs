@@ -2,8 +2,9 @@
 //! bands rendered by separate `--tile I/N` processes and assembled by
 //! `raykit merge-tiles` equal the one-process render pixel for pixel, frame
 //! ranges of `--orbit` equal the frames of a whole-range run, and bad sets
-//! of parts (overlapping, missing, of another size or of another picture)
-//! are refused with errors naming the file.
+//! of parts (overlapping, missing, of another size or of another picture:
+//! scene, sampling, environment or materials) are refused with errors
+//! naming the file.
 
 use std::path::{Path, PathBuf};
 
@@ -156,11 +157,17 @@ fn bad_sets_of_parts_are_refused_naming_the_file() {
     // Bands of another image size.
     let other = part(1, 3, "33");
     fails(&[&p0, &other, &p2], &["p1of3h33.png", "40×33", "40×30"]);
-    // A band of another picture of the same size: another scene, or more
-    // samples per pixel.
-    for (i, other) in [["--scene", "builtin:cornell"], ["--spp", "2"]]
-        .iter()
-        .enumerate()
+    // A band of another picture of the same size: another scene, more
+    // samples per pixel, another environment or other materials.
+    for (i, other) in [
+        ["--scene", "builtin:cornell"],
+        ["--spp", "2"],
+        ["--env", "black"],
+        ["--env", "0.2,0.3,0.4"],
+        ["--material", "glass"],
+    ]
+    .iter()
+    .enumerate()
     {
         let p = dir.path().join(format!("other{i}.png"));
         let mut args = vec!["render", "--width", "40", "--height", "30", "--tile", "1/3"];

@@ -205,6 +205,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     };
     bar.finish_and_clear();
     let mesh = &setup.scene.mesh;
+    let scene_print = args.tile.map(|_| picture::scene(mesh, &setup.environment));
     for (number, camera, out, frame) in &rendered {
         match args.tile {
             Some(_) => {
@@ -215,7 +216,12 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                     height: window.height,
                     full_width: width,
                     full_height: height,
-                    picture: picture::fingerprint(mesh, camera, &setup.lights, &opts),
+                    picture: picture::fingerprint(
+                        scene_print.unwrap_or_default(),
+                        camera,
+                        &setup.lights,
+                        &opts,
+                    ),
                 };
                 raykit_io::write_png_part(out, &part, &frame.image.rgb)?;
             }
