@@ -282,6 +282,8 @@ def render(
         light = _numbers(light, "light", "(x, y, h)")
         if not all(math.isfinite(v) for v in light):
             raise ValueError(f"light {light}: expected finite numbers")
+    if np.isnan(h).all():
+        raise ValueError("the DEM has no valid height (every sample is no-data)")
     # The declared surface: no-data samples at the lowest height.
     filled = np.where(np.isnan(h), np.nanmin(h), h)
     if eye is None:
@@ -296,7 +298,7 @@ def render(
             target = (cx, cy, ez - dist * slope)
     elif target is None:
         rows, cols = h.shape
-        target = (t[2] + t[0] * cols / 2.0, t[5] + t[4] * rows / 2.0, float(filled.mean()))
+        target = (t[2] + t[0] * cols / 2.0, t[5] + t[4] * rows / 2.0, float(np.nanmean(h)))
     out = cast(h, t, eye=eye, target=target, width=width, height=height, fov=fov, caster=caster, tau=tau, geographic=geo, threads=threads)
     mask = None
     if shadows:

@@ -53,15 +53,27 @@ pub fn load_dem(
 /// The DEM of a `(rows, cols)` height grid placed by `transform`.
 fn dem(heights: &PyReadonlyArray2<'_, f32>, t: Transform, geographic: bool) -> PyResult<Dem> {
     let (a, b, c, d, e, f) = t;
+    let n = format_number;
+    let named = format!(
+        "transform ({}, {}, {}, {}, {}, {})",
+        n(a),
+        n(b),
+        n(c),
+        n(d),
+        n(e),
+        n(f)
+    );
     if b != 0.0 || d != 0.0 {
         return Err(value_error(format!(
-            "rotated or sheared transform (terms b = {b}, d = {d}); expected a north-up \
-             transformation with zero rotation terms"
+            "rotated or sheared transform (terms b = {}, d = {}); expected a north-up \
+             transformation with zero rotation terms",
+            n(b),
+            n(d)
         )));
     }
     if !(a > 0.0 && e < 0.0 && a.is_finite() && e.is_finite() && c.is_finite() && f.is_finite()) {
         return Err(value_error(format!(
-            "transform ({a}, {b}, {c}, {d}, {e}, {f}): expected a north-up raster, a > 0 and \
+            "{named}: expected a north-up raster, a > 0 and \
              e < 0 (columns east, rows south)"
         )));
     }
@@ -70,7 +82,7 @@ fn dem(heights: &PyReadonlyArray2<'_, f32>, t: Transform, geographic: bool) -> P
     let (x1, y1) = (c + a * cols as f64, f + e * rows as f64);
     if !(x1.is_finite() && y1.is_finite() && c + a != c && f + e != f) {
         return Err(value_error(format!(
-            "transform ({a}, {b}, {c}, {d}, {e}, {f}): the pixel size is too small to tell \
+            "{named}: the pixel size is too small to tell \
              neighbouring pixels apart at the origin, or the {cols} x {rows} grid reaches \
              beyond the largest coordinates"
         )));

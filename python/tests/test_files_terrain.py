@@ -215,6 +215,15 @@ def test_render_checks_its_light_and_frames_grids_with_holes(tmp_path):
         raykit.terrain.shadow(str(path), sun=(135, 20))
 
 
+def test_numbers_in_terrain_errors_stay_short():
+    h = np.zeros((4, 4), np.float32)
+    for kw in (dict(transform=(1e300, 0, 0, 0, -1, 0)), dict(light=(1e300, -1, 2))):
+        light = kw.pop("light", (1, -1, 2))
+        with pytest.raises(ValueError, match="1e300") as e:
+            raykit.terrain.shadow(h, light=light, **kw)
+        assert len(str(e.value)) < 300, str(e.value)
+
+
 def test_transforms_and_bad_grids():
     h = np.zeros((5, 6), np.float32)
     h[2, 3] = 10.0
