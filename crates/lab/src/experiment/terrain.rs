@@ -7,6 +7,7 @@
 //! differ.
 
 use super::{write_csv, write_text};
+use crate::args::ranges::{self, image_side, in_range};
 use crate::measure::{median_min_max, median_ms, timed};
 use crate::plot::{write_svg, LineChart, Series};
 use anyhow::{bail, Context, Result};
@@ -34,6 +35,9 @@ const PAPER_TABLE1: [(f64, f64, f64); 11] = [
     (4096.0, 1.0, 0.111),
 ];
 
+/// The most views of part (a)'s fly-through (`--flythrough`).
+const MAX_VIEWS: usize = 1000;
+
 /// Arguments of `raykit experiment terrain`.
 #[derive(Args)]
 #[command(
@@ -46,10 +50,10 @@ pub struct TerrainExperimentArgs {
     /// Side of the generated DEM of parts (a) and (c).
     #[arg(long, default_value_t = 4096)]
     size: usize,
-    /// Image width of part (a).
+    /// Image width of part (a), 1 to 16384.
     #[arg(long, default_value_t = 1600)]
     width: u32,
-    /// Image height of part (a).
+    /// Image height of part (a), 1 to 16384.
     #[arg(long, default_value_t = 900)]
     height: u32,
     /// τ values of part (a).
@@ -64,11 +68,12 @@ pub struct TerrainExperimentArgs {
     shadow_sizes: Vec<usize>,
     /// Views of part (a): 1 is the single view of Table 1 of the quadtree terrain ray-casting paper; more
     /// fly along the DEM's diagonal (each view moved by an equal step to the
-    /// north-east, same direction), and part (a) reports the average frame.
+    /// north-east, same direction), and part (a) reports the average frame;
+    /// 1 to 1000.
     #[arg(long, default_value_t = 1)]
     flythrough: usize,
-    /// Repetitions (medians are reported); the brute-force shadow masks of
-    /// DEMs above 1024² run once.
+    /// Repetitions (medians are reported), 1 to 1000; the brute-force shadow
+    /// masks of DEMs above 1024² run once.
     #[arg(long, default_value_t = 3)]
     reps: usize,
     /// Parts to run: any of a, b, c.
@@ -515,6 +520,10 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
     if args.taus.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         bail!("--taus must be positive numbers");
     }
+    image_side("--width", args.width)?;
+    image_side("--height", args.height)?;
+    ranges::reps(args.reps)?;
+    in_range("--flythrough", args.flythrough, 1, MAX_VIEWS)?;
     if let Some(p) = args.parts.iter().find(|p| !"abc".contains(**p)) {
         bail!("--parts: unknown part '{p}'; the parts are a, b and c");
     }
