@@ -97,3 +97,53 @@ fn cull_resolutions_have_the_range_of_raykit_cull() {
         );
     }
 }
+
+/// The heat maps results.md names are the ones written: the box method's
+/// at τ = 16 when 16 is measured, else at the τ nearest to it.
+#[test]
+fn terrain_results_link_heat_maps_that_exist() {
+    for (taus, boxes) in [
+        ("4", "heat-boxes-tau4.png"),
+        ("4,16,64", "heat-boxes-tau16.png"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let o = raykit(&[
+            "experiment",
+            "terrain",
+            "--size",
+            "32",
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--taus",
+            taus,
+            "--parts",
+            "a",
+            "--reps",
+            "1",
+            "--out",
+            s(&out),
+        ]);
+        let err = text(&o.stderr);
+        assert!(!err.contains("panicked"), "{err}");
+        let md = std::fs::read_to_string(out.join("results.md")).expect("results.md");
+        let line = md
+            .lines()
+            .find(|l| l.starts_with("Heat maps"))
+            .expect("a heat map line");
+        let named: Vec<&str> = line
+            .split([' ', ','])
+            .map(|w| w.trim_end_matches('.'))
+            .filter(|w| w.ends_with(".png"))
+            .collect();
+        assert!(named.contains(&boxes), "--taus {taus}: {line}");
+        for name in named {
+            assert!(
+                out.join(name).is_file(),
+                "--taus {taus}: {name} named but not written"
+            );
+        }
+    }
+}

@@ -282,9 +282,9 @@ fn part_a(args: &TerrainExperimentArgs, dem: &Dem) -> Result<Vec<CastRow>> {
         eprintln!("(a) boxes, tau {tau}");
         let (img, t) = run(Caster::Boxes { tau });
         let (ms, noise) = median_ms(&t);
-        if tau == 16.0 {
+        if heat_tau(&args.taus) == Some(tau) {
             write_heatmap(
-                &args.out.join("heat-boxes-tau16.png"),
+                &args.out.join(boxes_heatmap_name(tau)),
                 &img[0],
                 args.width,
                 args.height,
@@ -607,8 +607,25 @@ fn part_a_table(args: &TerrainExperimentArgs, a: &[CastRow]) -> String {
             r.pixels_differing_from_march
         );
     }
-    md += "\nHeat maps (steps per ray, same scale): heat-march.png, heat-maxmip.png, heat-boxes-tau16.png.\n\n";
+    md += "\nHeat maps (steps per ray, same scale): heat-march.png, heat-maxmip.png";
+    if let Some(tau) = heat_tau(&args.taus) {
+        md += &format!(", {}", boxes_heatmap_name(tau));
+    }
+    md += ".\n\n";
     md
+}
+
+/// The τ whose box method gets a heat map: 16 (the paper's best) when it is
+/// among `taus`, else the nearest one on a log scale; `None` without τ values.
+fn heat_tau(taus: &[f64]) -> Option<f64> {
+    taus.iter()
+        .copied()
+        .min_by(|a, b| (a.log2() - 4.0).abs().total_cmp(&(b.log2() - 4.0).abs()))
+}
+
+/// The file name of the box method's heat map at `tau`.
+fn boxes_heatmap_name(tau: f64) -> String {
+    format!("heat-boxes-tau{tau}.png")
 }
 
 /// Part (b)'s table.
