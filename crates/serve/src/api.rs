@@ -257,9 +257,14 @@ fn allowed_scene(state: &AppState, spec: &str) -> Result<(String, Option<PathBuf
     let Some(dir) = &state.config.scene_dir else {
         return Err("only builtin: scenes can be loaded; start the server with --scene-dir DIR to allow files in DIR".into());
     };
-    let root = dir
-        .canonicalize()
-        .map_err(|e| format!("the server's --scene-dir cannot be read: {}", e.kind()))?;
+    let root = dir.canonicalize().map_err(|e| {
+        // The folder was readable at start (`ServeConfig::problem`); its
+        // path stays out of the answer, as everywhere in this API.
+        format!(
+            "the server's --scene-dir can no longer be read ({e}): it was removed or its \
+                 permissions changed after the server started"
+        )
+    })?;
     // Names that leave the folder are refused before the file system is
     // asked, so that the answer does not tell which files exist elsewhere.
     let leaves = Path::new(spec).components().any(|c| {

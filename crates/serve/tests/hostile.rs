@@ -362,3 +362,29 @@ async fn shutdown_closes_sessions_with_going_away() {
         "still listening"
     );
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_empty_token_or_a_missing_scene_folder_is_refused_at_start() {
+    let mut c = config();
+    c.token = Some(String::new());
+    let e = raykit_serve::start(c, loader(), "builtin:cornell")
+        .await
+        .err()
+        .expect("an empty token is refused");
+    assert!(format!("{e:#}").contains("token"), "{e:#}");
+    let missing =
+        std::env::temp_dir().join(format!("raykit-no-such-folder-{}", std::process::id()));
+    let mut c = config();
+    c.scene_dir = Some(missing.clone());
+    let e = raykit_serve::start(c, loader(), "builtin:cornell")
+        .await
+        .err()
+        .expect("a missing scene folder is refused");
+    let message = format!("{e:#}");
+    let os = std::fs::read_dir(&missing).unwrap_err().to_string();
+    assert!(
+        message.contains(&missing.display().to_string()),
+        "{message}"
+    );
+    assert!(message.contains(&os), "{message}");
+}
