@@ -388,3 +388,31 @@ async fn an_empty_token_or_a_missing_scene_folder_is_refused_at_start() {
     );
     assert!(message.contains(&os), "{message}");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn unknown_query_parameters_are_refused_naming_them() {
+    let mut c = config();
+    c.token = Some("s3cr3t".into());
+    let server = server(c).await;
+    let before = server.state().world().full;
+    let auth = "Authorization: Bearer s3cr3t\r\n";
+    let size = r#"{"width":64,"height":48}"#;
+    for (method, path, body, name) in [
+        ("PUT", "/api/resolution?clinet=1", size, "clinet"),
+        ("GET", "/mjpeg?widht=10&height=10", "", "widht"),
+        ("GET", "/api/camera?cilent=1", "", "cilent"),
+        ("GET", "/api/status?verbose=1", "", "verbose"),
+        ("GET", "/ws?format=raw", "", "format"),
+    ] {
+        let (status, _, reply) = http(&server, method, path, auth, body).await;
+        assert_eq!(status, 400, "{method} {path}");
+        let message = json_body(&reply)["error"].as_str().unwrap().to_string();
+        assert!(message.contains(&format!("'{name}'")), "{path}: {message}");
+    }
+    // Nothing changed, and the parameters a path takes (and the token) pass.
+    assert_eq!(server.state().world().full, before);
+    let (status, _, reply) = http(&server, "PUT", "/api/resolution?token=s3cr3t", "", size).await;
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&reply));
+    assert_eq!(server.state().world().full, (64, 48));
+    server.shutdown().await.unwrap();
+}
