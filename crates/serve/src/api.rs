@@ -60,7 +60,8 @@ pub async fn json_errors(req: axum::extract::Request, next: axum::middleware::Ne
 /// (counted again from the end of the headers) and `max_message_bytes`,
 /// before any handler sees it: a client that sends its body a byte at a
 /// time gets 408 and loses its connection instead of holding it, and a
-/// body over the limit gets 413 as before.
+/// body over the limit gets 413 (at once, unread, when its `Content-Length`
+/// says so).
 pub async fn body_in_time(
     State(state): State<Arc<AppState>>,
     req: axum::extract::Request,
@@ -69,6 +70,24 @@ pub async fn body_in_time(
     let (parts, body) = req.into_parts();
     let config = &state.config;
     let limit = config.max_message_bytes;
+    // A body announced over the limit is refused at once, unread, instead
+    // of waiting for bytes that would be refused anyway.
+    let announced = parts
+        .headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.trim().parse::<u64>().ok());
+    if let Some(n) = announced.filter(|&n| n > limit as u64) {
+        let mut res = error(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!("the request's body is {n} bytes (Content-Length), over the limit of {limit}"),
+        );
+        res.headers_mut().insert(
+            header::CONNECTION,
+            header::HeaderValue::from_static("close"),
+        );
+        return res;
+    }
     let read = tokio::time::timeout(config.header_timeout, axum::body::to_bytes(body, limit));
     match read.await {
         Ok(Ok(bytes)) => {

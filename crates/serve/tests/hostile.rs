@@ -416,3 +416,39 @@ async fn unknown_query_parameters_are_refused_naming_them() {
     assert_eq!(server.state().world().full, (64, 48));
     server.shutdown().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_body_announced_over_the_limit_is_refused_at_once() {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let mut c = config();
+    c.header_timeout = Duration::from_secs(5);
+    let limit = c.max_message_bytes;
+    let server = server(c).await;
+    let mut s = tokio::net::TcpStream::connect(server.addr()).await.unwrap();
+    let start = std::time::Instant::now();
+    let req = format!(
+        "PUT /api/lights HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n\
+         Content-Length: {}\r\n\r\n{{\"lights\":[]}}",
+        limit * 60
+    );
+    s.write_all(req.as_bytes()).await.unwrap();
+    let mut reply = Vec::new();
+    let mut buf = [0u8; 4096];
+    // The answer comes without waiting for the rest of the body.
+    while !reply.windows(4).any(|w| w == b"\r\n\r\n") {
+        let n = tokio::time::timeout(Duration::from_secs(4), s.read(&mut buf))
+            .await
+            .expect("an answer before the body timeout")
+            .unwrap();
+        assert!(n > 0, "closed without an answer");
+        reply.extend_from_slice(&buf[..n]);
+    }
+    assert!(
+        start.elapsed() < Duration::from_secs(3),
+        "{:?}",
+        start.elapsed()
+    );
+    let head = String::from_utf8_lossy(&reply);
+    assert!(head.starts_with("HTTP/1.1 413"), "{head}");
+    server.shutdown().await.unwrap();
+}
