@@ -195,3 +195,47 @@ fn malformed_scenes_and_options_give_clear_errors() {
         );
     }
 }
+
+/// A point light far away, but within the bound, still lights the scene:
+/// as a directional light from the same side with the same irradiance does.
+#[test]
+fn a_far_point_light_lights_as_a_directional_light_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let (point, parallel, unlit) = (
+        dir.path().join("p.png"),
+        dir.path().join("d.png"),
+        dir.path().join("u.png"),
+    );
+    let (x, y, z) = (1e17f32, 3e16f32, 2e16f32);
+    for (light, out) in [
+        (format!("{x:e},{y:e},{z:e}"), &point),
+        (format!("dir:{:e},{:e},{:e}", -x, -y, -z), &parallel),
+        (format!("dir:{:e},{:e},{:e}:0,0,0", -x, -y, -z), &unlit),
+    ] {
+        ok(&raykit(&[
+            "render",
+            "--width",
+            W,
+            "--height",
+            H,
+            "--light",
+            &light,
+            "--out",
+            s(out),
+        ]));
+    }
+    let mean_diff = |a: &image::RgbImage, b: &image::RgbImage| -> f64 {
+        a.as_raw()
+            .iter()
+            .zip(b.as_raw())
+            .map(|(&p, &q)| (p as f64 - q as f64).abs())
+            .sum::<f64>()
+            / a.as_raw().len() as f64
+    };
+    let (a, b) = (rgb(&point), rgb(&parallel));
+    let diff = mean_diff(&a, &b);
+    assert!(diff < 1.0, "mean difference {diff} levels");
+    // The light matters to the picture: without it, it differs.
+    let without = mean_diff(&b, &rgb(&unlit));
+    assert!(without > 5.0 * diff.max(0.2), "{without} against {diff}");
+}

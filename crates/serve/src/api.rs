@@ -11,7 +11,7 @@ use axum::extract::{Query, State};
 use axum::http::{header, StatusCode};
 use axum::response::{IntoResponse, Response};
 use raykit_core::Vec3;
-use raykit_render::PointLight;
+use raykit_render::light_spec::{light_position_problem, point_light};
 use serde::Deserialize;
 use serde_json::json;
 use std::collections::HashMap;
@@ -496,14 +496,27 @@ pub async fn put_lights(State(state): State<Arc<AppState>>, bytes: Bytes) -> Res
             );
         }
         let (p, c) = (Vec3::from_array(l.position), Vec3::from_array(l.color));
-        if !p.is_finite() || !c.is_finite() || c.min_element() < 0.0 || c.max_element() > 1e6 {
+        if let Some(problem) = light_position_problem(p) {
             return error(
                 StatusCode::BAD_REQUEST,
-                format!("lights[{i}]: position must be finite and color within 0..=1e6"),
+                format!("lights[{i}].position: {problem}"),
             );
         }
-        let d = p.distance(center).max(1e-6);
-        lights.push(PointLight::with_irradiance_at(p, c, d).into());
+        if !c.is_finite() || c.min_element() < 0.0 || c.max_element() > 1e6 {
+            return error(
+                StatusCode::BAD_REQUEST,
+                format!("lights[{i}].color must be finite and within 0..=1e6, got {c}"),
+            );
+        }
+        match point_light(p, c, center) {
+            Ok(light) => lights.push(light),
+            Err(problem) => {
+                return error(
+                    StatusCode::BAD_REQUEST,
+                    format!("lights[{i}].color: {problem}"),
+                )
+            }
+        }
     }
     let n = lights.len();
     state.update_world(|w| w.lights = lights);

@@ -1,6 +1,8 @@
 //! Bad and hostile input: malformed, out-of-range, binary, flooding and
 //! oversized messages get errors (or, for oversize, a 1009 close) and never
-//! stop the server or the other clients; client limits, token checks.
+//! stop the server or the other clients; client limits, token checks;
+//! unknown query parameters, bodies announced over the limit and lights
+//! beyond the camera bound are refused, as are unusable settings at start.
 
 mod support;
 
@@ -364,32 +366,6 @@ async fn shutdown_closes_sessions_with_going_away() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn an_empty_token_or_a_missing_scene_folder_is_refused_at_start() {
-    let mut c = config();
-    c.token = Some(String::new());
-    let e = raykit_serve::start(c, loader(), "builtin:cornell")
-        .await
-        .err()
-        .expect("an empty token is refused");
-    assert!(format!("{e:#}").contains("token"), "{e:#}");
-    let missing =
-        std::env::temp_dir().join(format!("raykit-no-such-folder-{}", std::process::id()));
-    let mut c = config();
-    c.scene_dir = Some(missing.clone());
-    let e = raykit_serve::start(c, loader(), "builtin:cornell")
-        .await
-        .err()
-        .expect("a missing scene folder is refused");
-    let message = format!("{e:#}");
-    let os = std::fs::read_dir(&missing).unwrap_err().to_string();
-    assert!(
-        message.contains(&missing.display().to_string()),
-        "{message}"
-    );
-    assert!(message.contains(&os), "{message}");
-}
-
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn unknown_query_parameters_are_refused_naming_them() {
     let mut c = config();
     c.token = Some("s3cr3t".into());
@@ -451,4 +427,79 @@ async fn a_body_announced_over_the_limit_is_refused_at_once() {
     let head = String::from_utf8_lossy(&reply);
     assert!(head.starts_with("HTTP/1.1 413"), "{head}");
     server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn lights_beyond_the_camera_bound_are_refused_naming_the_field() {
+    let server = server(config()).await;
+    let (_, _, before) = http(&server, "GET", "/api/status", "", "").await;
+    let bound = raykit_core::MAX_CAMERA_COORDINATE;
+    for (lights, field) in [
+        (
+            format!(r#"{{"lights":[{{"position":[{:e},1,0]}}]}}"#, bound * 1e12),
+            "lights[0].position",
+        ),
+        (
+            format!(
+                r#"{{"lights":[{{"position":[0,1,0]}},{{"position":[0,{:e},0]}}]}}"#,
+                -bound * 10.0
+            ),
+            "lights[1].position",
+        ),
+        // Within the bound, but too bright that far: the intensity overflows.
+        (
+            format!(
+                r#"{{"lights":[{{"position":[{:e},0,0],"color":[1e6,1,1]}}]}}"#,
+                bound
+            ),
+            "lights[0].color",
+        ),
+    ] {
+        let (status, _, reply) = http(&server, "PUT", "/api/lights", "", &lights).await;
+        assert_eq!(status, 400, "{lights}");
+        let message = json_body(&reply)["error"].as_str().unwrap().to_string();
+        assert!(message.contains(field), "{lights}: {message}");
+    }
+    // The lights are as they were, each with a finite colour.
+    let (_, _, after) = http(&server, "GET", "/api/status", "", "").await;
+    assert_eq!(json_body(&before)["lights"], json_body(&after)["lights"]);
+    // A far light within the bound is kept, with the colour it was given.
+    let far = format!(
+        r#"{{"lights":[{{"position":[{:e},1,0],"color":[0.5,0.5,0.5]}}]}}"#,
+        bound / 10.0
+    );
+    let (status, _, reply) = http(&server, "PUT", "/api/lights", "", &far).await;
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&reply));
+    let (_, _, after) = http(&server, "GET", "/api/status", "", "").await;
+    let colour = &json_body(&after)["lights"][0]["color"];
+    for c in colour.as_array().unwrap() {
+        assert!((c.as_f64().unwrap() - 0.5).abs() < 1e-3, "{colour}");
+    }
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_empty_token_or_a_missing_scene_folder_is_refused_at_start() {
+    let mut c = config();
+    c.token = Some(String::new());
+    let e = raykit_serve::start(c, loader(), "builtin:cornell")
+        .await
+        .err()
+        .expect("an empty token is refused");
+    assert!(format!("{e:#}").contains("token"), "{e:#}");
+    let missing =
+        std::env::temp_dir().join(format!("raykit-no-such-folder-{}", std::process::id()));
+    let mut c = config();
+    c.scene_dir = Some(missing.clone());
+    let e = raykit_serve::start(c, loader(), "builtin:cornell")
+        .await
+        .err()
+        .expect("a missing scene folder is refused");
+    let message = format!("{e:#}");
+    let os = std::fs::read_dir(&missing).unwrap_err().to_string();
+    assert!(
+        message.contains(&missing.display().to_string()),
+        "{message}"
+    );
+    assert!(message.contains(&os), "{message}");
 }
