@@ -1,7 +1,8 @@
 //! `raykit render` and `raykit export` as a user runs them: a glTF scene
 //! with its own camera and lights renders without options (checked against
 //! the built-in scene it was exported from), EXR output agrees with the PNG,
-//! AOVs are written, and malformed scenes give clear errors.
+//! AOVs are written, malformed scenes and out-of-range options give clear
+//! errors, and a far point light still lights the scene.
 
 use std::path::Path;
 
@@ -192,6 +193,125 @@ fn malformed_scenes_and_options_give_clear_errors() {
         assert!(
             !o.status.success() && err.contains(needle),
             "{args:?}: {err}"
+        );
+    }
+}
+
+/// Options out of range are refused naming the option and the value, and
+/// write nothing: a light beyond the bound on camera coordinates (its
+/// intensity would overflow f32 and the light be lost), a non-finite
+/// environment rotation, a tile count of 0.
+#[test]
+fn out_of_range_lights_rotations_and_tiles_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let env = cli::data("envmaps/studio.exr");
+    let far = format!("{:e},5,0", raykit_core::MAX_CAMERA_COORDINATE * 100.0);
+    let far_target = format!(
+        "spot:0,5,0:{:e},0,0:30",
+        raykit_core::MAX_CAMERA_COORDINATE * 100.0
+    );
+    for (args, needles) in [
+        (vec!["--light", far.as_str()], vec!["--light", "1e18"]),
+        (
+            vec!["--light", far_target.as_str()],
+            vec!["--light", "target"],
+        ),
+        (
+            vec!["--env", s(&env), "--env-rotate", "inf"],
+            vec!["--env-rotate", "inf"],
+        ),
+        (
+            vec!["--env", s(&env), "--env-rotate", "NaN"],
+            vec!["--env-rotate", "NaN"],
+        ),
+        (vec!["--tile", "0/0"], vec!["--tile", "at least 1"]),
+    ] {
+        let o = raykit(
+            &[
+                &["render", "--width", "8", "--height", "8", "--out", s(&out)][..],
+                &args,
+            ]
+            .concat(),
+        );
+        let err = text(&o.stderr);
+        assert!(!o.status.success(), "{args:?} was accepted");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {err}");
+        }
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}
+
+/// A point light far away, but within the bound, still lights the scene:
+/// as a directional light from the same side with the same irradiance does.
+#[test]
+fn a_far_point_light_lights_as_a_directional_light_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let (point, parallel, unlit) = (
+        dir.path().join("p.png"),
+        dir.path().join("d.png"),
+        dir.path().join("u.png"),
+    );
+    let (x, y, z) = (1e17f32, 3e16f32, 2e16f32);
+    for (light, out) in [
+        (format!("{x:e},{y:e},{z:e}"), &point),
+        (format!("dir:{:e},{:e},{:e}", -x, -y, -z), &parallel),
+        (format!("dir:{:e},{:e},{:e}:0,0,0", -x, -y, -z), &unlit),
+    ] {
+        ok(&raykit(&[
+            "render",
+            "--width",
+            W,
+            "--height",
+            H,
+            "--light",
+            &light,
+            "--out",
+            s(out),
+        ]));
+    }
+    let mean_diff = |a: &image::RgbImage, b: &image::RgbImage| -> f64 {
+        a.as_raw()
+            .iter()
+            .zip(b.as_raw())
+            .map(|(&p, &q)| (p as f64 - q as f64).abs())
+            .sum::<f64>()
+            / a.as_raw().len() as f64
+    };
+    let (a, b) = (rgb(&point), rgb(&parallel));
+    let diff = mean_diff(&a, &b);
+    assert!(diff < 1.0, "mean difference {diff} levels");
+    // The light matters to the picture: without it, it differs.
+    let without = mean_diff(&b, &rgb(&unlit));
+    assert!(without > 5.0 * diff.max(0.2), "{without} against {diff}");
+}
+
+/// `render --help` names every structure the GPU backend takes.
+#[test]
+fn the_accel_help_names_what_the_gpu_backend_takes() {
+    let o = raykit(&["render", "--help"]);
+    ok(&o);
+    let help = text(&o.stdout);
+    // The option's own lines: up to the next option's line, which is
+    // indented less than the descriptions.
+    let accel = help
+        .lines()
+        .skip_while(|l| !l.trim_start().starts_with("--accel <ACCEL>"))
+        .skip(1)
+        .take_while(|l| {
+            let indent = l.len() - l.trim_start().len();
+            !(l.trim_start().starts_with('-') && indent <= 6)
+        })
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(!accel.is_empty(), "--accel missing from the help");
+    for kind in raykit_gpu::GpuAccelKind::ALL {
+        assert!(
+            accel.contains(kind.name()),
+            "{} missing: {accel}",
+            kind.name()
         );
     }
 }

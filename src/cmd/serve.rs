@@ -31,6 +31,7 @@ pub struct ServeArgs {
     #[arg(long, default_value = "127.0.0.1:8080")]
     addr: SocketAddr,
     /// Require this token (`?token=` or `Authorization: Bearer`); also from $RAYKIT_TOKEN.
+    /// An empty token is refused.
     #[arg(long, env = "RAYKIT_TOKEN", hide_env_values = true)]
     token: Option<String>,
     /// Most clients at once (WebSocket and MJPEG).
@@ -69,7 +70,8 @@ pub struct ServeArgs {
     /// Largest scene `POST /api/scene` may load, in triangles.
     #[arg(long, default_value_t = 20_000_000)]
     max_scene_triangles: usize,
-    /// Allow `POST /api/scene` to load mesh files from this directory (otherwise builtin: only).
+    /// Allow `POST /api/scene` to load mesh files from this directory (otherwise builtin: only);
+    /// it must exist and be readable when the server starts.
     #[arg(long)]
     scene_dir: Option<PathBuf>,
     /// Render threads (0 = one per core; at most 4096).
@@ -84,7 +86,7 @@ impl ServeArgs {
     fn config(&self) -> ServeConfig {
         ServeConfig {
             addr: self.addr,
-            token: self.token.clone().filter(|t| !t.is_empty()),
+            token: self.token.clone(),
             max_clients: self.max_clients,
             full: (self.width, self.height),
             max_size: (self.max_width, self.max_height),
@@ -113,6 +115,16 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
         if !(s.is_finite() && (0.0..=1e7).contains(&s)) {
             anyhow::bail!("--seconds must be a number of seconds in 0..=1e7, got {s}");
         }
+    }
+    if args.token.as_deref() == Some("") {
+        anyhow::bail!(
+            "--token (or $RAYKIT_TOKEN) is empty: give a token clients must present, or leave \
+             both unset to serve without one"
+        );
+    }
+    if let Some(dir) = &args.scene_dir {
+        std::fs::read_dir(dir)
+            .with_context(|| format!("--scene-dir {} cannot be read", dir.display()))?;
     }
     let config = args.config();
     runtime()?.block_on(async move {

@@ -4,6 +4,13 @@ use crate::aabb::Aabb;
 use crate::ray::Ray;
 use glam::Vec3;
 
+/// The largest magnitude of a camera coordinate (eye, target, up) and of a
+/// light's position where a command or the server takes them: far beyond
+/// any mesh ([`crate::MAX_COORDINATE`]), and small enough that squared
+/// distances (a point light's intensity is its irradiance times the squared
+/// distance) stay finite in f32.
+pub const MAX_CAMERA_COORDINATE: f32 = 1e18;
+
 /// A pinhole camera: eye point, view target, up vector and vertical field of
 /// view in degrees.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -70,7 +70,7 @@ pub mod verify;
 
 pub use aabb::Aabb;
 pub use accel::{Accel, AccelStats};
-pub use camera::Camera;
+pub use camera::{Camera, MAX_CAMERA_COORDINATE};
 pub use glam;
 pub use glam::{Vec2, Vec3, Vec3A};
 pub use hit::Hit;

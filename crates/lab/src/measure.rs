@@ -44,11 +44,16 @@ pub fn per_second(n: usize, seconds: f64) -> f64 {
     }
 }
 
-/// Median, minimum and maximum of a non-empty sample.
+/// Median, minimum and maximum of a sample; all 0 for an empty one (no
+/// runs measured nothing), like [`per_second`], so that no caller panics and
+/// the JSON stats lines never hold NaN.
 pub fn median_min_max(samples: &[f64]) -> (f64, f64, f64) {
     let mut s = samples.to_vec();
     s.sort_by(f64::total_cmp);
     let n = s.len();
+    if n == 0 {
+        return (0.0, 0.0, 0.0);
+    }
     let median = if n % 2 == 1 {
         s[n / 2]
     } else {
@@ -72,5 +77,11 @@ mod tests {
     fn median_of_odd_and_even_samples() {
         assert_eq!(median_min_max(&[3.0, 1.0, 2.0]), (2.0, 1.0, 3.0));
         assert_eq!(median_min_max(&[4.0, 1.0, 2.0, 3.0]), (2.5, 1.0, 4.0));
+    }
+
+    #[test]
+    fn an_empty_sample_gives_zeros_instead_of_a_panic() {
+        assert_eq!(median_min_max(&[]), (0.0, 0.0, 0.0));
+        assert_eq!(median_ms(&[]), (0.0, 0.0));
     }
 }

@@ -2,7 +2,7 @@
 //! point, directional and spot lights (`--light` of `raykit render`).
 
 use anyhow::{bail, Context, Result};
-use raykit_core::{Light, PointLight, Vec3};
+use raykit_core::{Light, PointLight, Vec3, MAX_CAMERA_COORDINATE};
 
 /// Help text for `--light`.
 pub const LIGHT_HELP: &str = "Light, repeatable: `X,Y,Z[:R,G,B]` or `point:X,Y,Z[:R,G,B]` (a point \
@@ -27,6 +27,43 @@ fn vec3(s: &str, what: &str) -> Result<Vec3> {
     parse_vec3(s)
         .map_err(anyhow::Error::msg)
         .with_context(|| what.to_string())
+}
+
+/// Why `position` cannot place a light, if it cannot: a coordinate beyond
+/// ±[`MAX_CAMERA_COORDINATE`], the bound on camera coordinates (beyond it
+/// the light's intensity, irradiance × distance², overflows f32).
+pub fn light_position_problem(position: Vec3) -> Option<String> {
+    (!position.is_finite() || position.abs().max_element() > MAX_CAMERA_COORDINATE).then(|| {
+        format!(
+            "the position {position} is beyond ±{MAX_CAMERA_COORDINATE:e}, the bound on camera \
+             and light coordinates"
+        )
+    })
+}
+
+/// A point light at `position` giving irradiance `colour` at `centre`, or
+/// why not: a position beyond [`light_position_problem`]'s bound, or a
+/// colour so bright at that distance that the intensity overflows f32.
+pub fn point_light(position: Vec3, colour: Vec3, centre: Vec3) -> Result<Light, String> {
+    if let Some(p) = light_position_problem(position) {
+        return Err(p);
+    }
+    let d = position.distance(centre).max(1e-6);
+    let light = PointLight::with_irradiance_at(position, colour, d);
+    if !light.intensity.is_finite() {
+        return Err(format!(
+            "the colour {colour} at {d:e} from the scene centre gives an intensity beyond f32"
+        ));
+    }
+    Ok(light.into())
+}
+
+fn position(s: &str) -> Result<Vec3> {
+    let p = vec3(s, "the position X,Y,Z")?;
+    match light_position_problem(p) {
+        Some(problem) => bail!("{problem}"),
+        None => Ok(p),
+    }
 }
 
 fn colour(s: Option<&&str>) -> Result<Vec3> {
@@ -54,8 +91,7 @@ pub fn parse_light(spec: &str, centre: Vec3) -> Result<Light> {
             }
             let p = vec3(rest[0], "the position X,Y,Z")?;
             let c = colour(rest.get(1))?;
-            let d = p.distance(centre).max(1e-6);
-            Ok(PointLight::with_irradiance_at(p, c, d).into())
+            point_light(p, c, centre).map_err(anyhow::Error::msg)
         }
         "dir" => {
             if rest.is_empty() || rest.len() > 2 {
@@ -74,8 +110,11 @@ pub fn parse_light(spec: &str, centre: Vec3) -> Result<Light> {
             if rest.len() < 3 || rest.len() > 4 {
                 bail!("expected spot:X,Y,Z:TX,TY,TZ:ANGLE[:R,G,B]");
             }
-            let p = vec3(rest[0], "the position X,Y,Z")?;
+            let p = position(rest[0])?;
             let t = vec3(rest[1], "the target TX,TY,TZ")?;
+            if let Some(problem) = light_position_problem(t) {
+                bail!("the target: {problem}");
+            }
             let angle: f32 = rest[2]
                 .trim()
                 .parse()
@@ -92,10 +131,14 @@ pub fn parse_light(spec: &str, centre: Vec3) -> Result<Light> {
             }
             let c = colour(rest.get(3))?;
             let d = p.distance(t);
+            let intensity = c * d * d;
+            if !intensity.is_finite() {
+                bail!("the colour {c} at {d:e} from the target gives an intensity beyond f32");
+            }
             Ok(Light::Spot {
                 position: p,
                 direction: (t - p).normalize(),
-                intensity: c * d * d,
+                intensity,
                 cos_inner: (0.8 * angle).to_radians().cos(),
                 cos_outer: angle.to_radians().cos(),
             })

@@ -116,6 +116,18 @@ pub fn material_preset(name: &str) -> Result<Material> {
 
 /// The environment named by `spec` around a scene with bounds `bounds`.
 pub fn environment(args: &SceneOptions, bounds: &Aabb) -> Result<Environment> {
+    if !(args.env_intensity.is_finite() && args.env_intensity >= 0.0) {
+        bail!(
+            "--env-intensity must be a finite number ≥ 0, got {}",
+            args.env_intensity
+        );
+    }
+    if !args.env_rotate.is_finite() {
+        bail!(
+            "--env-rotate must be a finite number of degrees, got {}",
+            args.env_rotate
+        );
+    }
     let uniform = match args.env.as_str() {
         "sky" => return Ok(Environment::Sky),
         "black" => Some(Vec3::ZERO),
@@ -127,9 +139,6 @@ pub fn environment(args: &SceneOptions, bounds: &Aabb) -> Result<Environment> {
     };
     if let Some(c) = uniform {
         return Ok(Environment::Constant(c * args.env_intensity));
-    }
-    if !(args.env_intensity.is_finite() && args.env_intensity >= 0.0) {
-        bail!("--env-intensity must be a finite number ≥ 0");
     }
     if !(args.env_box_scale.is_finite() && args.env_box_scale >= 1.0) {
         bail!("--env-box-scale must be at least 1 (the box must contain the scene)");

@@ -11,7 +11,7 @@ use axum::extract::{Query, State};
 use axum::http::{header, StatusCode};
 use axum::response::{IntoResponse, Response};
 use raykit_core::Vec3;
-use raykit_render::PointLight;
+use raykit_render::light_spec::{light_position_problem, point_light};
 use serde::Deserialize;
 use serde_json::json;
 use std::collections::HashMap;
@@ -60,7 +60,8 @@ pub async fn json_errors(req: axum::extract::Request, next: axum::middleware::Ne
 /// (counted again from the end of the headers) and `max_message_bytes`,
 /// before any handler sees it: a client that sends its body a byte at a
 /// time gets 408 and loses its connection instead of holding it, and a
-/// body over the limit gets 413 as before.
+/// body over the limit gets 413 (at once, unread, when its `Content-Length`
+/// says so).
 pub async fn body_in_time(
     State(state): State<Arc<AppState>>,
     req: axum::extract::Request,
@@ -69,6 +70,24 @@ pub async fn body_in_time(
     let (parts, body) = req.into_parts();
     let config = &state.config;
     let limit = config.max_message_bytes;
+    // A body announced over the limit is refused at once, unread, instead
+    // of waiting for bytes that would be refused anyway.
+    let announced = parts
+        .headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.trim().parse::<u64>().ok());
+    if let Some(n) = announced.filter(|&n| n > limit as u64) {
+        let mut res = error(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!("the request's body is {n} bytes (Content-Length), over the limit of {limit}"),
+        );
+        res.headers_mut().insert(
+            header::CONNECTION,
+            header::HeaderValue::from_static("close"),
+        );
+        return res;
+    }
     let read = tokio::time::timeout(config.header_timeout, axum::body::to_bytes(body, limit));
     match read.await {
         Ok(Ok(bytes)) => {
@@ -257,9 +276,14 @@ fn allowed_scene(state: &AppState, spec: &str) -> Result<(String, Option<PathBuf
     let Some(dir) = &state.config.scene_dir else {
         return Err("only builtin: scenes can be loaded; start the server with --scene-dir DIR to allow files in DIR".into());
     };
-    let root = dir
-        .canonicalize()
-        .map_err(|e| format!("the server's --scene-dir cannot be read: {}", e.kind()))?;
+    let root = dir.canonicalize().map_err(|e| {
+        // The folder was readable at start (`ServeConfig::problem`); its
+        // path stays out of the answer, as everywhere in this API.
+        format!(
+            "the server's --scene-dir can no longer be read ({e}): it was removed or its \
+                 permissions changed after the server started"
+        )
+    })?;
     // Names that leave the folder are refused before the file system is
     // asked, so that the answer does not tell which files exist elsewhere.
     let leaves = Path::new(spec).components().any(|c| {
@@ -472,14 +496,27 @@ pub async fn put_lights(State(state): State<Arc<AppState>>, bytes: Bytes) -> Res
             );
         }
         let (p, c) = (Vec3::from_array(l.position), Vec3::from_array(l.color));
-        if !p.is_finite() || !c.is_finite() || c.min_element() < 0.0 || c.max_element() > 1e6 {
+        if let Some(problem) = light_position_problem(p) {
             return error(
                 StatusCode::BAD_REQUEST,
-                format!("lights[{i}]: position must be finite and color within 0..=1e6"),
+                format!("lights[{i}].position: {problem}"),
             );
         }
-        let d = p.distance(center).max(1e-6);
-        lights.push(PointLight::with_irradiance_at(p, c, d).into());
+        if !c.is_finite() || c.min_element() < 0.0 || c.max_element() > 1e6 {
+            return error(
+                StatusCode::BAD_REQUEST,
+                format!("lights[{i}].color must be finite and within 0..=1e6, got {c}"),
+            );
+        }
+        match point_light(p, c, center) {
+            Ok(light) => lights.push(light),
+            Err(problem) => {
+                return error(
+                    StatusCode::BAD_REQUEST,
+                    format!("lights[{i}].color: {problem}"),
+                )
+            }
+        }
     }
     let n = lights.len();
     state.update_world(|w| w.lights = lights);

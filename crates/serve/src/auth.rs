@@ -27,7 +27,7 @@ fn presented(req: &Request) -> Vec<String> {
     let query = req.uri().query().and_then(|q| {
         q.split('&')
             .filter_map(|kv| kv.split_once('='))
-            .find(|(k, _)| *k == "token")
+            .find(|(k, _)| *k == crate::query::TOKEN)
             .map(|(_, v)| percent_decode(v))
     });
     bearer.into_iter().chain(query).collect()

@@ -2,7 +2,7 @@
 //! device-orientation mode that stands in for the Purcell-style stream tracer's tracked handheld.
 
 use raykit_core::glam::{Mat3, Quat, Vec3};
-use raykit_core::Camera;
+use raykit_core::{Camera, MAX_CAMERA_COORDINATE};
 
 /// Smallest angle (radians) kept between the view offset and the up axis, so
 /// an orbit never flips over a pole.
@@ -99,7 +99,9 @@ pub fn camera_problem(camera: &Camera) -> Option<&'static str> {
     if v.iter().any(|p| !p.is_finite()) || !camera.vfov_deg.is_finite() {
         return Some("camera numbers must be finite");
     }
-    if v.iter().any(|p| p.abs().max_element() > 1e18) {
+    if v.iter()
+        .any(|p| p.abs().max_element() > MAX_CAMERA_COORDINATE)
+    {
         return Some("camera coordinates must be below 1e18");
     }
     let offset = camera.target - camera.eye;

@@ -9,7 +9,8 @@ use std::time::Duration;
 pub struct ServeConfig {
     /// Address to listen on.
     pub addr: SocketAddr,
-    /// When set, every request needs `?token=` or `Authorization: Bearer`.
+    /// When set, every request needs `?token=` or `Authorization: Bearer`;
+    /// an empty token is refused.
     pub token: Option<String>,
     /// Most clients (WebSocket and MJPEG together).
     pub max_clients: usize,
@@ -37,7 +38,7 @@ pub struct ServeConfig {
     /// Largest scene `POST /api/scene` may load, triangles.
     pub max_scene_triangles: usize,
     /// Directory scene files may be loaded from through the API (`None`:
-    /// built-in scenes only).
+    /// built-in scenes only); it must be readable when the server starts.
     pub scene_dir: Option<PathBuf>,
     /// Time a client has to send a request's headers before its connection
     /// is closed, and again its body (408), so that connections that never
@@ -110,6 +111,17 @@ impl ServeConfig {
         }
         if self.settle > Duration::from_secs(60) {
             return Some("the settle time is at most 60 s".into());
+        }
+        if self.token.as_deref() == Some("") {
+            return Some("the token is empty: give one clients must present, or none".into());
+        }
+        if let Some(dir) = &self.scene_dir {
+            if let Err(e) = std::fs::read_dir(dir) {
+                return Some(format!(
+                    "the scene folder {} cannot be read: {e}",
+                    dir.display()
+                ));
+            }
         }
         None
     }

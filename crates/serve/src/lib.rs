@@ -44,6 +44,7 @@ pub mod link;
 pub mod load;
 mod mjpeg;
 pub mod protocol;
+mod query;
 mod runtime;
 mod session;
 pub mod stats;
@@ -68,7 +69,8 @@ use tokio::task::JoinHandle;
 
 /// The routes over `state`. The page and its script are public (they hold
 /// no data; the page forwards its `?token=` to the WebSocket); everything
-/// else is behind the token check, and API writes must be JSON.
+/// else is behind the token check, takes only the query parameters its path
+/// has, and API writes must be JSON.
 pub fn router(state: Arc<AppState>) -> Router {
     let protected = Router::new()
         .route("/ws", get(ws::handler))
@@ -85,6 +87,7 @@ pub fn router(state: Arc<AppState>) -> Router {
             state.clone(),
             api::body_in_time,
         ))
+        .layer(axum::middleware::from_fn(query::refuse_unknown))
         .layer(axum::middleware::from_fn_with_state(
             state.clone(),
             auth::require_token,

@@ -125,9 +125,27 @@ pub async fn run_load(opts: &LoadOptions) -> Result<Vec<ClientReport>> {
 async fn one_client(opts: &LoadOptions, index: usize) -> ClientReport {
     let mut report = ClientReport::default();
     if let Err(e) = drive(opts, index, &mut report).await {
-        report.errors.push(format!("{e:#}"));
+        report.errors.push(causes_once(&e));
     }
     report
+}
+
+/// `e` and its causes joined by ": ", each said once: a cause whose text the
+/// line already holds (a WebSocket error that writes its I/O error into its
+/// own message and also keeps it as its source) is left out.
+fn causes_once(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
 }
 
 async fn drive(opts: &LoadOptions, index: usize, report: &mut ClientReport) -> Result<()> {
@@ -224,5 +242,21 @@ mod tests {
         assert_eq!(percentile(&v, 99.0), Some(10.0));
         assert_eq!(percentile(&v, 0.0), Some(1.0));
         assert_eq!(percentile(&[], 50.0), None);
+    }
+
+    #[test]
+    fn a_cause_written_into_its_error_is_said_once() {
+        let refused = || std::io::Error::from(std::io::ErrorKind::ConnectionRefused);
+        let ws = tokio_tungstenite::tungstenite::Error::Io(refused());
+        let e = anyhow::Error::new(ws).context("connecting to ws://x/ws");
+        let line = causes_once(&e);
+        let io_text = refused().to_string();
+        assert_eq!(line.matches(&io_text).count(), 1, "{line}");
+        assert!(line.starts_with("connecting to ws://x/ws: "), "{line}");
+        // Distinct causes all stay.
+        let e = anyhow::Error::new(refused())
+            .context("inner")
+            .context("outer");
+        assert_eq!(causes_once(&e), format!("outer: inner: {io_text}"));
     }
 }

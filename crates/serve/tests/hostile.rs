@@ -1,6 +1,8 @@
 //! Bad and hostile input: malformed, out-of-range, binary, flooding and
 //! oversized messages get errors (or, for oversize, a 1009 close) and never
-//! stop the server or the other clients; client limits, token checks.
+//! stop the server or the other clients; client limits, token checks;
+//! unknown query parameters, bodies announced over the limit and lights
+//! beyond the camera bound are refused, as are unusable settings at start.
 
 mod support;
 
@@ -361,4 +363,143 @@ async fn shutdown_closes_sessions_with_going_away() {
         tokio::net::TcpStream::connect(addr).await.is_err(),
         "still listening"
     );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn unknown_query_parameters_are_refused_naming_them() {
+    let mut c = config();
+    c.token = Some("s3cr3t".into());
+    let server = server(c).await;
+    let before = server.state().world().full;
+    let auth = "Authorization: Bearer s3cr3t\r\n";
+    let size = r#"{"width":64,"height":48}"#;
+    for (method, path, body, name) in [
+        ("PUT", "/api/resolution?clinet=1", size, "clinet"),
+        ("GET", "/mjpeg?widht=10&height=10", "", "widht"),
+        ("GET", "/api/camera?cilent=1", "", "cilent"),
+        ("GET", "/api/status?verbose=1", "", "verbose"),
+        ("GET", "/ws?format=raw", "", "format"),
+    ] {
+        let (status, _, reply) = http(&server, method, path, auth, body).await;
+        assert_eq!(status, 400, "{method} {path}");
+        let message = json_body(&reply)["error"].as_str().unwrap().to_string();
+        assert!(message.contains(&format!("'{name}'")), "{path}: {message}");
+    }
+    // Nothing changed, and the parameters a path takes (and the token) pass.
+    assert_eq!(server.state().world().full, before);
+    let (status, _, reply) = http(&server, "PUT", "/api/resolution?token=s3cr3t", "", size).await;
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&reply));
+    assert_eq!(server.state().world().full, (64, 48));
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_body_announced_over_the_limit_is_refused_at_once() {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let mut c = config();
+    c.header_timeout = Duration::from_secs(5);
+    let limit = c.max_message_bytes;
+    let server = server(c).await;
+    let mut s = tokio::net::TcpStream::connect(server.addr()).await.unwrap();
+    let start = std::time::Instant::now();
+    let req = format!(
+        "PUT /api/lights HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n\
+         Content-Length: {}\r\n\r\n{{\"lights\":[]}}",
+        limit * 60
+    );
+    s.write_all(req.as_bytes()).await.unwrap();
+    let mut reply = Vec::new();
+    let mut buf = [0u8; 4096];
+    // The answer comes without waiting for the rest of the body.
+    while !reply.windows(4).any(|w| w == b"\r\n\r\n") {
+        let n = tokio::time::timeout(Duration::from_secs(4), s.read(&mut buf))
+            .await
+            .expect("an answer before the body timeout")
+            .unwrap();
+        assert!(n > 0, "closed without an answer");
+        reply.extend_from_slice(&buf[..n]);
+    }
+    assert!(
+        start.elapsed() < Duration::from_secs(3),
+        "{:?}",
+        start.elapsed()
+    );
+    let head = String::from_utf8_lossy(&reply);
+    assert!(head.starts_with("HTTP/1.1 413"), "{head}");
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn lights_beyond_the_camera_bound_are_refused_naming_the_field() {
+    let server = server(config()).await;
+    let (_, _, before) = http(&server, "GET", "/api/status", "", "").await;
+    let bound = raykit_core::MAX_CAMERA_COORDINATE;
+    for (lights, field) in [
+        (
+            format!(r#"{{"lights":[{{"position":[{:e},1,0]}}]}}"#, bound * 1e12),
+            "lights[0].position",
+        ),
+        (
+            format!(
+                r#"{{"lights":[{{"position":[0,1,0]}},{{"position":[0,{:e},0]}}]}}"#,
+                -bound * 10.0
+            ),
+            "lights[1].position",
+        ),
+        // Within the bound, but too bright that far: the intensity overflows.
+        (
+            format!(
+                r#"{{"lights":[{{"position":[{:e},0,0],"color":[1e6,1,1]}}]}}"#,
+                bound
+            ),
+            "lights[0].color",
+        ),
+    ] {
+        let (status, _, reply) = http(&server, "PUT", "/api/lights", "", &lights).await;
+        assert_eq!(status, 400, "{lights}");
+        let message = json_body(&reply)["error"].as_str().unwrap().to_string();
+        assert!(message.contains(field), "{lights}: {message}");
+    }
+    // The lights are as they were, each with a finite colour.
+    let (_, _, after) = http(&server, "GET", "/api/status", "", "").await;
+    assert_eq!(json_body(&before)["lights"], json_body(&after)["lights"]);
+    // A far light within the bound is kept, with the colour it was given.
+    let far = format!(
+        r#"{{"lights":[{{"position":[{:e},1,0],"color":[0.5,0.5,0.5]}}]}}"#,
+        bound / 10.0
+    );
+    let (status, _, reply) = http(&server, "PUT", "/api/lights", "", &far).await;
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&reply));
+    let (_, _, after) = http(&server, "GET", "/api/status", "", "").await;
+    let colour = &json_body(&after)["lights"][0]["color"];
+    for c in colour.as_array().unwrap() {
+        assert!((c.as_f64().unwrap() - 0.5).abs() < 1e-3, "{colour}");
+    }
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_empty_token_or_a_missing_scene_folder_is_refused_at_start() {
+    let mut c = config();
+    c.token = Some(String::new());
+    let e = raykit_serve::start(c, loader(), "builtin:cornell")
+        .await
+        .err()
+        .expect("an empty token is refused");
+    assert!(format!("{e:#}").contains("token"), "{e:#}");
+    let missing =
+        std::env::temp_dir().join(format!("raykit-no-such-folder-{}", std::process::id()));
+    let mut c = config();
+    c.scene_dir = Some(missing.clone());
+    let e = raykit_serve::start(c, loader(), "builtin:cornell")
+        .await
+        .err()
+        .expect("a missing scene folder is refused");
+    let message = format!("{e:#}");
+    let os = std::fs::read_dir(&missing).unwrap_err().to_string();
+    assert!(
+        message.contains(&missing.display().to_string()),
+        "{message}"
+    );
+    assert!(message.contains(&os), "{message}");
 }

@@ -162,7 +162,8 @@ pub struct RenderArgs {
     pub(super) aov: Vec<String>,
     /// Acceleration structure (`raykit info accels`; default bvh8, the
     /// fastest, or bvh-threaded with --backend gpu, which takes kd-stack,
-    /// bvh-threaded or brute). The summary line names the one used.
+    /// kd-ropes, bvh-threaded, cwbvh (the compressed bvh8) or brute). The
+    /// summary line names the one used.
     #[arg(long)]
     pub(super) accel: Option<String>,
     /// Render on the CPU or the GPU (same image; see below).

@@ -53,7 +53,10 @@ pub fn parse_tile(s: &str) -> Result<TileArg, String> {
         .trim()
         .parse()
         .map_err(|_| format!("'{n}' in '{s}' is not a whole number ≥ 1"))?;
-    if count == 0 || index >= count {
+    if count == 0 {
+        return Err(format!("'{s}': the count N must be at least 1"));
+    }
+    if index >= count {
         return Err(format!(
             "'{s}': the band index must be below the count (0 to {})",
             count.saturating_sub(1)
@@ -100,6 +103,12 @@ mod tests {
         for bad in ["5/5", "1/0", "a/2", "3", "-1/2"] {
             assert!(parse_tile(bad).is_err(), "{bad}");
         }
+        // A zero count is named as such, not as an index out of 0 to 0.
+        let zero = parse_tile("0/0").unwrap_err();
+        assert!(
+            zero.contains("at least 1") && !zero.contains("0 to"),
+            "{zero}"
+        );
         assert_eq!(parse_frames("3..7"), Ok(FrameRange { start: 3, end: 7 }));
         assert_eq!(parse_frames("3..=7"), Ok(FrameRange { start: 3, end: 8 }));
         for bad in ["7..3", "3..3", "3", "a..4"] {

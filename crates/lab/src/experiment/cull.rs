@@ -1,5 +1,5 @@
 //! `raykit experiment cull`: culling measured on this machine — the
-//! ray-traced default (`cull_by_rays`) and Min's (2008) grid method (grid
+//! ray-traced mode (`cull_by_rays`) and Min's (2008) grid method (grid
 //! resolution, parts and triangles hidden, removal rate, distance-field and
 //! propagation times) for Min's rule and our conservative mode — with false
 //! and missed removals against the ray-traced ground truth.
@@ -18,7 +18,7 @@ use raykit_cull::synthetic::{
 };
 use raykit_cull::{
     compare, cull, cull_by_rays, evaluate_with_progress, CullOptions, CullResult, EvalOptions,
-    RayOptions,
+    Grid, RayOptions,
 };
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -42,17 +42,20 @@ shells, a box with a slit 1/500 of its size wide, a box of 1,000 spheres with 1,
 triangles, eight engines in a closed shell of 100 x 100 squares per face: 1,091,968 triangles),\n\
 the same shell with a 20 x 20-square hole (ground truth by rays) and the engine instanced 3 x 3\n\
 (1,093,464 triangles, no ground truth: too slow to evaluate).\n\
-Each model is culled by rays (the default of `raykit cull`), and at every resolution by Min's\n\
-(2008) rule and by the conservative grid mode; times are medians of --reps runs. The ground truth is `raykit cull --evaluate`'s\n\
+Each model is culled by rays (`raykit cull --mode rays`), and at every resolution by Min's\n\
+(2008) rule (`--mode paper`) and by the conservative grid mode (`--mode conservative`, the\n\
+default of `raykit cull`); times are medians of --reps runs. The ground truth is `raykit cull --evaluate`'s\n\
 (rays from the surface and renders from 10,000+ viewpoints, doubled until stable) or the\n\
 known answer. Writes results.csv, results.md and SVG plots into --out; exit status 1 when\n\
 the conservative mode removed a truly visible triangle."
 )]
 pub struct CullExperimentArgs {
-    /// Grid resolutions (points along the longest axis).
-    #[arg(long, value_delimiter = ',', default_value = "64,128,256")]
-    resolutions: Vec<usize>,
-    /// Repetitions of every timing (the median is reported).
+    /// Grid resolutions (points along the longest axis), each in 5..=1024
+    /// as `raykit cull --resolution` takes it.
+    #[arg(long, value_delimiter = ',', default_value = "64,128,256",
+          value_parser = clap::value_parser!(u32).range(Grid::MIN_RESOLUTION as i64..=Grid::MAX_RESOLUTION as i64))]
+    resolutions: Vec<u32>,
+    /// Repetitions of every timing (the median is reported); 1 to 1000.
     #[arg(long, default_value_t = 3)]
     reps: usize,
     /// Most rounds of the ground truth (see `raykit cull --eval-rounds`).
@@ -113,6 +116,7 @@ struct Row {
 
 /// Run the experiment.
 pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
+    crate::args::ranges::reps(args.reps)?;
     let head = super::provenance();
     let models = models(&args)?;
     let mut rows = Vec::new();
@@ -134,7 +138,7 @@ pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
         );
         let truth = truth_of(&m, args.eval_rounds as usize);
         rows.push(measure_rays(&m, &truth, args.reps)?);
-        for &res in &args.resolutions {
+        for res in args.resolutions.iter().map(|&r| r as usize) {
             let mut modes = vec![
                 ("paper", CullOptions::paper(res)),
                 ("conservative", CullOptions::conservative(res)),
@@ -318,7 +322,7 @@ fn truth_of(m: &Model, rounds: usize) -> Truth {
     Truth::Labels(g.visible, note)
 }
 
-/// One row for the ray-traced default (no grid: resolution 0).
+/// One row for the ray-traced mode (no grid: resolution 0).
 fn measure_rays(m: &Model, truth: &Truth, reps: usize) -> Result<Row> {
     let mut totals = Vec::new();
     let mut result: Option<CullResult> = None;

@@ -10,6 +10,7 @@
 use super::{cached_dragon, gpu_terrain, shared_mesh, write_csv, write_text};
 use crate::args::backend::{cpu_twin, open_gpu};
 use crate::args::build_args::BuildArgs;
+use crate::args::ranges::image_side;
 use crate::args::scene_arg;
 use crate::bench::gpu::gpu_lists;
 use crate::gpu_measure::{measure, Workload, SETS};
@@ -38,7 +39,8 @@ pub struct GpuExperimentArgs {
     /// Meshes (file or builtin:NAME); repeat the option for several.
     #[arg(long)]
     mesh: Vec<String>,
-    /// Image side of the ray sets (SIZE² primary and incoherent rays).
+    /// Image side of the ray sets (SIZE² primary and incoherent rays), 1 to
+    /// 16384.
     #[arg(long, default_value_t = 512)]
     size: u32,
     /// Timed runs of every measurement, after two warm-up runs (the median
@@ -156,7 +158,19 @@ fn default_meshes() -> Vec<String> {
 
 /// Run the experiment.
 pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
+    image_side("--size", args.size)?;
     let (accels, tests) = gpu_lists(&args.accel, &args.test)?;
+    let dems = match args.dem.as_slice() {
+        [] => default_dems(),
+        [n] if n == "none" => Vec::new(),
+        d => d.to_vec(),
+    };
+    // Every DEM is read before the meshes are measured, so that a missing
+    // or broken file is refused at once rather than after the long part.
+    let dems = dems
+        .iter()
+        .map(|d| gpu_terrain::load(d))
+        .collect::<Result<Vec<_>>>()?;
     let ctx = open_gpu()?;
     let meshes = if args.mesh.is_empty() {
         default_meshes()
@@ -257,14 +271,9 @@ pub fn run(args: GpuExperimentArgs) -> Result<ExitCode> {
         }
         bar.finish_and_clear();
     }
-    let dems = match args.dem.as_slice() {
-        [] => default_dems(),
-        [n] if n == "none" => Vec::new(),
-        d => d.to_vec(),
-    };
     let mut terrain = Vec::new();
     for dem in &dems {
-        eprintln!("terrain: {dem}…");
+        eprintln!("terrain: {}…", dem.path());
         terrain.push(all.install(|| gpu_terrain::measure_dem(&ctx, dem, args.terrain_view, reps))?);
     }
     let mut md = markdown(&rows, &args, &ctx.describe(), all.current_num_threads());

@@ -48,27 +48,57 @@ fn oblique(field: &HeightField, width: u32, height: u32) -> TerrainCamera {
     }
 }
 
-/// Measure one DEM.
+/// A DEM loaded for [`measure_dem`]: its path as given and its height field.
+pub struct LoadedDem {
+    path: String,
+    field: HeightField,
+}
+
+impl LoadedDem {
+    /// The path the DEM was loaded from.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+}
+
+/// Load the DEM at `path` (`--dem`), so that a missing or unreadable file is
+/// refused before the long measurements start.
+pub fn load(path: &str) -> Result<LoadedDem> {
+    let dem = load_dem(path, &LoadOptions::default()).map_err(|e| {
+        // The loader's message names the file itself.
+        let e = e.to_string();
+        anyhow!(
+            "--dem {path}: {}",
+            e.strip_prefix(&format!("{path}: ")).unwrap_or(&e)
+        )
+    })?;
+    let field = HeightField::new(&dem).map_err(|e| anyhow!("--dem {path}: {e}"))?;
+    Ok(LoadedDem {
+        path: path.to_string(),
+        field,
+    })
+}
+
+/// Measure one loaded DEM.
 pub fn measure_dem(
     ctx: &GpuContext,
-    path: &str,
+    dem: &LoadedDem,
     (width, height): (u32, u32),
     reps: usize,
 ) -> Result<TerrainRow> {
-    let dem = load_dem(path, &LoadOptions::default()).map_err(|e| anyhow!("{e}"))?;
-    let field = HeightField::new(&dem).map_err(|e| anyhow!("{path}: {e}"))?;
-    let pyramid = MaxMipmap::new(&field);
-    let cam = oblique(&field, width, height);
+    let (path, field) = (dem.path.as_str(), &dem.field);
+    let pyramid = MaxMipmap::new(field);
+    let cam = oblique(field, width, height);
     let gpu = |e: raykit_gpu::GpuError| anyhow!("{path}: {e}");
-    let g_max = time_terrain_casts(ctx, &field, &pyramid, &cam, reps).map_err(gpu)?;
-    let g_box = time_terrain_boxes(ctx, &field, &pyramid, &cam, 16.0, reps).map_err(gpu)?;
+    let g_max = time_terrain_casts(ctx, field, &pyramid, &cam, reps).map_err(gpu)?;
+    let g_box = time_terrain_boxes(ctx, field, &pyramid, &cam, 16.0, reps).map_err(gpu)?;
     let rays = width as f64 * height as f64;
     let mut spread: f64 = 0.0;
     let mut cpu = |caster: Caster| {
         let times: Vec<f64> = (0..reps.max(1))
             .map(|_| {
                 let start = Instant::now();
-                std::hint::black_box(cast_image(&field, &pyramid, &cam, caster));
+                std::hint::black_box(cast_image(field, &pyramid, &cam, caster));
                 start.elapsed().as_secs_f64()
             })
             .collect();

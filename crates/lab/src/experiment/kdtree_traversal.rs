@@ -5,6 +5,7 @@
 
 use super::{cached_dragon, shared_mesh, write_csv, write_text};
 use crate::args::build_args::BuildArgs;
+use crate::args::ranges::{self, image_side};
 use crate::args::scene_arg;
 use crate::measure::{median_min_max, pool, timed};
 use anyhow::Result;
@@ -34,10 +35,11 @@ pub struct KdTraversalArgs {
     /// Meshes (file or builtin:NAME); repeat the option for several.
     #[arg(long)]
     mesh: Vec<String>,
-    /// Image side: SIZE² primary rays (shaded) and their shadow rays.
+    /// Image side: SIZE² primary rays (shaded) and their shadow rays; 1 to
+    /// 16384.
     #[arg(long, default_value_t = 512)]
     size: u32,
-    /// Repetitions of every measurement (the median is reported).
+    /// Repetitions of every measurement (the median is reported); 1 to 1000.
     #[arg(long, default_value_t = 3)]
     reps: usize,
     /// Threads (single-kernel GPU variants are compared; 1 thread
@@ -107,6 +109,8 @@ fn default_meshes() -> Vec<String> {
 
 /// Run the experiment.
 pub fn run(args: KdTraversalArgs) -> Result<ExitCode> {
+    image_side("--size", args.size)?;
+    let reps = ranges::reps(args.reps)?;
     let meshes = if args.mesh.is_empty() {
         default_meshes()
     } else {
@@ -114,7 +118,6 @@ pub fn run(args: KdTraversalArgs) -> Result<ExitCode> {
     };
     let opts = args.build.options();
     let threads = pool(args.threads)?;
-    let reps = args.reps.max(1);
     let mut memory = Vec::new();
     let mut speed = Vec::new();
     for spec in &meshes {

@@ -63,14 +63,14 @@ pub struct ServeExperimentArgs {
     /// Drive the server at this WebSocket URL instead of starting one.
     #[arg(long, value_name = "URL")]
     pub(super) connect: Option<String>,
-    /// Frame payload with --connect.
-    #[arg(long, value_enum, default_value_t = LinkFormat::Jpeg)]
+    /// Frame payload; only with --connect.
+    #[arg(long, value_enum, default_value_t = LinkFormat::Jpeg, requires = "connect")]
     pub(super) format: LinkFormat,
-    /// JPEG quality to ask for with --connect (default: the server's).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=100))]
+    /// JPEG quality to ask for (default: the server's); only with --connect.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=100), requires = "connect")]
     pub(super) quality: Option<u8>,
-    /// Seconds not counted at the start with --connect.
-    #[arg(long, default_value_t = 2.0)]
+    /// Seconds not counted at the start; only with --connect.
+    #[arg(long, default_value_t = 2.0, requires = "connect")]
     pub(super) warmup: f64,
 }
 

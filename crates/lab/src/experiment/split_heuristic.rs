@@ -3,6 +3,7 @@
 
 use super::{shared_mesh, write_csv, write_text};
 use crate::args::build_args::BuildArgs;
+use crate::args::ranges::{self, image_side, in_range};
 use crate::args::scene_arg;
 use crate::measure::{median_min_max, pool, timed};
 use crate::plot::{write_svg, LineChart, Series};
@@ -35,13 +36,13 @@ pub struct SplitHeuristicArgs {
     /// Mesh file or builtin:NAME.
     #[arg(long)]
     mesh: Option<String>,
-    /// Image side of the primary ray set (SIZE² rays).
+    /// Image side of the primary ray set (SIZE² rays); 1 to 16384.
     #[arg(long, default_value_t = 256)]
     size: u32,
-    /// Random view frustums per query-speed measurement.
+    /// Random view frustums per query-speed measurement; 1 to 100000.
     #[arg(long, default_value_t = 40)]
     frustums: usize,
-    /// Repetitions of every timing (the median is reported).
+    /// Repetitions of every timing (the median is reported); 1 to 1000.
     #[arg(long, default_value_t = 3)]
     reps: usize,
     /// Threads (1 gives the steadiest figures).
@@ -84,12 +85,19 @@ struct Row {
     frustum_disagreements: usize,
 }
 
+/// The most random view frustums (`--frustums`): each is drawn once per
+/// tree and repetition.
+const MAX_FRUSTUMS: usize = 100_000;
+
 /// Size of the frames drawn after frustum culling (16:9, as the frustums).
 const FRAME_WIDTH: u32 = 512;
 const FRAME_HEIGHT: u32 = 288;
 
 /// Run the experiment.
 pub fn run(args: SplitHeuristicArgs) -> Result<ExitCode> {
+    image_side("--size", args.size)?;
+    let reps = ranges::reps(args.reps)?;
+    in_range("--frustums", args.frustums, 1, MAX_FRUSTUMS)?;
     let spec = args
         .mesh
         .clone()
@@ -97,7 +105,6 @@ pub fn run(args: SplitHeuristicArgs) -> Result<ExitCode> {
     let scene = scene_arg::load(&spec)?;
     let mesh = &scene.mesh;
     let threads = pool(args.threads)?;
-    let reps = args.reps.max(1);
     let base = args.build.options();
     let camera = raysets::standard_camera(mesh);
     let rays = raysets::primary(&camera, args.size);

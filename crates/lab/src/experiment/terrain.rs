@@ -7,6 +7,7 @@
 //! differ.
 
 use super::{write_csv, write_text};
+use crate::args::ranges::{self, image_side, in_range};
 use crate::measure::{median_min_max, median_ms, timed};
 use crate::plot::{write_svg, LineChart, Series};
 use anyhow::{bail, Context, Result};
@@ -34,6 +35,9 @@ const PAPER_TABLE1: [(f64, f64, f64); 11] = [
     (4096.0, 1.0, 0.111),
 ];
 
+/// The most views of part (a)'s fly-through (`--flythrough`).
+const MAX_VIEWS: usize = 1000;
+
 /// Arguments of `raykit experiment terrain`.
 #[derive(Args)]
 #[command(
@@ -46,10 +50,10 @@ pub struct TerrainExperimentArgs {
     /// Side of the generated DEM of parts (a) and (c).
     #[arg(long, default_value_t = 4096)]
     size: usize,
-    /// Image width of part (a).
+    /// Image width of part (a), 1 to 16384.
     #[arg(long, default_value_t = 1600)]
     width: u32,
-    /// Image height of part (a).
+    /// Image height of part (a), 1 to 16384.
     #[arg(long, default_value_t = 900)]
     height: u32,
     /// τ values of part (a).
@@ -64,11 +68,12 @@ pub struct TerrainExperimentArgs {
     shadow_sizes: Vec<usize>,
     /// Views of part (a): 1 is the single view of Table 1 of the quadtree terrain ray-casting paper; more
     /// fly along the DEM's diagonal (each view moved by an equal step to the
-    /// north-east, same direction), and part (a) reports the average frame.
+    /// north-east, same direction), and part (a) reports the average frame;
+    /// 1 to 1000.
     #[arg(long, default_value_t = 1)]
     flythrough: usize,
-    /// Repetitions (medians are reported); the brute-force shadow masks of
-    /// DEMs above 1024² run once.
+    /// Repetitions (medians are reported), 1 to 1000; the brute-force shadow
+    /// masks of DEMs above 1024² run once.
     #[arg(long, default_value_t = 3)]
     reps: usize,
     /// Parts to run: any of a, b, c.
@@ -277,9 +282,9 @@ fn part_a(args: &TerrainExperimentArgs, dem: &Dem) -> Result<Vec<CastRow>> {
         eprintln!("(a) boxes, tau {tau}");
         let (img, t) = run(Caster::Boxes { tau });
         let (ms, noise) = median_ms(&t);
-        if tau == 16.0 {
+        if heat_tau(&args.taus) == Some(tau) {
             write_heatmap(
-                &args.out.join("heat-boxes-tau16.png"),
+                &args.out.join(boxes_heatmap_name(tau)),
                 &img[0],
                 args.width,
                 args.height,
@@ -515,6 +520,10 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
     if args.taus.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         bail!("--taus must be positive numbers");
     }
+    image_side("--width", args.width)?;
+    image_side("--height", args.height)?;
+    ranges::reps(args.reps)?;
+    in_range("--flythrough", args.flythrough, 1, MAX_VIEWS)?;
     if let Some(p) = args.parts.iter().find(|p| !"abc".contains(**p)) {
         bail!("--parts: unknown part '{p}'; the parts are a, b and c");
     }
@@ -598,8 +607,25 @@ fn part_a_table(args: &TerrainExperimentArgs, a: &[CastRow]) -> String {
             r.pixels_differing_from_march
         );
     }
-    md += "\nHeat maps (steps per ray, same scale): heat-march.png, heat-maxmip.png, heat-boxes-tau16.png.\n\n";
+    md += "\nHeat maps (steps per ray, same scale): heat-march.png, heat-maxmip.png";
+    if let Some(tau) = heat_tau(&args.taus) {
+        md += &format!(", {}", boxes_heatmap_name(tau));
+    }
+    md += ".\n\n";
     md
+}
+
+/// The τ whose box method gets a heat map: 16 (the paper's best) when it is
+/// among `taus`, else the nearest one on a log scale; `None` without τ values.
+fn heat_tau(taus: &[f64]) -> Option<f64> {
+    taus.iter()
+        .copied()
+        .min_by(|a, b| (a.log2() - 4.0).abs().total_cmp(&(b.log2() - 4.0).abs()))
+}
+
+/// The file name of the box method's heat map at `tau`.
+fn boxes_heatmap_name(tau: f64) -> String {
+    format!("heat-boxes-tau{tau}.png")
 }
 
 /// Part (b)'s table.
