@@ -6,6 +6,7 @@ mod error_message;
 mod instanced_arg;
 mod paths;
 mod stage;
+mod stdout_errors;
 
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -53,6 +54,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    stdout_errors::install();
     let cli = Cli::parse();
     if !matches!(cli.command, Command::Serve(_)) {
         remove_unfinished_outputs_on_stop();

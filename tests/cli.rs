@@ -532,7 +532,7 @@ fn unusable_numbers_are_refused_by_their_flag() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.png");
     let o = s(&out);
-    let runs: [(&[&str], &str); 12] = [
+    let runs: [(&[&str], &str); 14] = [
         (
             &[
                 "render",
@@ -618,6 +618,14 @@ fn unusable_numbers_are_refused_by_their_flag() {
             ],
             "give --backend gpu",
         ),
+        (
+            &["tjunctions", "builtin:cornell", o, "--max-rounds", "0"],
+            "--max-rounds",
+        ),
+        (
+            &["bench", "--compare", "embree", "--backend", "gpu"],
+            "does not take --backend gpu",
+        ),
     ];
     for (args, needle) in runs {
         let r = raykit(args);
@@ -695,4 +703,38 @@ fn an_unusable_scene_camera_is_named_as_the_scenes() {
     );
     let o = render(&["--eye", "0.3,0.3,2", "--target", "0.3,0.3,0"]);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// A standard output that cannot take the report (a full disk: Linux's
+/// /dev/full) is an error naming stdout with status 1, not a panic; the
+/// mesh a command wrote before its report stays whole.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_stdout_is_an_error_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("welded.obj");
+    let teapot = teapot();
+    for args in [
+        vec!["info", "accels"],
+        vec!["tjunctions", s(&teapot), s(&out), "--json"],
+    ] {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_raykit"))
+            .args(&args)
+            .stdout(full)
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains("raykit: error: stdout: "), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    let written = raykit_io::load_mesh(&out).unwrap();
+    assert_eq!(
+        written.num_triangles(),
+        raykit_io::load_mesh(&teapot).unwrap().num_triangles()
+    );
 }

@@ -53,8 +53,8 @@ pub struct TJunctionsArgs {
     ulps: f64,
     /// Most find + re-triangulate rounds (later rounds fix what the first
     /// one exposes).
-    #[arg(long, default_value_t = 4)]
-    max_rounds: usize,
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    max_rounds: u64,
     /// Worker threads (0 = one per core; at most 4096).
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -106,7 +106,7 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
     let opts = TJunctionOptions {
         tolerance: args.tolerance,
         ulps: args.ulps,
-        max_rounds: args.max_rounds,
+        max_rounds: args.max_rounds as usize,
     };
     let method = match args.method {
         MethodArg::Fast => Method::Fast,

@@ -31,12 +31,26 @@ fn unit_scale(
 /// Build the structure `kind` over `mesh` with triangle test `test`; over
 /// the mesh at unit scale when it is tiny, and moved to the origin when it
 /// is far from it and the test needs it ([`UnitScaled`]).
+///
+/// # Panics
+///
+/// When a triangle names a vertex `mesh` does not have, naming it. The
+/// loaders and [`TriangleMesh::from_arrays`] never make such a mesh;
+/// [`TriangleMesh::validate`] finds one made by hand.
 pub fn build_accel(
     kind: AccelKind,
     test: TestKind,
     mesh: &TriangleMesh,
     options: &BuildOptions,
 ) -> Box<dyn Accel> {
+    let vertices = mesh.positions.len();
+    if let Some((t, i)) = mesh.indices.iter().enumerate().find_map(|(t, tri)| {
+        tri.iter()
+            .find(|&&i| i as usize >= vertices)
+            .map(|&i| (t, i))
+    }) {
+        panic!("build_accel: triangle {t} names vertex {i}, but the mesh has {vertices} vertices");
+    }
     let (scale, scaled) = unit_scale(test, mesh);
     let mesh = &*scaled;
     let accel = with_test!(test, T => match kind {
@@ -94,4 +108,35 @@ pub fn kd_accel_from_tree(
             _ => return None,
         })
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Vec3;
+
+    /// A mesh made by hand with an index past its vertices is refused by
+    /// name, by every structure, rather than with a bare index panic.
+    #[test]
+    fn a_triangle_naming_a_missing_vertex_is_named() {
+        let mesh = TriangleMesh::new(
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            vec![[0, 1, 2], [0, 1, 7]],
+        );
+        assert!(mesh.validate().is_err());
+        for kind in AccelKind::ALL {
+            let built = std::panic::catch_unwind(|| {
+                build_accel(kind, TestKind::Moller, &mesh, &BuildOptions::default())
+            });
+            let message = built.err().expect("refused");
+            let message = message
+                .downcast_ref::<String>()
+                .cloned()
+                .unwrap_or_default();
+            assert!(
+                message.contains("triangle 1 names vertex 7, but the mesh has 3 vertices"),
+                "{kind:?}: {message}"
+            );
+        }
+    }
 }

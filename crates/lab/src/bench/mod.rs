@@ -136,25 +136,35 @@ fn parse_list<K: Copy>(
     if s == "all" {
         return Ok(all.to_vec());
     }
-    s.split(',')
-        .map(|n| {
-            all.iter()
-                .copied()
-                .find(|k| name(*k) == n.trim())
-                .ok_or_else(|| {
-                    let names: Vec<_> = all.iter().map(|k| name(*k)).collect();
-                    anyhow!(
-                        "unknown {what} '{n}'; expected `all` or some of: {}",
-                        names.join(", ")
-                    )
-                })
-        })
-        .collect()
+    let mut chosen: Vec<K> = Vec::new();
+    for n in s.split(',') {
+        let k = all
+            .iter()
+            .copied()
+            .find(|k| name(*k) == n.trim())
+            .ok_or_else(|| {
+                let names: Vec<_> = all.iter().map(|k| name(*k)).collect();
+                anyhow!(
+                    "unknown {what} '{n}'; expected `all` or some of: {}",
+                    names.join(", ")
+                )
+            })?;
+        // A name given twice is measured once.
+        if !chosen.iter().any(|c| name(*c) == name(k)) {
+            chosen.push(k);
+        }
+    }
+    Ok(chosen)
 }
 
 /// Run the benchmark.
 pub fn run(args: BenchArgs) -> Result<ExitCode> {
     if let Some(engine) = &args.compare {
+        if args.backend == Backend::Gpu {
+            anyhow::bail!(
+                "--compare {engine} measures the CPU engines; it does not take --backend gpu"
+            );
+        }
         return compare(&args, engine);
     }
     let [mesh_spec] = &args.mesh[..] else {

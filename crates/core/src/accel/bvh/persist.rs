@@ -322,7 +322,12 @@ pub(crate) fn save<B: WideParts>(
 ) -> Result<(), PersistError> {
     let fault = Fault(path);
     let p = bvh.parts();
-    check_mesh(mesh, p.stats.triangle_refs).map_err(|e| fault.at(0, "mesh", e.to_string()))?;
+    check_mesh(mesh, p.stats.triangle_refs).map_err(|e| {
+        let e = e.to_string();
+        let detail = e.strip_prefix("refit: ").unwrap_or(&e);
+        let hint = "pass the mesh the tree was built over or last refit to";
+        fault.at(0, "mesh", format!("saving: {detail}; {hint}"))
+    })?;
     check_tree_matches_mesh(p.leaves, mesh, &fault)?;
     let built_sah = p.built_sah.unwrap_or_else(|| stored_sah(&p));
     let (mut head, meta, _) = header_and_meta(B::KIND, &p, mesh, built_sah);
