@@ -113,6 +113,26 @@ impl UnitScale {
         (scale, scale.mesh(mesh))
     }
 
+    /// The scale as five `f32` bit patterns (the factor's two powers of
+    /// two, the offset), as a saved structure records it.
+    pub(crate) fn to_words(self) -> [u32; 5] {
+        let (a, b) = self.factor;
+        let o = self.offset;
+        [a, b, o.x, o.y, o.z].map(f32::to_bits)
+    }
+
+    /// The scale [`Self::to_words`] recorded; `None` for words that are no
+    /// scale (a factor not a positive power of two, or not finite).
+    pub(crate) fn from_words(w: [u32; 5]) -> Option<Self> {
+        let [a, b, x, y, z] = w.map(f32::from_bits);
+        let power = |f: f32| f.is_finite() && f > 0.0 && f.to_bits() & 0x007f_ffff == 0;
+        let offset = Vec3::new(x, y, z);
+        (power(a) && power(b) && offset.is_finite()).then_some(UnitScale {
+            factor: (a, b),
+            offset,
+        })
+    }
+
     /// Whether this is no scaling at all.
     pub fn is_one(self) -> bool {
         self == UnitScale::ONE

@@ -473,3 +473,73 @@ fn tiny_meshes_round_trip_and_refit() {
         }
     }
 }
+
+/// A tree `build_accel` made over a tiny mesh (scaled to unit size) or a far
+/// one (moved to the origin for Plücker and projection), refit to moved
+/// vertices or not, loads again through `load_accel` over the mesh as given,
+/// with the built tree's answers; the structure's own `load` refuses such a
+/// file by name, and `load_accel` loads a file the structure saved itself.
+#[test]
+fn scaled_and_moved_trees_load_through_load_accel() {
+    use raykit_core::accel::{build_accel, load_accel, AccelKind};
+    use raykit_core::tri::TestKind;
+    use raykit_core::Vec3;
+    let sphere = small_sphere();
+    let placed = |scale: f32, offset: Vec3| {
+        let mut m = sphere.clone();
+        for p in &mut m.positions {
+            *p = *p * scale + offset;
+        }
+        m
+    };
+    let cases = [
+        ("tiny", placed(1e-6, Vec3::ZERO), TestKind::Moller),
+        (
+            "far",
+            placed(1.0, Vec3::new(1e5, 1e5, 0.0)),
+            TestKind::Plucker,
+        ),
+        (
+            "far-projection",
+            placed(1.0, Vec3::new(-3e5, 0.0, 2e5)),
+            TestKind::Projection,
+        ),
+    ];
+    for (name, mesh, test) in cases {
+        let mut moved = mesh.clone();
+        let lo = mesh.bounds();
+        let shift = (lo.max - lo.min) * 0.125;
+        for p in &mut moved.positions {
+            *p += Vec3::new(shift.x * (p.y - lo.min.y).signum(), 0.0, 0.0);
+        }
+        for (refit, now) in [(false, &mesh), (true, &moved)] {
+            let mut built = build_accel(AccelKind::Bvh8, test, &mesh, &BuildOptions::default());
+            if refit {
+                built.refit(&moved).unwrap();
+            }
+            let path = scratch(&format!("scaled-{name}-{refit}.bvh8"));
+            built.save(&path, now).unwrap();
+            let (_, _, loaded) =
+                load_accel(&path, now).unwrap_or_else(|e| panic!("{name}, refit {refit}: {e}"));
+            let brute = BruteForce::<Moller>::new(now);
+            let rays = rays(now, 2000, 5);
+            same_answers(&*loaded, &*built, &brute, &rays);
+            let plain = match test {
+                TestKind::Moller => Bvh8::<Moller>::load(&path, now).map(|_| ()),
+                TestKind::Plucker => Bvh8::<Plucker>::load(&path, now).map(|_| ()),
+                TestKind::Projection => Bvh8::<Projection>::load(&path, now).map(|_| ()),
+            };
+            let e = plain
+                .expect_err("a scaled tree through the plain load")
+                .to_string();
+            assert!(e.contains("load it with load_accel"), "{name}: {e}");
+        }
+        // Saved by the structure itself, over the mesh as given.
+        let own = Bvh8::<Moller>::build(&mesh, &BuildOptions::default());
+        let path = scratch(&format!("scaled-{name}-own.bvh8"));
+        own.save(&path, &mesh).unwrap();
+        let (_, _, loaded) = load_accel(&path, &mesh).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let brute = BruteForce::<Moller>::new(&mesh);
+        same_answers(&*loaded, &own, &brute, &rays(&mesh, 2000, 6));
+    }
+}

@@ -109,12 +109,26 @@ pub trait Accel: Send + Sync {
 
     /// Save the built structure to `path`, `mesh` being the mesh it was
     /// built over or last refit to, in the versioned, checksummed format
-    /// of `bvh/persist.rs`, loaded again by [`load_accel`] or the
-    /// structure's own `load`. The wide BVHs ([`Bvh4`], [`Bvh8`]) have a
-    /// saved form; the other structures refuse with
-    /// [`PersistError::Unsupported`].
+    /// of `bvh/persist.rs`, loaded again by [`load_accel`] (or by the
+    /// structure's own `load` when it was built over the mesh as given, not
+    /// scaled or moved as [`build_accel`] does tiny and far meshes). The
+    /// wide BVHs ([`Bvh4`], [`Bvh8`]) have a saved form; the other
+    /// structures refuse with [`PersistError::Unsupported`].
     fn save(&self, path: &std::path::Path, mesh: &TriangleMesh) -> Result<(), PersistError> {
-        let _ = (path, mesh);
+        self.save_at_scale(path, mesh, crate::UnitScale::ONE)
+    }
+
+    /// [`Accel::save`] of a structure built over the model at `scale`
+    /// (`mesh` being the scaled model, as [`UnitScaled`] holds it): the
+    /// file records the scale, so that [`load_accel`] loads it again over
+    /// the model as given, whatever its vertices then.
+    fn save_at_scale(
+        &self,
+        path: &std::path::Path,
+        mesh: &TriangleMesh,
+        scale: crate::UnitScale,
+    ) -> Result<(), PersistError> {
+        let _ = (mesh, scale);
         Err(PersistError::Unsupported {
             path: path.to_path_buf(),
         })

@@ -75,12 +75,17 @@ pub fn load_accel(
     mesh: &TriangleMesh,
 ) -> Result<(AccelKind, TestKind, Box<dyn Accel>), PersistError> {
     let (kind, test) = super::bvh::saved_kind(path)?;
-    let (scale, scaled) = unit_scale(test, mesh);
+    // The scale the file records (files that predate the record: the one
+    // build_accel would choose for this mesh).
+    let (scale, scaled) = match super::bvh::saved_scale(path)? {
+        Some(s) => (s, s.mesh(mesh)),
+        None => unit_scale(test, mesh),
+    };
     let mesh = &*scaled;
     with_test!(test, T => {
         let accel = match kind {
-            AccelKind::Bvh4 => Box::new(Bvh4::<T>::load(path, mesh)?) as Box<dyn Accel>,
-            _ => Box::new(Bvh8::<T>::load(path, mesh)?),
+            AccelKind::Bvh4 => Box::new(Bvh4::<T>::load_scaled(path, mesh)?) as Box<dyn Accel>,
+            _ => Box::new(Bvh8::<T>::load_scaled(path, mesh)?),
         };
         Ok((kind, test, UnitScaled::wrap(accel, scale)))
     })

@@ -71,7 +71,8 @@ impl<A: Accel + ?Sized> Accel for UnitScaled<A> {
     /// Saved over the model at unit scale, as [`super::load_accel`] loads
     /// it again.
     fn save(&self, path: &std::path::Path, mesh: &TriangleMesh) -> Result<(), PersistError> {
-        self.inner.save(path, &self.scale.mesh(mesh))
+        self.inner
+            .save_at_scale(path, &self.scale.mesh(mesh), self.scale)
     }
 
     /// Refit at the scale the structure was built at.

@@ -77,6 +77,7 @@ pub use build::{BuildOptions, BuildQuality};
 pub use bvh2::Bvh2;
 pub use node4::Node4;
 pub use node8::Node8;
+pub(crate) use persist::saved_scale;
 pub use persist::{saved_kind, FORMAT_VERSION, MAGIC};
 pub use persist_error::PersistError;
 pub use refit_report::{RefitError, RefitReport, DEFAULT_MAX_DEGRADATION};

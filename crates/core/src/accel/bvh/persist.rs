@@ -35,7 +35,7 @@
 //! | 80 | 8 | payload bytes |
 //! | 88 | 4 | CRC-32 of bytes 0..88 |
 //! | 92 | 4 | reserved, 0 |
-//! | 96 | 96 | root reference (index, count: `u32`), root box (min, max: 6 `f32`), SAH cost as built (`f64`), SAH cost now (`f64`), 48 bytes 0 |
+//! | 96 | 96 | root reference (index, count: `u32`), root box (min, max: 6 `f32`), SAH cost as built (`f64`), SAH cost now (`f64`), the scale the tree was built at ([`UnitScale`]: its factor as two `f32` powers of two, then the offset as three `f32`; one and zero for a tree over the mesh as given, all zero in files that predate it), 28 bytes 0 |
 //! | 192 | nodes × node bytes | inner nodes: per node the slot boxes as six rows (min x, max x, min y, max y, min z, max z) of one `f32` per slot, then per slot the child reference (index, count: `u32`; `u32::MAX, 0` for an unused slot; count 0 for an inner node, else a leaf of count triangles) |
 //! | … | units × unit bytes | packs of four triangles (first corners, first edges, second edges as three rows of four `f32` each, the edges' largest components (two rows of four `f32`), the mesh triangle per lane (`u32`, `u32::MAX` unused)), or the mesh triangle of each leaf position (`u32`) |
 //!
@@ -64,6 +64,7 @@ use crate::accel::node_box::NodeBox;
 use crate::accel::{AccelKind, AccelStats};
 use crate::mesh::TriangleMesh;
 use crate::tri::{Moller, TestKind, TriangleTest};
+use crate::unit_scale::UnitScale;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -199,6 +200,7 @@ fn header_and_meta<N: WideNode, T: TriangleTest>(
     p: &PartsRef<'_, N, T>,
     mesh: &TriangleMesh,
     built_sah: f64,
+    scale: UnitScale,
 ) -> ([u8; HEADER], [u8; META], usize) {
     let (form, unit_bytes, units) = leaf_layout(p.leaves);
     let node_bytes = std::mem::size_of::<N>();
@@ -212,6 +214,9 @@ fn header_and_meta<N: WideNode, T: TriangleTest>(
     }
     m.u64(built_sah.to_bits());
     m.u64(p.stats.sah_cost.to_bits());
+    for w in scale.to_words() {
+        m.u32(w);
+    }
     let mut head = [0u8; HEADER];
     let mut h = Cursor(&mut head, 0);
     h.bytes(&MAGIC);
@@ -314,11 +319,13 @@ fn check_tree_matches_mesh<T: TriangleTest>(
     }
 }
 
-/// Save `bvh`, built over (or last refit to) `mesh`, to `path`.
+/// Save `bvh`, built over (or last refit to) `mesh`, to `path`; `mesh` is
+/// the model at `scale` (see [`UnitScale`]), which the file records.
 pub(crate) fn save<B: WideParts>(
     bvh: &B,
     path: &Path,
     mesh: &TriangleMesh,
+    scale: UnitScale,
 ) -> Result<(), PersistError> {
     let fault = Fault(path);
     let p = bvh.parts();
@@ -330,7 +337,7 @@ pub(crate) fn save<B: WideParts>(
     })?;
     check_tree_matches_mesh(p.leaves, mesh, &fault)?;
     let built_sah = p.built_sah.unwrap_or_else(|| stored_sah(&p));
-    let (mut head, meta, _) = header_and_meta(B::KIND, &p, mesh, built_sah);
+    let (mut head, meta, _) = header_and_meta(B::KIND, &p, mesh, built_sah, scale);
     let nodes = le_bytes(p.nodes);
     let leaves: Cow<'_, [u8]> = match p.leaves {
         Leaves::Packed(packs) => le_bytes(packs.packs()),
@@ -370,6 +377,9 @@ pub(crate) fn save<B: WideParts>(
 /// Load a tree of type `B` over `mesh` from `path` (see the module docs).
 ///
 /// `mapped`: map the leaf packs from the file instead of reading them.
+/// `scaled`: `mesh` is the model at the scale the file records, as
+/// [`crate::accel::load_accel`] passes it; otherwise a file that records
+/// a scale other than one is refused.
 ///
 /// # Safety
 /// With `mapped`, the file must not be truncated or written while the
@@ -378,8 +388,14 @@ pub(crate) unsafe fn load<B: WideParts>(
     path: &Path,
     mesh: &TriangleMesh,
     mapped: bool,
+    scaled: bool,
 ) -> Result<B, PersistError> {
     let fault = Fault(path);
+    // A tree over the scaled model cannot match the model as given: say so
+    // before its mesh checksum does.
+    if !scaled && saved_scale(path)?.is_some_and(|s| !s.is_one()) {
+        return Err(scaled_elsewhere(&fault));
+    }
     let mut file = File::open(path).map_err(|e| fault.io(e))?;
     let len = file.metadata().map_err(|e| fault.io(e))?.len();
     let mut head = [0u8; HEADER];
@@ -472,8 +488,14 @@ pub(crate) unsafe fn load<B: WideParts>(
             ),
         ));
     }
-    if meta[48..].iter().any(|&b| b != 0) {
-        return Err(fault.at((HEADER + 48) as u64, "reserved", "not zero"));
+    if meta[68..].iter().any(|&b| b != 0) {
+        return Err(fault.at((HEADER + 68) as u64, "reserved", "not zero"));
+    }
+    match recorded_scale(&meta) {
+        Ok(None) => {}
+        Ok(Some(s)) if s.is_one() || scaled => {}
+        Ok(Some(_)) => return Err(scaled_elsewhere(&fault)),
+        Err(()) => return Err(fault.at((HEADER + 48) as u64, "scale", "not a scale")),
     }
     let f32_at = |at: usize| f32::from_bits(u32_at(&meta, at));
     let root = Child4 {
@@ -923,7 +945,25 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     /// stored so that a load with another mesh is refused. Written
     /// to a temporary file beside `path`, then renamed over it.
     pub fn save(&self, path: impl AsRef<Path>, mesh: &TriangleMesh) -> Result<(), PersistError> {
-        save(self, path.as_ref(), mesh)
+        save(self, path.as_ref(), mesh, UnitScale::ONE)
+    }
+
+    /// [`Self::save`] of a tree built over the model at `scale` (`mesh` is
+    /// the scaled model), recording the scale for
+    /// [`crate::accel::load_accel`].
+    pub(crate) fn save_scaled(
+        &self,
+        path: &Path,
+        mesh: &TriangleMesh,
+        scale: UnitScale,
+    ) -> Result<(), PersistError> {
+        save(self, path, mesh, scale)
+    }
+
+    /// [`Self::load`] of a file whose recorded scale `mesh` is already at.
+    pub(crate) fn load_scaled(path: &Path, mesh: &TriangleMesh) -> Result<Self, PersistError> {
+        // SAFETY: not mapped.
+        unsafe { load(path, mesh, false, true) }
     }
 
     /// Load a tree saved by [`Self::save`] over `mesh`, without a
@@ -932,7 +972,7 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     /// anything wrong is an error naming the offset and field.
     pub fn load(path: impl AsRef<Path>, mesh: &TriangleMesh) -> Result<Self, PersistError> {
         // SAFETY: not mapped.
-        unsafe { load(path.as_ref(), mesh, false) }
+        unsafe { load(path.as_ref(), mesh, false, false) }
     }
 
     /// [`Self::load`], with the leaf packs (over
@@ -954,8 +994,46 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
         mesh: &TriangleMesh,
     ) -> Result<Self, PersistError> {
         // SAFETY: the caller's promise.
-        unsafe { load(path.as_ref(), mesh, true) }
+        unsafe { load(path.as_ref(), mesh, true, false) }
     }
+}
+
+/// The error for a tree over a scaled model loaded as if over the model.
+fn scaled_elsewhere(fault: &Fault<'_>) -> PersistError {
+    fault.at(
+        (HEADER + 48) as u64,
+        "scale",
+        "the tree was built over the mesh scaled to unit size or moved to the origin \
+         (as build_accel does for tiny and far meshes): load it with load_accel",
+    )
+}
+
+/// The scale recorded in a file's `meta` block: `None` when it is all zero
+/// (a file that predates the record), an error when it is no scale.
+fn recorded_scale(meta: &[u8; META]) -> Result<Option<UnitScale>, ()> {
+    let words: [u32; 5] = std::array::from_fn(|i| u32_at(meta, 48 + 4 * i));
+    if words == [0; 5] {
+        return Ok(None);
+    }
+    UnitScale::from_words(words).map(Some).ok_or(())
+}
+
+/// The scale a saved file records (see [`recorded_scale`]); `None` when it
+/// records none, or when the file is too short or the record no scale,
+/// which the load itself then reports.
+pub(crate) fn saved_scale(path: &Path) -> Result<Option<UnitScale>, PersistError> {
+    let fault = Fault(path);
+    let mut file = File::open(path).map_err(|e| fault.io(e))?;
+    let mut start = Vec::with_capacity(HEADER + META);
+    (&mut file)
+        .take((HEADER + META) as u64)
+        .read_to_end(&mut start)
+        .map_err(|e| fault.io(e))?;
+    let Some(meta) = start.get(HEADER..HEADER + META) else {
+        return Ok(None);
+    };
+    let meta: &[u8; META] = meta.try_into().expect("the meta block's length");
+    Ok(recorded_scale(meta).unwrap_or(None))
 }
 
 /// The structure and triangle test a saved file holds, from its header

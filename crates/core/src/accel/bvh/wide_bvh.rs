@@ -449,13 +449,14 @@ impl<N: NodeWidth, T: TriangleTest> Accel for WideBvh<N, T> {
         self.stats.clone()
     }
 
-    /// [`WideBvh::save`].
-    fn save(
+    /// [`WideBvh::save`], recording `scale`.
+    fn save_at_scale(
         &self,
         path: &std::path::Path,
         mesh: &TriangleMesh,
+        scale: crate::UnitScale,
     ) -> Result<(), crate::accel::PersistError> {
-        WideBvh::save(self, path, mesh)
+        WideBvh::save_scaled(self, path, mesh, scale)
     }
 
     /// [`WideBvh::refit`].
