@@ -5,8 +5,9 @@
 use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
 
-/// Fail when the folder of `out` does not exist, so that a command stops
-/// before its work rather than after it, or when `out` names the same file
+/// Fail when an input that exists is not a regular file, when the folder of
+/// `out` does not exist, so that a command stops before its work rather
+/// than after it, or when `out` names the same file
 /// as one of `inputs` (after resolving links and relative paths), so that a
 /// command can never overwrite its input.
 ///
@@ -20,9 +21,21 @@ pub fn ensure_output(out: &Path, inputs: &[&Path]) -> Result<()> {
 /// [`ensure_output`] for each of `outs` (the frames of an animation, say),
 /// the files the inputs bring in found once.
 pub fn ensure_outputs(outs: &[&Path], inputs: &[&Path]) -> Result<()> {
+    // An input that is a device or a pipe would be read without end or wait
+    // for a writer; refuse it before any work.
+    for input in inputs {
+        if let Ok(m) = std::fs::metadata(input) {
+            if !m.is_file() {
+                bail!("{}: {}", input.display(), raykit_io::not_a_regular_file(&m));
+            }
+        }
+    }
     let mut brought: Option<Vec<(PathBuf, &Path)>> = None;
     for out in outs {
         ensure_folder(out)?;
+        if out.is_dir() {
+            bail!("cannot write {}: it is a folder", out.display());
+        }
         let is_obj = out
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("obj"));

@@ -286,6 +286,97 @@ fn bad_inputs_name_the_file_and_fail_cleanly() {
     assert!(stderr(&o).contains("also an input"), "{}", stderr(&o));
     assert_eq!(std::fs::read(&rays).unwrap(), vec![0u8; 64]);
 
+    // An AOV file is an output too: one that would replace the environment
+    // map read is refused, and the map survives.
+    let env = dir.path().join("x.depth.exr");
+    let studio = teapot()
+        .parent()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .join("envmaps/studio.exr");
+    std::fs::copy(&studio, &env).unwrap();
+    let o = raykit(&[
+        "render",
+        "--scene",
+        "builtin:cornell",
+        "--width",
+        "8",
+        "--height",
+        "6",
+        "--env",
+        s(&env),
+        "--aov",
+        "depth",
+        "--out",
+        s(&dir.path().join("x.png")),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("also an input"), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(&env).unwrap(),
+        std::fs::read(&studio).unwrap()
+    );
+
+    // A device or a folder given as an input is refused before any work
+    // (/dev/zero would be read without end), and a folder as the output.
+    #[cfg(unix)]
+    {
+        let zero = dir.path().join("zero.obj");
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+        let o = raykit(&[
+            "trace",
+            "--mesh",
+            s(&zero),
+            "--rays",
+            s(&rays),
+            "--out",
+            s(&dir.path().join("h.bin")),
+        ]);
+        assert!(!o.status.success());
+        let err = stderr(&o);
+        assert!(
+            err.contains("zero.obj") && err.contains("not a regular file"),
+            "{err}"
+        );
+    }
+    let folder = dir.path().join("folder.obj");
+    std::fs::create_dir(&folder).unwrap();
+    let o = raykit(&[
+        "trace",
+        "--mesh",
+        s(&folder),
+        "--rays",
+        s(&rays),
+        "--out",
+        s(&dir.path().join("h.bin")),
+    ]);
+    assert!(
+        stderr(&o).contains("not a regular file (a folder)"),
+        "{}",
+        stderr(&o)
+    );
+    let tri = dir.path().join("tri.obj");
+    std::fs::write(&tri, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = raykit(&["tjunctions", s(&tri), s(&folder)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("is a folder"), "{}", stderr(&o));
+    assert!(
+        !dir.path().join("folder.mtl").exists(),
+        "nothing written beside it"
+    );
+    let o = raykit(&[
+        "render",
+        "--scene",
+        "builtin:cornell",
+        "--orbit",
+        "99999999",
+        "--out",
+        s(&dir.path().join("o.png")),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--orbit"), "{}", stderr(&o));
+
     let o = raykit(&["render", "--scene", "builtin:nosuch"]);
     assert!(!o.status.success());
     assert!(

@@ -2,7 +2,7 @@
 
 Only the import differs: run with ``--open3d`` to use Open3D, without it to
 use raykit. Everything below the import is plain Open3D code (numpy in,
-``.numpy()`` on the results).
+``.numpy()`` and ``.isfinite()`` on the results).
 
     python examples/python/open3d_compat.py MESH.obj [OUT.npz] [--open3d]
 """
@@ -54,7 +54,7 @@ def main():
     ans = scene.cast_rays(rays)
     t_hit = ans["t_hit"].numpy()
     geometry = ans["geometry_ids"].numpy()
-    hit = np.isfinite(t_hit)
+    hit = ans["t_hit"].isfinite().numpy()  # as Open3D's ray-casting tutorial tests hits
 
     # Shadow rays towards a light above, from every hit point.
     rays_np = rays.numpy()

@@ -23,6 +23,66 @@ class Array(np.ndarray):
         """This array as a plain ``numpy.ndarray`` (a view, no copy)."""
         return self.view(np.ndarray)
 
+    # The Tensor methods Open3D's ray-casting tutorials call on results,
+    # so that their follow-up code runs unchanged too.
+
+    def isfinite(self) -> "Array":
+        """Element-wise ``numpy.isfinite`` (Open3D's ``Tensor.isfinite``)."""
+        return result(np.isfinite(self.numpy()))
+
+    def isinf(self) -> "Array":
+        """Element-wise ``numpy.isinf``."""
+        return result(np.isinf(self.numpy()))
+
+    def isnan(self) -> "Array":
+        """Element-wise ``numpy.isnan``."""
+        return result(np.isnan(self.numpy()))
+
+    def abs(self) -> "Array":
+        """Element-wise absolute value."""
+        return result(np.abs(self.numpy()))
+
+    def logical_not(self) -> "Array":
+        """Element-wise logical not."""
+        return result(np.logical_not(self.numpy()))
+
+    def lt(self, other) -> "Array":
+        """Element-wise ``<``."""
+        return result(self.numpy() < to_numpy(other))
+
+    def le(self, other) -> "Array":
+        """Element-wise ``<=``."""
+        return result(self.numpy() <= to_numpy(other))
+
+    def gt(self, other) -> "Array":
+        """Element-wise ``>``."""
+        return result(self.numpy() > to_numpy(other))
+
+    def ge(self, other) -> "Array":
+        """Element-wise ``>=``."""
+        return result(self.numpy() >= to_numpy(other))
+
+    def cpu(self) -> "Array":
+        """Itself: results are always in host memory."""
+        return self
+
+    def contiguous(self) -> "Array":
+        """A C-contiguous array (itself when it already is)."""
+        return result(np.ascontiguousarray(self.numpy()))
+
+    def clone(self) -> "Array":
+        """A copy."""
+        return result(self.numpy().copy())
+
+    def to(self, dtype, copy: bool = False) -> "Array":
+        """Converted to ``dtype``: a numpy dtype, or an Open3D one such as
+        ``open3d.core.float32`` (read by its name)."""
+        try:
+            target = np.dtype(dtype)
+        except TypeError:
+            target = np.dtype(str(dtype).lower())
+        return result(self.numpy().astype(target, copy=copy))
+
 
 def result(a: np.ndarray) -> Array:
     """``a`` viewed as :class:`Array` (no copy)."""
@@ -103,13 +163,16 @@ MAX_THREADS = 4096
 
 
 def threads(n) -> int:
-    """A thread count: 0 or None for all cores."""
+    """A thread count: 0, a negative number or None for all cores."""
     if n is None:
         return 0
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
         raise ValueError(f"threads must be an integer (0 for all cores), got {n!r}")
-    if not 0 <= n <= MAX_THREADS:
-        raise ValueError(f"threads must be between 0 (all cores) and {MAX_THREADS}, got {n}")
+    if n < 0:
+        # Open3D takes any non-positive count as "all cores".
+        return 0
+    if n > MAX_THREADS:
+        raise ValueError(f"threads must be at most {MAX_THREADS} (0 or negative for all cores), got {n}")
     return int(n)
 
 

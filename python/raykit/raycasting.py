@@ -138,14 +138,20 @@ class RaycastingScene:
         )
 
     def add_triangles(
-        self, vertex_positions, triangle_indices=None, *, place: bool = True, mask: int = _MASK_ALL
+        self,
+        vertex_positions=None,
+        triangle_indices=None,
+        *,
+        mesh=None,
+        place: bool = True,
+        mask: int = _MASK_ALL,
     ) -> int:
         """Add a triangle mesh; returns its geometry id (0, 1, 2, ...).
 
         Either ``add_triangles(vertex_positions, triangle_indices)`` with an
         ``(n, 3)`` float array and an ``(m, 3)`` integer array, or
-        ``add_triangles(mesh)`` with an Open3D ``TriangleMesh`` (tensor or
-        legacy) or a ``trimesh.Trimesh``. Indices out of range, NaN or
+        ``add_triangles(mesh)`` (or ``mesh=``) with an Open3D
+        ``TriangleMesh`` (tensor or legacy) or a ``trimesh.Trimesh``. Indices out of range, NaN or
         infinite coordinates, and coordinates beyond ``±1e12`` (where the
         engine's float32 products overflow) raise ``ValueError``.
 
@@ -156,6 +162,12 @@ class RaycastingScene:
         shares a bit with it (and with the instance's mask).
         """
         mask = _check_mask(mask, "mask")
+        if mesh is not None:
+            if vertex_positions is not None or triangle_indices is not None:
+                raise ValueError("give either mesh= or vertex_positions and triangle_indices, not both")
+            vertex_positions = mesh
+        if vertex_positions is None:
+            raise ValueError("add_triangles needs a mesh, or vertex_positions and triangle_indices")
         if triangle_indices is None:
             vertex_positions, triangle_indices = _mesh_arrays(vertex_positions)
         raw = _arrays.reals(vertex_positions, "vertex_positions", last=3)

@@ -12,7 +12,8 @@ has ``b = d = 0``, ``a > 0``, ``e < 0``; rotated rasters are refused.
 Without a transform, pixels are 1 m squares with the top-left corner at
 (0, 0). ``geographic=True`` says that map units are degrees of
 longitude/latitude (as for SRTM); heights are metres either way. NaN
-heights (or those equal to ``nodata``) are no data; infinite ones (or
+heights (or those equal to ``nodata``, or masked in a numpy masked array
+such as rasterio's ``read(masked=True)`` gives) are no data; infinite ones (or
 float64 ones beyond the float32 range) are refused with ``ValueError``, as
 are cells smaller than 1e-9 m or larger than 1e9 m.
 
@@ -72,10 +73,17 @@ def grid(heights, transform=None, geographic: bool = False, nodata=None):
             raise ValueError("a DEM file carries its own transform; pass transform only with an array")
         h, t, geo, _ = _raykit.load_dem(fspath(heights, "heights"))
         return h, t, geo
+    # A masked array (rasterio's ``read(masked=True)``): its masked cells
+    # are no data, whatever value fills them.
+    masked = np.ma.getmaskarray(heights) if np.ma.isMaskedArray(heights) else None
+    if masked is not None:
+        heights = np.ma.getdata(heights)
     with np.errstate(over="ignore"):
         h = _arrays.floats(heights, "heights")
     if h.ndim != 2:
         raise ValueError(f"heights must have shape (rows, cols), got {h.shape}")
+    if masked is not None and masked.any():
+        h = np.where(masked, np.float32(np.nan), h)
     if nodata is not None:
         h = np.where(h == np.float32(nodata), np.float32(np.nan), h)
     inf = np.isinf(h)

@@ -7,13 +7,40 @@ use std::path::Path;
 
 /// The bytes of `path`.
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, LoadError> {
+    regular_file(path)?;
     std::fs::read(path).map_err(|e| LoadError::io(path, "cannot read the file", e))
+}
+
+/// Refuse `path` when it exists but is not a regular file: a device such
+/// as `/dev/zero` reads without end, and opening a named pipe waits for a
+/// writer. A missing file is left to the read, which names the cause.
+fn regular_file(path: &Path) -> Result<(), LoadError> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() => Err(LoadError::new(
+            path,
+            ErrorKind::Io,
+            Location::File,
+            not_a_regular_file(&m),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// What a path that is not a regular file is, for the refusal.
+pub fn not_a_regular_file(m: &std::fs::Metadata) -> String {
+    let what = if m.is_dir() {
+        "a folder"
+    } else {
+        "a device, pipe or socket"
+    };
+    format!("not a regular file ({what}); give a file")
 }
 
 /// The bytes of `path`, the I/O error written into the message instead of
 /// kept as a source: for errors whose whole chain of causes is printed,
 /// which would show it twice.
 pub(crate) fn read_file_cause_in_message(path: &Path) -> Result<Vec<u8>, LoadError> {
+    regular_file(path)?;
     std::fs::read(path).map_err(|e| {
         LoadError::new(
             path,

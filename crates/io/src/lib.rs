@@ -46,6 +46,7 @@ mod hashing;
 mod image_merge;
 mod image_part;
 mod input;
+pub use input::not_a_regular_file;
 mod load;
 mod mtl;
 mod obj;

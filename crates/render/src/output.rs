@@ -58,6 +58,12 @@ fn sibling(out: &Path, kind: AovKind, ext: &str) -> PathBuf {
     out.with_file_name(format!("{stem}.{}.{ext}", kind.name()))
 }
 
+/// The files [`write_aov`] writes for `out` and `kind`: `STEM.KIND.exr`
+/// and `STEM.KIND.png`.
+pub fn aov_paths(out: &Path, kind: AovKind) -> [PathBuf; 2] {
+    [sibling(out, kind, "exr"), sibling(out, kind, "png")]
+}
+
 /// Write AOV `kind` of `frame` as EXR and a PNG preview next to `out`
 /// (`STEM.KIND.exr` and `STEM.KIND.png`); the paths written.
 pub fn write_aov(

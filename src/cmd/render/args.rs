@@ -187,7 +187,7 @@ pub struct RenderArgs {
     pub(super) tile: Option<super::split::TileArg>,
     /// Camera path: FRAMES frames orbiting the camera target about the up
     /// axis (a full turn; frame 0 is the camera itself).
-    #[arg(long, value_name = "FRAMES")]
+    #[arg(long, value_name = "FRAMES", value_parser = clap::value_parser!(u32).range(1..=100_000))]
     pub(super) orbit: Option<u32>,
     /// Render only frames A..B (B excluded; A..=B includes it) of --orbit.
     #[arg(long, value_name = "A..B", value_parser = super::split::parse_frames)]

@@ -21,7 +21,7 @@ use raykit_lab::args::scene as setup;
 use raykit_lab::measure::{pool, timed};
 use raykit_render::animation::{animation_frames, AnimationFrame};
 use raykit_render::aov::AovKind;
-use raykit_render::output::{write_aov, write_image, ImageFormat};
+use raykit_render::output::{aov_paths, write_aov, write_image, ImageFormat};
 use raykit_render::shadowmap::{ShadowMapOptions, ShadowMaps};
 use raykit_render::whitted::{render_whitted, ShadowMode, WhittedOptions, WhittedScene};
 use raykit_render::Encoding;
@@ -106,7 +106,16 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let (setup, load_s) = timed(|| setup::setup(&args.scene, aspect));
     let mut setup = setup?;
     let frames = animation_frames(&setup.camera, &args.out, args.orbit, args.frames)?;
-    let outs: Vec<&std::path::Path> = frames.iter().map(|f| f.out.as_path()).collect();
+    // Each frame's AOV files are outputs too.
+    let aov_files: Vec<std::path::PathBuf> = frames
+        .iter()
+        .flat_map(|f| aovs.iter().flat_map(|&k| aov_paths(&f.out, k)))
+        .collect();
+    let outs: Vec<&std::path::Path> = frames
+        .iter()
+        .map(|f| f.out.as_path())
+        .chain(aov_files.iter().map(|p| p.as_path()))
+        .collect();
     // The environment map is read too (a name such as `sky` names no file).
     let inputs = [
         std::path::Path::new(&args.scene.scene),

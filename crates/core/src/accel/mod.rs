@@ -28,6 +28,7 @@ use serde::Serialize;
 
 mod brute;
 pub mod bvh;
+mod far_rays;
 pub mod flat;
 pub mod kdtree;
 mod kind;
@@ -42,6 +43,7 @@ pub use bvh::{
     BuildOptions, BuildQuality, Bvh2, Bvh4, Bvh8, Node4, Node8, PersistError, RefitError,
     RefitReport, ThreadedBvh, WideBvh,
 };
+pub use far_rays::{FarRays, FAR_RADII};
 pub use flat::{
     FlatBvh8, FlatChild, FlatKdRopes, FlatKdTree, FlatNode8, FlatThreadedBvh, FlatTriangles,
 };

@@ -4,8 +4,8 @@
 use super::kdtree::{KdBuildNode, KdTree};
 use super::kind::AccelKind;
 use super::{
-    Accel, BruteForce, BuildOptions, Bvh2, Bvh4, Bvh8, KdBacktrack, KdRestart, KdRopes, KdStack,
-    PersistError, ThreadedBvh, UnitScaled,
+    Accel, BruteForce, BuildOptions, Bvh2, Bvh4, Bvh8, FarRays, KdBacktrack, KdRestart, KdRopes,
+    KdStack, PersistError, ThreadedBvh, UnitScaled,
 };
 use crate::aabb::Aabb;
 use crate::mesh::TriangleMesh;
@@ -30,7 +30,9 @@ fn unit_scale(
 
 /// Build the structure `kind` over `mesh` with triangle test `test`; over
 /// the mesh at unit scale when it is tiny, and moved to the origin when it
-/// is far from it and the test needs it ([`UnitScaled`]).
+/// is far from it and the test needs it ([`UnitScaled`]); with Möller's
+/// test, rays from far away are moved up to the mesh before they are traced
+/// ([`FarRays`]).
 ///
 /// # Panics
 ///
@@ -51,6 +53,7 @@ pub fn build_accel(
     }) {
         panic!("build_accel: triangle {t} names vertex {i}, but the mesh has {vertices} vertices");
     }
+    let model = mesh;
     let (scale, scaled) = unit_scale(test, mesh);
     let mesh = &*scaled;
     let accel = with_test!(test, T => match kind {
@@ -64,7 +67,20 @@ pub fn build_accel(
         AccelKind::KdRestart => Box::new(KdRestart::<T>::build(mesh, &options.kd)),
         AccelKind::KdBacktrack => Box::new(KdBacktrack::<T>::build(mesh, &options.kd)),
     });
-    UnitScaled::wrap(accel, scale)
+    far_rays(test, UnitScaled::wrap(accel, scale), model)
+}
+
+/// `accel` with rays from far away moved up to `model` ([`FarRays`]) for
+/// Möller's test, the default and the one whose far rays were measured to
+/// pass through closed meshes. The Plücker and projection tests keep rays
+/// as given: moved rays (an origin near the model, grazing a triangle's
+/// tolerance band) found the wide BVHs' Plücker boxes narrower than the
+/// band, a disagreement with brute force that moving must not bring in.
+fn far_rays(test: TestKind, accel: Box<dyn Accel>, model: &TriangleMesh) -> Box<dyn Accel> {
+    match test {
+        TestKind::Moller => FarRays::wrap(accel, model),
+        TestKind::Plucker | TestKind::Projection => accel,
+    }
 }
 
 /// Load a structure saved with [`Accel::save`] over `mesh`, of the
@@ -75,6 +91,7 @@ pub fn load_accel(
     mesh: &TriangleMesh,
 ) -> Result<(AccelKind, TestKind, Box<dyn Accel>), PersistError> {
     let (kind, test) = super::bvh::saved_kind(path)?;
+    let model = mesh;
     // The scale the file records (files that predate the record: the one
     // build_accel would choose for this mesh).
     let (scale, scaled) = match super::bvh::saved_scale(path)? {
@@ -87,7 +104,7 @@ pub fn load_accel(
             AccelKind::Bvh4 => Box::new(Bvh4::<T>::load_scaled(path, mesh)?) as Box<dyn Accel>,
             _ => Box::new(Bvh8::<T>::load_scaled(path, mesh)?),
         };
-        Ok((kind, test, UnitScaled::wrap(accel, scale)))
+        Ok((kind, test, far_rays(test, UnitScaled::wrap(accel, scale), model)))
     })
 }
 

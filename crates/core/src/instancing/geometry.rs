@@ -2,7 +2,7 @@
 //! bottom-level BVH, stored once however many instances place it.
 
 use crate::aabb::Aabb;
-use crate::accel::{Accel, BuildOptions, Bvh8, UnitScaled};
+use crate::accel::{Accel, BuildOptions, Bvh8, FarRays, UnitScaled};
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::query::SurfaceBvh;
@@ -19,8 +19,9 @@ use std::sync::OnceLock;
 pub struct Geometry {
     mesh: TriangleMesh,
     /// The BVH over the mesh at its [`UnitScale`] (a tiny mesh is scaled
-    /// up, so that the triangle tests' products stay in `f32`'s range).
-    bvh: UnitScaled<Bvh8<Moller>>,
+    /// up, so that the triangle tests' products stay in `f32`'s range),
+    /// rays from far away moved up to the mesh ([`FarRays`]).
+    bvh: FarRays<UnitScaled<Bvh8<Moller>>>,
     /// Bounds padded by the triangle tests' tolerance band, as the BVHs'
     /// own node boxes are (`accel/node_box.rs`).
     bounds: Aabb,
@@ -32,7 +33,10 @@ impl Geometry {
     /// Build the bottom-level BVH over `mesh` (checked by the caller).
     pub(crate) fn build(mesh: TriangleMesh, mask: u32, options: &BuildOptions) -> Self {
         let (scale, scaled) = UnitScale::of(&mesh);
-        let bvh = UnitScaled::new(Bvh8::build(&scaled, options), scale);
+        let bvh = FarRays::around(
+            Box::new(UnitScaled::new(Bvh8::build(&scaled, options), scale)),
+            &mesh,
+        );
         let b = mesh.bounds();
         let bounds = if mesh.indices.is_empty() {
             Aabb::EMPTY
@@ -99,7 +103,7 @@ impl Geometry {
         let [a, b, c] = self
             .mesh
             .triangle(prim as usize)
-            .map(|p| self.bvh.scale().point(p));
+            .map(|p| self.bvh.inner().scale().point(p));
         (b - a).cross(c - a)
     }
 
