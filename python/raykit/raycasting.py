@@ -137,6 +137,14 @@ class RaycastingScene:
             np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32), np.zeros(1, np.uint32), accel, test
         )
 
+    def __getstate__(self):
+        """Picklable (for multiprocessing, joblib, dask): the geometries,
+        instances and settings; the built structures are not kept, and are
+        built again at the first query, as after adding a geometry."""
+        state = self.__dict__.copy()
+        state.update(_scene=None, _flat_of_instances=None)
+        return state
+
     def add_triangles(
         self,
         vertex_positions=None,

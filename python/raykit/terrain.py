@@ -235,7 +235,8 @@ def cast(
     h, t, geo = grid(heights, transform, geographic, nodata)
     eye = [float(x) for x in eye]
     target = [float(x) for x in target]
-    return _raykit.cast(h, t, eye, target, geo, float(fov), int(width), int(height), caster, float(tau), _arrays.threads(threads))
+    width, height = _arrays.count(width, "width"), _arrays.count(height, "height")
+    return _raykit.cast(h, t, eye, target, geo, float(fov), width, height, caster, float(tau), _arrays.threads(threads))
 
 
 # Shading of `render`: the constants of `raykit terrain render`.

@@ -56,6 +56,13 @@ class RayMeshIntersector:
         self._scene = None
         self._shift = None
 
+    def __getstate__(self):
+        """Picklable (for multiprocessing, joblib, dask): the mesh and the
+        settings; the structure is built again at the first query."""
+        state = self.__dict__.copy()
+        state.update(_scene=None, _key=None)
+        return state
+
     def _built(self):
         key = hash(self.mesh)
         if self._scene is None or key != self._key:

@@ -375,3 +375,10 @@ def test_cast_image_size_is_bounded():
             raykit.terrain.cast(h, eye=eye, target=target, width=w, height=hh)
         with pytest.raises(ValueError, match="between 1 and 8192"):
             raykit.terrain.render(h, width=w, height=hh)
+    # Negative, huge and fractional sizes are refused by name, not cut or
+    # overflowed.
+    for w, hh in ((-3, 8), (8, -1), (2**64, 8), (2.9, 8)):
+        for call in (raykit.terrain.cast, raykit.terrain.render):
+            kw = dict(eye=eye, target=target) if call is raykit.terrain.cast else {}
+            with pytest.raises(ValueError, match="width|height"):
+                call(h, width=w, height=hh, **kw)

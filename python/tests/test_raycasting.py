@@ -226,6 +226,22 @@ def test_meshes_of_open3d_and_trimesh(bunny):
         raykit.RaycastingScene().add_triangles()
 
 
+def test_a_scene_pickles_after_queries_and_answers_alike(bunny):
+    import pickle
+
+    v, f, _ = bunny
+    rays = rays_at(v, 300, 12)
+    scene = scene_of(v, f)
+    scene.add_triangles(v + np.float32(3 * np.ptp(v[:, 0])), f)
+    scene.add_instance(0, np.eye(4)[:3] + [[0, 0, 0, 0], [0, 0, 0, 5 * np.ptp(v[:, 1])], [0, 0, 0, 0]])
+    want = scene.cast_rays(rays)
+    copy = pickle.loads(pickle.dumps(scene))
+    got = copy.cast_rays(rays)
+    for key in want:
+        np.testing.assert_array_equal(got[key], want[key], err_msg=key)
+    np.testing.assert_array_equal(copy.compute_distance(v[:50] + 0.01), scene.compute_distance(v[:50] + 0.01))
+
+
 def test_results_answer_the_tensor_methods_open3d_tutorials_call(bunny):
     v, f, _ = bunny
     rays = rays_at(v, 300, 9)

@@ -127,6 +127,14 @@ def test_plugs_into_a_trimesh(data):
     assert (mesh.ray.intersects_first(o, d) >= 0).sum() == (reference(o, d) >= 0).sum()
     inside = mesh.contains([mesh.centroid, mesh.bounds[1] + 1.0])
     assert inside.tolist() == [True, False]
+    # A mesh using it pickles (for multiprocessing, joblib, dask) after a
+    # query, and the copy answers as the original.
+    import pickle
+
+    first = mesh.ray.intersects_first(o, d)
+    copy = pickle.loads(pickle.dumps(mesh))
+    assert isinstance(copy.ray, raykit.trimesh.RayMeshIntersector)
+    np.testing.assert_array_equal(copy.ray.intersects_first(o, d), first)
     # A changed mesh rebuilds the structure.
     mesh.vertices = mesh.vertices + [0, 0, 1000.0]
     assert not mesh.ray.intersects_any(o, d).any()

@@ -129,8 +129,9 @@ pub struct RenderArgs {
     #[arg(long)]
     pub(super) no_shadows: bool,
     /// Shadow-map resolution in texels per side (per cube face for point
-    /// lights), 16-8192.
-    #[arg(long, default_value_t = ShadowMapOptions::default().resolution, value_parser = clap::value_parser!(u32).range(16..=8192))]
+    /// lights), 16-4096 (a point light's cube map holds 6 × 4096² depths at
+    /// the most, 400 MB).
+    #[arg(long, default_value_t = ShadowMapOptions::default().resolution, value_parser = clap::value_parser!(u32).range(16..=4096))]
     pub(super) shadow_map_size: u32,
     /// Shadow-map box filter (percentage-closer filtering) width in texels,
     /// 1-15; 1 = unfiltered.

@@ -139,22 +139,22 @@ impl<A: Accel + ?Sized> FarRays<A> {
 }
 
 impl<A: Accel + ?Sized> Accel for FarRays<A> {
+    /// A near ray goes on as a tail call; the far path is out of line, so
+    /// that the check is all a near ray pays.
     #[inline]
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        if !self.is_far(ray) {
-            return self.inner.intersect(ray);
+        if self.is_far(ray) {
+            return self.intersect_far(ray);
         }
-        let (moved, t0, len) = self.moved(ray);
-        let hit = self.inner.intersect(&moved)?;
-        Some(Self::moved_back(ray, (t0, len), hit))
+        self.inner.intersect(ray)
     }
 
     #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
-        if !self.is_far(ray) {
-            return self.inner.occluded(ray);
+        if self.is_far(ray) {
+            return self.occluded_far(ray);
         }
-        self.inner.occluded(&self.moved(ray).0)
+        self.inner.occluded(ray)
     }
 
     fn stats(&self) -> AccelStats {
@@ -219,6 +219,20 @@ impl<A: Accel + ?Sized> Accel for FarRays<A> {
 }
 
 impl<A: Accel + ?Sized> FarRays<A> {
+    #[cold]
+    #[inline(never)]
+    fn intersect_far(&self, ray: &Ray) -> Option<Hit> {
+        let (moved, t0, len) = self.moved(ray);
+        let hit = self.inner.intersect(&moved)?;
+        Some(Self::moved_back(ray, (t0, len), hit))
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn occluded_far(&self, ray: &Ray) -> bool {
+        self.inner.occluded(&self.moved(ray).0)
+    }
+
     /// A run's rays with the far ones moved, and how (see
     /// [`FarRays::moved`]).
     fn moved_run(&self, rays: &[Ray]) -> (Vec<Ray>, Vec<(f64, f64)>) {

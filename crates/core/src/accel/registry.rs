@@ -56,30 +56,49 @@ pub fn build_accel(
     let model = mesh;
     let (scale, scaled) = unit_scale(test, mesh);
     let mesh = &*scaled;
-    let accel = with_test!(test, T => match kind {
-        AccelKind::Brute => Box::new(BruteForce::<T>::new(mesh)) as Box<dyn Accel>,
-        AccelKind::Bvh2 => Box::new(Bvh2::<T>::build(mesh, options)),
-        AccelKind::Bvh4 => Box::new(Bvh4::<T>::build(mesh, options)),
-        AccelKind::Bvh8 => Box::new(Bvh8::<T>::build(mesh, options)),
-        AccelKind::ThreadedBvh => Box::new(ThreadedBvh::<T>::build(mesh, options)),
-        AccelKind::KdStack => Box::new(KdStack::<T>::build(mesh, &options.kd)),
-        AccelKind::KdRopes => Box::new(KdRopes::<T>::build(mesh, &options.kd)),
-        AccelKind::KdRestart => Box::new(KdRestart::<T>::build(mesh, &options.kd)),
-        AccelKind::KdBacktrack => Box::new(KdBacktrack::<T>::build(mesh, &options.kd)),
-    });
-    far_rays(test, UnitScaled::wrap(accel, scale), model)
+    let wrap = Wrap { test, scale, model };
+    with_test!(test, T => match kind {
+        AccelKind::Brute => wrap.around(BruteForce::<T>::new(mesh)),
+        AccelKind::Bvh2 => wrap.around(Bvh2::<T>::build(mesh, options)),
+        AccelKind::Bvh4 => wrap.around(Bvh4::<T>::build(mesh, options)),
+        AccelKind::Bvh8 => wrap.around(Bvh8::<T>::build(mesh, options)),
+        AccelKind::ThreadedBvh => wrap.around(ThreadedBvh::<T>::build(mesh, options)),
+        AccelKind::KdStack => wrap.around(KdStack::<T>::build(mesh, &options.kd)),
+        AccelKind::KdRopes => wrap.around(KdRopes::<T>::build(mesh, &options.kd)),
+        AccelKind::KdRestart => wrap.around(KdRestart::<T>::build(mesh, &options.kd)),
+        AccelKind::KdBacktrack => wrap.around(KdBacktrack::<T>::build(mesh, &options.kd)),
+    })
 }
 
-/// `accel` with rays from far away moved up to `model` ([`FarRays`]) for
-/// Möller's test, the default and the one whose far rays were measured to
-/// pass through closed meshes. The Plücker and projection tests keep rays
-/// as given: moved rays (an origin near the model, grazing a triangle's
-/// tolerance band) found the wide BVHs' Plücker boxes narrower than the
-/// band, a disagreement with brute force that moving must not bring in.
-fn far_rays(test: TestKind, accel: Box<dyn Accel>, model: &TriangleMesh) -> Box<dyn Accel> {
-    match test {
-        TestKind::Moller => FarRays::wrap(accel, model),
-        TestKind::Plucker | TestKind::Projection => accel,
+/// What a structure built or loaded over `model` is wrapped in: the scale
+/// it was built at ([`UnitScaled`]) and, for Möller's test, rays from far
+/// away moved up to the model ([`FarRays`]).
+///
+/// Only Möller's test moves far rays: it is the default, and the one whose
+/// far rays were measured to pass through closed meshes. Moved rays (an
+/// origin near the model, grazing a triangle's tolerance band) found the
+/// wide BVHs' Plücker boxes narrower than that test's band, a disagreement
+/// with brute force that moving must not bring in.
+struct Wrap<'a> {
+    test: TestKind,
+    scale: UnitScale,
+    model: &'a TriangleMesh,
+}
+
+impl Wrap<'_> {
+    /// `accel` wrapped. At unit scale the structure sits directly in
+    /// [`FarRays`], so that a one-ray call reaches it without a second
+    /// dynamic call.
+    fn around<A: Accel + 'static>(&self, accel: A) -> Box<dyn Accel> {
+        match (self.test, self.scale.is_one()) {
+            (TestKind::Moller, true) => Box::new(FarRays::around(Box::new(accel), self.model)),
+            (TestKind::Moller, false) => {
+                FarRays::wrap(UnitScaled::wrap(Box::new(accel), self.scale), self.model)
+            }
+            (TestKind::Plucker | TestKind::Projection, _) => {
+                UnitScaled::wrap(Box::new(accel), self.scale)
+            }
+        }
     }
 }
 
@@ -99,12 +118,13 @@ pub fn load_accel(
         None => unit_scale(test, mesh),
     };
     let mesh = &*scaled;
+    let wrap = Wrap { test, scale, model };
     with_test!(test, T => {
         let accel = match kind {
-            AccelKind::Bvh4 => Box::new(Bvh4::<T>::load_scaled(path, mesh)?) as Box<dyn Accel>,
-            _ => Box::new(Bvh8::<T>::load_scaled(path, mesh)?),
+            AccelKind::Bvh4 => wrap.around(Bvh4::<T>::load_scaled(path, mesh)?),
+            _ => wrap.around(Bvh8::<T>::load_scaled(path, mesh)?),
         };
-        Ok((kind, test, far_rays(test, UnitScaled::wrap(accel, scale), model)))
+        Ok((kind, test, accel))
     })
 }
 
