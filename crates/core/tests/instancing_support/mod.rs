@@ -237,8 +237,17 @@ pub fn agree_with_flattened(
                 let reference = crossings(&world, ray);
                 let tie =
                     matches!((a, b), (Some(a), Some(b)) if close(a.t as f64, b.t as f64, 1e-5));
+                // The instanced scene moves a ray that starts far from a
+                // small geometry up to it (`FarRays`), where the flattened
+                // tree tests the far origin as given; there the instanced
+                // answer may be the exact one and the flattened not.
+                let exact = a.is_some_and(|a| {
+                    reference
+                        .first()
+                        .is_some_and(|r| r.ids == ids(&a) && close(a.t as f64, r.t, 1e-6))
+                });
                 assert!(
-                    tie || near_edge(&reference, ray.dir().as_dvec3(), scale),
+                    tie || exact || near_edge(&reference, ray.dir().as_dvec3(), scale),
                     "ray {k}: {a:?} vs {b:?} (reference {:?})",
                     reference.first()
                 );
