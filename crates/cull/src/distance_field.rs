@@ -185,6 +185,15 @@ impl DirectedDistanceField {
     pub fn free_steps(&self) -> Vec<u8> {
         let g = &self.grid;
         let h = g.spacing;
+        // A crossing within rounding of a grid point blocks the steps on
+        // both sides of it. The crossings are distances from a line's first
+        // point and the steps' ends multiples of the spacing, each rounded
+        // in `f32`: a surface passing just after a point came out one ulp
+        // before it, the step beyond it was free, and the front leaked
+        // through a closed sphere at some resolutions.
+        let reach =
+            h * g.dims.iter().copied().max().unwrap_or(1) as f32 + g.origin.abs().max_element();
+        let slack = 8.0 * f32::EPSILON * reach;
         let slab = g.dims[0] * g.dims[1];
         let mut bits = vec![0u8; g.len()];
         bits.par_chunks_mut(slab).enumerate().for_each(|(k, out)| {
@@ -195,7 +204,7 @@ impl DirectedDistanceField {
                     if k + 1 == n {
                         continue;
                     }
-                    let (s0, s1) = (k as f32 * h, (k + 1) as f32 * h);
+                    let (s0, s1) = (k as f32 * h - slack, (k + 1) as f32 * h + slack);
                     for (idx, b) in out.iter_mut().enumerate() {
                         let p = [idx % g.dims[0], idx / g.dims[0], k];
                         let (t, _) = self.line_hits(2, g.line_of(2, p));
@@ -214,7 +223,7 @@ impl DirectedDistanceField {
                     let (t, _) = self.line_hits(axis, g.line_of(axis, p));
                     let mut m = 0;
                     for i in 0..n - 1 {
-                        let (s0, s1) = (i as f32 * h, (i + 1) as f32 * h);
+                        let (s0, s1) = (i as f32 * h - slack, (i + 1) as f32 * h + slack);
                         while m < t.len() && t[m] < s0 {
                             m += 1;
                         }

@@ -32,7 +32,8 @@ pub const FAR_RADII: f32 = 16.0;
 const RUN: usize = 4096;
 
 /// A structure whose rays from far away ([`FAR_RADII`]) are moved up to
-/// its model before they are traced; every other ray, and every other
+/// its model before they are traced, so that Möller and Trumbore's (1997)
+/// differences from the origin stay small; every other ray, and every other
 /// query, goes to the structure as it is. [`super::build_accel`] and
 /// [`super::load_accel`] wrap every structure over Möller's test in it.
 pub struct FarRays<A: Accel + ?Sized = dyn Accel> {
