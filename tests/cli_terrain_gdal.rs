@@ -495,7 +495,7 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         Some(-9999.0),
     )
     .unwrap();
-    let cases: [&[&str]; 11] = [
+    let cases: [&[&str]; 18] = [
         &["-co", "COMPRESS=ZSTD"],
         &[
             "-co",
@@ -537,6 +537,98 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         ],
         &["-co", "INTERLEAVE=BAND", "-co", "COMPRESS=PACKBITS"],
         &["-of", "AAIGrid"],
+        // LZW tiles whose edge tiles the `tiff` crate fails to decode, and
+        // each predictor and sample width through the same decoder.
+        &[
+            "-ot",
+            "Int16",
+            "-co",
+            "COMPRESS=LZW",
+            "-co",
+            "TILED=YES",
+            "-co",
+            "BLOCKXSIZE=48",
+            "-co",
+            "BLOCKYSIZE=48",
+        ],
+        &[
+            "-ot",
+            "Int16",
+            "-co",
+            "COMPRESS=LZW",
+            "-co",
+            "PREDICTOR=2",
+            "-co",
+            "TILED=YES",
+            "-co",
+            "BLOCKXSIZE=48",
+            "-co",
+            "BLOCKYSIZE=32",
+        ],
+        &[
+            "-ot",
+            "Int32",
+            "-co",
+            "COMPRESS=LZW",
+            "-co",
+            "PREDICTOR=2",
+            "-co",
+            "TILED=YES",
+            "-co",
+            "BLOCKXSIZE=48",
+            "-co",
+            "BLOCKYSIZE=48",
+        ],
+        &[
+            "-ot",
+            "Float64",
+            "-co",
+            "COMPRESS=LZW",
+            "-co",
+            "TILED=YES",
+            "-co",
+            "BLOCKXSIZE=48",
+            "-co",
+            "BLOCKYSIZE=48",
+        ],
+        &[
+            "-co",
+            "COMPRESS=LZW",
+            "-co",
+            "PREDICTOR=3",
+            "-co",
+            "TILED=YES",
+            "-co",
+            "BLOCKXSIZE=48",
+            "-co",
+            "BLOCKYSIZE=48",
+        ],
+        &[
+            "-ot",
+            "Float64",
+            "-co",
+            "COMPRESS=LZW",
+            "-co",
+            "PREDICTOR=3",
+            "-co",
+            "TILED=YES",
+            "-co",
+            "BLOCKXSIZE=64",
+            "-co",
+            "BLOCKYSIZE=48",
+        ],
+        &[
+            "-co",
+            "SPARSE_OK=TRUE",
+            "-co",
+            "COMPRESS=LZW",
+            "-co",
+            "TILED=YES",
+            "-co",
+            "BLOCKXSIZE=48",
+            "-co",
+            "BLOCKYSIZE=48",
+        ],
     ];
     for (k, options) in cases.iter().enumerate() {
         let ext = if options.contains(&"AAIGrid") {
@@ -584,6 +676,19 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         };
         assert_eq!(place(&got.georef), place(&dem.georef), "{options:?}");
     }
+    // An LZW tile the file ends inside is an error at that tile's bytes.
+    let lzw = dir.path().join("case11.tif");
+    let mut bytes = std::fs::read(&lzw).unwrap();
+    bytes.truncate(bytes.len() * 3 / 5);
+    let cut = dir.path().join("cut.tif");
+    std::fs::write(&cut, &bytes).unwrap();
+    let text = load_dem(&cut, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        text.contains("cut.tif") && text.contains("byte ") && text.contains("tile "),
+        "{text}"
+    );
     // A compression the decoder lacks is refused by name, with the way out.
     let lerc = dir.path().join("lerc.tif");
     gdal(

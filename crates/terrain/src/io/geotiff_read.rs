@@ -1,6 +1,7 @@
 //! GeoTIFF input: one band of 8/16/32-bit integer or 32/64-bit float
 //! samples, striped or tiled (the `tiff` crate handles layout and
-//! compression), with ModelPixelScale + ModelTiepoint or
+//! compression, except LZW tiles: `geotiff_lzw_tiles`), with
+//! ModelPixelScale + ModelTiepoint or
 //! ModelTransformation georeferencing and GDAL's nodata tag.
 
 use std::fs::File;
@@ -14,6 +15,7 @@ use super::crs_sidecar::{read_crs_sidecar, wkt_is_geographic};
 use super::geokeys::{
     declares_crs, geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE,
 };
+use super::geotiff_lzw_tiles::{read_lzw_tiles, TileLayout, TileSamples};
 use super::geotiff_sparse::{absent_height, block_byte_counts, read_sparse};
 use super::limits::{check_dimensions, ensure_room, zeroed_heights, MAX_SAMPLES};
 use super::nodata::nodata_as_f32;
@@ -171,15 +173,38 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
         None => {
             // The decoded samples and the heights made from them.
             ensure_room(path, "tag 256", width, height, bits as usize / 8 + 4)?;
-            match block_byte_counts(path, &mut dec)? {
-                Some(counts) if counts.contains(&0) => {
-                    read_sparse(path, &mut dec, &counts, (width, height), nodata, to_heights)?
-                }
-                _ => {
-                    let data = dec.read_image().map_err(|e| {
-                        DemError::new(path, "image data", format!("cannot decode samples: {e}"))
-                    })?;
-                    to_heights(data, nodata)
+            let samples = TileSamples {
+                bits: bits as u16,
+                format: format as u16,
+                predictor: unsigned(path, &mut dec, Tag::Predictor)?.unwrap_or(1) as u16,
+                little_endian,
+            };
+            if let Some((offsets, counts, tile)) = lzw_tile_layout(path, &mut dec, samples)? {
+                let layout = TileLayout {
+                    offsets: &offsets,
+                    counts: &counts,
+                    tile,
+                };
+                read_lzw_tiles(
+                    path,
+                    &strips_file,
+                    &layout,
+                    (width, height),
+                    samples,
+                    absent,
+                    |data| to_heights(data, nodata),
+                )?
+            } else {
+                match block_byte_counts(path, &mut dec)? {
+                    Some(counts) if counts.contains(&0) => {
+                        read_sparse(path, &mut dec, &counts, (width, height), nodata, to_heights)?
+                    }
+                    _ => {
+                        let data = dec.read_image().map_err(|e| {
+                            DemError::new(path, "image data", format!("cannot decode samples: {e}"))
+                        })?;
+                        to_heights(data, nodata)
+                    }
                 }
             }
         }
@@ -201,6 +226,41 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
         nodata,
         georef,
     })
+}
+
+/// The tiles' offsets, byte counts and size when the image is LZW-compressed
+/// tiles that [`read_lzw_tiles`] decodes: a predictor it knows and tiles of
+/// at most 2²⁴ samples; none otherwise, for the `tiff` crate to decode (or
+/// refuse).
+#[allow(clippy::type_complexity)]
+fn lzw_tile_layout<R: Read + Seek>(
+    path: &Path,
+    dec: &mut Decoder<R>,
+    samples: TileSamples,
+) -> Result<Option<(Vec<u64>, Vec<u64>, (usize, usize))>, DemError> {
+    if unsigned(path, dec, Tag::Compression)? != Some(5) || !(1..=3).contains(&samples.predictor) {
+        return Ok(None);
+    }
+    let (Some(tw), Some(th)) = (
+        unsigned(path, dec, Tag::TileWidth)?,
+        unsigned(path, dec, Tag::TileLength)?,
+    ) else {
+        return Ok(None);
+    };
+    if tw.saturating_mul(th) > 1 << 24 {
+        return Ok(None);
+    }
+    let list = |dec: &mut Decoder<R>, tag: Tag| match find(path, dec, tag.to_u16())? {
+        None => Err(DemError::new(
+            path,
+            format!("tag {}", tag.to_u16()),
+            "missing; a tiled image lists its tiles there",
+        )),
+        Some(v) => v.into_u64_vec().map_err(|e| tag_err(path, tag.to_u16(), e)),
+    };
+    let offsets = list(dec, Tag::TileOffsets)?;
+    let counts = list(dec, Tag::TileByteCounts)?;
+    Ok(Some((offsets, counts, (tw as usize, th as usize))))
 }
 
 /// The name of a compression GDAL writes that the `tiff` crate does not
@@ -368,13 +428,13 @@ fn plain_strips<R: Read + Seek>(
 
 /// Fills `buf` from `file` at byte `at`.
 #[cfg(unix)]
-fn read_at(file: &File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
+pub(super) fn read_at(file: &File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
     std::os::unix::fs::FileExt::read_exact_at(file, buf, at)
 }
 
 /// Fills `buf` from `file` at byte `at`.
 #[cfg(not(unix))]
-fn read_at(file: &File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
+pub(super) fn read_at(file: &File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
     let mut f = file.try_clone()?;
     f.seek(SeekFrom::Start(at))?;
     f.read_exact(buf)

@@ -10,6 +10,7 @@ mod error;
 mod geokeys;
 mod geotiff_blocks;
 mod geotiff_layout;
+mod geotiff_lzw_tiles;
 mod geotiff_read;
 mod geotiff_sparse;
 mod geotiff_write;
