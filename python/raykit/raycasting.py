@@ -114,6 +114,7 @@ class RaycastingScene:
         if device is not None and "CPU" not in str(device).upper():
             raise ValueError(f"raykit runs on the CPU only; got device {device}")
         self._origin = None if origin is None else _origin_of(origin)
+        self._origin_given = origin is not None
         self._nthreads = _arrays.threads(nthreads)
         self._accel_name = accel
         self._test_name = test
@@ -608,7 +609,8 @@ class RaycastingScene:
     def origin(self) -> np.ndarray:
         """The point the scene's coordinates are stored relative to, float64
         ``(3,)`` (beyond Open3D): zero, or, for a scene whose first geometry
-        lies far from the coordinates' origin, a point near its centre (a
+        lies far from the coordinates' origin (or was moved there by
+        :meth:`update_vertices`), a point near its centre (a
         multiple of a power of two near its size, so float32 input moves
         exactly). Everything the scene takes and returns is in the caller's
         coordinates."""
@@ -682,17 +684,30 @@ class RaycastingScene:
         rebuilt. The point-query structure is rebuilt at its next use.
         Returns ``{"rebuilt": bool, "degradation": float}`` (degradation NaN
         when the structure has no refit), or ``None`` when no structure was
-        built yet (it is built at the next query).
+        built yet (it is built at the next query). A scene of this geometry
+        alone, without ``origin=``, chooses its :attr:`origin` again from the
+        new positions, as if the geometry had been added there.
         """
         gid = int(geometry_id)
         if not 0 <= gid < len(self._vertices):
             raise ValueError(f"geometry_id {geometry_id} out of range: the scene has {len(self._vertices)} geometries")
-        v = _arrays.floats(vertex_positions, "vertex_positions", last=3, shift=self._geometry_origins[gid])
-        old = self._vertices[gid]
+        raw = _arrays.reals(vertex_positions, "vertex_positions", last=3)
+        own = self._geometry_origins[gid]
+        # A scene of this one geometry, placed where it is, with an origin
+        # chosen from it, chooses again: a mesh moved far away keeps its
+        # float32 precision as it would added there.
+        alone = len(self._vertices) == 1 and len(self._placements) == 1 and self._placements[0][1] is None
+        if alone and not getattr(self, "_origin_given", False):
+            own = _far_origin(raw)
+        v = _arrays.floats(raw, "vertex_positions", last=3, shift=own)
+        old, old_origin = self._vertices[gid], self._geometry_origins[gid]
         if v.shape != old.shape:
             raise ValueError(f"vertex_positions must have shape {old.shape} (geometry {gid}'s), got {v.shape}")
         _check_coordinates(v)
         self._vertices[gid] = v
+        self._geometry_origins[gid] = own
+        if alone:
+            self._origin = own
         self._flat_of_instances = None
         if self._scene is None:
             return None
@@ -705,6 +720,9 @@ class RaycastingScene:
             return self._scene.refit(np.ascontiguousarray(self._all_vertices()), self._nthreads, **limit)
         except BaseException:
             self._vertices[gid] = old
+            self._geometry_origins[gid] = old_origin
+            if alone:
+                self._origin = old_origin
             raise
 
     def stats(self) -> dict:

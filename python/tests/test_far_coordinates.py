@@ -82,6 +82,37 @@ def test_a_model_at_utm_coordinates_answers_as_at_the_origin(model):
     assert (inside_near == far.compute_occupancy(points + FAR)).mean() >= 0.999
 
 
+def test_a_model_moved_far_by_update_vertices_answers_as_added_there(model):
+    """A one-geometry scene built near zero and then moved to UTM
+    coordinates by ``update_vertices`` chooses its origin again; a scene
+    with a given origin keeps it."""
+    v, t = model
+    rng = np.random.default_rng(5)
+    points = -10.0 + rng.random((3000, 3)) * 120.0
+    rays = rays_at(v, 5000, 3).astype(np.float64)
+    moved = rays.copy()
+    moved[:, :3] += FAR
+    near = scene_of(v, t)
+    want_d = near.compute_distance(points)
+    want_hits = near.cast_rays(rays)
+    for query_first in (False, True):
+        scene = scene_of(v, t)
+        if query_first:
+            scene.cast_rays(rays[:10])
+        scene.update_vertices(0, v + FAR)
+        assert np.abs(scene.origin - (FAR + 50.0)).max() <= 64.0, scene.origin
+        assert np.abs(scene.compute_distance(points + FAR) - want_d).max() <= 1e-4
+        assert_same_hits(want_hits, scene.cast_rays(moved), rays, "cast_rays after update_vertices")
+        # Back near zero, the origin is zero again.
+        scene.update_vertices(0, v)
+        assert np.array_equal(scene.origin, np.zeros(3))
+        assert np.abs(scene.compute_distance(points) - want_d).max() <= 1e-4
+    given = scene_of(v, t, origin=[0.0, 0.0, 0.0])
+    given.update_vertices(0, v + 1000.0)
+    assert np.array_equal(given.origin, np.zeros(3))
+    assert np.abs(given.compute_distance(points + 1000.0) - want_d).max() <= 1e-3
+
+
 def test_float32_input_far_away_is_stored_without_rounding(model):
     """Float32 coordinates at UTM positions are already rounded; the origin
     lies on a grid fine enough that moving them by it rounds nothing more."""
