@@ -159,12 +159,14 @@ pub fn shadow<'py>(
             }
             if !(0.0..=90.0).contains(&el) {
                 return Err(value_error(format!(
-                    "sun: the elevation must be between 0 and 90 degrees, got {el}"
+                    "sun: the elevation must be between 0 and 90 degrees, got {}",
+                    format_number(el)
                 )));
             }
             if !az.is_finite() {
                 return Err(value_error(format!(
-                    "sun: the azimuth must be a finite number of degrees, got {az}"
+                    "sun: the azimuth must be a finite number of degrees, got {}",
+                    format_number(az)
                 )));
             }
             Light::Sun {

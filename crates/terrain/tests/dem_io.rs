@@ -616,6 +616,36 @@ fn esri_ascii_grids_read_with_their_corner_and_errors_name_the_line() {
         (g.pixel_width, g.pixel_height, g.geographic),
         (0.25, -0.125, true)
     );
+    // NaN written as GDAL writes it in float grids without a nodata value,
+    // first on the first row too: a sample, not a header keyword.
+    let mut with_nan = want.clone();
+    with_nan[0] = f32::NAN;
+    let nan_rows: Vec<String> = with_nan
+        .chunks(w)
+        .map(|r| {
+            r.iter()
+                .map(|&x| {
+                    if x.is_nan() {
+                        "nan".to_string()
+                    } else {
+                        format!("{x}")
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(" ")
+        })
+        .collect();
+    let c = dir.join("nan.asc");
+    std::fs::write(
+        &c,
+        format!(
+            "ncols {w}\nnrows {h}\nxllcorner 0\nyllcorner 0\ncellsize 1\n{}\n",
+            nan_rows.join("\n")
+        ),
+    )
+    .unwrap();
+    let dem = read_ascii_grid(&c).unwrap_or_else(|e| panic!("{e}"));
+    assert_same_heights(&dem.heights, &with_nan);
     // Malformed: each error names the line (or the header) and the problem.
     let header = format!("ncols {w}\nnrows {h}\nxllcorner 0\nyllcorner 0\ncellsize 2\n");
     let body = rows.join("\n").replace("-9999", "0");

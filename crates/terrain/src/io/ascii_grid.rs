@@ -155,7 +155,11 @@ fn read_header<'a>(
             lines.next();
             continue;
         };
-        if key.starts_with(|c: char| c.is_ascii_digit() || "+-.".contains(c)) {
+        // The first row of samples ends the header: a number, or a NaN or
+        // infinity as GDAL writes them in float grids.
+        if key.starts_with(|c: char| c.is_ascii_digit() || "+-.".contains(c))
+            || key.parse::<f64>().is_ok()
+        {
             break;
         }
         lines.next();

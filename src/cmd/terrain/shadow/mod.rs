@@ -18,7 +18,7 @@ use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use raykit_lab::measure::timed;
 use raykit_terrain::curvature::curvature_corrected;
-use raykit_terrain::georef::MapWorld;
+use raykit_terrain::georef::{format_number, MapWorld};
 use raykit_terrain::io::layout_from_creation_options;
 use raykit_terrain::mask_cells::{MaskClasses, MaskValues, Preview, Range, PREVIEW_PALETTE};
 use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
@@ -204,9 +204,16 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     } else {
         let [az, el] = numbers::<2>("--sun", args.sun.as_deref().unwrap_or_default())?;
         if !(0.0..=90.0).contains(&el) {
-            bail!("--sun: the elevation must be between 0 and 90 degrees, got {el}");
+            bail!(
+                "--sun: the elevation must be between 0 and 90 degrees, got {}",
+                format_number(el)
+            );
         }
-        named = format!("sun at azimuth {az}°, elevation {el}°");
+        named = format!(
+            "sun at azimuth {}°, elevation {}°",
+            format_number(az),
+            format_number(el)
+        );
         Light::Sun {
             azimuth_deg: az,
             elevation_deg: el,
