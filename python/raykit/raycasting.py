@@ -196,7 +196,7 @@ class RaycastingScene:
             raise ValueError(
                 f"triangle {bad} refers to vertex {int(t[bad].max())}, but there are only {len(v)} vertices"
             )
-        _check_coordinates(v)
+        v = _check_coordinates(v, t)
         self._origin = origin
         self._vertices.append(v)
         self._geometry_origins.append(own)
@@ -703,7 +703,7 @@ class RaycastingScene:
         old, old_origin = self._vertices[gid], self._geometry_origins[gid]
         if v.shape != old.shape:
             raise ValueError(f"vertex_positions must have shape {old.shape} (geometry {gid}'s), got {v.shape}")
-        _check_coordinates(v)
+        v = _check_coordinates(v, self._triangles[gid])
         self._vertices[gid] = v
         self._geometry_origins[gid] = own
         if alone:
@@ -740,19 +740,28 @@ class RaycastingScene:
             raise ValueError(f"{what}: a scene with instances has no saved form; only single-level scenes do")
 
 
-def _check_coordinates(v: np.ndarray) -> None:
-    """Refuse vertices that are not finite, or beyond the coordinates a mesh
-    may hold (the f32 products of the ray and winding-number tests
-    overflow there), naming the first."""
-    if not np.isfinite(v).all():
-        bad = int(np.argmax(~np.isfinite(v).all(axis=1)))
-        raise ValueError(f"vertex {bad} has a NaN or infinite coordinate")
-    far = (np.abs(v) > _raykit.MAX_COORDINATE).any(axis=1)
-    if far.any():
+def _check_coordinates(v: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Refuse vertices of triangles ``t`` that are not finite, or beyond the
+    coordinates a mesh may hold (the f32 products of the ray and
+    winding-number tests overflow there), naming the first. Vertices no
+    triangle uses may be anything, as in Open3D and trimesh: they are
+    returned moved onto a used vertex (or zero), where they change no box."""
+    nan = ~np.isfinite(v).all(axis=1)
+    far = ~nan & (np.abs(v) > _raykit.MAX_COORDINATE).any(axis=1)
+    if not (nan.any() or far.any()):
+        return v
+    used = np.zeros(len(v), dtype=bool)
+    used[t[t < len(v)]] = True
+    if (nan & used).any():
+        raise ValueError(f"vertex {int(np.argmax(nan & used))} has a NaN or infinite coordinate")
+    if (far & used).any():
         raise ValueError(
-            f"vertex {int(np.argmax(far))} has a coordinate beyond ±{_raykit.MAX_COORDINATE:.0e}, where the "
+            f"vertex {int(np.argmax(far & used))} has a coordinate beyond ±{_raykit.MAX_COORDINATE:.0e}, where the "
             "f32 products of the ray and winding-number tests overflow; move or scale the mesh"
         )
+    v = v.copy()
+    v[nan | far] = v[used][0] if used.any() else 0
+    return v
 
 
 def _check_placement(v: np.ndarray, box, m: np.ndarray, iid: int, gid: int) -> None:

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _arrays, _raykit
+from .raycasting import _check_coordinates
 
 class RayMeshIntersector:
     """Ray queries on a ``trimesh.Trimesh``, answered by raykit.
@@ -68,8 +69,9 @@ class RayMeshIntersector:
         if self._scene is None or key != self._key:
             vertices = np.asarray(self.mesh.vertices, dtype=np.float64)
             faces = _arrays.indices(np.asarray(self.mesh.faces), "mesh.faces")
-            self._shift = vertices.min(axis=0) if len(vertices) else np.zeros(3)
-            shifted = np.ascontiguousarray(vertices - self._shift, dtype=np.float32)
+            finite = vertices[np.isfinite(vertices).all(axis=1)]
+            self._shift = finite.min(axis=0) if len(finite) else np.zeros(3)
+            shifted = np.ascontiguousarray(_check_coordinates(vertices - self._shift, faces), dtype=np.float32)
             self._scene = _raykit.Scene(
                 shifted, faces, np.array([0, len(faces)], dtype=np.uint32), self._accel, self._test, self._threads
             )

@@ -181,6 +181,24 @@ def test_bad_meshes_raise(bunny):
     bad[7, 1] = np.nan
     with pytest.raises(ValueError, match="vertex 7 has a NaN or infinite coordinate"):
         s.add_triangles(bad, f)
+    # Vertices no triangle uses may be anything (Open3D and trimesh take
+    # them): the answers are the mesh's without them. The first used one
+    # that is not finite is named.
+    spare = np.concatenate([[[np.nan, 0.0, 0.0], [np.inf, 1e30, 0.0]], v]).astype(np.float64)
+    moved = f.astype(np.int64) + 2
+    rays = rays_at(v, 2000, 11)
+    with_spare = raykit.RaycastingScene()
+    with_spare.add_triangles(spare, moved)
+    plain = raykit.RaycastingScene()
+    plain.add_triangles(v, f)
+    np.testing.assert_array_equal(with_spare.cast_rays(rays)["t_hit"], plain.cast_rays(rays)["t_hit"])
+    points = rays[:500, :3]
+    np.testing.assert_array_equal(with_spare.compute_distance(points), plain.compute_distance(points))
+    with_spare.update_vertices(0, spare * 2.0)
+    np.testing.assert_allclose(with_spare.compute_distance(points * 2.0), plain.compute_distance(points) * 2.0, rtol=1e-5)
+    spare[9, 2] = np.nan
+    with pytest.raises(ValueError, match="vertex 9 has a NaN or infinite coordinate"):
+        raykit.RaycastingScene().add_triangles(spare, moved)
     # Coordinates whose f32 products overflow in the ray and winding
     # tests: a ray from inside such a cube used to miss it.
     far = v.astype(np.float64) * 1e15

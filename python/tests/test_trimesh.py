@@ -151,6 +151,23 @@ def test_far_from_the_origin(data):
     np.testing.assert_allclose(loc_far - shift, loc, atol=1e-4 * mesh.scale)
 
 
+def test_vertices_no_face_uses_may_be_nan(data):
+    """trimesh keeps vertices that no face uses (after ``update_faces``, for
+    one); a NaN among them changes no answer, as in trimesh's own engine."""
+    mesh = load(data, "teapot_992.obj")
+    o, d = random_rays(mesh, 300, 6)
+    spare = np.concatenate([mesh.vertices, [[np.nan, np.nan, np.nan], [1e300, 0.0, 0.0]]])
+    odd = trimesh.Trimesh(spare, mesh.faces, process=False)
+    want = raykit.trimesh.RayMeshIntersector(mesh).intersects_location(o, d)
+    got = raykit.trimesh.RayMeshIntersector(odd).intersects_location(o, d)
+    assert len(want[0]) > 50
+    for a, b in zip(got, want):
+        np.testing.assert_array_equal(a, b)
+    used = trimesh.Trimesh(spare, np.concatenate([mesh.faces, [[0, 1, len(spare) - 2]]]), process=False)
+    with pytest.raises(ValueError, match=f"vertex {len(spare) - 2} has a NaN"):
+        raykit.trimesh.RayMeshIntersector(used).intersects_first(o, d)
+
+
 def test_bad_rays(data):
     mesh = load(data, "teapot_992.obj")
     ray = raykit.trimesh.RayMeshIntersector(mesh)
