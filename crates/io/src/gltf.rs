@@ -17,7 +17,7 @@
 
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::far_origin::FarOrigin;
-use crate::gltf_accessor::{read_floats, read_indices};
+use crate::gltf_accessor::{check_fits, read_floats, read_indices};
 use crate::gltf_draco::{decode_primitive, point_placeholders_at_data, DracoPrimitive};
 use crate::gltf_flat_size::FlatSize;
 use crate::gltf_glb::{is_glb, split_glb};
@@ -113,9 +113,18 @@ pub(crate) fn parse_gltf(
     let mut placements = Vec::new();
     let mut walked = Vec::new();
     let mut size = FlatSize::default();
+    let mut checked = std::collections::HashSet::new();
     walk_nodes(path, &doc, &locals, &mut |node, world| {
         walked.push((node.index(), *world));
         if let Some(mesh) = node.mesh() {
+            if checked.insert(mesh.index()) {
+                for prim in mesh.primitives() {
+                    let accessors = [prim.get(&Semantic::Positions), prim.indices()];
+                    for acc in accessors.iter().flatten() {
+                        check_fits(path, acc, &buffers)?;
+                    }
+                }
+            }
             let placed = mesh_placements(path, &doc, &buffers, data.len(), node, world)?;
             size.add_copies(FlatSize::of_mesh(&mesh), placed.len() as u64);
             placements.extend(placed.into_iter().map(|m| (node.clone(), mesh.clone(), m)));

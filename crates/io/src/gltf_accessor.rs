@@ -63,6 +63,31 @@ pub(crate) fn read_indices(
     })
 }
 
+/// Refuse `acc` when its elements do not fit in its buffer view, before
+/// anything is sized from its count (a count no data backs would otherwise
+/// be reported as a file too large for memory).
+pub(crate) fn check_fits(
+    path: &Path,
+    acc: &Accessor<'_>,
+    buffers: &Buffers<'_>,
+) -> Result<(), LoadError> {
+    if let Some(view) = acc.view() {
+        let name = format!("accessors[{}]", acc.index());
+        let elem = acc.data_type().size() * acc.dimensions().multiplicity();
+        view_slice(
+            path,
+            &name,
+            &view,
+            buffers,
+            acc.offset(),
+            acc.count(),
+            elem,
+            true,
+        )?;
+    }
+    Ok(())
+}
+
 fn read<T: Copy + Default>(
     path: &Path,
     acc: &Accessor<'_>,

@@ -137,7 +137,11 @@ pub(crate) fn read_external(file: &Path, max: u64) -> Result<Vec<u8>, String> {
     let cannot = |e: std::io::Error| format!("cannot read {}: {e}", file.display());
     let meta = std::fs::metadata(file).map_err(cannot)?;
     if !meta.is_file() {
-        return Err(format!("{} is not a regular file", file.display()));
+        return Err(format!(
+            "{}: {}",
+            file.display(),
+            crate::input::not_a_regular_file(&meta)
+        ));
     }
     let mut out = Vec::new();
     std::fs::File::open(file)

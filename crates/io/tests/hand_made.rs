@@ -213,7 +213,7 @@ fn gltf_external_files_stay_in_the_files_folder() {
         ),
         ("file:///etc/passwd", "has a scheme"),
         ("/dev/zero", "leaves the folder of the file naming it"),
-        ("sub", "is not a regular file"),
+        ("sub", "not a regular file (a folder)"),
     ] {
         let e = with_uri(uri).unwrap_err();
         assert_eq!(

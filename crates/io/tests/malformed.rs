@@ -191,6 +191,14 @@ fn wrong_element_counts() {
         "do not fit in bufferViews[0]",
     );
     assert!(e.to_string().contains("t.gltf: accessors[0]: "), "{e}");
+    // A count far beyond its data is the same fault, not a file too large
+    // for memory.
+    let e = fails_with(
+        "t.gltf",
+        &gltf.replace("\"count\":792", "\"count\":3000000000"),
+        "do not fit in bufferViews[0]",
+    );
+    assert!(e.to_string().contains("t.gltf: accessors[0]: "), "{e}");
     assert!(header_end > 0);
 }
 
