@@ -11,6 +11,7 @@
 //! the rays or of all the hits in traced order is made.
 
 use crate::hit_arrays::{HitColumns, INVALID_ID};
+use crate::threads::Stop;
 use raykit_core::{Ray, Vec3};
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -102,12 +103,14 @@ pub fn band_rays(rays: &[f32], start: usize, order: &[u32], tnear: f32, tfar: f3
 
 /// Per row of `rays` (`n` rows of `[ox, oy, oz, dx, dy, dz]` over
 /// `[tnear, tfar]`): whether `occluded` finds it blocked, traced band by
-/// band ([`Bands`], in image blocks when the rows form rows of `width`).
+/// band ([`Bands`], in image blocks when the rows form rows of `width`);
+/// bands not begun when `stop` is raised are left out.
 pub fn occlusion_by_bands(
     rays: &[f32],
     n: usize,
     width: usize,
     (tnear, tfar): (f32, f32),
+    stop: &Stop,
     occluded: impl Fn(&[Ray], &mut [bool]) + Sync,
 ) -> Vec<bool> {
     let mut out = vec![false; n];
@@ -115,6 +118,9 @@ pub fn occlusion_by_bands(
     out.par_chunks_mut(bands.len)
         .enumerate()
         .for_each(|(b, out)| {
+            if stop.raised() {
+                return;
+            }
             let order = bands.order(out.len());
             let traced = band_rays(rays, b * bands.len, &order, tnear, tfar);
             let mut hit = vec![false; traced.len()];
@@ -142,11 +148,13 @@ pub struct HitRow {
 /// blocks when the rows form rows of `width`): `nearest` answers a band's
 /// rays in traced order, and each band writes its own part of the columns.
 /// The columns start zeroed, which costs nothing until a band writes them;
-/// misses are written with the hits.
+/// misses are written with the hits. Bands not begun when `stop` is raised
+/// are left out.
 pub fn nearest_by_bands(
     rays: &[f32],
     n: usize,
     width: usize,
+    stop: &Stop,
     nearest: impl Fn(&[Ray]) -> Vec<Option<HitRow>> + Sync,
 ) -> HitColumns {
     let mut c = HitColumns::zeroed(n);
@@ -160,6 +168,9 @@ pub fn nearest_by_bands(
         .zip(c.normal.par_chunks_mut(3 * len))
         .enumerate()
         .for_each(|(b, (((((t, g), inst), p), uv), nrm))| {
+            if stop.raised() {
+                return;
+            }
             let order = bands.order(t.len());
             let traced = band_rays(rays, b * len, &order, 0.0, f32::INFINITY);
             for (&i, h) in order.iter().zip(nearest(&traced)) {

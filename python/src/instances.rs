@@ -7,7 +7,7 @@ use crate::arrays::rows;
 use crate::errors::value_error;
 use crate::hit_arrays::{column, laid_out, matrix, HitColumns};
 use crate::image_order::{nearest_by_bands, occlusion_by_bands, HitRow};
-use crate::threads::detached;
+use crate::threads::{detached, interruptible, Stop};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use raykit_core::accel::BuildOptions;
@@ -59,8 +59,8 @@ impl InstancedScene {
     /// Nearest hits of the `n` rows of `rays` as result columns, traced
     /// band by band (in image blocks when the rays form rows of `width`;
     /// [`nearest_by_bands`]).
-    fn nearest(&self, rays: &[f32], n: usize, mask: u32, width: usize) -> HitColumns {
-        nearest_by_bands(rays, n, width, |traced| {
+    fn nearest(&self, rays: &[f32], n: usize, mask: u32, width: usize, stop: &Stop) -> HitColumns {
+        nearest_by_bands(rays, n, width, stop, |traced| {
             let mut hits = vec![None; traced.len()];
             self.scene.intersect_batch(traced, mask, &mut hits);
             hits.iter()
@@ -153,7 +153,7 @@ impl InstancedScene {
         Bound<'py, PyArray2<f32>>,
     )> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let c = detached(py, threads, || self.nearest(r, n, mask, width))?;
+        let c = interruptible(py, threads, n, |stop| self.nearest(r, n, mask, width, stop))?;
         Ok((
             c.t.into_pyarray(py),
             c.geometry.into_pyarray(py),
@@ -179,8 +179,8 @@ impl InstancedScene {
         width: usize,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let occluded = detached(py, threads, || {
-            occlusion_by_bands(r, n, width, (tnear, tfar), |rays, out| {
+        let occluded = interruptible(py, threads, n, |stop| {
+            occlusion_by_bands(r, n, width, (tnear, tfar), stop, |rays, out| {
                 self.scene.occluded_batch(rays, mask, out)
             })
         })?;

@@ -7,7 +7,7 @@ use crate::arrays::rows;
 use crate::errors::value_error;
 use crate::hit_arrays::{column, laid_out, matrix, INVALID_ID};
 use crate::scene::Scene;
-use crate::threads::detached;
+use crate::threads::interruptible;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -17,6 +17,11 @@ use rayon::prelude::*;
 
 /// Points per rayon task.
 const GRAIN: usize = 1024;
+
+/// Rays or points handed to the engine at a time: a call stops between
+/// pieces when interrupted ([`interruptible`]). Large enough that each
+/// piece keeps the engine's own order (Morton order of points) effective.
+const PIECE: usize = 1 << 20;
 
 /// The points of the rows of an `(n, 3)` array.
 fn points(p: &[f32]) -> Vec<Vec3> {
@@ -63,12 +68,16 @@ pub fn closest_points<'py>(
             "max_distance must be >= 0, got {max_distance}"
         )));
     }
-    let (pts, g, p, uv, nrm, dist) = detached(py, threads, || {
+    let (pts, g, p, uv, nrm, dist) = interruptible(py, threads, n, |stop| {
         let built = scene.read();
         let bvh = built.surface();
         let qp = points(q);
         let mut found: Vec<Option<ClosestPoint>> = vec![None; n];
-        bvh.closest_points(&qp, max_distance, &mut found);
+        for (qp, found) in qp.chunks(PIECE).zip(found.chunks_mut(PIECE)) {
+            if !stop.raised() {
+                bvh.closest_points(qp, max_distance, found);
+            }
+        }
         let mut pts = vec![f32::NAN; 3 * n];
         let mut g = vec![INVALID_ID; n];
         let mut p = vec![INVALID_ID; n];
@@ -132,23 +141,28 @@ fn point_values<'py>(
     what: PointValue,
 ) -> PyResult<Bound<'py, PyArray1<f32>>> {
     let (q, n) = rows(&query_points, 3, "query_points")?;
-    let out = detached(py, threads, || {
+    let out = interruptible(py, threads, n, |stop| {
         let built = scene.read();
         let bvh = built.surface();
         let qp = points(q);
         let mut out = vec![0.0f32; n];
-        match what {
-            PointValue::Distance => bvh.distances(&qp, &mut out),
-            PointValue::SignedDistance => bvh.signed_distances(&qp, &mut out),
-            PointValue::Occupancy => {
-                let mut inside = vec![false; n];
-                bvh.inside_batch(&qp, &mut inside);
-                out.par_iter_mut()
-                    .zip(&inside)
-                    .with_min_len(GRAIN)
-                    .for_each(|(o, &i)| *o = f32::from(u8::from(i)));
+        for (qp, out) in qp.chunks(PIECE).zip(out.chunks_mut(PIECE)) {
+            if stop.raised() {
+                break;
             }
-            PointValue::Winding(beta) => bvh.winding_numbers_with(&qp, beta, &mut out),
+            match what {
+                PointValue::Distance => bvh.distances(qp, out),
+                PointValue::SignedDistance => bvh.signed_distances(qp, out),
+                PointValue::Occupancy => {
+                    let mut inside = vec![false; qp.len()];
+                    bvh.inside_batch(qp, &mut inside);
+                    out.par_iter_mut()
+                        .zip(&inside)
+                        .with_min_len(GRAIN)
+                        .for_each(|(o, &i)| *o = f32::from(u8::from(i)));
+                }
+                PointValue::Winding(beta) => bvh.winding_numbers_with(qp, beta, out),
+            }
         }
         out
     })?;
@@ -222,11 +236,16 @@ pub fn count_intersections<'py>(
     threads: i64,
 ) -> PyResult<Bound<'py, PyArray1<i32>>> {
     let (r, n) = rows(&rays, 6, "rays")?;
-    let out = detached(py, threads, || {
+    let out = interruptible(py, threads, n, |stop| {
         let built = scene.read();
         let bvh = built.surface();
         let mut counts = vec![0u32; n];
-        bvh.count_hits_batch(&self::rays(r), &mut counts);
+        let rays = self::rays(r);
+        for (rays, counts) in rays.chunks(PIECE).zip(counts.chunks_mut(PIECE)) {
+            if !stop.raised() {
+                bvh.count_hits_batch(rays, counts);
+            }
+        }
         counts
             .into_par_iter()
             .with_min_len(GRAIN)
@@ -257,12 +276,17 @@ pub fn list_intersections<'py>(
     Bound<'py, PyArray1<u32>>,
     Bound<'py, PyArray2<f32>>,
 )> {
-    let (r, _) = rows(&rays, 6, "rays")?;
-    let lists: Vec<Vec<Hit>> = detached(py, threads, || {
-        scene
-            .read()
-            .surface()
-            .ray_hits_batch(&self::rays(r), max_hits)
+    let (r, n) = rows(&rays, 6, "rays")?;
+    let lists: Vec<Vec<Hit>> = interruptible(py, threads, n, |stop| {
+        let built = scene.read();
+        let mut lists = Vec::with_capacity(n);
+        for rays in self::rays(r).chunks(PIECE) {
+            if stop.raised() {
+                break;
+            }
+            lists.extend(built.surface().ray_hits_batch(rays, max_hits));
+        }
+        lists
     })?;
     let (splits, ray_ids, hits) = laid_out(&lists);
     let (g, p): (Vec<u32>, Vec<u32>) = hits.iter().map(|h| scene.split(h.prim)).unzip();

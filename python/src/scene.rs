@@ -10,7 +10,7 @@ use crate::errors::persist_error;
 use crate::errors::value_error;
 use crate::hit_arrays::{matrix, HitColumns, INVALID_ID};
 use crate::image_order::{nearest_by_bands, occlusion_by_bands, HitRow};
-use crate::threads::detached;
+use crate::threads::{detached, interruptible, Stop};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -100,12 +100,12 @@ impl Scene {
     /// Nearest hits of the rows of `rays` as result columns, traced band
     /// by band in image blocks when the rays form rows of `width` (0: any
     /// order; [`nearest_by_bands`]).
-    fn nearest(&self, built: &Built, rays: &[f32], width: usize) -> HitColumns {
+    fn nearest(&self, built: &Built, rays: &[f32], width: usize, stop: &Stop) -> HitColumns {
         let n = rays.len() / 6;
         let Some(a) = built.accel() else {
             return HitColumns::misses(n);
         };
-        nearest_by_bands(rays, n, width, |traced| {
+        nearest_by_bands(rays, n, width, stop, |traced| {
             let mut hits = vec![None; traced.len()];
             a.intersect_batch(traced, &mut hits);
             hits.iter()
@@ -309,8 +309,10 @@ impl Scene {
         Bound<'py, PyArray2<f32>>,
         Bound<'py, PyArray2<f32>>,
     )> {
-        let (r, _) = rows(&rays, 6, "rays")?;
-        let c = detached(py, threads, || self.nearest(&self.read(), r, width))?;
+        let (r, n) = rows(&rays, 6, "rays")?;
+        let c = interruptible(py, threads, n, |stop| {
+            self.nearest(&self.read(), r, width, stop)
+        })?;
         Ok((
             c.t.into_pyarray(py),
             c.geometry.into_pyarray(py),
@@ -333,8 +335,8 @@ impl Scene {
         width: usize,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let occluded = detached(py, threads, || match self.read().accel() {
-            Some(a) => occlusion_by_bands(r, n, width, (tnear, tfar), |rays, out| {
+        let occluded = interruptible(py, threads, n, |stop| match self.read().accel() {
+            Some(a) => occlusion_by_bands(r, n, width, (tnear, tfar), stop, |rays, out| {
                 a.occluded_batch(rays, out)
             }),
             None => vec![false; n],

@@ -6,11 +6,20 @@
 //! that repeated calls with `threads=1` cost no thread start-up while a
 //! loop over many sizes does not keep a pool of each alive. A pool dropped
 //! from the cache lives on until the calls running on it return.
+//!
+//! Long calls can be interrupted (Ctrl-C): [`interruptible`] runs the work
+//! on its own thread while the caller's thread waits with the GIL released,
+//! taking the GIL back a few times a second to let Python's signal handlers
+//! run. A handler's exception (KeyboardInterrupt) raises [`Stop`], which
+//! the work polls between its pieces; the call then waits for the pieces
+//! in flight and raises the exception, its partial results dropped.
 
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use rayon::{ThreadPool, ThreadPoolBuilder};
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc, Mutex, OnceLock};
+use std::time::Duration;
 
 /// Largest `threads` accepted: far above any core count, low enough that
 /// a typo does not start a million threads.
@@ -81,4 +90,77 @@ where
         Some(p) => p.install(work),
         None => work(),
     }))
+}
+
+/// Below this many rays or points a call runs as [`detached`] does: a
+/// thread of its own would cost more than such a call takes.
+pub const INTERRUPTIBLE_FROM: usize = 1 << 16;
+
+/// How often a waiting caller looks for a signal.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// Raised when the caller of an [`interruptible`] call is interrupted; the
+/// work stops at its next check.
+#[derive(Default)]
+pub struct Stop(AtomicBool);
+
+impl Stop {
+    /// Whether the work should stop.
+    #[inline]
+    pub fn raised(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// [`detached`] for work on `items` rays or points that may take long:
+/// from [`INTERRUPTIBLE_FROM`] items on, a signal handler's exception
+/// (Ctrl-C's KeyboardInterrupt) raises [`Stop`] for the work and is raised
+/// once the work returns.
+pub fn interruptible<R, F>(py: Python<'_>, threads: i64, items: usize, work: F) -> PyResult<R>
+where
+    F: FnOnce(&Stop) -> R + Send,
+    R: Send,
+{
+    let stop = Stop::default();
+    if items < INTERRUPTIBLE_FROM {
+        return detached(py, threads, || work(&stop));
+    }
+    let pool = pool(threads)?;
+    std::thread::scope(|s| {
+        let (done, finished) = mpsc::channel::<()>();
+        let stop = &stop;
+        let worker = s.spawn(move || {
+            let r = match pool {
+                Some(p) => p.install(|| work(stop)),
+                None => work(stop),
+            };
+            let _ = done.send(());
+            r
+        });
+        let mut interrupted = None;
+        let mut finished = finished;
+        loop {
+            let waited;
+            (finished, waited) = py.detach(move || {
+                let waited = finished.recv_timeout(SIGNAL_POLL);
+                (finished, waited)
+            });
+            if !matches!(waited, Err(mpsc::RecvTimeoutError::Timeout)) {
+                break;
+            }
+            if interrupted.is_none() {
+                if let Err(e) = py.check_signals() {
+                    stop.0.store(true, Ordering::Relaxed);
+                    interrupted = Some(e);
+                }
+            }
+        }
+        let r = py
+            .detach(|| worker.join())
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        match interrupted {
+            Some(e) => Err(e),
+            None => Ok(r),
+        }
+    })
 }

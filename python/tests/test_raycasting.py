@@ -368,6 +368,44 @@ def test_the_gil_is_released_during_a_query(dragon):
     assert spins > 10
 
 
+def test_ctrl_c_stops_a_long_query_and_leaves_the_scene_whole(bunny):
+    """Ctrl-C (a KeyboardInterrupt, here from ``interrupt_main``) during a
+    long call raises in it, for each kind of query; the scene then answers
+    as before. (That the call returns early, at the next piece of work
+    rather than at its end, is measured in BENCHMARKS.md, not asserted.)"""
+    import _thread
+
+    v, f, _ = bunny
+    scene = scene_of(v, f)
+    rays = rays_at(v, 600_000, 13)
+    points = rays[:, :3].copy()
+    calls = {
+        "cast_rays": lambda: scene.cast_rays(rays, nthreads=1)["t_hit"],
+        "test_occlusions": lambda: scene.test_occlusions(rays, nthreads=1),
+        "count_intersections": lambda: scene.count_intersections(rays, nthreads=1),
+        "compute_distance": lambda: scene.compute_distance(points, nthreads=1),
+    }
+    for name, call in calls.items():
+        want = call()
+        started = threading.Event()
+
+        def interrupt():
+            started.wait()
+            time.sleep(0.02)
+            _thread.interrupt_main()
+
+        helper = threading.Thread(target=interrupt)
+        helper.start()
+        with pytest.raises(KeyboardInterrupt):
+            started.set()
+            call()
+            # Should the call end first, the interrupt still comes here.
+            helper.join()
+            time.sleep(1.0)
+        helper.join()
+        np.testing.assert_array_equal(call(), want, err_msg=name)
+
+
 def test_image_rays_traced_in_blocks_give_the_row_order_answers(bunny):
     v, f, _ = bunny
     scene = scene_of(v, f)
