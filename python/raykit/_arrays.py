@@ -145,6 +145,70 @@ def rows(
     return a.reshape(-1, width), lead
 
 
+#: A float64 ray whose origin lies farther than this many radii of the
+#: scene's bounding sphere is moved before it is rounded to float32.
+FAR_RADII = 16.0
+
+
+def ray_rows(
+    a, name: str, shift: np.ndarray | None, sphere: tuple[np.ndarray, float] | None, move: bool = True
+) -> tuple[np.ndarray, tuple[int, ...], np.ndarray | None]:
+    """Rays ``(..., 6)`` as :func:`rows` makes them, and how far each was
+    moved. Float64 rays whose origin lies more than :data:`FAR_RADII`
+    radii from the centre of ``sphere`` (``(centre, radius)`` in the
+    shifted coordinates; None for an empty scene) are moved along
+    themselves, in float64, to twice the radius before their closest
+    approach to it, where no triangle lies: float32 keeps such an origin to
+    a fraction of the scene's size, and rounds it by up to half a unit at
+    10⁷. Returns the float32 rays, the leading shape and the distance
+    ``t0`` each moved, in its direction's length (None when none moved, or
+    ``move`` is false); a hit's ``t`` on the moved ray plus ``t0`` is its
+    ``t`` on the ray given. Float32 rays are as given (the engine moves
+    those itself when its test is Möller's)."""
+    raw = reals(a, name, last=6, min_ndim=2)
+    if not move or sphere is None or raw.dtype != np.float64 or raw.size == 0:
+        flat, lead = rows(raw, name, 6, shift=shift)
+        return flat, lead, None
+    lead = raw.shape[:-1]
+    r = raw.reshape(-1, 6)
+    centre, radius = sphere
+    o = r[:, :3] if shift is None else r[:, :3] - shift
+    w = o - centre
+    with np.errstate(invalid="ignore", over="ignore"):
+        far = np.flatnonzero(np.einsum("ij,ij->i", w, w) > (FAR_RADII * radius) ** 2)
+    if not len(far):
+        flat, lead = rows(raw, name, 6, shift=shift)
+        return flat, lead, None
+    d = r[far, 3:]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        dd = np.einsum("ij,ij->i", d, d)
+        closest = -np.einsum("ij,ij->i", w[far], d) / dd
+        t0 = closest - 2.0 * radius / np.sqrt(dd)
+    t0 = np.where(np.isfinite(t0) & (t0 > 0), t0, 0.0)
+    moved = np.array(r, dtype=np.float64)
+    if shift is not None:
+        moved[:, :3] -= shift
+    moved[far, :3] += t0[:, None] * d
+    out = np.zeros(len(r))
+    out[far] = t0
+    return np.ascontiguousarray(moved, dtype=np.float32), lead, out
+
+
+def bounding_sphere(points: list[np.ndarray]) -> tuple[np.ndarray, float] | None:
+    """The sphere around the box of the finite ``(n, 3)`` points of every
+    array (None when there are none)."""
+    boxes = []
+    for p in points:
+        p = p[np.isfinite(p).all(axis=1)]
+        if len(p):
+            boxes.append((p.min(axis=0).astype(np.float64), p.max(axis=0).astype(np.float64)))
+    if not boxes:
+        return None
+    lo = np.min([b[0] for b in boxes], axis=0)
+    hi = np.max([b[1] for b in boxes], axis=0)
+    return (lo + hi) / 2, max(float(np.linalg.norm(hi - lo)) / 2, 1e-30)
+
+
 def indices(a, name: str) -> np.ndarray:
     """Triangle corners: ``(m, 3)`` non-negative integers as C-contiguous,
     aligned uint32."""

@@ -298,6 +298,23 @@ class RaycastingScene:
         """Forget the built structures (rebuilt at the next query)."""
         self._scene = None
         self._flat_of_instances = None
+        self._sphere_of_scene = None
+
+    def _sphere(self):
+        """The bounding sphere of the placed geometries' boxes, in the
+        scene's coordinates (None when empty), kept until the scene
+        changes: rays from afar are moved to it (:func:`_arrays.ray_rows`)."""
+        if getattr(self, "_sphere_of_scene", None) is None:
+            corners = []
+            for g, m, _ in self._placements:
+                box = self._box(g)
+                if box is None:
+                    continue
+                lo, hi = box
+                c = np.array([[(lo, hi)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
+                corners.append(c if m is None else c @ m[:, :3].T + m[:, 3])
+            self._sphere_of_scene = (_arrays.bounding_sphere(corners),)
+        return self._sphere_of_scene[0]
 
     @property
     def instanced(self) -> bool:
@@ -407,7 +424,7 @@ class RaycastingScene:
         :meth:`add_instance`) and normals are in world space; ``mask`` is
         the rays' 32-bit mask (see :meth:`add_triangles`).
         """
-        flat, lead = _arrays.rows(rays, "rays", 6, shift=self._origin)
+        flat, lead, t0 = _arrays.ray_rows(rays, "rays", self._origin, self._sphere())
         mask = _check_mask(mask, "mask")
         if self.instanced:
             t, g, inst, p, uv, n = self._built().cast_rays(
@@ -418,6 +435,8 @@ class RaycastingScene:
             if mask == 0:
                 t, g, p, uv, n = _missed(t, g, p, uv, n)
             inst = None
+        if t0 is not None:
+            t = (t + t0).astype(np.float32)
         out = {
             "primitive_uvs": _arrays.result(uv.reshape(lead + (2,))),
             "primitive_ids": _arrays.result(p.reshape(lead)),
@@ -438,10 +457,13 @@ class RaycastingScene:
         ``(...)``. Stops at the first triangle found, so it is faster than
         :meth:`cast_rays`. ``mask`` as in :meth:`cast_rays`.
         """
-        flat, lead = _arrays.rows(rays, "rays", 6, shift=self._origin)
         tnear, tfar = float(tnear), float(tfar)
         if math.isnan(tnear) or math.isnan(tfar):
             raise ValueError(f"tnear and tfar must be numbers, got {tnear} and {tfar}")
+        # A ray moved closer answers for [0, inf) only; other intervals
+        # would move with each ray.
+        whole = tnear == 0.0 and tfar == math.inf
+        flat, lead, _ = _arrays.ray_rows(rays, "rays", self._origin, self._sphere(), move=whole)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             hit = self._built().test_occlusions(
@@ -463,7 +485,7 @@ class RaycastingScene:
         times. Rays with NaN or infinite coordinates count 0. ``mask`` as in
         :meth:`cast_rays`.
         """
-        flat, lead = _arrays.rows(rays, "rays", 6, shift=self._origin)
+        flat, lead, _ = _arrays.ray_rows(rays, "rays", self._origin, self._sphere())
         mask = _check_mask(mask, "mask")
         if self.instanced:
             counts = self._built().count_intersections(flat, mask, _arrays.threads(nthreads))
@@ -488,7 +510,7 @@ class RaycastingScene:
         edge or corner is listed once, as :meth:`count_intersections` counts
         it.
         """
-        flat, _ = _arrays.rows(rays, "rays", 6, shift=self._origin)
+        flat, _, t0 = _arrays.ray_rows(rays, "rays", self._origin, self._sphere())
         cap = _arrays.max_hits(max_hits)
         mask = _check_mask(mask, "mask")
         if self.instanced:
@@ -500,6 +522,8 @@ class RaycastingScene:
                 self._built(), flat, 0 if mask == 0 else cap, _arrays.threads(nthreads)
             )
             inst = None
+        if t0 is not None:
+            t = (t + t0[ray_ids]).astype(np.float32)
         out = {
             "ray_splits": _arrays.result(splits),
             "ray_ids": _arrays.result(ray_ids),
@@ -706,6 +730,7 @@ class RaycastingScene:
         v = _check_coordinates(v, self._triangles[gid])
         self._vertices[gid] = v
         self._geometry_origins[gid] = own
+        self._sphere_of_scene = None
         if alone:
             self._origin = own
         self._flat_of_instances = None
@@ -721,6 +746,7 @@ class RaycastingScene:
         except BaseException:
             self._vertices[gid] = old
             self._geometry_origins[gid] = old_origin
+            self._sphere_of_scene = None
             if alone:
                 self._origin = old_origin
             raise

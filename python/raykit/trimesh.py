@@ -11,7 +11,9 @@ Plug it into a mesh with::
 
 The mesh is shifted by the lower corner of its bounding box (in float64)
 before it is rounded to the engine's float32, and so are the rays, so that
-meshes far from the origin keep their precision; hit locations are
+meshes far from the origin keep their precision; rays from far away are
+moved along themselves to just outside the mesh first, in float64, so that
+their origins keep it too; hit locations are
 computed in float64 from the hit triangle's own vertices and the
 barycentric coordinates. Directions are normalised, as trimesh's engines
 do.
@@ -77,10 +79,11 @@ class RayMeshIntersector:
             )
             self._vertices = vertices
             self._faces = faces
+            self._sphere = _arrays.bounding_sphere([vertices[faces.ravel()] - self._shift]) if faces.size else None
             self._key = key
         return self._scene
 
-    def _rays(self, ray_origins, ray_directions) -> tuple[np.ndarray, np.ndarray]:
+    def _rays(self, ray_origins, ray_directions) -> np.ndarray:
         o = np.asarray(_arrays.to_numpy(ray_origins))
         d = np.asarray(_arrays.to_numpy(ray_directions))
         for a, name in ((o, "ray_origins"), (d, "ray_directions")):
@@ -95,8 +98,9 @@ class RayMeshIntersector:
         norm = np.linalg.norm(d, axis=1, keepdims=True)
         with np.errstate(invalid="ignore", divide="ignore"):
             d = np.where(norm > 0, d / norm, d)
-        o = np.ascontiguousarray(o - self._shift, dtype=np.float32)
-        return o, np.ascontiguousarray(d, dtype=np.float32)
+        rays = np.concatenate([o.astype(np.float64), d], axis=1)
+        flat, _, _ = _arrays.ray_rows(rays, "rays", self._shift, self._sphere)
+        return flat
 
     def _locations(self, tri: np.ndarray, uv: np.ndarray) -> np.ndarray:
         corners = self._vertices[self._faces[tri]]
@@ -104,8 +108,8 @@ class RayMeshIntersector:
         return (1.0 - u - v) * corners[:, 0] + u * corners[:, 1] + v * corners[:, 2]
 
     def _first(self, ray_origins, ray_directions):
-        o, d = self._rays(ray_origins, ray_directions)
-        t, _, prim, uv, _ = self._scene.cast_rays(np.concatenate([o, d], axis=1), self._threads)
+        rays = self._rays(ray_origins, ray_directions)
+        t, _, prim, uv, _ = self._scene.cast_rays(rays, self._threads)
         return prim, uv
 
     def intersects_first(self, ray_origins, ray_directions, **kwargs) -> np.ndarray:
@@ -117,8 +121,8 @@ class RayMeshIntersector:
 
     def intersects_any(self, ray_origins, ray_directions, **kwargs) -> np.ndarray:
         """Whether each ray hits the mesh: ``(n,)`` bool."""
-        o, d = self._rays(ray_origins, ray_directions)
-        return self._scene.test_occlusions(np.concatenate([o, d], axis=1), 0.0, np.inf, self._threads)
+        rays = self._rays(ray_origins, ray_directions)
+        return self._scene.test_occlusions(rays, 0.0, np.inf, self._threads)
 
     def intersects_id(
         self,
@@ -137,8 +141,7 @@ class RayMeshIntersector:
         """
         if multiple_hits:
             cap = _arrays.max_hits(max_hits)
-            o, d = self._rays(ray_origins, ray_directions)
-            rays = np.ascontiguousarray(np.concatenate([o, d], axis=1))
+            rays = self._rays(ray_origins, ray_directions)
             _, ray, _, _, tri, uv = _raykit.list_intersections(self._scene, rays, cap, self._threads)
         else:
             prim, uv_all = self._first(ray_origins, ray_directions)

@@ -12,7 +12,7 @@ import struct
 
 import numpy as np
 import pytest
-from conftest import rays_at
+from conftest import brute_force, rays_at, ties
 
 import raykit
 from raykit import distributed
@@ -111,6 +111,55 @@ def test_a_model_moved_far_by_update_vertices_answers_as_added_there(model):
     given.update_vertices(0, v + 1000.0)
     assert np.array_equal(given.origin, np.zeros(3))
     assert np.abs(given.compute_distance(points + 1000.0) - want_d).max() <= 1e-3
+
+
+def test_float64_rays_from_far_away_hit_what_float64_brute_force_hits(bunny):
+    """Rays given in float64 from 10⁴-10⁶ model sizes away, at random points
+    of the model's box: raykit moves each along itself to just outside the
+    model before rounding it to float32, so the nearest triangle is the one
+    an f64 brute force finds (ties at shared corners aside) and ``t_hit``
+    is right to float32's precision. Rounded first, an origin at 10⁶ sizes
+    moves by about 0.03 sizes and most of these rays hit another triangle.
+    The same for the trimesh engine, the hit lists and the counts."""
+    v, t, _ = bunny
+    v, t = v.astype(np.float64), t.astype(np.int64)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    centre, size = (lo + hi) / 2, float(np.linalg.norm(hi - lo))
+    rng = np.random.default_rng(8)
+    scene = raykit.RaycastingScene()
+    scene.add_triangles(v, t)
+
+    class Mesh:
+        vertices, faces, scale = v, t, size
+
+    engine = raykit.trimesh.RayMeshIntersector(Mesh())
+    for far in (1e4, 1e6):
+        u = rng.normal(size=(200, 3))
+        origins = centre + far * size * u / np.linalg.norm(u, axis=1, keepdims=True)
+        d = lo + rng.random((200, 3)) * (hi - lo) - origins
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        rays = np.concatenate([origins, d], axis=1)
+        want_t, want_i = brute_force(v, t, rays)
+        hit = np.isfinite(want_t)
+        assert hit.sum() > 100
+        ans = scene.cast_rays(rays)
+        got_i = ans["primitive_ids"].astype(np.int64)
+        assert ((got_i != raykit.INVALID_ID) == hit).all(), f"{far}: hit/miss differs"
+        same = ties(t, got_i[hit], want_i[hit])
+        assert same.all(), f"{far}: {int((~same).sum())} rays hit another triangle"
+        gap = np.abs(ans["t_hit"][hit] - want_t[hit]) / want_t[hit]
+        assert gap.max() <= 2e-7, f"{far}: t_hit off by {gap.max():.1e} of t"
+        first = engine.intersects_first(rays[:, :3], rays[:, 3:])
+        assert ((first >= 0) == hit).all() and ties(t, first[hit], want_i[hit]).all()
+        lists = scene.list_intersections(rays)
+        splits = lists["ray_splits"].astype(np.int64)
+        assert ((splits[1:] > splits[:-1]) == hit).all()
+        firsts = splits[:-1][hit]
+        assert ties(t, lists["primitive_ids"][firsts].astype(np.int64), want_i[hit]).all()
+        assert (np.abs(lists["t_hit"][firsts] - want_t[hit]) / want_t[hit]).max() <= 2e-7
+        counts = scene.count_intersections(rays)
+        assert (counts[hit] % 2 == 0).all() and (counts[~hit] == 0).all()
+        assert (scene.test_occlusions(rays) == hit).all()
 
 
 def test_float32_input_far_away_is_stored_without_rounding(model):

@@ -18,7 +18,9 @@
 use crate::error::{ErrorKind, LoadError, Location};
 use crate::far_origin::FarOrigin;
 use crate::gltf_accessor::{check_fits, read_floats, read_indices};
-use crate::gltf_draco::{decode_primitive, point_placeholders_at_data, DracoPrimitive};
+use crate::gltf_draco::{
+    decode_primitive, point_placeholders_at_data, DracoPrimitive, EXTENSION as DRACO_EXTENSION,
+};
 use crate::gltf_flat_size::FlatSize;
 use crate::gltf_glb::{is_glb, split_glb};
 use crate::gltf_gpu_instancing::mesh_placements;
@@ -118,7 +120,12 @@ pub(crate) fn parse_gltf(
         walked.push((node.index(), *world));
         if let Some(mesh) = node.mesh() {
             if checked.insert(mesh.index()) {
-                for prim in mesh.primitives() {
+                // A Draco primitive's accessors are sized by its decoded
+                // data, not by a buffer view.
+                let plain = mesh
+                    .primitives()
+                    .filter(|p| p.extension_value(DRACO_EXTENSION).is_none());
+                for prim in plain {
                     let accessors = [prim.get(&Semantic::Positions), prim.indices()];
                     for acc in accessors.iter().flatten() {
                         check_fits(path, acc, &buffers)?;
