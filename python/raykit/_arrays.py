@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _raykit
+
 
 class Array(np.ndarray):
     """A numpy array that also answers Open3D's ``Tensor.numpy()``.
@@ -170,28 +172,12 @@ def ray_rows(
         flat, lead = rows(raw, name, 6, shift=shift)
         return flat, lead, None
     lead = raw.shape[:-1]
-    r = raw.reshape(-1, 6)
+    r = np.require(raw.reshape(-1, 6), dtype=np.float64, requirements=["C", "A"])
     centre, radius = sphere
-    o = r[:, :3] if shift is None else r[:, :3] - shift
-    w = o - centre
-    with np.errstate(invalid="ignore", over="ignore"):
-        far = np.flatnonzero(np.einsum("ij,ij->i", w, w) > (FAR_RADII * radius) ** 2)
-    if not len(far):
-        flat, lead = rows(raw, name, 6, shift=shift)
-        return flat, lead, None
-    d = r[far, 3:]
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        dd = np.einsum("ij,ij->i", d, d)
-        closest = -np.einsum("ij,ij->i", w[far], d) / dd
-        t0 = closest - 2.0 * radius / np.sqrt(dd)
-    t0 = np.where(np.isfinite(t0) & (t0 > 0), t0, 0.0)
-    moved = np.array(r, dtype=np.float64)
-    if shift is not None:
-        moved[:, :3] -= shift
-    moved[far, :3] += t0[:, None] * d
-    out = np.zeros(len(r))
-    out[far] = t0
-    return np.ascontiguousarray(moved, dtype=np.float32), lead, out
+    flat, t0 = _raykit.near_rays(
+        r, np.zeros(3) if shift is None else shift, centre, float(radius), FAR_RADII
+    )
+    return flat, lead, t0
 
 
 def bounding_sphere(points: list[np.ndarray]) -> tuple[np.ndarray, float] | None:

@@ -105,6 +105,13 @@ class InstancedScene:
     @property
     def placed_triangles(self) -> int: ...
 
+def near_rays(
+    rays: npt.NDArray[np.float64],
+    shift: npt.ArrayLike,
+    centre: npt.ArrayLike,
+    radius: float,
+    far_radii: float,
+) -> Tuple[npt.NDArray[np.float32], Optional[npt.NDArray[np.float64]]]: ...
 def closest_points(
     scene: Scene, query_points: npt.NDArray[np.float32], max_distance: float = ..., threads: int = 0
 ) -> Tuple[

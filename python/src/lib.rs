@@ -11,6 +11,7 @@ mod hit_arrays;
 mod image_order;
 mod instances;
 mod mesh_io;
+mod near_rays;
 mod queries;
 mod render;
 mod scene;
@@ -29,6 +30,7 @@ fn _raykit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MAX_COORDINATE", raykit_core::MAX_COORDINATE)?;
     m.add_function(wrap_pyfunction!(mesh_io::load_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(mesh_io::load_gltf_instances, m)?)?;
+    m.add_function(wrap_pyfunction!(near_rays::near_rays, m)?)?;
     m.add_function(wrap_pyfunction!(queries::closest_points, m)?)?;
     m.add_function(wrap_pyfunction!(queries::distance, m)?)?;
     m.add_function(wrap_pyfunction!(queries::signed_distance, m)?)?;
