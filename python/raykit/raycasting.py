@@ -704,10 +704,12 @@ class RaycastingScene:
         but traversal may slow as boxes overlap more. When the refit tree's
         SAH cost passes ``max_degradation`` (default 1.5, the engine's
         balance of refit and rebuild costs) times the built tree's, or the
-        structure has no refit (only ``"bvh8"`` and ``"bvh4"`` have), it is
-        rebuilt. The point-query structure is rebuilt at its next use.
-        Returns ``{"rebuilt": bool, "degradation": float}`` (degradation NaN
-        when the structure has no refit), or ``None`` when no structure was
+        structure has no refit (only ``"bvh8"`` and ``"bvh4"`` have), or the
+        model moved too far for the scaling and placement it was built with
+        (a Plücker or projection model moved far away, any model shrunk to a
+        tiny size), it is rebuilt. The point-query structure is rebuilt at
+        its next use. Returns ``{"rebuilt": bool, "degradation": float}``
+        (degradation NaN when the structure was not refit), or ``None`` when no structure was
         built yet (it is built at the next query). A scene of this geometry
         alone, without ``origin=``, chooses its :attr:`origin` again from the
         new positions, as if the geometry had been added there.

@@ -15,7 +15,9 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2}
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use raykit_core::accel::bvh::DEFAULT_MAX_DEGRADATION;
-use raykit_core::accel::{build_accel, load_accel, AccelKind, BuildOptions, RefitError};
+use raykit_core::accel::{
+    build_accel, load_accel, refit_keeps_precision, AccelKind, BuildOptions, RefitError,
+};
 use raykit_core::query::SurfaceBvh;
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, MeshError, TriangleMesh, Vec3};
@@ -262,8 +264,12 @@ impl Scene {
             checked(&mesh)?;
             // A structure not built yet is built from the new vertices at
             // its first use: nothing to refit.
+            // A model moved too far for the scaling and placement it was
+            // built with is rebuilt, as a refit would lose precision.
+            let keeps = refit_keeps_precision(built.test, &built.mesh, &mesh);
             let outcome = match built.ray_structure.get_mut().and_then(|a| a.as_mut()) {
                 None => None,
+                Some(_) if !keeps => Some((true, f64::NAN)),
                 Some(a) => Some(match a.refit(&mesh) {
                     Ok(report) => {
                         let d = report.degradation();

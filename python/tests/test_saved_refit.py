@@ -218,6 +218,36 @@ def test_update_vertices_rebuilds_past_the_degradation_limit(bunny):
         kept.update_vertices(0, v, max_degradation=0.5)
 
 
+@pytest.mark.parametrize("test", ["plucker", "projection"])
+def test_a_model_moved_far_is_rebuilt_for_the_tests_that_need_it_near(bunny, test):
+    """The Plücker and projection tests multiply coordinates: a model moved
+    far from where its structure was built is rebuilt rather than refit
+    (a refit kept the build's placement and gave other triangles and
+    barycentrics). A scene of two geometries keeps its origin, so once both
+    are moved the model really lies far; the answers are then a fresh
+    scene's, bit for bit."""
+    v, f, _ = bunny
+    v = v.astype(np.float64)
+    size = float(np.ptp(v, axis=0).max())
+    other = v + np.array([2.0, 0.0, 0.0]) * size
+    away = np.array([3e4, -2e4, 1e4]) * size
+    scene = scene_of((v, f), (other, f), test=test)
+    scene.stats()
+    # The first moved geometry and the other span the way between: a build
+    # over them would not move them either, so they refit.
+    assert not scene.update_vertices(0, v + away)["rebuilt"]
+    assert scene.update_vertices(1, other + away)["rebuilt"]
+    # Made with the first scene's origin (zero), the fresh scene holds the
+    # same float32 vertices.
+    fresh = scene_of((v + away, f), (other + away, f), test=test, origin=[0.0, 0.0, 0.0])
+    rays = rays_at(np.concatenate([v, other]) + away, 3000, seed=46).astype(np.float64)
+    a, b = scene.cast_rays(rays), fresh.cast_rays(rays)
+    assert np.isfinite(b["t_hit"]).sum() > 1000
+    assert_same_answers(a, b)
+    # Deformed in place, the same scene refits.
+    assert not scene.update_vertices(1, other + away + 1e-3 * size)["rebuilt"]
+
+
 def test_update_vertices_before_a_build_and_bad_input(bunny):
     v, f, _ = bunny
     moved = displaced(v, 0.02, seed=43)

@@ -77,7 +77,7 @@ impl UnitScale {
     }
 
     /// The scale for a model whose box is `b`.
-    fn for_bounds(b: &Aabb) -> Self {
+    pub(crate) fn for_bounds(b: &Aabb) -> Self {
         Self::for_side((b.max - b.min).max_element())
     }
 
@@ -91,8 +91,12 @@ impl UnitScale {
     /// of two of the centre's (Sterbenz), which holds for a model of that
     /// kind.
     pub fn for_mesh_near_origin(mesh: &TriangleMesh) -> Self {
-        let b = used_bounds(mesh);
-        let mut scale = Self::for_bounds(&b);
+        Self::for_bounds_near_origin(&used_bounds(mesh))
+    }
+
+    /// [`UnitScale::for_mesh_near_origin`] for a model whose box is `b`.
+    pub(crate) fn for_bounds_near_origin(b: &Aabb) -> Self {
+        let mut scale = Self::for_bounds(b);
         let (centre, side) = ((b.min + b.max) * 0.5, (b.max - b.min).max_element());
         if centre.is_finite() && centre.abs().max_element() > side {
             scale.offset = centre;
@@ -222,7 +226,7 @@ impl UnitScale {
 
 /// The box of the vertices `mesh`'s triangles use, indices out of range
 /// passed over (empty for a mesh without triangles).
-fn used_bounds(mesh: &TriangleMesh) -> Aabb {
+pub(crate) fn used_bounds(mesh: &TriangleMesh) -> Aabb {
     mesh.indices
         .iter()
         .flatten()

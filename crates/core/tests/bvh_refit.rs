@@ -234,3 +234,63 @@ fn registry_refit_every_kind() {
         }
     }
 }
+
+/// `refit_keeps_precision` says when a refit answers as a build over the
+/// moved mesh would: true for a deformation in place (the refit's hits are
+/// the rebuild's, bit for bit, for every test), false once a Plücker or
+/// projection model has moved far from where it was built (its refit hits
+/// then differ from the rebuild's, which match brute force) or any model
+/// has shrunk to a tiny size.
+#[test]
+fn refit_keeps_precision_tells_when_to_rebuild() {
+    use raykit_core::accel::{build_accel, refit_keeps_precision, AccelKind};
+    use raykit_core::tri::TestKind;
+    let s = sphere();
+    let bent = deformed(&s, 0.9, 0.08);
+    let far = TriangleMesh::new(
+        s.positions
+            .iter()
+            .map(|p| *p + raykit_core::Vec3::new(3e4, -2e4, 1e4))
+            .collect(),
+        s.indices.clone(),
+    );
+    let tiny = TriangleMesh::new(
+        s.positions.iter().map(|p| *p * 1e-9).collect(),
+        s.indices.clone(),
+    );
+    let opts = BuildOptions::default();
+    for test in [TestKind::Moller, TestKind::Plucker, TestKind::Projection] {
+        assert!(refit_keeps_precision(test, &s, &bent), "{test:?}");
+        assert!(!refit_keeps_precision(test, &s, &tiny), "{test:?}");
+        let moves_far = !refit_keeps_precision(test, &s, &far);
+        assert_eq!(moves_far, test != TestKind::Moller, "{test:?}");
+        for (moved, keeps) in [(&bent, true), (&far, !moves_far)] {
+            let mut refit = build_accel(AccelKind::Bvh8, test, &s, &opts);
+            refit.refit(moved).unwrap();
+            let rebuilt = build_accel(AccelKind::Bvh8, test, moved, &opts);
+            let brute = build_accel(AccelKind::Brute, test, moved, &opts);
+            let rays = rays(moved, 2000, 17);
+            let differ = rays
+                .iter()
+                .filter(|r| bits(refit.intersect(r)) != bits(rebuilt.intersect(r)))
+                .count();
+            for ray in &rays {
+                assert!(
+                    agree(rebuilt.intersect(ray), brute.intersect(ray)),
+                    "{test:?}"
+                );
+            }
+            if keeps {
+                assert_eq!(
+                    differ, 0,
+                    "{test:?}: the refit should answer as the rebuild"
+                );
+            } else {
+                assert!(
+                    differ > 100,
+                    "{test:?}: only {differ} of 2000 rays differ far away"
+                );
+            }
+        }
+    }
+}

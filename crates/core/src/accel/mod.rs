@@ -50,7 +50,7 @@ pub use flat::{
 pub use kdtree::{KdBacktrack, KdOptions, KdRestart, KdRopes, KdSplit, KdStack};
 pub use kind::AccelKind;
 pub use linear_boxes::{LinearBoxes, LINEAR_BOX_SIZE};
-pub use registry::{build_accel, kd_accel_from_tree, load_accel};
+pub use registry::{build_accel, kd_accel_from_tree, load_accel, refit_keeps_precision};
 pub use unit_scaled::UnitScaled;
 
 /// Rays per rayon task in the batch queries: large enough to amortise task
@@ -140,7 +140,8 @@ pub trait Accel: Send + Sync {
     /// moved vertices: boxes recomputed bottom-up in O(n), topology kept
     /// (see `bvh/refit.rs`). The wide BVHs ([`Bvh4`], [`Bvh8`]) refit; the
     /// other structures refuse with [`RefitError::Unsupported`] (build
-    /// them again).
+    /// them again). The scaling and placement [`build_accel`] chose stay:
+    /// [`refit_keeps_precision`] says whether they suit the moved mesh.
     fn refit(&mut self, mesh: &TriangleMesh) -> Result<RefitReport, RefitError> {
         let _ = mesh;
         Err(RefitError::Unsupported)

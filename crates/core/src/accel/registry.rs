@@ -10,7 +10,7 @@ use super::{
 use crate::aabb::Aabb;
 use crate::mesh::TriangleMesh;
 use crate::tri::TestKind;
-use crate::unit_scale::UnitScale;
+use crate::unit_scale::{used_bounds, UnitScale};
 use crate::with_test;
 
 /// The scale a structure with triangle test `test` is built at: Möller's
@@ -26,6 +26,27 @@ fn unit_scale(
         TestKind::Moller => UnitScale::of(mesh),
         TestKind::Plucker | TestKind::Projection => UnitScale::of_near_origin(mesh),
     }
+}
+
+/// Whether a structure that [`build_accel`] built over `built` with test
+/// `test`, refit to `moved` ([`Accel::refit`]), keeps the precision a build
+/// over `moved` has: the scaling and placement it was built with still
+/// suit the moved model (a build over the moved model, taken in the
+/// built one's frame, would scale or move nothing). A model moved far from
+/// where it was built (with the Plücker or projection test) or shrunk to
+/// a tiny size is not: rebuild it instead.
+pub fn refit_keeps_precision(test: TestKind, built: &TriangleMesh, moved: &TriangleMesh) -> bool {
+    let frame = match test {
+        TestKind::Moller => UnitScale::for_mesh(built),
+        TestKind::Plucker | TestKind::Projection => UnitScale::for_mesh_near_origin(built),
+    };
+    let b = used_bounds(moved);
+    let b = Aabb::new(frame.point(b.min), frame.point(b.max));
+    let again = match test {
+        TestKind::Moller => UnitScale::for_bounds(&b),
+        TestKind::Plucker | TestKind::Projection => UnitScale::for_bounds_near_origin(&b),
+    };
+    again.is_one()
 }
 
 /// Build the structure `kind` over `mesh` with triangle test `test`; over
