@@ -676,6 +676,92 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         };
         assert_eq!(place(&got.georef), place(&dem.georef), "{options:?}");
     }
+    // GDAL's -FLT_MAX nodata ("-3.4028229999999999e+038" in the shared
+    // lidar DEM's tag): the cells GDAL pads with it hold that text rounded
+    // to float32, one step inside -FLT_MAX, and are no data.
+    let padded = dir.path().join("padded.tif");
+    gdal(
+        "gdal_translate",
+        &[
+            "-q",
+            "-srcwin",
+            "-10",
+            "-10",
+            "420",
+            "420",
+            s(&data("terrain/lidar_dem_400.tif")),
+            s(&padded),
+        ],
+    );
+    let raw = dir.path().join("padded.raw");
+    gdal(
+        "gdal_translate",
+        &["-q", "-of", "ENVI", s(&padded), s(&raw)],
+    );
+    let fill = -3.4028229999999999e38f64 as f32;
+    let want: Vec<f32> = std::fs::read(&raw)
+        .unwrap()
+        .chunks_exact(4)
+        .map(|b| f32::from_ne_bytes(b.try_into().unwrap()))
+        .map(|x| if x == fill { f32::NAN } else { x })
+        .collect();
+    let got = load_dem(&padded, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        want.iter().filter(|x| x.is_nan()).count(),
+        420 * 420 - 400 * 400
+    );
+    assert_eq!(got.heights.len(), want.len());
+    assert!(got
+        .heights
+        .iter()
+        .zip(&want)
+        .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())));
+    // A south-up raster (GDAL writes Terragen files so, pixel height +19.5)
+    // reads as the north-up raster gdalwarp makes of it: rows reversed,
+    // origin at the north edge, every sample where GDAL puts it; and the
+    // shadow mask written from it is north-up too.
+    let south = dir.path().join("south.tif");
+    let north = dir.path().join("north.tif");
+    gdal(
+        "gdal_translate",
+        &[
+            "-q",
+            "-ot",
+            "Float32",
+            "-unscale",
+            s(&data("terrain/RealisticTerrain_Large.ter")),
+            s(&south),
+        ],
+    );
+    gdal("gdalwarp", &["-q", "-r", "near", s(&south), s(&north)]);
+    let (a, b) = (
+        load_dem(&south, &LoadOptions::default()).unwrap(),
+        load_dem(&north, &LoadOptions::default()).unwrap(),
+    );
+    let place =
+        |g: &raykit_terrain::GeoRef| (g.origin_x, g.origin_y, g.pixel_width, g.pixel_height);
+    assert_eq!(place(&a.georef), place(&b.georef));
+    assert!(a.georef.pixel_height < 0.0);
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    assert!(a
+        .heights
+        .iter()
+        .zip(&b.heights)
+        .all(|(x, y)| x.to_bits() == y.to_bits()));
+    let mask = dir.path().join("south_mask.tif");
+    let out = raykit(&[
+        "terrain",
+        "shadow",
+        s(&south),
+        "--sun",
+        "30,20",
+        "--out",
+        s(&mask),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let gt = gdalinfo(&mask)["geoTransform"].clone();
+    assert_eq!(gt[3].as_f64(), Some(b.georef.origin_y), "{gt}");
+    assert_eq!(gt[5].as_f64(), Some(b.georef.pixel_height), "{gt}");
     // An LZW tile the file ends inside is an error at that tile's bytes.
     let lzw = dir.path().join("case11.tif");
     let mut bytes = std::fs::read(&lzw).unwrap();

@@ -67,6 +67,33 @@ impl Dem {
         }
     }
 
+    /// The same grid with rows running south and columns east, as every
+    /// caster and writer takes it: a raster stored south-up (positive
+    /// pixel height, as GDAL writes some Terragen and NetCDF conversions)
+    /// has its rows reversed and its origin moved to the north edge, one
+    /// stored east-to-west its columns. The map position of every sample
+    /// is unchanged.
+    pub fn north_up(mut self) -> Dem {
+        let (w, h) = (self.width, self.height);
+        let g = &mut self.georef;
+        if g.pixel_height > 0.0 {
+            g.origin_y += h as f64 * g.pixel_height;
+            g.pixel_height = -g.pixel_height;
+            for r in 0..h / 2 {
+                let (top, bottom) = self.heights.split_at_mut((h - 1 - r) * w);
+                top[r * w..(r + 1) * w].swap_with_slice(&mut bottom[..w]);
+            }
+        }
+        if g.pixel_width < 0.0 {
+            g.origin_x += w as f64 * g.pixel_width;
+            g.pixel_width = -g.pixel_width;
+            for row in self.heights.chunks_exact_mut(w) {
+                row.reverse();
+            }
+        }
+        self
+    }
+
     /// Height at (`col`, `row`).
     pub fn at(&self, col: usize, row: usize) -> f32 {
         self.heights[row * self.width + col]

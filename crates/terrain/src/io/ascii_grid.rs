@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use super::crs_sidecar::wkt_is_geographic;
 use super::limits::{check_dimensions, zeroed_heights};
-use super::nodata::nodata_as_f32;
+use super::nodata::NodataF32;
 use super::DemError;
 use crate::dem::{Dem, GeoRef};
 
@@ -48,7 +48,7 @@ pub fn read_ascii_grid(path: impl AsRef<Path>) -> Result<Dem, DemError> {
     let mut lines = text.lines().enumerate().peekable();
     let header = read_header(path, &mut lines)?;
     let (w, h) = (header.width, header.height);
-    let nodata = header.nodata.map(nodata_as_f32);
+    let nodata = header.nodata.map(NodataF32::new);
     let mut heights = zeroed_heights(path, "header", w, h)?;
     let body: Vec<(usize, &str)> = lines.filter(|(_, l)| !l.trim().is_empty()).collect();
     let line_no = |k: usize| format!("line {}", k + 1);
@@ -130,8 +130,8 @@ fn read_prj(path: &Path) -> Option<String> {
 }
 
 /// One height, read as a double and stored as a float as GDAL reads it:
-/// NaN for the nodata value (compared as floats, see [`nodata_as_f32`]).
-fn height(path: &Path, at: &str, token: &str, nodata: Option<f32>) -> Result<f32, DemError> {
+/// NaN for the nodata value (compared as floats, see [`NodataF32`]).
+fn height(path: &Path, at: &str, token: &str, nodata: Option<NodataF32>) -> Result<f32, DemError> {
     let v: f64 = token.parse().map_err(|_| {
         DemError::new(
             path,
@@ -140,7 +140,11 @@ fn height(path: &Path, at: &str, token: &str, nodata: Option<f32>) -> Result<f32
         )
     })?;
     let v = v as f32;
-    Ok(if Some(v) == nodata { f32::NAN } else { v })
+    Ok(if nodata.is_some_and(|nd| nd.matches(v)) {
+        f32::NAN
+    } else {
+        v
+    })
 }
 
 /// The header lines, up to the first line that starts with a number.

@@ -18,7 +18,7 @@ use super::geokeys::{
 use super::geotiff_lzw_tiles::{read_lzw_tiles, TileLayout, TileSamples};
 use super::geotiff_sparse::{absent_height, block_byte_counts, read_sparse};
 use super::limits::{check_dimensions, ensure_room, zeroed_heights, MAX_SAMPLES};
-use super::nodata::nodata_as_f32;
+use super::nodata::NodataF32;
 use super::DemError;
 use crate::dem::{Dem, GeoRef};
 
@@ -160,10 +160,10 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
     {
         Some(mut heights) => {
             if let Some(nd) = nodata.filter(|nd| !nd.is_nan()) {
-                let nd32 = nodata_as_f32(nd);
+                let nd32 = NodataF32::new(nd);
                 use rayon::prelude::*;
                 heights.par_iter_mut().for_each(|s| {
-                    if *s == nd32 {
+                    if nd32.matches(*s) {
                         *s = f32::NAN
                     }
                 });
@@ -225,7 +225,8 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
         heights,
         nodata,
         georef,
-    })
+    }
+    .north_up())
 }
 
 /// The tiles' offsets, byte counts and size when the image is LZW-compressed
@@ -627,9 +628,9 @@ fn to_heights(data: DecodingResult, nodata: Option<f64>) -> Vec<f32> {
     match data {
         DecodingResult::F32(mut v) => {
             if let Some(nd) = nodata.filter(|nd| !nd.is_nan()) {
-                let nd32 = nodata_as_f32(nd);
+                let nd32 = NodataF32::new(nd);
                 for s in &mut v {
-                    if *s == nd32 {
+                    if nd32.matches(*s) {
                         *s = f32::NAN;
                     }
                 }

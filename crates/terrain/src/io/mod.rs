@@ -44,7 +44,7 @@ pub use geotiff_write::{
 pub use hgt::{parse_hgt_name, read_hgt, HGT_VOID};
 pub use limits::{check_dimensions, MAX_SAMPLES, MAX_SIDE};
 pub use load::{load_dem, LoadOptions, RawSpec, SUPPORTED_EXTENSIONS};
-pub use nodata::{nodata_as_f32, nodata_text};
+pub use nodata::{nodata_as_f32, nodata_text, NodataF32};
 pub use png::read_png;
 pub use raw::{read_raw, RawType};
 pub use source::{load_dem_source, FRACTAL_PREFIX};
