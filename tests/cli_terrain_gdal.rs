@@ -748,6 +748,24 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         .iter()
         .zip(&b.heights)
         .all(|(x, y)| x.to_bits() == y.to_bits()));
+    // Stored as Terragen's raw integers with GDAL's band scale and offset,
+    // the heights are the unscaled ones.
+    let south_raw = dir.path().join("south_raw.tif");
+    gdal(
+        "gdal_translate",
+        &[
+            "-q",
+            s(&data("terrain/RealisticTerrain_Large.ter")),
+            s(&south_raw),
+        ],
+    );
+    assert!(gdalinfo(&south_raw)["bands"][0]["scale"].as_f64() != Some(1.0));
+    let c = load_dem(&south_raw, &LoadOptions::default()).unwrap();
+    assert!(c
+        .heights
+        .iter()
+        .zip(&a.heights)
+        .all(|(x, y)| x.to_bits() == y.to_bits()));
     let mask = dir.path().join("south_mask.tif");
     let out = raykit(&[
         "terrain",

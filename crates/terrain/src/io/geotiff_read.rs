@@ -12,6 +12,7 @@ use tiff::decoder::{ifd::Value, Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
 use super::crs_sidecar::{read_crs_sidecar, wkt_is_geographic};
+use super::gdal_metadata::{band_scale_offset, TAG_GDAL_METADATA};
 use super::geokeys::{
     declares_crs, geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE,
 };
@@ -50,9 +51,12 @@ pub const TAG_GDAL_NODATA: u16 = 42113;
 /// GeoAsciiParams are kept raw; `geographic` is GTModelTypeGeoKey (1024) ==
 /// 2. GDAL_NODATA (42113) sets `nodata` and those samples become NaN (a
 /// nodata within 1e-6 of ±f32::MAX, as GDAL writes it in text, matches
-/// ±f32::MAX in float32 data). A strip or tile stored as no bytes (GDAL's
+/// ±f32::MAX in float32 data as well as the value rounded to float32). A strip or tile stored as no bytes (GDAL's
 /// `SPARSE_OK` files) is no data, or zero where there is no nodata value,
-/// as GDAL reads it.
+/// as GDAL reads it. A band scale and offset in GDAL_METADATA (42112) are
+/// applied (`height = sample × scale + offset`, as `gdal_translate
+/// -unscale`); a raster stored south-up or east-to-west is turned north-up
+/// ([`Dem::north_up`]).
 pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
     let path = path.as_ref();
     let mut file = File::open(path).map_err(|e| DemError::open(path, &e))?;
@@ -150,6 +154,21 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             })?)
         }
     };
+    let (scale, offset) = match find(path, &mut dec, TAG_GDAL_METADATA)? {
+        None => (1.0, 0.0),
+        Some(v) => {
+            let xml = v
+                .into_string()
+                .map_err(|e| tag_err(path, TAG_GDAL_METADATA, e))?;
+            band_scale_offset(&xml).map_err(|bad| {
+                DemError::new(
+                    path,
+                    format!("tag {TAG_GDAL_METADATA}"),
+                    format!("the band's scale or offset is {bad:?}; expected a finite number"),
+                )
+            })?
+        }
+    };
 
     let plain = little_endian && cfg!(target_endian = "little") && bits == 32 && format == 3;
     let absent = absent_height(nodata);
@@ -218,6 +237,13 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
                 heights.len()
             ),
         ));
+    }
+    let mut heights = heights;
+    if (scale, offset) != (1.0, 0.0) {
+        use rayon::prelude::*;
+        heights
+            .par_iter_mut()
+            .for_each(|h| *h = (*h as f64 * scale + offset) as f32);
     }
     Ok(Dem {
         width,
