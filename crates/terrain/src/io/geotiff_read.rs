@@ -99,6 +99,8 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             1 => "unsigned integer",
             2 => "signed integer",
             3 => "float",
+            5 => "complex integer",
+            6 => "complex float",
             _ => "unknown",
         };
         return Err(DemError::new(

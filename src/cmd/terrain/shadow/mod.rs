@@ -199,7 +199,12 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
             }
             field.height_at(gx, gy) + h
         };
-        named = format!("point light at {x}, {y}, elevation {z:.2} m");
+        let z_text = if z.abs() < 1e15 {
+            format!("{z:.2}")
+        } else {
+            format_number(z)
+        };
+        named = format!("point light at {x}, {y}, elevation {z_text} m");
         Light::Point([wx, wy, z])
     } else {
         let [az, el] = numbers::<2>("--sun", args.sun.as_deref().unwrap_or_default())?;
