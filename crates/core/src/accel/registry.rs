@@ -59,7 +59,10 @@ pub fn refit_keeps_precision(test: TestKind, built: &TriangleMesh, moved: &Trian
 ///
 /// When a triangle names a vertex `mesh` does not have, naming it. The
 /// loaders and [`TriangleMesh::from_arrays`] never make such a mesh;
-/// [`TriangleMesh::validate`] finds one made by hand.
+/// [`TriangleMesh::validate`] finds one made by hand. It also finds what is
+/// not checked here: a vertex that is not finite (its triangles are never
+/// hit) or lies beyond [`crate::mesh::MAX_COORDINATE`] (the tests' `f32`
+/// products overflow and its triangles may be missed).
 pub fn build_accel(
     kind: AccelKind,
     test: TestKind,

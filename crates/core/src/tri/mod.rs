@@ -57,7 +57,9 @@ pub use projection::Projection;
 /// so that no ray slips between two triangles sharing an edge or a vertex.
 /// For rays nearly parallel to a triangle, or far from it relative to its
 /// size, that bound grows without limit; capping it keeps every false hit
-/// within this thin band around the triangle, and lets the BVHs pad their
+/// within this thin band around the triangle (twice it beyond the edge
+/// opposite the first corner in Möller's test, which checks `u + v` against
+/// the sum of the two coordinates' allowances), and lets the BVHs pad their
 /// boxes by the same fraction so that box culling never disagrees with the
 /// triangle test (see `accel::bvh`).
 pub const MAX_EDGE_TOLERANCE: f32 = 1.0 / 256.0;
