@@ -698,7 +698,7 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         "gdal_translate",
         &["-q", "-of", "ENVI", s(&padded), s(&raw)],
     );
-    let fill = -3.4028229999999999e38f64 as f32;
+    let fill = "-3.4028229999999999e+038".parse::<f64>().unwrap() as f32;
     let want: Vec<f32> = std::fs::read(&raw)
         .unwrap()
         .chunks_exact(4)
