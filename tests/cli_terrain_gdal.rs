@@ -780,6 +780,33 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
     let gt = gdalinfo(&mask)["geoTransform"].clone();
     assert_eq!(gt[3].as_f64(), Some(b.georef.origin_y), "{gt}");
     assert_eq!(gt[5].as_f64(), Some(b.georef.pixel_height), "{gt}");
+    // A projected system in US survey feet is named, with what follows.
+    let feet = dir.path().join("feet.tif");
+    gdal(
+        "gdal_translate",
+        &[
+            "-q",
+            "-a_srs",
+            "EPSG:2263",
+            s(&data("terrain/lidar_dem_400.tif")),
+            s(&feet),
+        ],
+    );
+    let out = raykit(&[
+        "terrain",
+        "shadow",
+        s(&feet),
+        "--sun",
+        "100,20",
+        "--out",
+        s(&dir.path().join("feet_mask.tif")),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let said = text(&out.stderr);
+    assert!(
+        said.contains("cells 1.00 x 1.00 US survey feet") && said.contains("--md are read in them"),
+        "{said}"
+    );
     // An LZW tile the file ends inside is an error at that tile's bytes.
     let lzw = dir.path().join("case11.tif");
     let mut bytes = std::fs::read(&lzw).unwrap();

@@ -72,3 +72,19 @@ fn entry_index(keys: &[u16], id: u16) -> Option<usize> {
         .take_while(|&i| i + 3 < keys.len())
         .find(|&i| keys[i] == id)
 }
+
+/// GeoKey ProjLinearUnitsGeoKey: the unit of a projected system's
+/// coordinates (EPSG unit codes).
+pub const KEY_PROJ_LINEAR_UNITS: u16 = 3076;
+
+/// The name of a projected raster's linear unit when it is not the metre
+/// (EPSG 9001): the foot (9002), the US survey foot (9003), or the EPSG
+/// code; none for metres or when the keys do not say.
+pub fn linear_unit_not_metre(keys: &[u16]) -> Option<String> {
+    match geo_key_short(keys, KEY_PROJ_LINEAR_UNITS)? {
+        9001 => None,
+        9002 => Some("feet (EPSG 9002)".into()),
+        9003 => Some("US survey feet (EPSG 9003)".into()),
+        code => Some(format!("units of EPSG code {code}")),
+    }
+}

@@ -31,7 +31,9 @@ pub use crs_sidecar::{
     crs_sidecar_path, read_crs_sidecar, remove_crs_sidecar, wkt_is_geographic, write_crs_sidecar,
 };
 pub use error::DemError;
-pub use geokeys::{geo_key_short, KEY_MODEL_TYPE, KEY_RASTER_TYPE};
+pub use geokeys::{
+    geo_key_short, linear_unit_not_metre, KEY_MODEL_TYPE, KEY_PROJ_LINEAR_UNITS, KEY_RASTER_TYPE,
+};
 pub use geotiff_blocks::TileSample;
 pub use geotiff_layout::{GeoTiffLayout, TiffCompression};
 pub use geotiff_read::{

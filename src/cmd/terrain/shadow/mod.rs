@@ -156,15 +156,24 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
         Method::Fast => ShadowMethod::Fast,
         Method::Brute => ShadowMethod::BruteForce,
     };
+    let unit = raykit_terrain::io::linear_unit_not_metre(&dem.georef.geo_keys);
     eprintln!(
-        "{}: {}x{} grid points, cells {:.2} x {:.2} m, load {:.0} ms",
+        "{}: {}x{} grid points, cells {:.2} x {:.2} {}, load {:.0} ms",
         args.dem,
         dem.width,
         dem.height,
         field.sx,
         field.sy,
+        unit.as_deref().unwrap_or("m"),
         load_s * 1e3,
     );
+    if let Some(unit) = &unit {
+        eprintln!(
+            "note: the map's coordinates are in {unit}; the grid is taken in its own units, \
+             so heights, --light's height, --tz and --md are read in them too \
+             (--curvature-coefficient assumes metres)"
+        );
+    }
 
     if let Some(spec) = &args.sun_path {
         let (pyramid, pyr_s) = timed(|| MaxMipmap::new(&field));
