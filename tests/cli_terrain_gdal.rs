@@ -4,7 +4,9 @@
 //! and no-data cells, the target height, the maximum distance, the
 //! compression and tiling (`--co`) as GDAL sees them, every cell against the
 //! library's brute force; and the mask against gdal_viewshed's own on the
-//! same DEM and observer, flat and with the earth's curvature.
+//! same DEM and observer, flat and with the earth's curvature; GeoTIFFs in
+//! GDAL's layouts, nodata, band scaling, south-up rows and units read as
+//! GDAL reads them.
 
 #[path = "support/cli.rs"]
 mod cli;
@@ -495,150 +497,38 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         Some(-9999.0),
     )
     .unwrap();
-    let cases: [&[&str]; 18] = [
-        &["-co", "COMPRESS=ZSTD"],
-        &[
-            "-co",
-            "COMPRESS=ZSTD",
-            "-co",
-            "PREDICTOR=3",
-            "-co",
-            "TILED=YES",
-        ],
-        &["-co", "COMPRESS=DEFLATE", "-co", "PREDICTOR=3"],
-        &["-ot", "Int16", "-co", "COMPRESS=LZW", "-co", "PREDICTOR=2"],
-        &[
-            "-co",
-            "BIGTIFF=YES",
-            "-co",
-            "TILED=YES",
-            "-co",
-            "BLOCKXSIZE=128",
-        ],
-        &["-of", "COG", "-co", "COMPRESS=DEFLATE"],
-        &["-co", "SPARSE_OK=TRUE"],
-        &[
-            "-co",
-            "SPARSE_OK=TRUE",
-            "-co",
-            "COMPRESS=DEFLATE",
-            "-co",
-            "PREDICTOR=3",
-        ],
-        &[
-            "-co",
-            "SPARSE_OK=TRUE",
-            "-co",
-            "TILED=YES",
-            "-co",
-            "BLOCKYSIZE=64",
-            "-co",
-            "BLOCKXSIZE=64",
-        ],
-        &["-co", "INTERLEAVE=BAND", "-co", "COMPRESS=PACKBITS"],
-        &["-of", "AAIGrid"],
+    // gdal_translate options, one layout each.
+    let cases: [&str; 18] = [
+        "-co COMPRESS=ZSTD",
+        "-co COMPRESS=ZSTD -co PREDICTOR=3 -co TILED=YES",
+        "-co COMPRESS=DEFLATE -co PREDICTOR=3",
+        "-ot Int16 -co COMPRESS=LZW -co PREDICTOR=2",
+        "-co BIGTIFF=YES -co TILED=YES -co BLOCKXSIZE=128",
+        "-of COG -co COMPRESS=DEFLATE",
+        "-co SPARSE_OK=TRUE",
+        "-co SPARSE_OK=TRUE -co COMPRESS=DEFLATE -co PREDICTOR=3",
+        "-co SPARSE_OK=TRUE -co TILED=YES -co BLOCKYSIZE=64 -co BLOCKXSIZE=64",
+        "-co INTERLEAVE=BAND -co COMPRESS=PACKBITS",
+        "-of AAIGrid",
         // LZW tiles whose edge tiles the `tiff` crate fails to decode, and
         // each predictor and sample width through the same decoder.
-        &[
-            "-ot",
-            "Int16",
-            "-co",
-            "COMPRESS=LZW",
-            "-co",
-            "TILED=YES",
-            "-co",
-            "BLOCKXSIZE=48",
-            "-co",
-            "BLOCKYSIZE=48",
-        ],
-        &[
-            "-ot",
-            "Int16",
-            "-co",
-            "COMPRESS=LZW",
-            "-co",
-            "PREDICTOR=2",
-            "-co",
-            "TILED=YES",
-            "-co",
-            "BLOCKXSIZE=48",
-            "-co",
-            "BLOCKYSIZE=32",
-        ],
-        &[
-            "-ot",
-            "Int32",
-            "-co",
-            "COMPRESS=LZW",
-            "-co",
-            "PREDICTOR=2",
-            "-co",
-            "TILED=YES",
-            "-co",
-            "BLOCKXSIZE=48",
-            "-co",
-            "BLOCKYSIZE=48",
-        ],
-        &[
-            "-ot",
-            "Float64",
-            "-co",
-            "COMPRESS=LZW",
-            "-co",
-            "TILED=YES",
-            "-co",
-            "BLOCKXSIZE=48",
-            "-co",
-            "BLOCKYSIZE=48",
-        ],
-        &[
-            "-co",
-            "COMPRESS=LZW",
-            "-co",
-            "PREDICTOR=3",
-            "-co",
-            "TILED=YES",
-            "-co",
-            "BLOCKXSIZE=48",
-            "-co",
-            "BLOCKYSIZE=48",
-        ],
-        &[
-            "-ot",
-            "Float64",
-            "-co",
-            "COMPRESS=LZW",
-            "-co",
-            "PREDICTOR=3",
-            "-co",
-            "TILED=YES",
-            "-co",
-            "BLOCKXSIZE=64",
-            "-co",
-            "BLOCKYSIZE=48",
-        ],
-        &[
-            "-co",
-            "SPARSE_OK=TRUE",
-            "-co",
-            "COMPRESS=LZW",
-            "-co",
-            "TILED=YES",
-            "-co",
-            "BLOCKXSIZE=48",
-            "-co",
-            "BLOCKYSIZE=48",
-        ],
+        "-ot Int16 -co COMPRESS=LZW -co TILED=YES -co BLOCKXSIZE=48 -co BLOCKYSIZE=48",
+        "-ot Int16 -co COMPRESS=LZW -co PREDICTOR=2 -co TILED=YES -co BLOCKXSIZE=48 -co BLOCKYSIZE=32",
+        "-ot Int32 -co COMPRESS=LZW -co PREDICTOR=2 -co TILED=YES -co BLOCKXSIZE=48 -co BLOCKYSIZE=48",
+        "-ot Float64 -co COMPRESS=LZW -co TILED=YES -co BLOCKXSIZE=48 -co BLOCKYSIZE=48",
+        "-co COMPRESS=LZW -co PREDICTOR=3 -co TILED=YES -co BLOCKXSIZE=48 -co BLOCKYSIZE=48",
+        "-ot Float64 -co COMPRESS=LZW -co PREDICTOR=3 -co TILED=YES -co BLOCKXSIZE=64 -co BLOCKYSIZE=48",
+        "-co SPARSE_OK=TRUE -co COMPRESS=LZW -co TILED=YES -co BLOCKXSIZE=48 -co BLOCKYSIZE=48",
     ];
     for (k, options) in cases.iter().enumerate() {
-        let ext = if options.contains(&"AAIGrid") {
+        let ext = if options.contains("AAIGrid") {
             "asc"
         } else {
             "tif"
         };
         let tif = dir.path().join(format!("case{k}.{ext}"));
         let mut args = vec!["-q"];
-        args.extend_from_slice(options);
+        args.extend(options.split_whitespace());
         args.extend_from_slice(&[s(&src), s(&tif)]);
         gdal("gdal_translate", &args);
         // GDAL's decoding, as 32-bit floats in this machine's byte order.
@@ -676,6 +566,36 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         };
         assert_eq!(place(&got.georef), place(&dem.georef), "{options:?}");
     }
+    // An LZW tile the file ends inside is an error at that tile's bytes.
+    let lzw = dir.path().join("case11.tif");
+    let mut bytes = std::fs::read(&lzw).unwrap();
+    bytes.truncate(bytes.len() * 3 / 5);
+    let cut = dir.path().join("cut.tif");
+    std::fs::write(&cut, &bytes).unwrap();
+    let text = load_dem(&cut, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        text.contains("cut.tif") && text.contains("byte ") && text.contains("tile "),
+        "{text}"
+    );
+    // A compression the decoder lacks is refused by name, with the way out.
+    let lerc = dir.path().join("lerc.tif");
+    gdal(
+        "gdal_translate",
+        &["-q", "-co", "COMPRESS=LERC", s(&src), s(&lerc)],
+    );
+    let err = load_dem(&lerc, &LoadOptions::default()).unwrap_err();
+    let text = err.to_string();
+    assert!(
+        text.contains("LERC") && text.contains("tag 259") && text.contains("gdal_translate"),
+        "{text}"
+    );
+}
+
+#[test]
+fn gdal_float_max_nodata_marks_the_cells_gdal_fills() {
+    let dir = tempfile::tempdir().unwrap();
     // GDAL's -FLT_MAX nodata ("-3.4028229999999999e+038" in the shared
     // lidar DEM's tag): the cells GDAL pads with it hold that text rounded
     // to float32, one step inside -FLT_MAX, and are no data.
@@ -716,6 +636,11 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
         .iter()
         .zip(&want)
         .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())));
+}
+
+#[test]
+fn south_up_and_scaled_rasters_read_as_gdal_warps_and_unscales_them() {
+    let dir = tempfile::tempdir().unwrap();
     // A south-up raster (GDAL writes Terragen files so, pixel height +19.5)
     // reads as the north-up raster gdalwarp makes of it: rows reversed,
     // origin at the north edge, every sample where GDAL puts it; and the
@@ -780,6 +705,11 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
     let gt = gdalinfo(&mask)["geoTransform"].clone();
     assert_eq!(gt[3].as_f64(), Some(b.georef.origin_y), "{gt}");
     assert_eq!(gt[5].as_f64(), Some(b.georef.pixel_height), "{gt}");
+}
+
+#[test]
+fn a_projected_system_in_feet_is_named() {
+    let dir = tempfile::tempdir().unwrap();
     // A projected system in US survey feet is named, with what follows.
     let feet = dir.path().join("feet.tif");
     gdal(
@@ -806,30 +736,5 @@ fn geotiffs_as_gdal_writes_them_read_as_gdal_reads_them() {
     assert!(
         said.contains("cells 1.00 x 1.00 US survey feet") && said.contains("--md are read in them"),
         "{said}"
-    );
-    // An LZW tile the file ends inside is an error at that tile's bytes.
-    let lzw = dir.path().join("case11.tif");
-    let mut bytes = std::fs::read(&lzw).unwrap();
-    bytes.truncate(bytes.len() * 3 / 5);
-    let cut = dir.path().join("cut.tif");
-    std::fs::write(&cut, &bytes).unwrap();
-    let text = load_dem(&cut, &LoadOptions::default())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        text.contains("cut.tif") && text.contains("byte ") && text.contains("tile "),
-        "{text}"
-    );
-    // A compression the decoder lacks is refused by name, with the way out.
-    let lerc = dir.path().join("lerc.tif");
-    gdal(
-        "gdal_translate",
-        &["-q", "-co", "COMPRESS=LERC", s(&src), s(&lerc)],
-    );
-    let err = load_dem(&lerc, &LoadOptions::default()).unwrap_err();
-    let text = err.to_string();
-    assert!(
-        text.contains("LERC") && text.contains("tag 259") && text.contains("gdal_translate"),
-        "{text}"
     );
 }
