@@ -140,6 +140,35 @@ fn check_kinds(mesh: &TriangleMesh, rays: &[Ray], opts: &BuildOptions, kinds: &[
     }
 }
 
+/// Segments that start behind their origin (negative `tnear`, down to the
+/// whole line at minus infinity) find the hits there, in every structure:
+/// the kd-trees' traversals once clipped them to `t >= 0`.
+#[test]
+fn segments_reaching_behind_the_origin_agree_with_brute_force() {
+    let mesh = random_soup(3000, 9);
+    let mut rng = Pcg32::new(10);
+    let rays: Vec<Ray> = random_rays(&mesh, 3000, 11)
+        .into_iter()
+        .enumerate()
+        .map(|(i, r)| {
+            // Origins moved past the soup, looking on; the hits lie behind.
+            let origin = r.origin + r.dir() * (1.0 + 2.0 * rng.next_f32());
+            let tnear = if i % 2 == 0 {
+                f32::NEG_INFINITY
+            } else {
+                -4.0 * rng.next_f32()
+            };
+            Ray::segment(
+                origin,
+                r.dir(),
+                tnear,
+                if i % 3 == 0 { 0.0 } else { f32::INFINITY },
+            )
+        })
+        .collect();
+    check_mesh(&mesh, &rays);
+}
+
 #[test]
 fn random_soups_agree_with_brute_force() {
     for (n, seed) in [(1, 1), (2, 2), (7, 3), (100, 4), (3000, 5)] {

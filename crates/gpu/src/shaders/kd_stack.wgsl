@@ -47,19 +47,24 @@ fn kd_trace(r: RayIn, any: bool) -> Hit {
             let c = word & KD_OFFSET;
             let first = select(c + 1u, c, below_first);
             let second = select(c, c + 1u, below_first);
-            // A NaN (ray lying in the plane) goes to the near side only.
-            if (ts > tmax) | (ts <= 0.0) | is_nan(ts) {
+            // A NaN (ray lying in the plane) goes to the near side only. A
+            // plane at or behind the origin is crossed, in order of t, from
+            // the far side to the near one (negative tnear).
+            let behind = ts <= 0.0;
+            let enter = select(first, second, behind);
+            let leave = select(second, first, behind);
+            if is_nan(ts) | (!behind & (ts > tmax)) | (behind & (ts <= tmin)) {
                 node = first;
-            } else if ts < tmin {
+            } else if (!behind & (ts < tmin)) | (behind & (ts >= tmax)) {
                 node = second;
             } else {
                 if sp < KD_STACK {
-                    stack_node[sp] = second;
+                    stack_node[sp] = leave;
                     stack_t0[sp] = ts;
                     stack_t1[sp] = tmax;
                     sp += 1u;
                 }
-                node = first;
+                node = enter;
                 tmax = ts;
             }
             continue;

@@ -43,12 +43,26 @@ pub(crate) fn descend<T: TriangleTest>(
         let below_first = o < split || (o == split && d <= 0.0);
         let c = n.first_child();
         let (first, second) = if below_first { (c, c + 1) } else { (c + 1, c) };
-        if ts > tmax || ts <= 0.0 || ts.is_nan() {
+        // A plane at or behind the origin is crossed, in order of `t`,
+        // from the far side to the near one (a segment that starts behind
+        // the origin, negative tnear).
+        if ts.is_nan() {
             node = first;
+        } else if ts > 0.0 {
+            if ts > tmax {
+                node = first;
+            } else if ts <= tmin {
+                node = second;
+            } else {
+                node = first;
+                tmax = ts;
+            }
         } else if ts <= tmin {
+            node = first;
+        } else if ts >= tmax {
             node = second;
         } else {
-            node = first;
+            node = second;
             tmax = ts;
         }
     }

@@ -65,14 +65,30 @@ impl<T: TriangleTest> KdStack<T> {
                 let c = n.first_child();
                 let (first, second) = if below_first { (c, c + 1) } else { (c + 1, c) };
                 // A NaN (ray lying in the plane) goes to the near side only.
-                if ts > tmax || ts <= 0.0 || ts.is_nan() {
+                // A plane at or behind the origin is crossed, in order of
+                // `t`, from the far side to the near one: it matters for a
+                // segment that starts behind the origin (negative tnear).
+                if ts.is_nan() {
                     node = first;
-                } else if ts < tmin {
+                } else if ts > 0.0 {
+                    if ts > tmax {
+                        node = first;
+                    } else if ts < tmin {
+                        node = second;
+                    } else {
+                        stack[sp] = (second, ts, tmax);
+                        sp += 1;
+                        node = first;
+                        tmax = ts;
+                    }
+                } else if ts <= tmin {
+                    node = first;
+                } else if ts >= tmax {
                     node = second;
                 } else {
-                    stack[sp] = (second, ts, tmax);
+                    stack[sp] = (first, ts, tmax);
                     sp += 1;
-                    node = first;
+                    node = second;
                     tmax = ts;
                 }
                 continue;
