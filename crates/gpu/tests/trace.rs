@@ -293,3 +293,51 @@ fn timed_runs_give_the_same_answers_on_either_clock() {
     let d = compare(&want, &answers[0]);
     assert!(d.hit_miss.is_empty() && d.distance.is_empty());
 }
+
+/// Segments that start behind their origin (negative `tnear`, down to the
+/// whole line) find the hits there on the GPU too, in every structure;
+/// the kd-stack kernel once clipped them to `t >= 0`.
+#[test]
+fn segments_reaching_behind_the_origin_agree_with_brute_force() {
+    use raykit_core::rng::Pcg32;
+    use raykit_core::Ray;
+    let mesh = triangle_soup(5_000, 41);
+    let b = mesh.bounds();
+    let mut rng = Pcg32::new(42);
+    let rays: Vec<Ray> = (0..4096)
+        .map(|i| {
+            let target = rng.in_box(b.min, b.max);
+            let dir = rng.unit_vector();
+            // The origin lies past the target, looking on.
+            let origin = target + dir * (b.diagonal() * (0.5 + rng.next_f32()));
+            let tnear = if i % 2 == 0 {
+                f32::NEG_INFINITY
+            } else {
+                -b.diagonal() * 2.0
+            };
+            Ray::segment(origin, dir, tnear, f32::INFINITY)
+        })
+        .collect();
+    let brute = BruteForce::<Moller>::new(&mesh);
+    let mut want = vec![None; rays.len()];
+    brute.intersect_batch(&rays, &mut want);
+    assert!(want.iter().filter(|h| h.is_some()).count() > 1000);
+    let ctx = gpu();
+    for kind in GpuAccelKind::ALL {
+        let scene =
+            GpuScene::build(ctx, &mesh, kind, TestKind::Moller, &BuildOptions::default()).unwrap();
+        let got = GpuTracer::new(ctx, &scene)
+            .unwrap()
+            .intersect_batch(&rays)
+            .unwrap();
+        let d = compare(&want, &got);
+        assert!(
+            d.hit_miss.is_empty() && d.distance.is_empty(),
+            "{}: {} hit/miss and {} distance differences\n{}",
+            kind.name(),
+            d.hit_miss.len(),
+            d.distance.len(),
+            describe(&rays, &d.hit_miss, &want, &got)
+        );
+    }
+}
