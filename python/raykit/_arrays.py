@@ -153,7 +153,11 @@ FAR_RADII = 16.0
 
 
 def ray_rows(
-    a, name: str, shift: np.ndarray | None, sphere: tuple[np.ndarray, float] | None, move: bool = True
+    a,
+    name: str,
+    shift: np.ndarray | None,
+    sphere: tuple[np.ndarray, float] | None,
+    every_dtype: bool = False,
 ) -> tuple[np.ndarray, tuple[int, ...], np.ndarray | None]:
     """Rays ``(..., 6)`` as :func:`rows` makes them, and how far each was
     moved. Float64 rays whose origin lies more than :data:`FAR_RADII`
@@ -163,12 +167,15 @@ def ray_rows(
     approach to it, where no triangle lies: float32 keeps such an origin to
     a fraction of the scene's size, and rounds it by up to half a unit at
     10⁷. Returns the float32 rays, the leading shape and the distance
-    ``t0`` each moved, in its direction's length (None when none moved, or
-    ``move`` is false); a hit's ``t`` on the moved ray plus ``t0`` is its
-    ``t`` on the ray given. Float32 rays are as given (the engine moves
-    those itself when its test is Möller's)."""
+    ``t0`` each moved, in its direction's length (None when none moved);
+    a hit's ``t`` on the moved ray plus ``t0`` is its ``t`` on the ray
+    given. Rays of other dtypes are moved only with ``every_dtype`` (the
+    engine's own far-ray move covers float32 rays in Möller's nearest-hit
+    and occlusion structures)."""
     raw = reals(a, name, last=6, min_ndim=2)
-    if not move or sphere is None or raw.dtype != np.float64 or raw.size == 0:
+    if every_dtype and raw.dtype != np.float64:
+        raw = raw.astype(np.float64)
+    if sphere is None or raw.dtype != np.float64 or raw.size == 0:
         flat, lead = rows(raw, name, 6, shift=shift)
         return flat, lead, None
     lead = raw.shape[:-1]

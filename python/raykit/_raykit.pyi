@@ -49,6 +49,7 @@ class Scene:
         tfar: float = ...,
         threads: int = 0,
         width: int = 0,
+        moved: Optional[npt.NDArray[np.float64]] = None,
     ) -> npt.NDArray[np.bool_]: ...
     @property
     def num_triangles(self) -> int: ...
@@ -85,6 +86,7 @@ class InstancedScene:
         mask: int = ...,
         threads: int = 0,
         width: int = 0,
+        moved: Optional[npt.NDArray[np.float64]] = None,
     ) -> npt.NDArray[np.bool_]: ...
     def count_intersections(
         self, rays: npt.NDArray[np.float32], mask: int = ..., threads: int = 0

@@ -182,21 +182,23 @@ class RaycastingScene:
         raw = _arrays.reals(vertex_positions, "vertex_positions", last=3)
         if raw.ndim != 2:
             raise ValueError(f"vertex_positions must have shape (n, 3), got {raw.shape}")
+        t = _arrays.indices(triangle_indices, "triangle_indices")
+        if t.size and int(t.max()) >= len(raw):
+            bad = int(np.argmax(t.max(axis=1) >= len(raw)))
+            raise ValueError(
+                f"triangle {bad} refers to vertex {int(t[bad].max())}, but there are only {len(raw)} vertices"
+            )
+        # Origins come from the vertices the triangles use: one no triangle
+        # uses, however far, does not keep a far model at float32's mercy.
+        used = raw[_used(t, len(raw))]
         origin = self._origin
         if not self._vertices and origin is None:
-            origin = _far_origin(raw)
+            origin = _far_origin(used)
         # A geometry placed where it is lives in the scene's coordinates; one
         # kept for instances only has its own origin (zero near zero), which
         # its instances' placements absorb.
-        own = origin if place else _far_origin(raw)
-        v = _arrays.floats(raw, "vertex_positions", last=3, shift=own)
-        t = _arrays.indices(triangle_indices, "triangle_indices")
-        if t.size and int(t.max()) >= len(v):
-            bad = int(np.argmax(t.max(axis=1) >= len(v)))
-            raise ValueError(
-                f"triangle {bad} refers to vertex {int(t[bad].max())}, but there are only {len(v)} vertices"
-            )
-        v = _check_coordinates(v, t)
+        own = origin if place else _far_origin(used)
+        v = _check_coordinates(_shifted(raw, own), t)
         self._origin = origin
         self._vertices.append(v)
         self._geometry_origins.append(own)
@@ -253,13 +255,15 @@ class RaycastingScene:
         return iid
 
     def _box(self, gid: int):
-        """Geometry ``gid``'s bounding box ``(lo, hi)`` in float64, or None
-        when it has no vertices; kept while its vertex array is the same
-        object (instances of one geometry are checked against it)."""
+        """The bounding box ``(lo, hi)`` in float64 of the vertices geometry
+        ``gid``'s triangles use, or None when they use none; kept while its
+        vertex array is the same object (instances of one geometry are
+        checked against it)."""
         v = self._vertices[gid]
         cached = self._boxes.get(gid)
         if cached is None or cached[0] is not v:
-            box = (v.min(axis=0).astype(np.float64), v.max(axis=0).astype(np.float64)) if len(v) else None
+            u = v[_used(self._triangles[gid], len(v))]
+            box = (u.min(axis=0).astype(np.float64), u.max(axis=0).astype(np.float64)) if len(u) else None
             cached = (v, box)
             self._boxes[gid] = cached
         return cached[1]
@@ -299,6 +303,14 @@ class RaycastingScene:
         self._scene = None
         self._flat_of_instances = None
         self._sphere_of_scene = None
+
+    def _rays(self, rays, every_dtype: bool = False):
+        """``rays`` as the engine takes them (:func:`_arrays.ray_rows`):
+        float64 rays from afar moved up to the scene, and rays of every
+        dtype where the engine's own move does not cover them (counts and
+        hit lists; the Plücker and projection tests)."""
+        every = every_dtype or (self._test_name != "moller" and not self.instanced)
+        return _arrays.ray_rows(rays, "rays", self._origin, self._sphere(), every_dtype=every)
 
     def _sphere(self):
         """The bounding sphere of the placed geometries' boxes, in the
@@ -424,7 +436,7 @@ class RaycastingScene:
         :meth:`add_instance`) and normals are in world space; ``mask`` is
         the rays' 32-bit mask (see :meth:`add_triangles`).
         """
-        flat, lead, t0 = _arrays.ray_rows(rays, "rays", self._origin, self._sphere())
+        flat, lead, t0 = self._rays(rays)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             t, g, inst, p, uv, n = self._built().cast_rays(
@@ -460,17 +472,17 @@ class RaycastingScene:
         tnear, tfar = float(tnear), float(tfar)
         if math.isnan(tnear) or math.isnan(tfar):
             raise ValueError(f"tnear and tfar must be numbers, got {tnear} and {tfar}")
-        # A ray moved closer answers for [0, inf) only; other intervals
-        # would move with each ray.
-        whole = tnear == 0.0 and tfar == math.inf
-        flat, lead, _ = _arrays.ray_rows(rays, "rays", self._origin, self._sphere(), move=whole)
+        # A ray moved closer has its interval moved back by as much.
+        flat, lead, t0 = self._rays(rays)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             hit = self._built().test_occlusions(
-                flat, tnear, tfar, mask, _arrays.threads(nthreads), _image_width(lead)
+                flat, tnear, tfar, mask, _arrays.threads(nthreads), _image_width(lead), moved=t0
             )
         else:
-            hit = self._built().test_occlusions(flat, tnear, tfar, _arrays.threads(nthreads), _image_width(lead))
+            hit = self._built().test_occlusions(
+                flat, tnear, tfar, _arrays.threads(nthreads), _image_width(lead), moved=t0
+            )
             hit &= mask != 0
         return _arrays.result(hit.reshape(lead))
 
@@ -485,7 +497,7 @@ class RaycastingScene:
         times. Rays with NaN or infinite coordinates count 0. ``mask`` as in
         :meth:`cast_rays`.
         """
-        flat, lead, _ = _arrays.ray_rows(rays, "rays", self._origin, self._sphere())
+        flat, lead, _ = self._rays(rays, every_dtype=True)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             counts = self._built().count_intersections(flat, mask, _arrays.threads(nthreads))
@@ -510,7 +522,7 @@ class RaycastingScene:
         edge or corner is listed once, as :meth:`count_intersections` counts
         it.
         """
-        flat, _, t0 = _arrays.ray_rows(rays, "rays", self._origin, self._sphere())
+        flat, _, t0 = self._rays(rays, every_dtype=True)
         cap = _arrays.max_hits(max_hits)
         mask = _check_mask(mask, "mask")
         if self.instanced:
@@ -718,18 +730,18 @@ class RaycastingScene:
         if not 0 <= gid < len(self._vertices):
             raise ValueError(f"geometry_id {geometry_id} out of range: the scene has {len(self._vertices)} geometries")
         raw = _arrays.reals(vertex_positions, "vertex_positions", last=3)
-        own = self._geometry_origins[gid]
+        old, old_origin = self._vertices[gid], self._geometry_origins[gid]
+        if raw.shape != old.shape:
+            raise ValueError(f"vertex_positions must have shape {old.shape} (geometry {gid}'s), got {raw.shape}")
+        t = self._triangles[gid]
+        own = old_origin
         # A scene of this one geometry, placed where it is, with an origin
         # chosen from it, chooses again: a mesh moved far away keeps its
         # float32 precision as it would added there.
         alone = len(self._vertices) == 1 and len(self._placements) == 1 and self._placements[0][1] is None
         if alone and not getattr(self, "_origin_given", False):
-            own = _far_origin(raw)
-        v = _arrays.floats(raw, "vertex_positions", last=3, shift=own)
-        old, old_origin = self._vertices[gid], self._geometry_origins[gid]
-        if v.shape != old.shape:
-            raise ValueError(f"vertex_positions must have shape {old.shape} (geometry {gid}'s), got {v.shape}")
-        v = _check_coordinates(v, self._triangles[gid])
+            own = _far_origin(raw[_used(t, len(raw))])
+        v = _check_coordinates(_shifted(raw, own), t)
         self._vertices[gid] = v
         self._geometry_origins[gid] = own
         self._sphere_of_scene = None
@@ -768,18 +780,35 @@ class RaycastingScene:
             raise ValueError(f"{what}: a scene with instances has no saved form; only single-level scenes do")
 
 
+def _used(t: np.ndarray, n: int) -> np.ndarray:
+    """Which of ``n`` vertices the triangles ``t`` use (indices past ``n``
+    left for the engine to refuse)."""
+    used = np.zeros(n, dtype=bool)
+    used[t[t < n]] = True
+    return used
+
+
+def _shifted(raw: np.ndarray, shift: np.ndarray | None) -> np.ndarray:
+    """Vertices ``raw`` in float64, less ``shift`` (None for zero)."""
+    v = raw.astype(np.float64)
+    if shift is not None:
+        v -= shift
+    return v
+
+
 def _check_coordinates(v: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Refuse vertices of triangles ``t`` that are not finite, or beyond the
-    coordinates a mesh may hold (the f32 products of the ray and
-    winding-number tests overflow there), naming the first. Vertices no
-    triangle uses may be anything, as in Open3D and trimesh: they are
-    returned moved onto a used vertex (or zero), where they change no box."""
+    """Vertices ``v`` (float64, in the scene's coordinates) of triangles
+    ``t`` as the engine's C-contiguous float32. Refuses used vertices that
+    are not finite, or beyond the coordinates a mesh may hold (the f32
+    products of the ray and winding-number tests overflow there), naming
+    the first. Vertices no triangle uses may be anything, as in Open3D and
+    trimesh: they are moved onto a used vertex (or zero), where they change
+    no box."""
     nan = ~np.isfinite(v).all(axis=1)
     far = ~nan & (np.abs(v) > _raykit.MAX_COORDINATE).any(axis=1)
     if not (nan.any() or far.any()):
-        return v
-    used = np.zeros(len(v), dtype=bool)
-    used[t[t < len(v)]] = True
+        return np.ascontiguousarray(v, dtype=np.float32)
+    used = _used(t, len(v))
     if (nan & used).any():
         raise ValueError(f"vertex {int(np.argmax(nan & used))} has a NaN or infinite coordinate")
     if (far & used).any():
@@ -789,7 +818,7 @@ def _check_coordinates(v: np.ndarray, t: np.ndarray) -> np.ndarray:
         )
     v = v.copy()
     v[nan | far] = v[used][0] if used.any() else 0
-    return v
+    return np.ascontiguousarray(v, dtype=np.float32)
 
 
 def _check_placement(v: np.ndarray, box, m: np.ndarray, iid: int, gid: int) -> None:

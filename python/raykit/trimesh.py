@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _arrays, _raykit
-from .raycasting import _check_coordinates
+from .raycasting import _check_coordinates, _used
 
 class RayMeshIntersector:
     """Ray queries on a ``trimesh.Trimesh``, answered by raykit.
@@ -71,15 +71,18 @@ class RayMeshIntersector:
         if self._scene is None or key != self._key:
             vertices = np.asarray(self.mesh.vertices, dtype=np.float64)
             faces = _arrays.indices(np.asarray(self.mesh.faces), "mesh.faces")
-            finite = vertices[np.isfinite(vertices).all(axis=1)]
-            self._shift = finite.min(axis=0) if len(finite) else np.zeros(3)
-            shifted = np.ascontiguousarray(_check_coordinates(vertices - self._shift, faces), dtype=np.float32)
+            # The shift comes from the vertices the faces use: one no face
+            # uses, however far, does not cost the mesh its precision.
+            used = vertices[_used(faces, len(vertices))]
+            used = used[np.isfinite(used).all(axis=1)]
+            self._shift = used.min(axis=0) if len(used) else np.zeros(3)
+            shifted = _check_coordinates(vertices - self._shift, faces)
             self._scene = _raykit.Scene(
                 shifted, faces, np.array([0, len(faces)], dtype=np.uint32), self._accel, self._test, self._threads
             )
             self._vertices = vertices
             self._faces = faces
-            self._sphere = _arrays.bounding_sphere([vertices[faces.ravel()] - self._shift]) if faces.size else None
+            self._sphere = _arrays.bounding_sphere([vertices[_used(faces, len(vertices))] - self._shift])
             self._key = key
         return self._scene
 

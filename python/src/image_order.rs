@@ -90,26 +90,42 @@ fn ray(r: &[f32], tnear: f32, tfar: f32) -> Ray {
 }
 
 /// The rays of a band starting at ray `start` of the rows of `rays`, in
-/// the band's traced `order`.
-pub fn band_rays(rays: &[f32], start: usize, order: &[u32], tnear: f32, tfar: f32) -> Vec<Ray> {
+/// the band's traced `order`, over `[tnear, tfar]`; with `moved`, ray `k`'s
+/// interval less `moved[k]` (a ray moved that far along itself).
+pub fn band_rays(
+    rays: &[f32],
+    start: usize,
+    order: &[u32],
+    (tnear, tfar): (f32, f32),
+    moved: Option<&[f64]>,
+) -> Vec<Ray> {
     order
         .iter()
         .map(|&i| {
-            let at = 6 * (start + i as usize);
-            ray(&rays[at..at + 6], tnear, tfar)
+            let k = start + i as usize;
+            let at = 6 * k;
+            let (near, far) = match moved {
+                Some(m) if m[k] != 0.0 => {
+                    ((tnear as f64 - m[k]) as f32, (tfar as f64 - m[k]) as f32)
+                }
+                _ => (tnear, tfar),
+            };
+            ray(&rays[at..at + 6], near, far)
         })
         .collect()
 }
 
 /// Per row of `rays` (`n` rows of `[ox, oy, oz, dx, dy, dz]` over
-/// `[tnear, tfar]`): whether `occluded` finds it blocked, traced band by
+/// `[tnear, tfar]`, less `moved[k]` for ray `k` when given): whether
+/// `occluded` finds it blocked, traced band by
 /// band ([`Bands`], in image blocks when the rows form rows of `width`);
 /// bands not begun when `stop` is raised are left out.
 pub fn occlusion_by_bands(
     rays: &[f32],
     n: usize,
     width: usize,
-    (tnear, tfar): (f32, f32),
+    interval: (f32, f32),
+    moved: Option<&[f64]>,
     stop: &Stop,
     occluded: impl Fn(&[Ray], &mut [bool]) + Sync,
 ) -> Vec<bool> {
@@ -122,7 +138,7 @@ pub fn occlusion_by_bands(
                 return;
             }
             let order = bands.order(out.len());
-            let traced = band_rays(rays, b * bands.len, &order, tnear, tfar);
+            let traced = band_rays(rays, b * bands.len, &order, interval, moved);
             let mut hit = vec![false; traced.len()];
             occluded(&traced, &mut hit);
             for (&i, h) in order.iter().zip(hit) {
@@ -172,7 +188,7 @@ pub fn nearest_by_bands(
                 return;
             }
             let order = bands.order(t.len());
-            let traced = band_rays(rays, b * len, &order, 0.0, f32::INFINITY);
+            let traced = band_rays(rays, b * len, &order, (0.0, f32::INFINITY), None);
             for (&i, h) in order.iter().zip(nearest(&traced)) {
                 let i = i as usize;
                 let Some(h) = h else {
@@ -186,4 +202,25 @@ pub fn nearest_by_bands(
             }
         });
     c
+}
+
+/// The distance each of `n` rays was moved along itself (see
+/// `near_rays.rs`), as a slice: none when not given.
+pub fn moved_per_ray<'a>(
+    moved: &'a Option<numpy::PyReadonlyArray1<'_, f64>>,
+    n: usize,
+) -> pyo3::PyResult<Option<&'a [f64]>> {
+    let Some(m) = moved else {
+        return Ok(None);
+    };
+    let m = m
+        .as_slice()
+        .map_err(|_| crate::errors::value_error("moved must be C-contiguous"))?;
+    if m.len() != n {
+        return Err(crate::errors::value_error(format!(
+            "moved has {} entries for {n} rays",
+            m.len()
+        )));
+    }
+    Ok(Some(m))
 }

@@ -6,9 +6,11 @@
 use crate::arrays::rows;
 use crate::errors::value_error;
 use crate::hit_arrays::{column, laid_out, matrix, HitColumns};
-use crate::image_order::{nearest_by_bands, occlusion_by_bands, HitRow};
+use crate::image_order::{moved_per_ray, nearest_by_bands, occlusion_by_bands, HitRow};
 use crate::threads::{detached, interruptible, Stop};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use raykit_core::accel::BuildOptions;
 use raykit_core::glam::{Affine3A, Vec3A};
@@ -165,8 +167,9 @@ impl InstancedScene {
     }
 
     /// Whether each `(n, 6)` float32 ray meets a triangle seen by `mask`
-    /// with `t` in `[tnear, tfar]`; `width` as for `cast_rays`.
-    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, mask=u32::MAX, threads=0, width=0))]
+    /// with `t` in `[tnear, tfar]`; `width` as for `cast_rays`; `moved` as
+    /// for the plain scene's.
+    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, mask=u32::MAX, threads=0, width=0, moved=None))]
     #[allow(clippy::too_many_arguments)]
     fn test_occlusions<'py>(
         &self,
@@ -177,10 +180,12 @@ impl InstancedScene {
         mask: u32,
         threads: i64,
         width: usize,
+        moved: Option<PyReadonlyArray1<'py, f64>>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
+        let moved = moved_per_ray(&moved, n)?;
         let occluded = interruptible(py, threads, n, |stop| {
-            occlusion_by_bands(r, n, width, (tnear, tfar), stop, |rays, out| {
+            occlusion_by_bands(r, n, width, (tnear, tfar), moved, stop, |rays, out| {
                 self.scene.occluded_batch(rays, mask, out)
             })
         })?;

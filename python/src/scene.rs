@@ -9,7 +9,7 @@ use crate::arrays::{flat, rows};
 use crate::errors::persist_error;
 use crate::errors::value_error;
 use crate::hit_arrays::{matrix, HitColumns, INVALID_ID};
-use crate::image_order::{nearest_by_bands, occlusion_by_bands, HitRow};
+use crate::image_order::{moved_per_ray, nearest_by_bands, occlusion_by_bands, HitRow};
 use crate::threads::{detached, interruptible, Stop};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -329,8 +329,11 @@ impl Scene {
     }
 
     /// Whether each `(n, 6)` float32 ray meets a triangle with `t` in
-    /// `[tnear, tfar]`; `width` as for `cast_rays`.
-    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, threads=0, width=0))]
+    /// `[tnear, tfar]`; `width` as for `cast_rays`; `moved` (float64, one
+    /// per ray): how far each ray was moved along itself, taken off its
+    /// interval.
+    #[pyo3(signature = (rays, tnear=0.0, tfar=f32::INFINITY, threads=0, width=0, moved=None))]
+    #[allow(clippy::too_many_arguments)]
     fn test_occlusions<'py>(
         &self,
         py: Python<'py>,
@@ -339,10 +342,12 @@ impl Scene {
         tfar: f32,
         threads: i64,
         width: usize,
+        moved: Option<PyReadonlyArray1<'py, f64>>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
+        let moved = moved_per_ray(&moved, n)?;
         let occluded = interruptible(py, threads, n, |stop| match self.read().accel() {
-            Some(a) => occlusion_by_bands(r, n, width, (tnear, tfar), stop, |rays, out| {
+            Some(a) => occlusion_by_bands(r, n, width, (tnear, tfar), moved, stop, |rays, out| {
                 a.occluded_batch(rays, out)
             }),
             None => vec![false; n],

@@ -160,6 +160,49 @@ def test_float64_rays_from_far_away_hit_what_float64_brute_force_hits(bunny):
         counts = scene.count_intersections(rays)
         assert (counts[hit] % 2 == 0).all() and (counts[~hit] == 0).all()
         assert (scene.test_occlusions(rays) == hit).all()
+        # Intervals other than [0, inf) move with each ray (every hit lies
+        # beyond t = 1 here).
+        assert (scene.test_occlusions(rays, tfar=1e30) == hit).all()
+        assert (scene.test_occlusions(rays, tnear=1.0) == hit).all()
+        # Float32 rays are the float64 rays they round to: counted alike.
+        r32 = rays.astype(np.float32)
+        np.testing.assert_array_equal(
+            scene.count_intersections(r32), scene.count_intersections(r32.astype(np.float64))
+        )
+        hit32 = scene.cast_rays(r32)["primitive_ids"] != raykit.INVALID_ID
+        assert (scene.count_intersections(r32)[hit32] > 0).all()
+
+
+def test_vertices_no_triangle_uses_leave_a_far_model_its_precision(bunny):
+    """An unused vertex at zero (or far away) next to a model at UTM
+    coordinates: the scene's origin and the trimesh engine's shift come
+    from the vertices the triangles use, so the answers are the model's
+    without the extra vertex."""
+    v, t, _ = bunny
+    v = v.astype(np.float64) * 100.0 + FAR
+    rays = rays_at(v, 2000, 21).astype(np.float64)
+    plain = raykit.RaycastingScene()
+    plain.add_triangles(v, t)
+    want = plain.cast_rays(rays)
+
+    class Mesh:
+        def __init__(self, vertices):
+            self.vertices, self.faces, self.scale = vertices, t.astype(np.int64), 100.0
+
+    first = raykit.trimesh.RayMeshIntersector(Mesh(v)).intersects_first(rays[:, :3], rays[:, 3:])
+    for spare in ([0.0, 0.0, 0.0], [-1e9, 0.0, 0.0], [1e30, 0.0, 0.0]):
+        with_spare = np.concatenate([v, [spare]])
+        scene = raykit.RaycastingScene()
+        scene.add_triangles(with_spare, t)
+        np.testing.assert_array_equal(scene.origin, plain.origin)
+        np.testing.assert_array_equal(scene.cast_rays(rays)["t_hit"], want["t_hit"])
+        got = raykit.trimesh.RayMeshIntersector(Mesh(with_spare)).intersects_first(rays[:, :3], rays[:, 3:])
+        np.testing.assert_array_equal(got, first)
+    # A used vertex finite in float64 but beyond float32 is named as beyond.
+    huge = v.copy()
+    huge[int(t[0, 0])] = [1e40, 0.0, 0.0]
+    with pytest.raises(ValueError, match=f"vertex {int(t[0, 0])} has a coordinate beyond"):
+        raykit.RaycastingScene().add_triangles(huge, t)
 
 
 def test_float32_input_far_away_is_stored_without_rounding(model):
