@@ -623,7 +623,7 @@ fn unusable_numbers_are_refused_by_their_flag() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o.png");
     let o = s(&out);
-    let runs: [(&[&str], &str); 14] = [
+    let runs: [(&[&str], &str); 15] = [
         (
             &[
                 "render",
@@ -656,6 +656,12 @@ fn unusable_numbers_are_refused_by_their_flag() {
         (
             &["render", "--eye", "0,1,0", "--target", "0,1,0", "--out", o],
             "same point",
+        ),
+        (
+            &[
+                "render", "--eye", "0,5,19", "--target", "0,5,0", "--up", "0,0,1", "--out", o,
+            ],
+            "parallel to the view",
         ),
         (
             &[

@@ -206,6 +206,16 @@ pub fn setup(mut scene: Scene, args: &SceneOptions, aspect: f32) -> Result<Rende
             camera.eye
         );
     }
+    // The same test as the render server's camera check: an up along the
+    // view leaves the image's roll undefined.
+    let view = (camera.target - camera.eye).normalize();
+    if args.eye.is_some() && view.cross(camera.up.normalize()).length() < 1e-4 {
+        bail!(
+            "--up {} is parallel to the view direction {view}: the image's roll is undefined; \
+             give an --up across the view",
+            camera.up
+        );
+    }
     let mut lights = Vec::new();
     for spec in &args.light {
         lights
