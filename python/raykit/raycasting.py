@@ -721,10 +721,11 @@ class RaycastingScene:
         (a Plücker or projection model moved far away, any model shrunk to a
         tiny size), it is rebuilt. The point-query structure is rebuilt at
         its next use. Returns ``{"rebuilt": bool, "degradation": float}``
-        (degradation NaN when the structure was not refit), or ``None`` when no structure was
-        built yet (it is built at the next query). A scene of this geometry
-        alone, without ``origin=``, chooses its :attr:`origin` again from the
-        new positions, as if the geometry had been added there.
+        (degradation NaN when the structure was not refit), or ``None``
+        when no structure was built yet (it is built at the next query). A
+        scene of this geometry alone, without ``origin=``, chooses its
+        :attr:`origin` again from the new positions, as if the geometry had
+        been added there.
         """
         gid = int(geometry_id)
         if not 0 <= gid < len(self._vertices):

@@ -51,9 +51,9 @@ pub const TAG_GDAL_NODATA: u16 = 42113;
 /// GeoAsciiParams are kept raw; `geographic` is GTModelTypeGeoKey (1024) ==
 /// 2. GDAL_NODATA (42113) sets `nodata` and those samples become NaN (a
 /// nodata within 1e-6 of ±f32::MAX, as GDAL writes it in text, matches
-/// ±f32::MAX in float32 data as well as the value rounded to float32). A strip or tile stored as no bytes (GDAL's
-/// `SPARSE_OK` files) is no data, or zero where there is no nodata value,
-/// as GDAL reads it. A band scale and offset in GDAL_METADATA (42112) are
+/// ±f32::MAX in float32 data as well as the value rounded to float32). A
+/// strip or tile stored as no bytes (GDAL's `SPARSE_OK` files) is no data,
+/// or zero where there is no nodata value, as GDAL reads it. A band scale and offset in GDAL_METADATA (42112) are
 /// applied (`height = sample × scale + offset`, as `gdal_translate
 /// -unscale`); a raster stored south-up or east-to-west is turned north-up
 /// ([`Dem::north_up`]).
