@@ -16,6 +16,7 @@ use std::path::Path;
 use rayon::prelude::*;
 use tiff::decoder::DecodingResult;
 
+use super::file_at::read_at;
 use super::DemError;
 
 /// How a tile's samples are stored: bits per sample (8, 16, 32 or 64),
@@ -108,7 +109,7 @@ fn decode_tile(
     // bytes past twice that are never read.
     let count = count.min(need.saturating_mul(2) + 4096);
     let mut raw = vec![0u8; count];
-    super::geotiff_read::read_at(file, &mut raw, at)
+    read_at(file, &mut raw, at)
         .map_err(|e| DemError::at_byte(path, at, format!("cannot read tile {k} there: {e}")))?;
     let mut out = vec![0u8; need];
     let mut lzw = weezl::decode::Decoder::with_tiff_size_switch(weezl::BitOrder::Msb, 8);

@@ -12,6 +12,7 @@ use tiff::decoder::{ifd::Value, Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
 use super::crs_sidecar::{read_crs_sidecar, wkt_is_geographic};
+use super::file_at::read_at;
 use super::gdal_metadata::{band_scale_offset, TAG_GDAL_METADATA};
 use super::geokeys::{
     declares_crs, geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE,
@@ -453,20 +454,6 @@ fn plain_strips<R: Read + Seek>(
             })
         })?;
     Ok(Some(heights))
-}
-
-/// Fills `buf` from `file` at byte `at`.
-#[cfg(unix)]
-pub(super) fn read_at(file: &File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
-    std::os::unix::fs::FileExt::read_exact_at(file, buf, at)
-}
-
-/// Fills `buf` from `file` at byte `at`.
-#[cfg(not(unix))]
-pub(super) fn read_at(file: &File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
-    let mut f = file.try_clone()?;
-    f.seek(SeekFrom::Start(at))?;
-    f.read_exact(buf)
 }
 
 fn tag_err(path: &Path, tag: u16, e: impl std::fmt::Display) -> DemError {

@@ -7,6 +7,7 @@ mod ascii_grid;
 mod creation_options;
 mod crs_sidecar;
 mod error;
+mod file_at;
 mod gdal_metadata;
 mod geokeys;
 mod geotiff_blocks;
