@@ -1,7 +1,7 @@
 //! LZW-compressed tiles, each decompressed whole. The `tiff` crate (0.11)
 //! reads an edge tile row by row, skipping the padding between rows, and its
 //! LZW reader stalls part way through some of the edge tiles GDAL writes
-//! ("no lzw end code found"; image-tiff issue 395): an SRTM tile of 1201²
+//! ("no lzw end code found", fixed upstream after 0.11.3): an SRTM tile of 1201²
 //! samples in GDAL's default 256² tiles is refused, although every stream is
 //! complete. Here each tile's stream is decompressed into a buffer of the
 //! full tile (weezl, with TIFF's early code-size switch, Welch 1984 as TIFF

@@ -175,7 +175,7 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
 
     let plain = little_endian && cfg!(target_endian = "little") && bits == 32 && format == 3;
     let absent = absent_height(nodata);
-    let heights = match plain
+    let mut heights = match plain
         .then(|| plain_strips(path, &mut dec, &strips_file, (width, height), absent))
         .transpose()?
         .flatten()
@@ -241,7 +241,6 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             ),
         ));
     }
-    let mut heights = heights;
     if (scale, offset) != (1.0, 0.0) {
         use rayon::prelude::*;
         heights

@@ -68,27 +68,20 @@ impl<T: TriangleTest> KdStack<T> {
                 // A plane at or behind the origin is crossed, in order of
                 // `t`, from the far side to the near one: it matters for a
                 // segment that starts behind the origin (negative tnear).
-                if ts.is_nan() {
+                let behind = ts <= 0.0;
+                let (enter, leave) = if behind {
+                    (second, first)
+                } else {
+                    (first, second)
+                };
+                if ts.is_nan() || (!behind && ts > tmax) || (behind && ts <= tmin) {
                     node = first;
-                } else if ts > 0.0 {
-                    if ts > tmax {
-                        node = first;
-                    } else if ts < tmin {
-                        node = second;
-                    } else {
-                        stack[sp] = (second, ts, tmax);
-                        sp += 1;
-                        node = first;
-                        tmax = ts;
-                    }
-                } else if ts <= tmin {
-                    node = first;
-                } else if ts >= tmax {
+                } else if (!behind && ts < tmin) || (behind && ts >= tmax) {
                     node = second;
                 } else {
-                    stack[sp] = (first, ts, tmax);
+                    stack[sp] = (leave, ts, tmax);
                     sp += 1;
-                    node = second;
+                    node = enter;
                     tmax = ts;
                 }
                 continue;
