@@ -147,11 +147,6 @@ def rows(
     return a.reshape(-1, width), lead
 
 
-#: A float64 ray whose origin lies farther than this many radii of the
-#: scene's bounding sphere is moved before it is rounded to float32.
-FAR_RADII = 16.0
-
-
 def ray_rows(
     a,
     name: str,
@@ -160,8 +155,8 @@ def ray_rows(
     every_dtype: bool = False,
 ) -> tuple[np.ndarray, tuple[int, ...], np.ndarray | None]:
     """Rays ``(..., 6)`` as :func:`rows` makes them, and how far each was
-    moved. Float64 rays whose origin lies more than :data:`FAR_RADII`
-    radii from the centre of ``sphere`` (``(centre, radius)`` in the
+    moved. Float64 rays whose origin lies more than 16 radii (the engine's
+    ``FAR_RADII``) from the centre of ``sphere`` (``(centre, radius)`` in the
     shifted coordinates; None for an empty scene) are moved along
     themselves, in float64, to twice the radius before their closest
     approach to it, where no triangle lies: float32 keeps such an origin to
@@ -182,7 +177,7 @@ def ray_rows(
     r = np.require(raw.reshape(-1, 6), dtype=np.float64, requirements=["C", "A"])
     centre, radius = sphere
     flat, t0 = _raykit.near_rays(
-        r, np.zeros(3) if shift is None else shift, centre, float(radius), FAR_RADII
+        r, np.zeros(3) if shift is None else shift, centre, float(radius)
     )
     return flat, lead, t0
 

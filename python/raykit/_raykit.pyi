@@ -112,7 +112,6 @@ def near_rays(
     shift: npt.ArrayLike,
     centre: npt.ArrayLike,
     radius: float,
-    far_radii: float,
 ) -> Tuple[npt.NDArray[np.float32], Optional[npt.NDArray[np.float64]]]: ...
 def closest_points(
     scene: Scene, query_points: npt.NDArray[np.float32], max_distance: float = ..., threads: int = 0

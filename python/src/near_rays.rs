@@ -10,19 +10,23 @@ use crate::arrays::rows;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
+use raykit_core::accel::{approach_start, FAR_RADII};
+use raykit_core::glam::DVec3;
 use rayon::prelude::*;
 
 /// Rays per rayon task.
 const GRAIN: usize = 4096;
 
 /// `(n, 6)` float64 rays `[ox, oy, oz, dx, dy, dz]` as float32, origins
-/// moved by `-shift`; a ray whose origin then lies more than `far_radii`
-/// radii from `centre` is moved along itself to twice `radius` before its
-/// closest approach to `centre`. Returns the rays and, when any ray moved,
-/// the distance `t0` each moved in its direction's length (a hit's `t` on
-/// the moved ray plus `t0` is its `t` on the ray given).
+/// moved by `-shift`; a ray whose origin then lies more than
+/// [`FAR_RADII`] radii from `centre` is moved along itself to twice
+/// `radius` before its closest approach to `centre`, as the core's
+/// [`raykit_core::accel::FarRays`] moves it ([`approach_start`]). Returns
+/// the rays and, when any ray moved, the distance `t0` each moved in its
+/// direction's length (a hit's `t` on the moved ray plus `t0` is its `t`
+/// on the ray given).
 #[pyfunction]
-#[pyo3(signature = (rays, shift, centre, radius, far_radii))]
+#[pyo3(signature = (rays, shift, centre, radius))]
 #[allow(clippy::type_complexity)]
 pub fn near_rays<'py>(
     py: Python<'py>,
@@ -30,10 +34,10 @@ pub fn near_rays<'py>(
     shift: [f64; 3],
     centre: [f64; 3],
     radius: f64,
-    far_radii: f64,
 ) -> PyResult<(Bound<'py, PyArray2<f32>>, Option<Bound<'py, PyArray1<f64>>>)> {
     let (r, n) = rows(&rays, 6, "rays")?;
-    let far = (far_radii * radius).powi(2);
+    let (shift, centre) = (DVec3::from_array(shift), DVec3::from_array(centre));
+    let far = (FAR_RADII as f64 * radius).powi(2);
     let mut out = vec![0.0f32; 6 * n];
     let mut moved = vec![0.0f64; n];
     let any = py.detach(|| {
@@ -42,25 +46,17 @@ pub fn near_rays<'py>(
             .zip(r.par_chunks_exact(6))
             .with_min_len(GRAIN)
             .map(|((out, t0), r)| {
-                let mut o = [r[0] - shift[0], r[1] - shift[1], r[2] - shift[2]];
-                let d = [r[3], r[4], r[5]];
-                let w = [o[0] - centre[0], o[1] - centre[1], o[2] - centre[2]];
-                let ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-                if ww > far {
-                    let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                    let closest = -(w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd;
-                    let t = closest - 2.0 * radius / dd.sqrt();
+                let mut o = DVec3::new(r[0], r[1], r[2]) - shift;
+                let d = DVec3::new(r[3], r[4], r[5]);
+                if (o - centre).length_squared() > far {
+                    let t = approach_start(o, d, centre, radius);
                     if t.is_finite() && t > 0.0 {
                         *t0 = t;
-                        for k in 0..3 {
-                            o[k] += t * d[k];
-                        }
+                        o += t * d;
                     }
                 }
-                for k in 0..3 {
-                    out[k] = o[k] as f32;
-                    out[3 + k] = d[k] as f32;
-                }
+                out[..3].copy_from_slice(&o.as_vec3().to_array());
+                out[3..].copy_from_slice(&d.as_vec3().to_array());
                 *t0 > 0.0
             })
             .reduce(|| false, |a, b| a || b)

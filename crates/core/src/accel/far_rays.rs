@@ -27,6 +27,17 @@ use rayon::prelude::*;
 /// given, so cameras and sample points around a model are untouched.
 pub const FAR_RADII: f32 = 16.0;
 
+/// How far, in units of `dir`, a ray from `origin` moves along itself to
+/// lie twice `radius` before its closest approach to `centre`: from there
+/// on it is where [`FarRays`] traces it. Points before the new origin lie
+/// outside the sphere, so no hit is passed over. Not finite when `dir` is
+/// zero or not finite.
+#[inline]
+pub fn approach_start(origin: DVec3, dir: DVec3, centre: DVec3, radius: f64) -> f64 {
+    let dd = dir.dot(dir);
+    (centre - origin).dot(dir) / dd - 2.0 * radius / dd.sqrt()
+}
+
 /// Rays per run of a batch: each run is checked for far origins and, when
 /// it has none, handed on as it is, while its rays are still in cache.
 const RUN: usize = 4096;
@@ -110,8 +121,7 @@ impl<A: Accel + ?Sized> FarRays<A> {
         if !(dd > 0.0 && dd.is_finite() && o.is_finite()) {
             return (*ray, 0.0, 1.0);
         }
-        let c: DVec3 = self.centre.as_dvec3();
-        let t0 = (c - o).dot(d) / dd - 2.0 * self.radius as f64 / dd.sqrt();
+        let t0 = approach_start(o, d, self.centre.as_dvec3(), self.radius as f64);
         let origin = (o + d * t0).as_vec3();
         // The moved ray's direction has unit length, so that its distances
         // are those of the model's units (a direction as long as the way

@@ -43,7 +43,7 @@ pub use bvh::{
     BuildOptions, BuildQuality, Bvh2, Bvh4, Bvh8, Node4, Node8, PersistError, RefitError,
     RefitReport, ThreadedBvh, WideBvh,
 };
-pub use far_rays::{FarRays, FAR_RADII};
+pub use far_rays::{approach_start, FarRays, FAR_RADII};
 pub use flat::{
     FlatBvh8, FlatChild, FlatKdRopes, FlatKdTree, FlatNode8, FlatThreadedBvh, FlatTriangles,
 };
