@@ -738,3 +738,103 @@ fn a_projected_system_in_feet_is_named() {
         "{said}"
     );
 }
+
+#[test]
+fn cells_outside_gdals_mask_are_no_data_as_gdalwarp_reads_them() {
+    // A window of the SRTM tile half sea (height 0), with band 1 as its own
+    // mask, so the sea is masked out: GDAL's mask beside the file (.msk,
+    // 8-bit), inside it (1-bit, DEFLATE strips; LZW 16² tiles; BigTIFF with
+    // ZSTD). gdalwarp honours the mask and writes -9999 there; we must read
+    // NaN at exactly those cells and GDAL's heights elsewhere.
+    let dir = tempfile::tempdir().unwrap();
+    let window = dir.path().join("window.tif");
+    gdal(
+        "gdal_translate",
+        &[
+            "-q",
+            "-srcwin",
+            "600",
+            "0",
+            "64",
+            "48",
+            s(&data("terrain/N57E011.hgt")),
+            s(&window),
+        ],
+    );
+    let cases: [(&str, &str, &[&str]); 4] = [
+        ("sidecar", "NO", &[]),
+        ("internal", "YES", &[]),
+        (
+            "tiled_lzw",
+            "YES",
+            &[
+                "-co",
+                "TILED=YES",
+                "-co",
+                "BLOCKXSIZE=16",
+                "-co",
+                "BLOCKYSIZE=16",
+                "-co",
+                "COMPRESS=LZW",
+            ],
+        ),
+        (
+            "bigtiff_zstd",
+            "YES",
+            &["-co", "BIGTIFF=YES", "-co", "COMPRESS=ZSTD"],
+        ),
+    ];
+    for (name, internal, options) in cases {
+        let masked = dir.path().join(format!("{name}.tif"));
+        let mut args = vec![
+            "-q",
+            "--config",
+            "GDAL_TIFF_INTERNAL_MASK",
+            internal,
+            "-b",
+            "1",
+            "-mask",
+            "1",
+        ];
+        args.extend_from_slice(options);
+        args.extend([s(&window), s(&masked)]);
+        gdal("gdal_translate", &args);
+        assert_eq!(
+            dir.path().join(format!("{name}.tif.msk")).is_file(),
+            internal == "NO",
+            "{name}: GDAL put its mask elsewhere than this case tests"
+        );
+        let warped = dir.path().join(format!("{name}_warped.tif"));
+        gdal(
+            "gdalwarp",
+            &[
+                "-q",
+                "-ot",
+                "Float32",
+                "-dstnodata",
+                "-9999",
+                s(&masked),
+                s(&warped),
+            ],
+        );
+        let want: Vec<f32> = gdal_bytes(&warped, dir.path(), &format!("{name}_warped"))
+            .chunks_exact(4)
+            .map(|b| f32::from_ne_bytes(b.try_into().unwrap()))
+            .map(|x| if x == -9999.0 { f32::NAN } else { x })
+            .collect();
+        let masked_cells = want.iter().filter(|x| x.is_nan()).count();
+        assert!(
+            (64 * 48 / 4..64 * 48 * 3 / 4).contains(&masked_cells),
+            "{name}: GDAL masked {masked_cells} cells; the window should be about half sea"
+        );
+        let got = load_dem(&masked, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(got.heights.len(), want.len(), "{name}");
+        let differing = got
+            .heights
+            .iter()
+            .zip(&want)
+            .filter(|(a, b)| a.to_bits() != b.to_bits() && !(a.is_nan() && b.is_nan()))
+            .count();
+        assert_eq!(differing, 0, "{name}: cells read otherwise than gdalwarp");
+    }
+}

@@ -13,6 +13,7 @@ use tiff::tags::Tag;
 
 use super::crs_sidecar::{read_crs_sidecar, wkt_is_geographic};
 use super::file_at::read_at;
+use super::gdal_mask::apply_gdal_mask;
 use super::gdal_metadata::{band_scale_offset, TAG_GDAL_METADATA};
 use super::geokeys::{
     declares_crs, geo_key_short, validate_geo_keys, KEY_MODEL_TYPE, KEY_RASTER_TYPE,
@@ -56,7 +57,9 @@ pub const TAG_GDAL_NODATA: u16 = 42113;
 /// strip or tile stored as no bytes (GDAL's `SPARSE_OK` files) is no data,
 /// or zero where there is no nodata value, as GDAL reads it. A band scale and offset in GDAL_METADATA (42112) are
 /// applied (`height = sample × scale + offset`, as `gdal_translate
-/// -unscale`); a raster stored south-up or east-to-west is turned north-up
+/// -unscale`); cells that GDAL's mask of valid cells (an image inside the
+/// file, or `<file>.msk` beside it) marks invalid are no data
+/// (see `io/gdal_mask.rs`); a raster stored south-up or east-to-west is turned north-up
 /// ([`Dem::north_up`]).
 pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
     let path = path.as_ref();
@@ -241,6 +244,7 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             ),
         ));
     }
+    apply_gdal_mask(path, &strips_file, &mut dec, &mut heights, (width, height))?;
     if (scale, offset) != (1.0, 0.0) {
         use rayon::prelude::*;
         heights

@@ -8,6 +8,7 @@ mod creation_options;
 mod crs_sidecar;
 mod error;
 mod file_at;
+mod gdal_mask;
 mod gdal_metadata;
 mod geokeys;
 mod geotiff_blocks;
