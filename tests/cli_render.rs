@@ -315,3 +315,59 @@ fn the_accel_help_names_what_the_gpu_backend_takes() {
         );
     }
 }
+
+/// `raykit render` under `ulimit -v limit_kib` with `args`: status 1 (an
+/// error, not an abort), stderr naming each of `named`, and no image.
+#[cfg(target_os = "linux")]
+fn refused_under_limit(limit_kib: u64, args: &[&str], named: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.png");
+    let script = format!(
+        "ulimit -v {limit_kib}; exec {} render {} --out {}",
+        env!("CARGO_BIN_EXE_raykit"),
+        args.join(" "),
+        s(&out)
+    );
+    let o = std::process::Command::new("bash")
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    let e = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    for n in named {
+        assert!(e.contains(n), "{n:?} not in {e}");
+    }
+    assert!(!out.exists());
+}
+
+/// A frame larger than the process may allocate is an error that points at
+/// tiles; it used to abort in the first buffer's allocation.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_frame_beyond_the_memory_limit_is_an_error_not_an_abort() {
+    refused_under_limit(
+        1_500_000,
+        &["--width", "16384", "--height", "16384", "--depth", "1"],
+        &["268435456 pixels", "--tile"],
+    );
+}
+
+/// A Radiance header claiming 16384² texels with no pixels behind it, under
+/// a limit below what decoding would need: an error naming the file, where
+/// the decoder's allocation used to abort the process.
+#[cfg(target_os = "linux")]
+#[test]
+fn an_environment_map_beyond_the_memory_limit_is_an_error_not_an_abort() {
+    let dir = tempfile::tempdir().unwrap();
+    let hdr = dir.path().join("huge.hdr");
+    std::fs::write(
+        &hdr,
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16384 +X 16384\n",
+    )
+    .unwrap();
+    refused_under_limit(
+        2_000_000,
+        &["--width", "64", "--height", "48", "--env", s(&hdr)],
+        &["huge.hdr", "16384×16384"],
+    );
+}

@@ -379,8 +379,11 @@ pub(crate) struct Builder<'a, 'b> {
     mesh: TriangleMesh,
     normals: Vec<Vec3>,
     uvs: Vec<Vec2>,
-    all_normals: bool,
-    all_uvs: bool,
+    /// Whether any primitive had normals / texture coordinates: the
+    /// vertices of primitives without them hold zeros (a zero normal means
+    /// "use the triangle's own", as [`TriangleMesh::append`] fills them).
+    any_normals: bool,
+    any_uvs: bool,
     /// Our material index per glTF material (last entry: the default material).
     material_of: Vec<Option<u32>>,
     /// Decoded base-colour images.
@@ -414,8 +417,8 @@ impl<'a, 'b> Builder<'a, 'b> {
             mesh: TriangleMesh::default(),
             normals: Vec::new(),
             uvs: Vec::new(),
-            all_normals: true,
-            all_uvs: true,
+            any_normals: false,
+            any_uvs: false,
             material_of: vec![None; doc.materials().len() + 1],
             images: ImageCache::new(doc.images().len()),
             scene: SceneCollector::default(),
@@ -529,6 +532,19 @@ impl<'a, 'b> Builder<'a, 'b> {
             };
             match mode {
                 Mode::Triangles => {
+                    if idx.len() % 3 != 0 {
+                        let what = if prim.indices().is_some() {
+                            "indices"
+                        } else {
+                            "vertices (POSITION)"
+                        };
+                        self.warnings.push(format!(
+                            "{pname}: {} {what}, not a multiple of 3 as TRIANGLES requires; the \
+                             last {} ignored",
+                            idx.len(),
+                            idx.len() % 3
+                        ));
+                    }
                     for t in idx.chunks_exact(3) {
                         push(t[0], t[1], t[2]);
                     }
@@ -631,23 +647,22 @@ impl<'a, 'b> Builder<'a, 'b> {
             self.mesh.positions.push(w);
         }
         match normals {
-            Some(n) => self.normals.extend(
-                n.chunks_exact(3)
-                    .map(|c| (normal_m * Vec3::new(c[0], c[1], c[2])).normalize_or_zero()),
-            ),
-            None => {
-                self.all_normals = false;
-                self.normals.resize(self.mesh.positions.len(), Vec3::ZERO);
+            Some(n) => {
+                self.any_normals = true;
+                self.normals.extend(
+                    n.chunks_exact(3)
+                        .map(|c| (normal_m * Vec3::new(c[0], c[1], c[2])).normalize_or_zero()),
+                )
             }
+            None => self.normals.resize(self.mesh.positions.len(), Vec3::ZERO),
         }
         match uvs {
-            Some(t) => self
-                .uvs
-                .extend(t.chunks_exact(2).map(|c| Vec2::new(c[0], c[1]))),
-            None => {
-                self.all_uvs = false;
-                self.uvs.resize(self.mesh.positions.len(), Vec2::ZERO);
+            Some(t) => {
+                self.any_uvs = true;
+                self.uvs
+                    .extend(t.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])))
             }
+            None => self.uvs.resize(self.mesh.positions.len(), Vec2::ZERO),
         }
         Ok((base, nv, idx))
     }
@@ -686,10 +701,10 @@ impl<'a, 'b> Builder<'a, 'b> {
 
     /// The mesh collected and the lights and camera met.
     pub(crate) fn finish(mut self) -> (TriangleMesh, SceneCollector) {
-        if self.all_normals && !self.mesh.positions.is_empty() {
+        if self.any_normals && !self.mesh.positions.is_empty() {
             self.mesh.normals = Some(self.normals);
         }
-        if self.all_uvs && !self.mesh.positions.is_empty() {
+        if self.any_uvs && !self.mesh.positions.is_empty() {
             self.mesh.uvs = Some(self.uvs);
         }
         (self.mesh, self.scene)

@@ -1322,3 +1322,79 @@ fn written_scene_reads_back_with_materials_camera_and_lights() {
         }
     }
 }
+
+#[test]
+fn a_primitive_without_texture_coordinates_leaves_the_others_theirs() {
+    // Mesh 0 has TEXCOORD_0, mesh 1 (the same corners, moved by its node)
+    // has none: mesh 0's coordinates must be the file's, mesh 1's zero.
+    let dir = tempfile::tempdir().unwrap();
+    let rest = r#""meshes": [
+    {"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}}]},
+    {"primitives": [{"attributes": {"POSITION": 0}}]}
+  ],
+  "nodes": [{"mesh": 0}, {"mesh": 1, "translation": [5, 0, 0]}],
+  "scenes": [{"nodes": [0, 1]}]"#;
+    let text = gltf(None, rest).replacen(
+        r#"  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}}]}],"#,
+        "",
+        1,
+    );
+    let m = load_ok(dir.path(), "mixed.gltf", &text).mesh;
+    assert_eq!(m.num_triangles(), 2);
+    let uvs = m
+        .uvs
+        .as_ref()
+        .expect("the texture coordinates of mesh 0 were dropped");
+    let file: Vec<f32> = geometry()
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+        .collect();
+    for t in 0..2 {
+        let moved = m.positions[m.indices[t][0] as usize].x >= 4.0;
+        for (k, &v) in m.indices[t].iter().enumerate() {
+            let want = if moved {
+                Vec2::ZERO
+            } else {
+                Vec2::new(file[9 + 2 * k], file[10 + 2 * k])
+            };
+            assert_eq!(uvs[v as usize], want, "triangle {t}, corner {k}");
+        }
+    }
+}
+
+#[test]
+fn triangle_indices_not_a_multiple_of_three_are_named_in_a_warning() {
+    // Five indices (0 1 2 2 1): one whole triangle and two left over.
+    let mut data: Vec<u8> = geometry()[..36].to_vec();
+    data.extend([0u16, 1, 2, 2, 1].iter().flat_map(|i| i.to_le_bytes()));
+    let text = format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  "buffers": [{{"byteLength": 46, "uri": "data:application/octet-stream;base64,{}"}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": 36}},
+    {{"buffer": 0, "byteOffset": 36, "byteLength": 10}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+      "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5123, "count": 5, "type": "SCALAR"}}
+  ],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+  "nodes": [{{"mesh": 0}}]
+}}"#,
+        b64(&data)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let l = load_ok(dir.path(), "five.gltf", &text);
+    assert_eq!(l.mesh.num_triangles(), 1);
+    assert!(
+        l.warnings
+            .iter()
+            .any(|w| w.contains("meshes[0].primitives[0]")
+                && w.contains("5 indices")
+                && w.contains("multiple of 3")),
+        "{:?}",
+        l.warnings
+    );
+}

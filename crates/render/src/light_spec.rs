@@ -41,14 +41,27 @@ pub fn light_position_problem(position: Vec3) -> Option<String> {
     })
 }
 
+/// Closest a point light may be to the scene centre, where its colour is
+/// the irradiance: at the centre itself that irradiance is undefined.
+pub const MIN_LIGHT_TO_CENTRE: f32 = 1e-6;
+
 /// A point light at `position` giving irradiance `colour` at `centre`, or
-/// why not: a position beyond [`light_position_problem`]'s bound, or a
-/// colour so bright at that distance that the intensity overflows f32.
+/// why not: a position beyond [`light_position_problem`]'s bound, one at
+/// the centre (within [`MIN_LIGHT_TO_CENTRE`]), where irradiance is
+/// undefined, or a colour so bright at that distance that the intensity
+/// overflows f32.
 pub fn point_light(position: Vec3, colour: Vec3, centre: Vec3) -> Result<Light, String> {
     if let Some(p) = light_position_problem(position) {
         return Err(p);
     }
-    let d = position.distance(centre).max(1e-6);
+    let d = position.distance(centre);
+    if d < MIN_LIGHT_TO_CENTRE {
+        return Err(format!(
+            "the point light at {position} is at the scene centre {centre}, where its colour (the \
+             irradiance it gives there) is undefined; move it off the centre, or use a spot \
+             light (colour = irradiance at its target)"
+        ));
+    }
     let light = PointLight::with_irradiance_at(position, colour, d);
     if !light.intensity.is_finite() {
         return Err(format!(
@@ -173,8 +186,12 @@ mod tests {
             "spot:0,1,0:0,0,0:95",
             "point:1,2,3:-1,0,0",
             "spot:1,1,1",
+            "point:0,1,0",
         ] {
             assert!(parse_light(bad, centre).is_err(), "{bad}");
         }
+        // Just off the centre the colour is still the irradiance there.
+        let l = parse_light("point:0,1.001,0:1,1,1", centre).unwrap();
+        assert!((l.toward(centre).irradiance - Vec3::ONE).length() < 1e-3);
     }
 }

@@ -76,7 +76,10 @@ impl Buffers {
             r#""POSITION":{}"#,
             self.add_floats(&pos, 3, &minmax)
         )];
-        if let Some(n) = normals {
+        // glTF's normals are unit vectors; a primitive some of whose
+        // vertices carry none (zeros) is written without them, and readers
+        // shade it by its triangles' own normals, as we do.
+        if let Some(n) = normals.filter(|n| n.iter().all(|v| v.length_squared() > 0.25)) {
             let d: Vec<f32> = n.iter().flat_map(|p| p.to_array()).collect();
             attributes.push(format!(r#""NORMAL":{}"#, self.add_floats(&d, 3, "")));
         }

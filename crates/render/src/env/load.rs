@@ -29,6 +29,27 @@ fn check_size(path: &Path, width: usize, height: usize) -> Result<(), EnvError> 
     }
 }
 
+/// Whether the memory a `width`×`height` map needs while it is decoded
+/// (the decoder's RGB f32 image and our copy of it, 24 bytes a texel) can
+/// be had, asked for before decoding: the decoder allocates its image
+/// before it reads a pixel, and an allocation that fails there aborts the
+/// process, where a header that claims more than the process may use
+/// should be an error naming the file.
+fn check_memory(path: &Path, width: usize, height: usize) -> Result<(), EnvError> {
+    let bytes = width.saturating_mul(height).saturating_mul(24);
+    let mut probe: Vec<u8> = Vec::new();
+    probe
+        .try_reserve_exact(bytes)
+        .map_err(|_| EnvError::Invalid {
+            path: path.to_path_buf(),
+            message: format!(
+                "{width}×{height} texels need {:.1} GiB while decoding, more than this process \
+                 can allocate",
+                bytes as f64 / (1u64 << 30) as f64
+            ),
+        })
+}
+
 impl EquirectMap {
     /// Load an equirectangular map from an OpenEXR file (`.exr`: the R, G and B
     /// channels of its first layer, any sample type and compression the `exr`
@@ -128,6 +149,7 @@ fn decode_hdr(path: &Path) -> Result<Decoded, EnvError> {
         .into_dimensions()
     {
         check_size(path, w as usize, h as usize)?;
+        check_memory(path, w as usize, h as usize)?;
     }
     let mut cursor = std::io::Cursor::new(bytes.as_slice());
     let mut reader = image::ImageReader::with_format(&mut cursor, hdr);

@@ -74,7 +74,19 @@ pub struct Frame {
 pub enum FrameError {
     /// Shadow maps were asked for but the scene has none.
     NoShadowMaps,
+    /// The frame's buffers need more memory than the process can allocate.
+    OutOfMemory {
+        /// Pixels rendered (the window's, when there is one).
+        pixels: u64,
+        /// Bytes the frame's buffers take at once, at least.
+        bytes: u64,
+    },
 }
+
+/// Bytes a frame holds per pixel at once, at least: the radiance sum (12),
+/// the primaries' hits and the first hits kept for the AOVs (20 each). A
+/// lower bound, so that no frame the machine could render is refused.
+const FRAME_BYTES_PER_PIXEL: u64 = 52;
 
 impl std::fmt::Display for FrameError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -85,6 +97,13 @@ impl std::fmt::Display for FrameError {
                     "shadow maps were asked for, but none were built for the scene"
                 )
             }
+            FrameError::OutOfMemory { pixels, bytes } => write!(
+                f,
+                "{pixels} pixels need at least {:.1} GiB while the frame renders, more than this \
+                 process can allocate; render it in pieces (a window of the frame: `raykit \
+                 render --tile I/N` and `raykit merge-tiles`)",
+                *bytes as f64 / (1u64 << 30) as f64
+            ),
         }
     }
 }
@@ -127,6 +146,15 @@ pub fn render_whitted(
         .clipped(frame_width, frame_height);
     let (width, height) = (window.width, window.height);
     let n = width as usize * height as usize;
+    // Asked for before any buffer is made: an allocation that fails part
+    // way through aborts the process.
+    let bytes = n as u64 * FRAME_BYTES_PER_PIXEL;
+    if Vec::<u8>::new().try_reserve_exact(bytes as usize).is_err() {
+        return Err(FrameError::OutOfMemory {
+            pixels: n as u64,
+            bytes,
+        });
+    }
     let spp = opts.samples_per_pixel.max(1);
     let rays = camera.rays(frame_width, frame_height);
     let mut sum = vec![Vec3::ZERO; n];
