@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import shutil
 import sys
 import tempfile
@@ -51,7 +52,7 @@ from ._png import write_png
 from .files import PATH_TYPES, fspath
 from .raycasting import RaycastingScene
 from .render import render as render_image
-from .terrain import grid, viewshed
+from .terrain import _cell_size, grid, viewshed
 
 Progress = Union[bool, Callable[[int, int], None], None]
 
@@ -299,12 +300,17 @@ def cast_rays(
     workdir: str | bytes | os.PathLike | None = None,
     threads: int = 1,
 ) -> dict[str, Any]:
-    """First hits of a dask array of rays (or an array ``dask.array.asarray``
-    takes, as one chunk), ``(n, 6)`` rows
+    """First hits of a dask array of rays, ``(n, 6)`` rows
     ``[ox, oy, oz, dx, dy, dz]`` chunked along rows, as a dict of dask
-    arrays chunked alike: ``t_hit`` ``(n,)`` float32, ``geometry_ids`` and
-    ``primitive_ids`` ``(n,)`` uint32, ``primitive_uvs`` ``(n, 2)`` and
-    ``primitive_normals`` ``(n, 3)`` float32, equal to
+    arrays chunked alike. A numpy array (or anything else
+    ``dask.array.asarray`` takes) is split by ``dask.array.asarray`` into
+    dask's automatic chunks (of ``array.chunk-size`` bytes, 128 MiB unless
+    configured: one chunk up to about 5.6 million float32 rays); pass a
+    dask array (``dask.array.from_array(rays, chunks=...)``) to choose the
+    chunks, and with them the tasks. The arrays: ``t_hit`` ``(n,)``
+    float32, ``geometry_ids`` and ``primitive_ids`` ``(n,)`` uint32,
+    ``primitive_uvs`` ``(n, 2)`` and ``primitive_normals`` ``(n, 3)``
+    float32, equal to
     :meth:`raykit.RaycastingScene.cast_rays` on the whole array.
 
     ``scene``: a :class:`raykit.RaycastingScene` whose structure has a
@@ -378,6 +384,76 @@ def _viewshed_task(dem, observers: list, height: float, elevation: bool, threads
     return count, masks
 
 
+def _observer_fault(h: np.ndarray, t, geo: bool, x: float, y: float, height: float, elevation: bool) -> str | None:
+    """Why :func:`raykit.terrain.viewshed` would refuse the observer at map
+    position (``x``, ``y``) on the north-up grid ``h`` with transform
+    ``t``, or None: outside the grid points' extent (with the extension's
+    allowance of 10⁻⁹ of the grid for rounding at the edge), a height that
+    is not finite or, above the ground, negative, or no data under it (the
+    corners of the surface's triangle there that carry weight). None too
+    for a rotated transform, which the extension refuses itself."""
+    a, b, c, d, e, f = t
+    if b != 0.0 or d != 0.0 or a == 0.0 or e == 0.0:
+        return None
+    rows, cols = h.shape
+    col, row = (x - c) / a - 0.5, (y - f) / e - 0.5
+    w, n = cols - 1, rows - 1
+    hair = 1e-9 * max(w, n)
+    if not (-hair <= col <= w + hair and -hair <= row <= n + hair):
+        return f"({x}, {y}) lies outside the DEM's grid points"
+    if not math.isfinite(height):
+        return f"the observer height {height} is not finite"
+    if elevation:
+        return None
+    if height < 0.0:
+        return f"the observer height {height} is below the ground"
+    # Through world metres and back, as the extension rounds it.
+    sx, sy = _cell_size(h, t, geo)
+    col, row = min(max(col, 0.0), w) * sx / sx, min(max(row, 0.0), n) * sy / sy
+    cc, rr = min(max(math.floor(col), 0), w - 1), min(max(math.floor(row), 0), n - 1)
+    u, v = col - cc, row - rr
+    if u >= v:
+        corners = [(cc, rr, 1.0 - u), (cc + 1, rr, u - v), (cc + 1, rr + 1, v)]
+    else:
+        corners = [(cc, rr, 1.0 - v), (cc, rr + 1, v - u), (cc + 1, rr + 1, u)]
+    for i, j, weight in corners:
+        if weight != 0.0 and np.isnan(h[j, i]):
+            return f"the ground under ({x}, {y}) has no data (row {j}, column {i})"
+    return None
+
+
+def _check_observers(h, t, geo, observers, height: float, elevation: bool) -> None:
+    """Refuse, before any task runs, the first observer that
+    :func:`raykit.terrain.viewshed` would refuse, with its message and
+    index."""
+    for i, (x, y) in enumerate(observers):
+        fault = _observer_fault(h, t, geo, x, y, height, elevation)
+        if fault is None:
+            continue
+        try:
+            # The extension's own message; it refuses before computing.
+            viewshed(h, t, observer=(x, y), observer_height=height, observer_elevation=elevation, geographic=geo, threads=1)
+        except ValueError as e:
+            raise ValueError(f"observers[{i}]: {e}") from None
+        raise ValueError(f"observers[{i}]: {fault}")
+
+
+#: The files a run of :func:`viewsheds` writes to ``out``.
+_VIEWSHED_FILE = re.compile(r"^(count|mask_[0-9]{5,})\.tif$")
+
+
+def _replace_outputs(staging: str, out: str) -> None:
+    """Move every file of ``staging`` into ``out`` (replacing those of the
+    same name), then remove the ``mask_NNNNN.tif`` files of earlier runs
+    that this run did not write."""
+    written = set(os.listdir(staging))
+    for name in sorted(written):
+        os.replace(os.path.join(staging, name), os.path.join(out, name))
+    for name in os.listdir(out):
+        if _VIEWSHED_FILE.match(name) and name not in written:
+            os.remove(os.path.join(out, name))
+
+
 def viewsheds(
     client,
     dem,
@@ -404,14 +480,33 @@ def viewsheds(
     height array with ``transform`` (sent to the workers once).
     ``observers``: ``(x, y)`` map positions, as for ``viewshed``.
 
-    ``out``: a folder to write ``count.tif`` (float32; -1 where the DEM has
-    no data) and ``mask_NNNNN.tif`` per observer (uint8, nodata 255),
-    written by the workers, as GeoTIFFs with the DEM's georeferencing
-    (a DEM file's coordinate system too). Returns ``{"count": (rows, cols)
+    ``out``: a folder (made if missing) to write ``count.tif`` (float32;
+    -1 where the DEM has no data) and ``mask_NNNNN.tif`` per observer
+    (uint8, nodata 255), as GeoTIFFs with the DEM's georeferencing (a DEM
+    file's coordinate system too). The workers write them to a temporary
+    folder inside ``out``, and they are moved into place only when every
+    task has succeeded: then ``count.tif`` and the masks of this run
+    replace those of earlier runs, and the ``mask_NNNNN.tif`` of an
+    earlier run with more observers are removed, so that ``out`` holds
+    one run's files; other files in ``out`` are left alone. When the run
+    fails, ``out`` is left as it was. Returns ``{"count": (rows, cols)
     uint32, "masks": (observers, rows, cols) uint8 or None}`` (masks only
     with ``return_masks`` and without ``out``).
+
+    Every observer is checked here before any task runs: one that
+    :func:`raykit.terrain.viewshed` refuses (outside the DEM's grid
+    points, or over no data without ``observer_elevation``) raises its
+    ``ValueError``, naming its index in ``observers``.
     """
-    obs = [tuple(float(c) for c in o) for o in observers]
+    obs = []
+    for i, o in enumerate(observers):
+        try:
+            xy = tuple(float(c) for c in o)
+        except (TypeError, ValueError):
+            raise ValueError(f"observers[{i}] must be (x, y), 2 numbers; got {o!r}") from None
+        if len(xy) != 2:
+            raise ValueError(f"observers[{i}] must be (x, y), 2 numbers; got {len(xy)}")
+        obs.append(xy)
     if not obs:
         raise ValueError("viewsheds needs at least one observer")
     if batch < 1:
@@ -426,37 +521,46 @@ def viewsheds(
         source: Any = like
     else:
         h, t, geo = grid(dem, transform, geographic, nodata)
+    _check_observers(h, t, geo, obs, float(observer_height), bool(observer_elevation))
+    if not isinstance(dem, PATH_TYPES):
         source = client.scatter([(h, t, geo)], broadcast=True)[0]
+    staging = None
     if out is not None:
         out = os.path.abspath(fspath(out, "out"))
         os.makedirs(out, exist_ok=True)
-    groups = [list(range(i, min(i + batch, len(obs)))) for i in range(0, len(obs), batch)]
-    futures = []
-    for g in groups:
-        paths = None if out is None else [os.path.join(out, f"mask_{i:05d}.tif") for i in g]
-        futures.append(
-            client.submit(
-                _viewshed_task,
-                source,
-                [obs[i] for i in g],
-                float(observer_height),
-                bool(observer_elevation),
-                int(threads),
-                paths,
-                like,
-                pure=False,
+        staging = tempfile.mkdtemp(prefix=".viewsheds-", dir=out)
+    try:
+        groups = [list(range(i, min(i + batch, len(obs)))) for i in range(0, len(obs), batch)]
+        futures = []
+        for g in groups:
+            paths = None if staging is None else [os.path.join(staging, f"mask_{i:05d}.tif") for i in g]
+            futures.append(
+                client.submit(
+                    _viewshed_task,
+                    source,
+                    [obs[i] for i in g],
+                    float(observer_height),
+                    bool(observer_elevation),
+                    int(threads),
+                    paths,
+                    like,
+                    pure=False,
+                )
             )
-        )
-    results = _wait(client, futures, "viewsheds", progress)
-    count = np.zeros(h.shape, np.uint32)
-    for c, _ in results:
-        count += c
-    masks = None
-    if out is None and return_masks:
-        masks = np.stack([m for _, ms in results for m in ms])
-    if out is not None:
-        counts = np.where(np.isnan(h), np.float32(-1.0), count.astype(np.float32))
-        _raykit.write_geotiff(os.path.join(out, "count.tif"), counts, t, geo, -1.0, like)
+        results = _wait(client, futures, "viewsheds", progress)
+        count = np.zeros(h.shape, np.uint32)
+        for c, _ in results:
+            count += c
+        masks = None
+        if out is None and return_masks:
+            masks = np.stack([m for _, ms in results for m in ms])
+        if staging is not None:
+            counts = np.where(np.isnan(h), np.float32(-1.0), count.astype(np.float32))
+            _raykit.write_geotiff(os.path.join(staging, "count.tif"), counts, t, geo, -1.0, like)
+            _replace_outputs(staging, out)
+    finally:
+        if staging is not None:
+            shutil.rmtree(staging, ignore_errors=True)
     return {"count": count, "masks": masks}
 
 

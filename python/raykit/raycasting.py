@@ -218,12 +218,11 @@ class RaycastingScene:
         ``transform``: a 4×4 object-to-world matrix whose last row is
         ``[0, 0, 0, 1]``, or its top 3×4 part. The geometry is stored once
         however often it is placed. ``mask`` (32 bits) is the instance's
-        ray mask. A geometry id that does not exist, and a matrix that is
-        not affine, not finite or not invertible, raise ``ValueError``.
+        ray mask. A ``geometry_id`` that is not an integer (numpy's are) or
+        names no geometry, and a matrix that is not affine, not finite or
+        not invertible, raise ``ValueError``.
         """
-        gid = int(geometry_id)
-        if not 0 <= gid < len(self._vertices):
-            raise ValueError(f"geometry_id {geometry_id} out of range: the scene has {len(self._vertices)} geometries")
+        gid = self._geometry_id(geometry_id)
         m = np.array(_arrays.to_numpy(transform), dtype=np.float64)
         iid = len(self._placements)
         if m.shape == (4, 4):
@@ -253,6 +252,15 @@ class RaycastingScene:
         self._placements.append((gid, m, mask))
         self._changed()
         return iid
+
+    def _geometry_id(self, geometry_id) -> int:
+        """``geometry_id`` as an int: an integer (Python's or numpy's, not
+        a bool, a float or a string) naming a geometry of the scene."""
+        if isinstance(geometry_id, (bool, np.bool_)) or not isinstance(geometry_id, (int, np.integer)):
+            raise ValueError(f"geometry_id must be an integer (a geometry id add_triangles returned), got {geometry_id!r}")
+        if not 0 <= geometry_id < len(self._vertices):
+            raise ValueError(f"geometry_id {geometry_id} out of range: the scene has {len(self._vertices)} geometries")
+        return int(geometry_id)
 
     def _box(self, gid: int):
         """The bounding box ``(lo, hi)`` in float64 of the vertices geometry
@@ -389,20 +397,34 @@ class RaycastingScene:
         """The scene the point queries search, and the geometry id of each
         of its geometries: the scene itself, or, for an instanced scene, one
         mesh of every instance moved into place (concatenated by instance,
-        so its geometry ids are instance ids)."""
+        so its geometry ids are instance ids), and whether each instance
+        mirrors (None when there are none).
+
+        A mirroring placement (negative determinant) turns each triangle's
+        winding, and so its normal, inside out; its triangles are placed
+        with their second and third corners swapped, as the glTF loader
+        flattens mirrored nodes, so that the winding number, signed
+        distance and occupancy see the instance's inside as inside. Its
+        barycentrics then come with u and v swapped (see
+        :meth:`compute_closest_points`)."""
         if not self.instanced:
-            return self._built(), None
+            return self._built(), None, None
         if self._flat_of_instances is None:
-            vertices, triangles, counts = [], [], [0]
+            vertices, triangles, counts, mirrored = [], [], [0], []
             base = 0
             for g, t, _ in self._placements:
                 v = self._vertices[g].astype(np.float64)
+                tri = self._triangles[g]
+                flip = t is not None and np.linalg.det(t[:, :3]) < 0.0
                 if t is not None:
                     v = v @ t[:, :3].T + t[:, 3]
+                if flip:
+                    tri = tri[:, [0, 2, 1]]
                 vertices.append(v.astype(np.float32))
-                triangles.append(self._triangles[g] + np.uint32(base))
+                triangles.append(tri + np.uint32(base))
+                mirrored.append(flip)
                 base += len(v)
-                counts.append(len(self._triangles[g]))
+                counts.append(len(tri))
             offsets = np.cumsum(counts).astype(np.uint64)
             if base > np.iinfo(np.uint32).max or offsets[-1] > np.iinfo(np.uint32).max:
                 raise ValueError("the placed instances hold more than 4294967295 vertices or triangles")
@@ -415,7 +437,7 @@ class RaycastingScene:
                 self._nthreads,
             )
             geometry_of = np.array([g for g, _, _ in self._placements] + [INVALID_ID], dtype=np.uint32)
-            self._flat_of_instances = (scene, geometry_of)
+            self._flat_of_instances = (scene, geometry_of, np.array(mirrored + [False], dtype=bool))
         return self._flat_of_instances
 
     def cast_rays(self, rays, nthreads: int = 0, *, mask: int = _MASK_ALL) -> dict:
@@ -433,8 +455,15 @@ class RaycastingScene:
 
         Beyond Open3D: in a scene with instances (:attr:`instanced`), the
         key ``instance_ids`` ``(...)`` uint32 gives the instance hit (see
-        :meth:`add_instance`) and normals are in world space; ``mask`` is
-        the rays' 32-bit mask (see :meth:`add_triangles`).
+        :meth:`add_instance`); ``primitive_uvs`` refer to the geometry's
+        own corners, and ``primitive_normals`` are in world space: the
+        geometry's normal moved by the inverse transpose of the placement's
+        3×3 part, made unit length. Under a mirroring placement (negative
+        determinant) that is the outward side still: the normal of the
+        placed triangle with its second and third corners swapped (as the
+        glTF loader flattens mirrored nodes, and as the point queries see
+        the instance), the opposite of the placed triangle's own winding.
+        ``mask`` is the rays' 32-bit mask (see :meth:`add_triangles`).
         """
         flat, lead, t0 = self._rays(rays)
         mask = _check_mask(mask, "mask")
@@ -562,17 +591,24 @@ class RaycastingScene:
         it, and points with NaN or infinite coordinates, get NaN points and
         ``INVALID_ID``. In a scene with instances the search covers every
         instance (masks do not apply) and the key ``instance_ids`` says
-        which.
+        which; uvs refer to the geometry's own corners and normals are as
+        :meth:`cast_rays` gives them (outward under a mirroring placement).
         """
         flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
-        scene, geometry_of = self._point_scene()
+        scene, geometry_of, mirrored = self._point_scene()
         pts, g, p, uv, n, _ = _raykit.closest_points(scene, flat, float(max_distance), _arrays.threads(nthreads))
         if self._origin is not None:
             pts = pts.astype(np.float64) + self._origin
         out = {}
         if geometry_of is not None:
             out["instance_ids"] = _arrays.result(g.reshape(lead))
-            g = geometry_of[np.minimum(g, len(geometry_of) - 1)]
+            inst = np.minimum(g, len(geometry_of) - 1)
+            # A mirrored instance's triangles are searched with their second
+            # and third corners swapped: swap u and v back.
+            swap = mirrored[inst]
+            if swap.any():
+                uv = np.where(swap[:, None], uv[:, ::-1], uv)
+            g = geometry_of[inst]
         return out | {
             "points": _arrays.result(pts.reshape(lead + (3,))),
             "geometry_ids": _arrays.result(g.reshape(lead)),
@@ -598,7 +634,9 @@ class RaycastingScene:
         duplicated triangles or overlapping parts, where parity flips. It
         counts the faces' orientation, so the faces must be consistently
         oriented (outward normals); flipped faces, which parity ignores,
-        change it. ``nsamples`` (Open3D's number of rays) is accepted and must be odd,
+        change it. An instance placed by a mirroring matrix (negative
+        determinant) keeps its inside: its triangles count with their
+        winding reversed, as the glTF loader flattens mirrored nodes. ``nsamples`` (Open3D's number of rays) is accepted and must be odd,
         but is not needed.
         """
         _check_nsamples(nsamples)
@@ -727,9 +765,7 @@ class RaycastingScene:
         :attr:`origin` again from the new positions, as if the geometry had
         been added there.
         """
-        gid = int(geometry_id)
-        if not 0 <= gid < len(self._vertices):
-            raise ValueError(f"geometry_id {geometry_id} out of range: the scene has {len(self._vertices)} geometries")
+        gid = self._geometry_id(geometry_id)
         raw = _arrays.reals(vertex_positions, "vertex_positions", last=3)
         old, old_origin = self._vertices[gid], self._geometry_origins[gid]
         if raw.shape != old.shape:

@@ -9,6 +9,15 @@ convention: ``Affine(a, b, c, d, e, f)`` (or any sequence of those six
 numbers) maps a pixel corner (col, row) to map coordinates
 ``x = a·col + b·row + c``, ``y = d·col + e·row + f``. A north-up raster
 has ``b = d = 0``, ``a > 0``, ``e < 0``; rotated rasters are refused.
+
+A south-up raster (``e > 0``) or one whose columns run east to west
+(``a < 0``), given as a file or as an array with its transform, is
+flipped to north-up as it is read (its rows, or columns, reversed and its
+transform with them): every result (masks, counts, :func:`cast`'s
+``row``/``col``) is on the north-up grid, row 0 to the north and column
+0 to the west, so rows (or columns) come reversed relative to the array
+given or to rasterio's ``read`` of the file.
+
 Without a transform, pixels are 1 m squares with the top-left corner at
 (0, 0). ``geographic=True`` says that map units are degrees of
 longitude/latitude (as for SRTM); heights are metres either way. NaN
@@ -65,9 +74,25 @@ def _naming_the_file(f):
     return named
 
 
+def _north_up(h: np.ndarray, t) -> tuple[np.ndarray, tuple]:
+    """A south-up (``e > 0``) or east-to-west (``a < 0``) grid and its
+    transform flipped to north-up, as the DEM loader flips such files; a
+    rotated or not finite transform, or a north-up one, as given (the
+    engine refuses the first two by name)."""
+    a, b, c, d, e, f = t
+    if b != 0.0 or d != 0.0 or not all(math.isfinite(x) for x in t):
+        return h, t
+    if e > 0.0:
+        h, f, e = h[::-1], f + e * h.shape[0], -e
+    if a < 0.0:
+        h, c, a = h[:, ::-1], c + a * h.shape[1], -a
+    return h, (a, b, c, d, e, f)
+
+
 def grid(heights, transform=None, geographic: bool = False, nodata=None):
     """``(heights float32 (rows, cols) with NaN for no data, transform,
-    geographic)`` of a DEM path or an array with its transform."""
+    geographic)`` of a DEM path or an array with its transform, north-up
+    (see the module's note on south-up rasters)."""
     if isinstance(heights, PATH_TYPES):
         if transform is not None:
             raise ValueError("a DEM file carries its own transform; pass transform only with an array")
@@ -95,7 +120,8 @@ def grid(heights, transform=None, geographic: bool = False, nodata=None):
             f"heights: row {r}, column {c}: height {given} is not finite{beyond}; "
             "heights must be finite, or NaN for no data"
         )
-    return np.ascontiguousarray(h, dtype=np.float32), _transform(transform), bool(geographic)
+    h, t = _north_up(h, _transform(transform))
+    return np.ascontiguousarray(h, dtype=np.float32), t, bool(geographic)
 
 
 @_naming_the_file
@@ -126,7 +152,8 @@ def shadow(
     not through the hill it stands on).
 
     Returns ``(rows, cols)`` uint8: 1 lit, 0 in shadow, 255 no data, as
-    ``raykit terrain shadow`` writes its GeoTIFF.
+    ``raykit terrain shadow`` writes its GeoTIFF; north-up, rows reversed
+    for a south-up raster (see the module's note).
     """
     h, t, geo = grid(heights, transform, geographic, nodata)
     sun = None if sun is None else _sun(sun)
@@ -146,8 +173,11 @@ def _sun(sun) -> tuple[float, float]:
 
 def _numbers(given, what: str, form: str) -> tuple[float, ...]:
     """``given`` as a tuple of as many floats as ``form`` names."""
-    terms = tuple(float(x) for x in given)
     n = form.count(",") + 1
+    try:
+        terms = tuple(float(x) for x in given)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be {form}, {n} numbers; got {given!r}") from None
     if len(terms) != n:
         raise ValueError(f"{what} must be {form}, {n} numbers; got {len(terms)}")
     return terms
@@ -169,7 +199,8 @@ def viewshed(
     ``observer_height`` metres above the ground there, sees (as
     gdal_viewshed's ``-ox -oy -oz`` with target height 0): the shadow mask
     of a point light at the observer's eye. Returns ``(rows, cols)`` uint8:
-    1 visible, 0 hidden, 255 no data."""
+    1 visible, 0 hidden, 255 no data; north-up, rows reversed for a
+    south-up raster (see the module's note)."""
     h, t, geo = grid(heights, transform, geographic, nodata)
     x, y = _numbers(observer, "observer", "(x, y)")
     light = (x, y, float(observer_height))
@@ -189,18 +220,58 @@ def _cell_size(h: np.ndarray, t, geographic: bool) -> tuple[float, float]:
     return a * 111_320.0 * math.cos(mid), e * 111_320.0
 
 
-def _default_camera(h: np.ndarray, t, fov: float):
-    """The command line's default view: the eye 3/4 of the way from the
-    centre to the south-west corner, above the highest point, looking
-    towards the centre 20° below the horizontal."""
-    a, _, c, _, e, f = t
-    rows, cols = h.shape
-    centre = (c + a * cols / 2.0, f + e * rows / 2.0)
-    corner = (c + a * 0.5, f + e * (rows - 0.5))
-    zc = float(np.mean(h[rows // 2 - 1 : rows // 2 + 1, cols // 2 - 1 : cols // 2 + 1]))
-    zmax = float(np.max(h))
-    eye = (centre[0] + 0.75 * (corner[0] - centre[0]), centre[1] + 0.75 * (corner[1] - centre[1]))
-    return eye, centre, zc, zmax
+def _height_at(z: np.ndarray, x: float, y: float) -> float:
+    """The declared surface's height at grid position (column ``x``, row
+    ``y``), clamped into the grid (raykit-terrain's
+    ``HeightField::height_at``): the plane of the cell's upper triangle
+    (u ≥ v) or lower one."""
+    rows, cols = z.shape
+    c = min(max(math.floor(x), 0), cols - 2)
+    r = min(max(math.floor(y), 0), rows - 2)
+    u, v = x - c, y - r
+    h00, h10 = float(z[r, c]), float(z[r, c + 1])
+    h01, h11 = float(z[r + 1, c]), float(z[r + 1, c + 1])
+    if u >= v:
+        return h00 + (h10 - h00) * u + (h11 - h10) * v
+    return h00 + (h11 - h01) * u + (h01 - h00) * v
+
+
+def _to_map(t, cs: tuple[float, float], w: tuple[float, float, float]) -> tuple[float, float, float]:
+    """World metres (x east and y north of grid point (0, 0), z) as map
+    coordinates, as raykit-terrain's ``MapWorld::to_map``. On a grid of
+    zero-sized cells, which the engine refuses by its transform, NaN."""
+    if not (cs[0] != 0.0 and cs[1] != 0.0):
+        return (math.nan, math.nan, math.nan)
+    col, row = w[0] / cs[0], -w[1] / cs[1]
+    return (t[2] + (col + 0.5) * t[0], t[5] + (row + 0.5) * t[4], w[2])
+
+
+def _centre(z: np.ndarray, cs: tuple[float, float]) -> tuple[float, float, float]:
+    """The surface point at the DEM's centre grid position, world metres:
+    where a camera without a target looks (raykit-terrain's
+    ``camera::centre``)."""
+    rows, cols = z.shape
+    gx, gy = (cols - 1) * 0.5, (rows - 1) * 0.5
+    return (gx * cs[0], -gy * cs[1], _height_at(z, gx, gy))
+
+
+def _default_camera(z: np.ndarray, t, geographic: bool):
+    """The command line's default view (raykit-terrain's
+    ``camera::default_camera``) as map coordinates ``(eye, target)``: the
+    eye 3/4 of the way from the surface point at the centre to the
+    south-west grid point, at the height that looks at the centre 20°
+    below the horizontal or 2% of the grid points' diagonal above the
+    highest point, whichever is higher, looking 20° down towards the
+    centre. ``z``: the heights with no data at the lowest height."""
+    rows, cols = z.shape
+    cs = _cell_size(z, t, geographic)
+    c = _centre(z, cs)
+    w, h = (cols - 1) * cs[0], (rows - 1) * cs[1]
+    ex, ey = c[0] + 0.75 * (0.0 - c[0]), c[1] + 0.75 * (-h - c[1])
+    d = max(math.hypot(c[0] - ex, c[1] - ey), 1e-9)
+    slope = math.tan(math.radians(20.0))
+    ez = max(c[2] + d * slope, float(np.max(z)) + 0.02 * math.hypot(w, h))
+    return _to_map(t, cs, (ex, ey, ez)), _to_map(t, cs, (c[0], c[1], ez - d * slope))
 
 
 @_naming_the_file
@@ -227,14 +298,16 @@ def cast(
     and ``height``: 1 to 8192 pixels.
 
     Returns a dict of ``t`` ``(height, width)`` float64 (metres from the
-    eye, inf on a miss), ``col``/``row`` int64 (the hit cell, -1 on a miss),
+    eye, inf on a miss), ``col``/``row`` int64 (the hit cell of the
+    north-up grid, -1 on a miss; see the module's note on south-up
+    rasters),
     ``steps`` uint32 (cells and nodes visited per ray), ``directions``
     ``(height, width, 3)`` (unit, x east, y north, z up), ``eye`` (world
     metres from grid point (0, 0)) and ``cell_size`` (metres).
     """
     h, t, geo = grid(heights, transform, geographic, nodata)
-    eye = [float(x) for x in eye]
-    target = [float(x) for x in target]
+    eye = list(_numbers(eye, "eye", "(x, y, z)"))
+    target = list(_numbers(target, "target", "(x, y, z)"))
     width, height = _arrays.count(width, "width"), _arrays.count(height, "height")
     return _raykit.cast(h, t, eye, target, geo, float(fov), width, height, caster, float(tau), _arrays.threads(threads))
 
@@ -277,12 +350,19 @@ def render(
     threads: int = 0,
 ) -> np.ndarray:
     """The terrain seen from ``eye`` towards ``target`` (map x, y; z in
-    metres; by default the command line's view from the south-west), lit by
+    metres), lit by
     the ``sun=(azimuth, elevation)`` or a point ``light=(x, y, h)`` h metres
     above the ground, with exact shadows: Phong shading of the hit
     triangle's normal times the shadow mask (bilinear over the hit cell's
     corners), a hypsometric colour ramp over the DEM's heights and a sky
     gradient where rays miss. Returns ``(height, width, 3)`` uint8 sRGB.
+
+    The camera is the command line's (``raykit terrain render``): without
+    ``eye``, its default view, the eye 3/4 of the way from the DEM's
+    centre to its south-west grid point, above the highest point, looking
+    towards the centre 20° below the horizontal (``target`` given, it
+    looks there instead); with ``eye`` and no ``target``, it looks at the
+    surface point at the DEM's centre grid position.
     """
     h, t, geo = grid(heights, transform, geographic, nodata)
     if light is None:
@@ -296,18 +376,12 @@ def render(
     # The declared surface: no-data samples at the lowest height.
     filled = np.where(np.isnan(h), np.nanmin(h), h)
     if eye is None:
-        (ex, ey), (cx, cy), zc, zmax = _default_camera(filled, t, fov)
-        cs = _cell_size(h, t, geo)
-        dist = math.hypot((cx - ex) / abs(t[0]) * cs[0], (cy - ey) / abs(t[4]) * cs[1])
-        slope = math.tan(math.radians(20.0))
-        diag = math.hypot(h.shape[1] * cs[0], h.shape[0] * cs[1])
-        ez = max(zc + dist * slope, zmax + 0.02 * diag)
-        eye = (ex, ey, ez)
+        eye, default_target = _default_camera(filled, t, geo)
         if target is None:
-            target = (cx, cy, ez - dist * slope)
+            target = default_target
     elif target is None:
-        rows, cols = h.shape
-        target = (t[2] + t[0] * cols / 2.0, t[5] + t[4] * rows / 2.0, float(np.nanmean(h)))
+        cs = _cell_size(h, t, geo)
+        target = _to_map(t, cs, _centre(filled, cs))
     out = cast(h, t, eye=eye, target=target, width=width, height=height, fov=fov, caster=caster, tau=tau, geographic=geo, threads=threads)
     mask = None
     if shadows:

@@ -5,6 +5,7 @@ float64 brute-force ray/triangle reference."""
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,27 @@ def shared_data() -> Path:
             "(RAYKIT_SHARED_DATA overrides it)"
         )
     return root
+
+
+def raykit_cli() -> str:
+    """The ``raykit`` command line, for tests that compare with it:
+    ``RAYKIT_CLI``, else the repository's release or debug build, else
+    ``raykit`` on the PATH. Without one the test fails, naming the build
+    to run (``scripts/test`` builds it before the Python suite)."""
+    given = os.environ.get("RAYKIT_CLI")
+    if given:
+        return given
+    for build in ("release", "debug"):
+        exe = REPO / "target" / build / "raykit"
+        if exe.is_file() and os.access(exe, os.X_OK):
+            return str(exe)
+    found = shutil.which("raykit")
+    if found is None:
+        pytest.fail(
+            "the raykit command line is not built: run `cargo build --release` in the "
+            "repository, or set RAYKIT_CLI to the binary"
+        )
+    return found
 
 
 @pytest.fixture(scope="session")

@@ -97,9 +97,13 @@ def test_render_bands_and_frames_equal_the_in_process_render(client, scene, bunn
 
 
 def test_numpy_rays_and_refused_arguments(client, scene, bunny, tmp_path):
-    # A numpy array is one chunk, with the in-process answers.
+    # A numpy array is split into dask's automatic chunks (here made small
+    # enough to split 2,000 rays), with the in-process answers.
     rays = rays_at(bunny[0], 2_000, seed=8)
-    hits = rkd.cast_rays(client, scene, rays)
+    with dask.config.set({"array.chunk-size": "16KiB"}):
+        hits = rkd.cast_rays(client, scene, rays)
+        auto = da.asarray(rays).chunks[0]
+    assert len(auto) > 1 and all(h.chunks[0] == auto for h in hits.values())
     got = dict(zip(hits, dask.compute(*hits.values())))
     for name, value in scene.cast_rays(rays).items():
         assert np.array_equal(got[name], np.asarray(value)), name
@@ -202,3 +206,54 @@ def test_frame_path_takes_the_paths_open_takes(tmp_path):
         assert rkd.frame_path(out, 3) == want
     with pytest.raises(TypeError, match="out must be a str, bytes or os.PathLike"):
         rkd.frame_path(3, 3)
+
+
+def tif_files(folder) -> dict:
+    """The GeoTIFFs of ``folder`` by name, with their bytes."""
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
+
+
+def test_viewsheds_out_holds_one_runs_files(client, tmp_path):
+    """``out`` after runs of 3, then 2 observers, and after failed runs
+    between them: each success leaves exactly its own count and masks
+    (equal to the in-process viewsheds), a failure leaves the folder as it
+    was; an observer the viewshed refuses is refused before any task."""
+    heights = np.add.outer(np.sin(np.arange(30) / 4.0), np.cos(np.arange(40) / 5.0)).astype(np.float32) * 20
+    heights[0, 0] = np.nan
+    transform = (10.0, 0.0, 1000.0, 0.0, -10.0, 5000.0)
+    out = tmp_path / "vs"
+    (out).mkdir()
+    (out / "notes.txt").write_text("not the run's")
+
+    def run(observers, **kw):
+        rkd.viewsheds(client, heights, observers, transform=transform, out=out, **kw)
+        names = {f"mask_{i:05d}.tif" for i in range(len(observers))} | {"count.tif", "notes.txt"}
+        assert set(os.listdir(out)) == names
+        masks = [raykit.terrain.viewshed(heights, transform, observer=o) for o in observers]
+        for i, m in enumerate(masks):
+            with rasterio.open(out / f"mask_{i:05d}.tif") as src:
+                assert np.array_equal(src.read(1), m)
+        with rasterio.open(out / "count.tif") as src:
+            count = np.sum([m == 1 for m in masks], axis=0).astype(np.float32)
+            assert np.array_equal(src.read(1), np.where(np.isnan(heights), -1.0, count))
+
+    run([(1100.0, 4900.0), (1300.0, 4800.0), (1050.0, 4750.0)], batch=2, progress=False)
+    before = tif_files(out)
+    # Outside the grid points (x 1005..1395, y 4705..4995), over no data,
+    # and below the ground: refused by index before any task.
+    for observers, kw, message in (
+        ([(1100.0, 4900.0), (1200.0, 4800.0), (1000.0, 4800.0)], {}, r"observers\[2\]: observer: \(1000, 4800\) lies outside the DEM"),
+        ([(1100.0, 4900.0), (1005.0, 4995.0)], {}, r"observers\[1\]: .*no data"),
+        ([(1100.0, 4900.0)], {"observer_height": -1.0}, r"observers\[0\]: .*>= 0"),
+    ):
+        seen = []
+        with pytest.raises(ValueError, match=message):
+            rkd.viewsheds(client, heights, observers, transform=transform, out=out, progress=lambda d, t: seen.append(d), **kw)
+        assert seen == []
+        assert tif_files(out) == before
+    # A run the workers fail (a rotated grid, which the engine refuses):
+    # nothing of it reaches out.
+    with pytest.raises(ValueError, match="rotated"):
+        rkd.viewsheds(client, heights, [(1100.0, 4900.0)], transform=(10.0, 1.0, 1000.0, 0.0, -10.0, 5000.0), out=out, progress=False)
+    assert tif_files(out) == before
+    run([(1200.0, 4850.0), (1350.0, 4720.0)], progress=False)

@@ -16,6 +16,7 @@ from rasterio.transform import Affine
 
 import raykit
 import raykit.terrain
+from conftest import raykit_cli
 
 
 def test_load_mesh_matches_trimesh(data):
@@ -196,6 +197,18 @@ def test_a_light_over_no_data_needs_its_elevation():
         raykit.terrain.shadow(h, light=(1, 2, 3, 4))
     with pytest.raises(ValueError, match=r"sun must be \(azimuth, elevation\), 2 numbers; got 1"):
         raykit.terrain.shadow(h, sun=(1,))
+    # Cameras name the argument that is not three numbers.
+    for kw, name in (
+        (dict(eye=(1, -1)), "eye"),
+        (dict(eye=(1, -1, 9), target=(1, -2)), "target"),
+        (dict(eye="abc", target=(1, -1, 0)), "eye"),
+    ):
+        with pytest.raises(ValueError, match=rf"^{name} must be \(x, y, z\), 3 numbers; got"):
+            raykit.terrain.render(h, width=8, height=6, **kw)
+        with pytest.raises(ValueError, match=rf"^{name} must be \(x, y, z\), 3 numbers; got"):
+            raykit.terrain.cast(h, width=8, height=6, **{"target": (1, -1, 0), **kw})
+    with pytest.raises(ValueError, match=r"^target must be \(x, y, z\), 3 numbers; got None"):
+        raykit.terrain.cast(h, eye=(1, -1, 9), target=None)
 
 
 def test_render_checks_its_light_and_frames_grids_with_holes(tmp_path):
@@ -238,8 +251,13 @@ def test_transforms_and_bad_grids():
     np.testing.assert_array_equal(raykit.terrain.shadow(h.astype(np.float64), sun=(90, 30)), base)
     with pytest.raises(ValueError, match="rotated or sheared"):
         raykit.terrain.shadow(h, (1, 0.1, 0, 0, -1, 0), sun=(90, 30))
-    with pytest.raises(ValueError, match="north-up"):
-        raykit.terrain.shadow(h, (1, 0, 0, 0, 1, 0), sun=(90, 30))
+    # The same cells stored south-up (rows reversed, e > 0) come back north-up.
+    np.testing.assert_array_equal(raykit.terrain.shadow(h[::-1], (1, 0, 0, 0, 1, -5), sun=(90, 30)), base)
+    for degenerate in ((1, 0, 0, 0, 0, 0), (0, 0, 0, 0, -1, 0), (1, 0, 0, 0, np.inf, 0)):
+        with pytest.raises(ValueError, match=r"^transform \((1|0), 0, 0, 0, (0|-1|inf), 0\): expected a north-up raster"):
+            raykit.terrain.shadow(h, degenerate, sun=(90, 30))
+        with pytest.raises(ValueError, match=r"^transform .*: expected a north-up raster"):
+            raykit.terrain.render(h, degenerate, width=8, height=6)
     with pytest.raises(ValueError, match="exactly one of sun, light"):
         raykit.terrain.shadow(h)
     with pytest.raises(ValueError, match="elevation must be between 0 and 90"):
@@ -385,3 +403,89 @@ def test_cast_image_size_is_bounded():
             kw = dict(eye=eye, target=target) if call is raykit.terrain.cast else {}
             with pytest.raises(ValueError, match="width|height"):
                 call(h, width=w, height=hh, **kw)
+
+
+def write_dem(path, heights, transform, crs, nodata=None):
+    with rasterio.open(
+        path, "w", driver="GTiff", width=heights.shape[1], height=heights.shape[0], count=1,
+        dtype="float32", crs=crs, transform=transform, nodata=nodata,
+    ) as dst:
+        dst.write(heights, 1)
+
+
+@pytest.mark.filterwarnings("ignore::rasterio.errors.NotGeoreferencedWarning")
+@pytest.mark.parametrize("geographic", [False, True])
+def test_render_cameras_are_the_command_lines(tmp_path, geographic):
+    """``raykit.terrain.render`` without ``eye`` (the default view), and
+    with ``eye`` but no ``target`` (looking at the surface at the DEM's
+    centre), against ``raykit terrain render`` of the same GeoTIFF:
+    within 1/255 per channel. Cells are not square and the rows and
+    columns not of one parity, so that centre and extent are tested."""
+    import subprocess
+
+    cli = raykit_cli()
+    rows, cols = 23, 30
+    y, x = np.mgrid[0:rows, 0:cols]
+    heights = (40 * np.sin(x / 4.0) * np.cos(y / 5.0) + 3 * x - 2 * y + 300).astype(np.float32)
+    nodata = -9999.0
+    heights[11:13, 14:16] = nodata  # no data where the centre's height is read
+    if geographic:
+        transform, crs = Affine(1 / 1200, 0, 11.0, 0, -1 / 3600, 57.5), "EPSG:4326"
+    else:
+        transform, crs = Affine(2.0, 0, 429_000.0, 0, -3.0, 5_150_000.0), "EPSG:32633"
+    dem = tmp_path / "dem.tif"
+    write_dem(dem, heights, transform, crs, nodata)
+    # An eye south-west of the DEM's middle, above its highest point.
+    eye = (transform.c + transform.a * cols * 0.2, transform.f + transform.e * rows * 0.9, float(heights.max()) + 60.0)
+    for extra, kw in (([], {}), (["--eye", ",".join(repr(c) for c in eye)], {"eye": eye})):
+        png = tmp_path / "cli.png"
+        subprocess.run(
+            [cli, "terrain", "render", str(dem), "--width", "96", "--height", "54", "--out", str(png), *extra],
+            check=True, capture_output=True,
+        )
+        with rasterio.open(png) as src:
+            want = src.read()[:3].transpose(1, 2, 0)
+        got = raykit.terrain.render(dem, width=96, height=54, **kw)
+        assert got.shape == want.shape
+        diff = np.abs(got.astype(int) - want)
+        assert diff.max() <= 1, (kw, int((diff > 1).sum()))
+        assert len(np.unique(want.reshape(-1, 3), axis=0)) > 50  # a picture of the terrain, not of the sky
+
+
+@pytest.mark.parametrize("flip", ["south-up", "east-to-west", "both"])
+def test_south_up_and_east_to_west_rasters_come_north_up(tmp_path, flip):
+    """A GeoTIFF whose rows run south (e > 0) or columns west (a < 0):
+    the file path and the array API with rasterio's transform give the
+    same north-up answers, those of the grid flipped to north-up by hand."""
+    rows, cols = 21, 26
+    y, x = np.mgrid[0:rows, 0:cols]
+    north_up = (30 * np.sin(x / 3.0) * np.cos(y / 4.0) + x).astype(np.float32)
+    north_up[3, 4] = np.nan
+    a, c, e, f = 5.0, 600_000.0, -5.0, 4_200_000.0  # the north-up grid's transform
+    stored, t = north_up, [a, c, e, f]
+    if flip in ("south-up", "both"):
+        stored, t = stored[::-1], [t[0], t[1], -t[2], t[3] + t[2] * rows]
+    if flip in ("east-to-west", "both"):
+        stored, t = stored[:, ::-1], [-t[0], t[1] + t[0] * cols, t[2], t[3]]
+    transform = Affine(t[0], 0.0, t[1], 0.0, t[2], t[3])
+    path = tmp_path / "flipped.tif"
+    write_dem(path, np.ascontiguousarray(stored), transform, "EPSG:32633")
+    with rasterio.open(path) as src:
+        read = src.read(1)
+        assert src.transform == transform
+    np.testing.assert_array_equal(read, stored)
+    north = Affine(a, 0.0, c, 0.0, e, f)
+    observer = (c + a * 17.5, f + e * 6.5)
+    light = (c + a * 9.5, f + e * 15.5, 40.0)
+    calls = [
+        lambda dem, tr: raykit.terrain.viewshed(dem, tr, observer=observer, observer_height=3.0),
+        lambda dem, tr: raykit.terrain.shadow(dem, tr, light=light),
+        lambda dem, tr: raykit.terrain.shadow(dem, tr, sun=(200.0, 12.0)),
+        lambda dem, tr: raykit.terrain.cast(dem, tr, eye=(c - 40.0, f + e * rows + 40.0, 120.0), target=(c + a * cols / 2, f + e * rows / 2, 0.0), width=24, height=16)["t"],
+        lambda dem, tr: raykit.terrain.render(dem, tr, width=24, height=16),
+    ]
+    for k, call in enumerate(calls):
+        want = call(north_up, north)
+        assert 0 < np.mean(want == 1) < 1 or k >= 3, k  # masks with both lit and shadowed cells
+        np.testing.assert_array_equal(call(str(path), None), want, err_msg=str(k))
+        np.testing.assert_array_equal(call(read, transform), want, err_msg=str(k))

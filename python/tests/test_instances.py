@@ -220,6 +220,12 @@ def test_bad_instances_are_refused_by_name(bunny):
         scene.add_instance(g, np.eye(3))
     with pytest.raises(ValueError, match="out of range"):
         scene.add_instance(5, np.eye(4))
+    # Only integers name geometries: int() would take 0.7 and "0" for 0.
+    for bad in (0.7, 0.0, "0", True, np.bool_(False), None):
+        with pytest.raises(ValueError, match="^geometry_id must be an integer"):
+            scene.add_instance(bad, np.eye(4))
+        with pytest.raises(ValueError, match="^geometry_id must be an integer"):
+            scene.update_vertices(bad, v)
     with pytest.raises(ValueError, match="mask"):
         scene.add_instance(g, np.eye(4), mask=-1)
     # A placement beyond the coordinates a mesh may hold is refused at
@@ -234,9 +240,9 @@ def test_bad_instances_are_refused_by_name(bunny):
         scene.add_instance(g, far)
     with pytest.raises(ValueError, match="mask"):
         scene.cast_rays(rays_at(v, 4, 0), mask=2**32)
-    # Nothing refused was added; a good instance still works, and rays with
-    # NaN miss.
-    assert scene.add_instance(g, np.eye(4)) == 1
+    # Nothing refused was added; a good instance (numpy's integers name
+    # geometries too) still works, and rays with NaN miss.
+    assert scene.add_instance(np.uint8(g), np.eye(4)) == 1
     rays = rays_at(v, 50, 1)
     rays[0, 0] = np.nan
     out = scene.cast_rays(rays)
@@ -317,3 +323,156 @@ def test_a_gltf_too_large_to_flatten_loads_with_add_gltf(tmp_path):
     ans = scene.cast_rays(rays)
     assert np.allclose(ans["t_hit"], [5.0, 6.0])
     assert ans["instance_ids"].tolist() == [0, nodes - 1]
+
+
+def mirrored_boxes():
+    """A 1 × 2 × 3 box stored once and placed three times: mirrored in x
+    (the placement's determinant -1), by a random rotation times a
+    mirroring scale, and by a plain rotation; with the placed vertices of
+    each instance in float64."""
+    import trimesh
+
+    box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
+    v, f = np.asarray(box.vertices), np.asarray(box.faces)
+    q, _ = np.linalg.qr(np.random.default_rng(2).normal(size=(3, 3)))
+    placements = [
+        np.hstack([np.diag([-1.0, 1.0, 1.0]), [[5.0], [0.0], [0.0]]]),
+        np.hstack([q @ np.diag([0.8, -1.3, 1.1]), [[-4.0], [1.0], [0.5]]]),
+        np.hstack([q, [[0.0], [6.0], [0.0]]]),
+    ]
+    if np.linalg.det(q) < 0:
+        placements[2][:, 0] *= -1
+    scene = raykit.RaycastingScene()
+    g = scene.add_triangles(v, f, place=False)
+    for m in placements:
+        scene.add_instance(g, m)
+    return scene, v, f, placements
+
+
+def test_a_mirrored_instance_keeps_its_inside():
+    """Signed distance, occupancy and winding number of instances placed by
+    mirroring matrices against trimesh's ray-parity ``contains`` and a
+    float64 brute-force distance on each placed box."""
+    import trimesh
+
+    scene, v, f, placements = mirrored_boxes()
+    dets = [np.linalg.det(m[:, :3]) for m in placements]
+    assert dets[0] < 0 and dets[1] < 0 and dets[2] > 0
+    rng = np.random.default_rng(7)
+    points, inside, dist = [], [], []
+    for m in placements:
+        placed = moved(v, m)
+        # Points around the box, sampled in its own frame and placed.
+        pts = moved(rng.uniform(-1.0, 1.0, (150, 3)) * [0.8, 1.3, 1.8], m)
+        d = closest_brute(placed, f, pts)
+        keep = d > 0.05  # clear of the surface, where inside and outside are plain
+        pts = pts[keep]
+        points.append(pts)
+        dist.append(d[keep])
+        # Parity of rays does not depend on the faces' winding.
+        inside.append(trimesh.Trimesh(placed, f, process=False).contains(pts))
+    pts, inside, dist = np.concatenate(points), np.concatenate(inside), np.concatenate(dist)
+    assert 50 < inside.sum() < len(pts) - 50
+    np.testing.assert_array_equal(scene.compute_occupancy(pts), inside.astype(np.float32))
+    np.testing.assert_allclose(scene.compute_signed_distance(pts), np.where(inside, -dist, dist), rtol=1e-4, atol=1e-5)
+    np.testing.assert_allclose(scene.compute_winding_number(pts, beta=np.inf), inside.astype(np.float32), atol=1e-3)
+
+
+def placed_corners(v, f, placements, inst, prim) -> np.ndarray:
+    """``(k, 3, 3)``: the corners of triangle ``prim[j]`` of instance
+    ``inst[j]``, placed in float64, in the order the geometry lists them."""
+    return np.stack([moved(v[f[p]], placements[i]) for i, p in zip(inst, prim)])
+
+
+def own_normals(corners, placements, inst) -> np.ndarray:
+    """The unit normals of the placed triangles by their winding, reversed
+    where the placement mirrors."""
+    e = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    side = np.sign([np.linalg.det(placements[i][:, :3]) for i in inst])
+    return e / np.linalg.norm(e, axis=1, keepdims=True) * side[:, None]
+
+
+def test_a_mirrored_instance_reports_its_outward_normals_and_own_barycentrics():
+    """Ray hits and closest points on mirrored instances: the normal is the
+    placed triangle's with its winding reversed (outward: away from the
+    box's centre), the barycentrics rebuild the point from the geometry's
+    own corners, in the order the geometry lists them."""
+    scene, v, f, placements = mirrored_boxes()
+    rng = np.random.default_rng(3)
+    centres = np.array([moved(v, m).mean(0) for m in placements])
+    k = rng.integers(0, len(placements), 400)
+    aim = centres[k] + rng.uniform(-0.3, 0.3, (400, 3))
+    u = rng.normal(size=(400, 3))
+    origins = aim + 8.0 * u / np.linalg.norm(u, axis=1, keepdims=True)
+    rays = np.hstack([origins, aim - origins]).astype(np.float32)
+    hits = scene.cast_rays(rays)
+    hit = np.isfinite(hits["t_hit"])
+    assert hit.mean() > 0.9
+    inst, prim = hits["instance_ids"][hit], hits["primitive_ids"][hit]
+    points = rays[hit, :3].astype(np.float64) + hits["t_hit"][hit, None] * rays[hit, 3:]
+    n = hits["primitive_normals"][hit].astype(np.float64)
+    outward = points - centres[inst]
+    assert ((n * outward).sum(1) > 0).all()
+    corners = placed_corners(v, f, placements, inst, prim)
+    np.testing.assert_allclose(n, own_normals(corners, placements, inst), atol=1e-4)
+    uv = hits["primitive_uvs"][hit].astype(np.float64)
+    rebuilt = (1 - uv.sum(1))[:, None] * corners[:, 0] + uv[:, :1] * corners[:, 1] + uv[:, 1:] * corners[:, 2]
+    np.testing.assert_allclose(rebuilt, points, atol=1e-4)
+
+    queries = centres[k[:200]] + rng.uniform(-2.0, 2.0, (200, 3))
+    near = scene.compute_closest_points(queries)
+    inst, prim = near["instance_ids"], near["primitive_ids"]
+    corners = placed_corners(v, f, placements, inst, prim)
+    uv = near["primitive_uvs"].astype(np.float64)
+    rebuilt = (1 - uv.sum(1))[:, None] * corners[:, 0] + uv[:, :1] * corners[:, 1] + uv[:, 1:] * corners[:, 2]
+    np.testing.assert_allclose(rebuilt, near["points"], atol=1e-4)
+    np.testing.assert_allclose(near["primitive_normals"], own_normals(corners, placements, inst), atol=1e-4)
+
+
+def test_a_gltf_node_with_a_mirroring_scale_keeps_its_inside(tmp_path):
+    """A box placed by a glTF node scaled by (-1, 1, 1) and rotated: the
+    point queries of ``add_gltf`` (the mesh stored once, the node as an
+    instance) against the same file flattened by ``load_mesh``, whose
+    loader reverses the winding of mirrored nodes."""
+    import base64
+    import json
+
+    import trimesh
+
+    box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
+    v = np.asarray(box.vertices, np.float32)
+    idx = np.asarray(box.faces, np.uint32).ravel()
+    buf = v.tobytes() + idx.tobytes()
+    gltf = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": len(buf), "uri": "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": v.nbytes},
+            {"buffer": 0, "byteOffset": v.nbytes, "byteLength": idx.nbytes},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": len(v), "type": "VEC3", "min": v.min(0).tolist(), "max": v.max(0).tolist()},
+            {"bufferView": 1, "componentType": 5125, "count": len(idx), "type": "SCALAR"},
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "nodes": [
+            {"mesh": 0, "scale": [-1, 1, 1], "translation": [5, 0, 0], "rotation": [0.0, 0.38268343, 0.0, 0.92387953]},
+            {"mesh": 0, "translation": [-5, 0, 0]},
+        ],
+        "scenes": [{"nodes": [0, 1]}],
+        "scene": 0,
+    }
+    path = tmp_path / "mirrored.gltf"
+    path.write_text(json.dumps(gltf))
+    scene = raykit.RaycastingScene()
+    assert scene.add_gltf(path) == [0, 1]
+    fv, ft, _ = raykit.load_mesh(path)
+    flat = raykit.RaycastingScene()
+    flat.add_triangles(fv, ft)
+    rng = np.random.default_rng(5)
+    pts = np.concatenate([c + rng.uniform(-1.0, 1.0, (200, 3)) * [1.2, 1.3, 1.8] for c in ([5.0, 0, 0], [-5.0, 0, 0])]).astype(np.float32)
+    occ = scene.compute_occupancy(pts)
+    assert occ[:200].sum() > 30 and occ[200:].sum() > 30 and occ.sum() < len(pts) - 100
+    np.testing.assert_array_equal(occ, flat.compute_occupancy(pts))
+    np.testing.assert_allclose(scene.compute_signed_distance(pts), flat.compute_signed_distance(pts), atol=1e-5)
+    np.testing.assert_allclose(scene.compute_winding_number(pts), flat.compute_winding_number(pts), atol=1e-4)

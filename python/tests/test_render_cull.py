@@ -132,3 +132,56 @@ def test_render_refuses_a_camera_without_a_direction(bunny):
             raykit.render(scene, 24, 16, eye=eye, target=(0, bad, 0))
     with pytest.raises(ValueError, match="must be finite and differ"):
         raykit.render(scene, 24, 16, eye=centre, target=centre)
+
+
+@pytest.mark.filterwarnings("ignore::rasterio.errors.NotGeoreferencedWarning")
+def test_up_is_checked_as_the_command_line_checks_it(tmp_path):
+    """``up`` zero, not finite, or along the view is refused naming ``up``,
+    where ``raykit render --up`` refuses it (the default up too, with an
+    eye above the box's centre); ``up`` without ``eye`` is refused rather
+    than ignored; an ``up`` across the view turns the image: ``-up`` shows
+    it upside down (a hand-made camera: the same rays, pixels mirrored)."""
+    import subprocess
+
+    from conftest import raykit_cli
+
+    v, f = box(np.array([0.5, 0.0, -0.25]), 1.0)
+    v = v * [1.0, 1.5, 0.7]
+    scene = raykit.RaycastingScene()
+    scene.add_triangles(v, f)
+    centre = (v.min(0) + v.max(0)) / 2
+    above = centre + [0.0, 6.0, 0.0]
+    cases = [
+        (dict(eye=above), True),  # the default up (0, 1, 0) along the view
+        (dict(eye=above, up=(0, -2, 0)), True),
+        (dict(eye=above, target=centre + [0, 0, 3e-5], up=(0, 1, 0)), True),  # 5e-6 rad off: within the CLI's 1e-4
+        (dict(eye=above, up=(0, 0, 0)), True),
+        (dict(eye=above, up=(0, 0, 1)), False),
+        (dict(eye=above, target=centre + [0, 0, 0.01], up=(0, 1, 0)), False),
+        (dict(eye=centre + [3.0, 2.0, 4.0]), False),
+    ]
+    cli = raykit_cli()
+    obj = tmp_path / "box.obj"
+    trimesh.Trimesh(v, f, process=False).export(obj)
+    for kw, refused in cases:
+        flags = [f"--{k}={','.join(repr(float(c)) for c in x)}" for k, x in kw.items()]
+        run = subprocess.run(
+            [cli, "render", "--scene", str(obj), "--width", "8", "--height", "6", "--out", str(tmp_path / "r.png"), *flags],
+            capture_output=True, text=True,
+        )
+        assert (run.returncode != 0) == refused, (kw, run.stderr)
+        if refused:
+            assert "--up" in run.stderr
+            with pytest.raises(ValueError, match="^up "):
+                raykit.render(scene, 8, 6, **kw)
+        else:
+            assert raykit.render(scene, 8, 6, **kw).shape == (6, 8, 3)
+    for up in ((0, 0, 1), (np.nan, 0, 1), (0, 0, 0)):
+        with pytest.raises(ValueError, match="^up "):
+            raykit.render(scene, 8, 6, up=up)
+    eye = centre + [3.0, 2.0, 4.0]
+    across = np.cross(centre - eye, [1.0, 0.0, 0.0])
+    one = raykit.render(scene, 40, 30, eye=eye, up=across, shadows=False)
+    turned = raykit.render(scene, 40, 30, eye=eye, up=-across, shadows=False)
+    assert (one != one[0, 0]).any(axis=-1).mean() > 0.1
+    assert np.abs(turned.astype(int) - one[::-1, ::-1]).max() <= 1
