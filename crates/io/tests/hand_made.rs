@@ -82,8 +82,19 @@ fn gltf_node_transforms_match_hand_computation() {
     assert!(loaded.warnings[1].contains("meshes[1].primitives[1]"));
     assert!(loaded.warnings[1].contains("Lines"));
     assert!(m.materials[0].base_texture.is_none());
-    // Normals are dropped because the strip has none.
-    assert!(m.normals.is_none());
+    // The strip has no normals: its corners hold zeros ("use the face's"),
+    // the other primitives keep theirs, unit length.
+    let normals = m.normals.as_ref().expect("normals of the other primitives");
+    for (t, tri) in m.indices.iter().enumerate() {
+        for &v in tri {
+            let len = normals[v as usize].length();
+            if m.tri_part[t] == 1 {
+                assert_eq!(len, 0.0, "strip triangle {t}");
+            } else {
+                assert!((len - 1.0).abs() < 1e-5, "triangle {t}: {len}");
+            }
+        }
+    }
     // Materials: the tinted one, then the default for the strip.
     assert_eq!(m.tri_material, vec![0, 1, 1, 0]);
     assert_eq!(m.materials[0].name, "tinted");

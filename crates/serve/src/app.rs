@@ -35,7 +35,7 @@ pub struct AppState {
     shutdown: watch::Sender<bool>,
     /// Held while a scene loads, so only one loads at a time.
     pub load_lock: Arc<tokio::sync::Mutex<()>>,
-    /// Where every frame is rendered, in turn.
+    /// Where every frame is rendered, in turn, a band at a time.
     pub renderer: RenderQueue,
 }
 
@@ -52,6 +52,9 @@ impl AppState {
             version: 1,
             look_version: 1,
         };
+        let slice_samples = config
+            .slice_samples_per_thread
+            .saturating_mul(rayon::current_num_threads() as u64);
         Arc::new(AppState {
             config,
             loader,
@@ -63,9 +66,9 @@ impl AppState {
             totals: Mutex::new(Totals::default()),
             shutdown: watch::channel(false).0,
             load_lock: Arc::new(tokio::sync::Mutex::new(())),
-            // Two renders at a time overlap one's JPEG encoding (one
-            // thread) with the other's tracing (all threads).
-            renderer: RenderQueue::new(2),
+            // Two render threads overlap one frame's JPEG encoding (one
+            // thread) with another's tracing (all threads).
+            renderer: RenderQueue::new(2, slice_samples),
         })
     }
 

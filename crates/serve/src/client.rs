@@ -194,7 +194,7 @@ impl ClientShared {
                 orient(&c, alpha, beta, gamma)
             }
             ClientMessage::Camera(json) => json.apply(&c),
-            ClientMessage::Reset => world.camera,
+            ClientMessage::Reset {} => world.camera,
             ClientMessage::Settings(s) => {
                 apply_settings(&mut v, &s, config)?;
                 settings_changed = true;

@@ -4,6 +4,8 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::Duration;
 
+pub use crate::frame::SLICE_SAMPLES_PER_THREAD;
+
 /// How the server runs and what it allows.
 #[derive(Clone, Debug)]
 pub struct ServeConfig {
@@ -45,13 +47,20 @@ pub struct ServeConfig {
     /// finish a request (a slow-loris client) cannot use up the server's
     /// sockets.
     pub header_timeout: Duration,
+    /// Most samples (pixels × samples per pixel) rendered in one slice of a
+    /// frame, per thread of the rayon pool. Frames render in horizontal
+    /// bands of at most this many samples times the pool's threads, and
+    /// clients' frames take turns a band at a time, so that no client's
+    /// frame, however large, holds the others' up for more than a band.
+    pub slice_samples_per_thread: u64,
 }
 
 impl Default for ServeConfig {
     /// 127.0.0.1:8080, no token, 16 clients, 1280×720 refined with 4
     /// samples, 3840×2160 and 16 samples at most, quality 80, 150 ms settle,
     /// 16 KiB messages, 240 inputs/s, scenes up to 20M triangles, a ping every
-    /// 20 s and 65 s of silence allowed, 10 s to send a request's headers.
+    /// 20 s and 65 s of silence allowed, 10 s to send a request's headers,
+    /// slices of [`SLICE_SAMPLES_PER_THREAD`] samples per thread.
     fn default() -> Self {
         ServeConfig {
             addr: SocketAddr::from(([127, 0, 0, 1], 8080)),
@@ -70,6 +79,7 @@ impl Default for ServeConfig {
             idle_timeout: Duration::from_secs(65),
             scene_dir: None,
             header_timeout: Duration::from_secs(10),
+            slice_samples_per_thread: SLICE_SAMPLES_PER_THREAD,
         }
     }
 }
@@ -82,43 +92,78 @@ impl ServeConfig {
             .then(|| format!("resolution {width}x{height} outside 16x16..={mw}x{mh}"))
     }
 
-    /// Why the settings themselves are unusable, if they are.
+    /// Why the settings themselves are unusable, if they are. Each reason
+    /// names the setting, with the `raykit serve` flag that sets it.
     pub fn problem(&self) -> Option<String> {
         if let Some(p) = self.size_problem(self.full.0, self.full.1) {
-            return Some(format!("default {p}"));
+            return Some(format!("full (--width, --height): default {p}"));
         }
         if self.max_size.0 > 16384 || self.max_size.1 > 16384 {
-            return Some("the largest resolution is 16384x16384".into());
-        }
-        if !(1..=self.max_spp).contains(&self.spp) || self.max_spp > 4096 {
             return Some(format!(
-                "spp {} outside 1..={} (at most 4096)",
+                "max_size (--max-width, --max-height) {}x{} is over 16384x16384",
+                self.max_size.0, self.max_size.1
+            ));
+        }
+        if !(1..=4096).contains(&self.max_spp) {
+            return Some(format!(
+                "max_spp (--max-spp) {} outside 1..=4096",
+                self.max_spp
+            ));
+        }
+        if !(1..=self.max_spp).contains(&self.spp) {
+            return Some(format!(
+                "spp (--spp) {} outside 1..={} (max_spp, --max-spp)",
                 self.spp, self.max_spp
             ));
         }
         if !(1..=100).contains(&self.quality) {
-            return Some(format!("JPEG quality {} outside 1..=100", self.quality));
+            return Some(format!(
+                "quality (--quality) {} outside 1..=100",
+                self.quality
+            ));
         }
-        if self.max_clients == 0 || self.max_message_bytes < 256 || self.max_inputs_per_second == 0
-        {
-            return Some("max clients, inputs per second must be positive and message size at least 256 bytes".into());
+        if self.max_clients == 0 {
+            return Some("max_clients (--max-clients) must be at least 1".into());
+        }
+        if self.max_message_bytes < 256 {
+            return Some(format!(
+                "max_message_bytes (--max-message-bytes) {} is under 256",
+                self.max_message_bytes
+            ));
+        }
+        if self.max_inputs_per_second == 0 {
+            return Some(
+                "max_inputs_per_second (--max-inputs-per-second) must be at least 1".into(),
+            );
         }
         if self.header_timeout.is_zero() {
-            return Some("the header timeout must be positive".into());
+            return Some("header_timeout must be positive".into());
         }
         if self.ping_every.is_zero() || self.idle_timeout <= self.ping_every {
-            return Some("the idle timeout must exceed the (non-zero) ping period".into());
+            return Some(format!(
+                "idle_timeout ({:?}) must exceed ping_every ({:?}), which must be positive",
+                self.idle_timeout, self.ping_every
+            ));
         }
         if self.settle > Duration::from_secs(60) {
-            return Some("the settle time is at most 60 s".into());
+            return Some(format!(
+                "settle (--settle-ms) {} ms is over 60000 ms",
+                self.settle.as_millis()
+            ));
+        }
+        if self.slice_samples_per_thread == 0 {
+            return Some("slice_samples_per_thread must be at least 1".into());
         }
         if self.token.as_deref() == Some("") {
-            return Some("the token is empty: give one clients must present, or none".into());
+            return Some(
+                "token (--token, $RAYKIT_TOKEN) is empty: give one clients must present, or none"
+                    .into(),
+            );
         }
         if let Some(dir) = &self.scene_dir {
             if let Err(e) = std::fs::read_dir(dir) {
                 return Some(format!(
-                    "the scene folder {} cannot be read: {e}",
+                    "scene_dir (--scene-dir): the folder {} cannot be read: {e}",
                     dir.display()
                 ));
             }

@@ -4,6 +4,7 @@
 
 use crate::api::{error, query_u32};
 use crate::app::{AppState, ClientGuard};
+use crate::frame::FrameRequest;
 use crate::protocol::FrameFormat;
 use crate::sync::lock;
 use axum::body::{Body, Bytes};
@@ -120,14 +121,14 @@ async fn next_part(mut s: Stream) -> Option<(Result<Bytes, std::io::Error>, Stre
     let encoded = s
         .state
         .renderer
-        .render(
-            world.clone(),
-            world.camera,
+        .render(FrameRequest {
+            camera: world.camera,
+            world: world.clone(),
             size,
             spp,
-            FrameFormat::Jpeg,
+            format: FrameFormat::Jpeg,
             quality,
-        )
+        })
         .await?;
     let now = Instant::now();
     let client = &s.guard.client;

@@ -118,8 +118,10 @@ pub enum ClientMessage {
     },
     /// Set the camera (fields optional).
     Camera(CameraJson),
-    /// Back to the default camera.
-    Reset,
+    /// Back to the default camera. A struct variant with no fields (not a
+    /// unit variant, whose extra fields serde would ignore), so that any
+    /// field besides `type` and the envelope's `seq` is refused by name.
+    Reset {},
     /// Full resolution, JPEG quality and refined samples per pixel.
     Settings(SettingsJson),
 }
@@ -281,17 +283,23 @@ mod tests {
             })
         );
         let e: Envelope = serde_json::from_str(r#"{"type":"reset"}"#).unwrap();
-        assert_eq!(e.message, ClientMessage::Reset);
+        assert_eq!(e.message, ClientMessage::Reset {});
+        let e: Envelope = serde_json::from_str(r#"{"type":"reset","seq":5}"#).unwrap();
+        assert_eq!((e.seq, e.message), (Some(5), ClientMessage::Reset {}));
         assert!(serde_json::from_str::<Envelope>(r#"{"type":"warp"}"#).is_err());
         assert!(serde_json::from_str::<Envelope>(r#"{"type":"zoom"}"#).is_err());
-        // A misspelt field is an error naming it, not ignored.
-        for typo in [
-            r#"{"type":"camera","eye":[0,1,3],"taget":[9,9,9]}"#,
-            r#"{"type":"settings","widht":800}"#,
-            r#"{"type":"orbit","yaw":0.1,"pich":0.2,"seq":3}"#,
+        // A misspelt field, or one the message does not have, is an error
+        // naming it, not ignored.
+        for (typo, field) in [
+            (r#"{"type":"camera","eye":[0,1,3],"taget":[9,9,9]}"#, "taget"),
+            (r#"{"type":"settings","widht":800}"#, "widht"),
+            (r#"{"type":"orbit","yaw":0.1,"pich":0.2,"seq":3}"#, "pich"),
+            (r#"{"type":"reset","fov":10}"#, "fov"),
+            (r#"{"type":"reset","seq":5,"sqe":1}"#, "sqe"),
         ] {
             let e = serde_json::from_str::<Envelope>(typo).unwrap_err();
-            assert!(e.to_string().contains("unknown field"), "{typo}: {e}");
+            let named = format!("unknown field `{field}`");
+            assert!(e.to_string().contains(&named), "{typo}: {e}");
         }
     }
 

@@ -7,6 +7,7 @@
 use crate::app::AppState;
 use crate::client::{ClientShared, View};
 use crate::config::ServeConfig;
+use crate::frame::FrameRequest;
 use crate::protocol::{encode_frame, CameraJson, FrameHeader, Stage};
 use crate::sync::lock;
 use crate::world::World;
@@ -128,14 +129,14 @@ pub async fn render_loop(
                 let camera = snapshot.camera;
                 let Some(encoded) = state
                     .renderer
-                    .render(
-                        world.clone(),
+                    .render(FrameRequest {
+                        world: world.clone(),
                         camera,
                         size,
                         spp,
-                        snapshot.format,
-                        snapshot.quality,
-                    )
+                        format: snapshot.format,
+                        quality: snapshot.quality,
+                    })
                     .await
                 else {
                     return;

@@ -11,7 +11,7 @@ use axum::response::{IntoResponse, Response};
 use futures_util::{SinkExt, StreamExt};
 use serde_json::json;
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 use tokio::sync::mpsc;
 
 /// Close code for a message over the size limit (RFC 6455 §7.4.1).
@@ -20,6 +20,12 @@ pub const CLOSE_TOO_BIG: u16 = 1009;
 pub const CLOSE_GOING_AWAY: u16 = 1001;
 /// Close code when the server cannot render.
 pub const CLOSE_INTERNAL: u16 = 1011;
+/// Close code for a frame that breaks the WebSocket protocol: unmasked,
+/// with a reserved opcode or reserved bits, a continuation with nothing to
+/// continue, a control frame over 125 bytes or fragmented (RFC 6455 §7.4.1).
+pub const CLOSE_PROTOCOL: u16 = 1002;
+/// Close code for a text message that is not UTF-8 (RFC 6455 §7.4.1).
+pub const CLOSE_INVALID_DATA: u16 = 1007;
 
 /// `GET /ws`: upgrade unless the client limit is reached (503).
 pub async fn handler(State(state): State<Arc<AppState>>, upgrade: WebSocketUpgrade) -> Response {
@@ -87,6 +93,81 @@ impl RateLimit {
     }
 }
 
+/// When to ping a client and when to give up on it: a ping every
+/// `ping_every`, and a close once nothing (message or pong) has been heard
+/// for `idle_timeout`, at that moment rather than at the next ping.
+struct Liveness {
+    ping_every: Duration,
+    idle_timeout: Duration,
+    last_heard: Instant,
+    next_ping: Instant,
+}
+
+/// What [`Liveness`] says is due.
+#[derive(Debug, PartialEq, Eq)]
+enum Due {
+    /// Nothing yet.
+    Nothing,
+    /// Send a ping.
+    Ping,
+    /// Silent too long: close.
+    Close,
+}
+
+impl Liveness {
+    fn new(ping_every: Duration, idle_timeout: Duration, now: Instant) -> Self {
+        Liveness {
+            ping_every,
+            idle_timeout,
+            last_heard: now,
+            next_ping: now + ping_every,
+        }
+    }
+
+    /// Something came from the client at `now`.
+    fn heard(&mut self, now: Instant) {
+        self.last_heard = now;
+    }
+
+    /// The next instant something may be due.
+    fn wake(&self) -> Instant {
+        self.next_ping.min(self.last_heard + self.idle_timeout)
+    }
+
+    /// What is due at `now` (a ping counts as sent).
+    fn due(&mut self, now: Instant) -> Due {
+        if now.saturating_duration_since(self.last_heard) >= self.idle_timeout {
+            Due::Close
+        } else if now >= self.next_ping {
+            self.next_ping = now + self.ping_every;
+            Due::Ping
+        } else {
+            Due::Nothing
+        }
+    }
+}
+
+/// The close code and reason for an error reading the socket, or `None`
+/// when the connection itself failed (nothing can be sent).
+fn close_for(error: axum::Error) -> Option<(u16, String)> {
+    use tokio_tungstenite::tungstenite::error::{Error, ProtocolError};
+    let error = error.into_inner().downcast::<Error>().ok()?;
+    match *error {
+        Error::Capacity(_) => Some((CLOSE_TOO_BIG, "message over the size limit".into())),
+        Error::Utf8(_) => Some((CLOSE_INVALID_DATA, "text message is not UTF-8".into())),
+        Error::Protocol(ProtocolError::ResetWithoutClosingHandshake) => None,
+        Error::Protocol(p) => {
+            // A close reason has at most 123 bytes.
+            let mut reason = format!("protocol error: {p}");
+            while reason.len() > 123 {
+                reason.pop();
+            }
+            Some((CLOSE_PROTOCOL, reason))
+        }
+        _ => None,
+    }
+}
+
 async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
     let client = guard.client.clone();
     let (mut sink, mut stream) = socket.split();
@@ -138,43 +219,46 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
     let mut renderer = tokio::spawn(render_loop(state.clone(), client.clone(), tx.clone()));
 
     let mut limit = RateLimit::new(state.config.max_inputs_per_second);
-    let mut close: Option<(u16, &str)> = None;
-    // The first ping after one period, not at once (interval's first tick
-    // is immediate).
-    let every = state.config.ping_every;
-    let mut ping = tokio::time::interval_at(tokio::time::Instant::now() + every, every);
-    let mut last_heard = Instant::now();
+    let mut close: Option<(u16, String)> = None;
+    let going_away = |reason: &str| Some((CLOSE_GOING_AWAY, reason.to_string()));
+    let c = &state.config;
+    let mut live = Liveness::new(c.ping_every, c.idle_timeout, Instant::now());
     loop {
+        let wake = tokio::time::Instant::from_std(live.wake());
         let msg = tokio::select! {
             m = stream.next() => m,
-            _ = shutdown.wait_for(|s| *s) => { close = Some((CLOSE_GOING_AWAY, "server shutting down")); break; }
+            _ = shutdown.wait_for(|s| *s) => { close = going_away("server shutting down"); break; }
             // The render loop ends only when the server cannot render.
             _ = &mut renderer => {
-                close = Some(if *state.watch_shutdown().borrow() {
-                    (CLOSE_GOING_AWAY, "server shutting down")
+                close = if *state.watch_shutdown().borrow() {
+                    going_away("server shutting down")
                 } else {
-                    (CLOSE_INTERNAL, "rendering failed")
-                });
+                    Some((CLOSE_INTERNAL, "rendering failed".into()))
+                };
                 break;
             }
-            _ = ping.tick() => {
-                if last_heard.elapsed() > state.config.idle_timeout {
-                    close = Some((CLOSE_GOING_AWAY, "no message or pong for too long"));
-                    break;
+            _ = tokio::time::sleep_until(wake) => {
+                match live.due(Instant::now()) {
+                    Due::Close => {
+                        close = going_away("no message or pong for too long");
+                        break;
+                    }
+                    Due::Ping => { let _ = tx.try_send(Outgoing::Ping); }
+                    Due::Nothing => {}
                 }
-                let _ = tx.try_send(Outgoing::Ping);
                 continue;
             }
         };
-        last_heard = Instant::now();
+        live.heard(Instant::now());
         let text = match msg {
             None => break,
             Some(Err(e)) => {
-                // Over-long messages end the connection (tungstenite cannot
-                // skip them); say why if the socket still works.
-                if e.to_string().contains("too long") || e.to_string().contains("too big") {
+                // A broken frame or an over-long message ends the connection
+                // (tungstenite cannot skip it); say why if the socket still
+                // works.
+                close = close_for(e);
+                if close.is_some() {
                     client.count_error(&state.totals);
-                    close = Some((CLOSE_TOO_BIG, "message over the size limit"));
                 }
                 break;
             }
@@ -218,8 +302,12 @@ async fn session(socket: WebSocket, state: Arc<AppState>, guard: ClientGuard) {
             .and_then(|env| {
                 client.apply(env.seq, &env.message, &state.world(), &state.config, now)
             });
-        if let Err(e) = result {
-            reply_error(&tx, &client, &state, &e);
+        match result {
+            Ok(()) => {}
+            // Acks take no token, so a wrong one is answered at most once
+            // a second, as dropped messages are; the rest are counted.
+            Err(_) if is_ack && !limit.report(now) => client.count_error(&state.totals),
+            Err(e) => reply_error(&tx, &client, &state, &e),
         }
     }
     renderer.abort();
@@ -252,4 +340,38 @@ fn reply_error(
     client.count_error(&state.totals);
     let msg = json!({"type": "error", "message": message}).to_string();
     let _ = tx.try_send(Outgoing::Text(msg));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn silence_closes_at_the_idle_timeout_not_at_the_next_ping() {
+        let (every, idle) = (Duration::from_secs(20), Duration::from_secs(65));
+        let t0 = Instant::now();
+        let at = |s: u64| t0 + Duration::from_secs(s);
+        let mut live = Liveness::new(every, idle, t0);
+        assert_eq!(live.due(at(1)), Due::Nothing);
+        for ping in [20, 40, 60] {
+            assert_eq!(live.wake(), at(ping));
+            assert_eq!(live.due(at(ping)), Due::Ping);
+        }
+        // The next ping would be at 80 s: the close is due at 65 s.
+        assert_eq!(live.wake(), at(65));
+        assert_eq!(live.due(at(64)), Due::Nothing);
+        assert_eq!(live.due(at(65)), Due::Close);
+        // Hearing from the client moves the close.
+        let mut live = Liveness::new(every, idle, t0);
+        assert_eq!(live.due(at(20)), Due::Ping);
+        live.heard(at(30));
+        for ping in [40, 60] {
+            assert_eq!(live.due(at(ping)), Due::Ping);
+        }
+        assert_eq!(live.due(at(65)), Due::Nothing);
+        assert_eq!(live.wake(), at(80));
+        assert_eq!(live.due(at(80)), Due::Ping);
+        assert_eq!(live.wake(), at(95));
+        assert_eq!(live.due(at(95)), Due::Close);
+    }
 }
