@@ -36,10 +36,15 @@ pub fn ensure_outputs(outs: &[&Path], inputs: &[&Path]) -> Result<()> {
         if out.is_dir() {
             bail!("cannot write {}: it is a folder", out.display());
         }
-        let is_obj = out
+        // An OBJ (compressed or not) may bring its material library.
+        let plain = match out.extension() {
+            Some(e) if e.eq_ignore_ascii_case("gz") => out.with_extension(""),
+            _ => out.to_path_buf(),
+        };
+        let is_obj = plain
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-        let library = is_obj.then(|| out.with_extension("mtl"));
+        let library = is_obj.then(|| plain.with_extension("mtl"));
         for written in std::iter::once(*out).chain(library.as_deref()) {
             let Ok(real) = written.canonicalize() else {
                 continue; // the file does not exist yet
@@ -136,11 +141,12 @@ pub fn ensure_distinct(a: &Path, b: &Path, what_a: &str, what_b: &str) -> Result
 fn ensure_folder(path: &Path) -> Result<()> {
     let folder = folder_of(path);
     if !folder.is_dir() {
-        bail!(
-            "cannot write {}: the folder {} does not exist",
-            path.display(),
-            folder.display()
-        );
+        let why = if folder.exists() {
+            format!("{} is not a folder", folder.display())
+        } else {
+            format!("the folder {} does not exist", folder.display())
+        };
+        bail!("cannot write {}: {why}", path.display());
     }
     let probe = folder.join(format!(".raykit-probe.{}", std::process::id()));
     match std::fs::OpenOptions::new()

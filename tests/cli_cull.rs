@@ -356,3 +356,49 @@ fn model_balls(model: &TriangleMesh) -> Vec<TriangleMesh> {
         })
         .collect()
 }
+
+/// Labels saved for one model are refused for another with as many
+/// triangles (the same model moved), naming the field; for the model they
+/// were saved for they give the evaluation a fresh one gives.
+#[test]
+fn saved_labels_are_refused_for_another_mesh_with_as_many_triangles() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, _) = boxed_balls();
+    let input = dir.path().join("assembly.ply");
+    raykit_io::save_mesh(&input, &model).unwrap();
+    let mut moved = model.clone();
+    for p in &mut moved.positions {
+        *p += Vec3::new(0.25, 0.0, 0.0);
+    }
+    let other = dir.path().join("moved.ply");
+    raykit_io::save_mesh(&other, &moved).unwrap();
+    let truth = dir.path().join("t.json");
+    let output = dir.path().join("out.ply");
+    let run = |mesh: &std::path::Path, extra: &[&str]| {
+        let args = [
+            &["cull", s(mesh), s(&output), "--resolution", "32"][..],
+            &["--evaluate", "--eval-rounds", "2", "--json"],
+            extra,
+        ]
+        .concat();
+        raykit(&args)
+    };
+    let fresh = run(&input, &["--save-truth", s(&truth)]);
+    assert!(fresh.status.success(), "{}", text(&fresh.stderr));
+    let again = run(&input, &["--truth", s(&truth)]);
+    assert!(again.status.success(), "{}", text(&again.stderr));
+    let evaluation = |o: &std::process::Output| {
+        let r: serde_json::Value = serde_json::from_str(&text(&o.stdout)).unwrap();
+        r["evaluation"].clone()
+    };
+    assert_eq!(evaluation(&again), evaluation(&fresh));
+    std::fs::remove_file(&output).unwrap();
+    let refused = run(&other, &["--truth", s(&truth)]);
+    assert!(!refused.status.success());
+    let err = text(&refused.stderr);
+    assert!(
+        err.contains("t.json") && err.contains("mesh_digest") && err.contains("moved.ply"),
+        "{err}"
+    );
+    assert!(!output.exists(), "no output is written on errors");
+}

@@ -115,8 +115,11 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
     let pool = pool(args.threads)?;
     let (mesh, load_s) = timed(|| raykit_io::load_mesh(&args.input));
     let mut mesh = mesh?;
+    // The cut mesh and the output are put in place together at the end, so
+    // that a failed run leaves both as they were.
+    let mut outputs = raykit_io::OutputSet::new();
     if let Some(h) = args.kd_cut {
-        mesh = pool.install(|| kd_cut(&mesh, h, &args))?;
+        mesh = pool.install(|| kd_cut(&mesh, h, &args, &mut outputs))?;
     }
     let bar = crate::stage::spinner(format!(
         "T-junctions of {} triangles ({})",
@@ -132,8 +135,14 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
             args.input.display()
         );
     }
-    let (saved, save_s) = timed(|| raykit_io::save_mesh(&args.output, &fixed));
+    let (saved, save_s) = timed(|| raykit_io::stage_mesh(&mut outputs, &args.output, &fixed));
     saved.with_context(|| format!("cannot write {}", args.output.display()))?;
+    outputs
+        .commit()
+        .context("cannot put the outputs in place")?;
+    if let Some(path) = &args.cut_out {
+        eprintln!("wrote the cut mesh to {}", path.display());
+    }
     if args.json {
         let full = Report {
             input: args.input.display().to_string(),
@@ -152,18 +161,22 @@ pub fn run(args: TJunctionsArgs) -> Result<ExitCode> {
         eprintln!(
             "raykit: warning: {} T-junctions and {} flat triangles remain after {} rounds: \
              the mesh has distinct vertices about the tolerance apart, which no re-triangulation \
-             separates (weld close vertices first)",
-            report.remaining_t_junctions, report.remaining_degenerate, report.rounds
+             separates. If those vertices are meant to be distinct (a fine mesh far from the \
+             origin, where {} ulps of the coordinates is wider than its spacing), lower --ulps \
+             or --tolerance; if they are meant to be one, weld them first",
+            report.remaining_t_junctions, report.remaining_degenerate, report.rounds, args.ulps
         );
     }
     Ok(ExitCode::SUCCESS)
 }
 
-/// Cut `mesh` with the game kd-tree of weight `h` and report it.
+/// Cut `mesh` with the game kd-tree of weight `h` and report it; the cut
+/// mesh goes to `--cut-out` among the run's `outputs`.
 fn kd_cut(
     mesh: &raykit_core::TriangleMesh,
     h: u8,
     args: &TJunctionsArgs,
+    outputs: &mut raykit_io::OutputSet,
 ) -> Result<raykit_core::TriangleMesh> {
     use raykit_core::accel::kdtree::{build_game, cut_mesh, KdOptions, KdSplit};
     let opts = KdOptions {
@@ -182,9 +195,8 @@ fn kd_cut(
         build_s * 1e3
     );
     if let Some(path) = &args.cut_out {
-        raykit_io::save_mesh(path, &cut.mesh)
+        raykit_io::stage_mesh(outputs, path, &cut.mesh)
             .with_context(|| format!("cannot write {}", path.display()))?;
-        eprintln!("wrote the cut mesh to {}", path.display());
     }
     Ok(cut.mesh)
 }

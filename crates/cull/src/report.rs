@@ -154,7 +154,7 @@ impl CullReport {
         if let Some(x) = &s.rays {
             say!(
                 "rays: {} seen by {} views of {}x{}, {} by escape rays and shared directions in {} rounds \
-                 ({}; last round added {}); {} rays, {:.0} per triangle; {}; {} zero-area triangles removed",
+                 ({}; last round added {}); {} rays, {:.0} per triangle; {}; {} zero-area triangles {}",
                 x.by_views,
                 x.viewpoints,
                 x.image,
@@ -178,7 +178,12 @@ impl CullReport {
                         x.rays_per_removed
                     )
                 ),
-                x.degenerate
+                x.degenerate,
+                if r.by == Removal::Part {
+                    "counted hidden (removed only with their parts)"
+                } else {
+                    "removed"
+                }
             );
         }
         if r.mode == CullMode::Conservative {

@@ -92,6 +92,78 @@ pub fn write_atomic_file<E>(
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), E>,
     io_error: impl Fn(io::Error) -> E,
 ) -> Result<(), E> {
+    match stage(path, write, &io_error)? {
+        Some(staged) => staged.commit().map_err(io_error),
+        None => Ok(()),
+    }
+}
+
+/// A file written and synced under a temporary name beside its destination,
+/// waiting for [`StagedFile::commit`] to rename it there; dropped
+/// uncommitted, it is removed.
+struct StagedFile {
+    guard: TempGuard,
+    target: PathBuf,
+}
+
+impl StagedFile {
+    fn commit(mut self) -> io::Result<()> {
+        fs::rename(&self.guard.path, &self.target)?;
+        self.guard.armed = false;
+        Ok(())
+    }
+}
+
+/// Several outputs of one run, written in turn and put in place together:
+/// each [`OutputSet::write`] goes to a temporary file beside its
+/// destination, and [`OutputSet::commit`] renames them all, in the order
+/// written, once every one has been written. A run that fails before the
+/// commit (or drops the set) leaves every destination as it was and no
+/// temporary file. Destinations that are no regular file (a pipe) are
+/// written when their turn comes, as [`write_atomic`] writes them.
+#[derive(Default)]
+pub struct OutputSet {
+    staged: Vec<StagedFile>,
+}
+
+impl OutputSet {
+    /// An empty set.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Write `path`'s contents into the set (see [`write_atomic`]).
+    pub fn write<F>(&mut self, path: &Path, write: F) -> io::Result<()>
+    where
+        F: FnOnce(&mut dyn Write) -> io::Result<()>,
+    {
+        let staged = stage(path, |w| write(w).map_err(|e| with_path(e, path)), &|e| {
+            with_path(e, path)
+        })?;
+        self.staged.extend(staged);
+        Ok(())
+    }
+
+    /// Put every output written in place. A rename that fails (rare: the
+    /// files are already written and synced in their folders) leaves the
+    /// outputs before it in place and the others as they were.
+    pub fn commit(self) -> io::Result<()> {
+        for staged in self.staged {
+            let target = staged.target.clone();
+            staged.commit().map_err(|e| with_path(e, &target))?;
+        }
+        Ok(())
+    }
+}
+
+/// Write `path`'s contents to a temporary file beside it, synced, and
+/// return it for renaming; a destination that is no regular file is written
+/// in place (`None`).
+fn stage<E>(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> Result<(), E>,
+    io_error: &impl Fn(io::Error) -> E,
+) -> Result<Option<StagedFile>, E> {
     // Opened through `path` itself, so that links the kernel resolves
     // (`/dev/stdout` to a pipe) still work.
     let existing = fs::metadata(path).ok();
@@ -105,9 +177,9 @@ pub fn write_atomic_file<E>(
             .map_err(&io_error)?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
         write(&mut w)?;
-        return w.flush().map_err(&io_error);
+        return w.flush().map(|()| None).map_err(io_error);
     }
-    let target = resolve_links(path).map_err(&io_error)?;
+    let target = resolve_links(path).map_err(io_error)?;
     let path = target.as_path();
     let name = path.file_name().ok_or_else(|| {
         io_error(io::Error::new(
@@ -122,7 +194,7 @@ pub fn write_atomic_file<E>(
     // Each name is listed before its file is made, so that a stop between
     // the two cannot leave the file behind; a name already taken is unlisted
     // without touching the file that holds it.
-    let (file, mut guard) = loop {
+    let (file, guard) = loop {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let mut tmp_name = std::ffi::OsString::from(".");
         tmp_name.push(name);
@@ -148,11 +220,12 @@ pub fn write_atomic_file<E>(
     let mut w = BufWriter::with_capacity(1 << 20, file);
     write(&mut w)?;
     let file: File = w.into_inner().map_err(|e| io_error(e.into_error()))?;
-    file.sync_all().map_err(&io_error)?;
+    file.sync_all().map_err(io_error)?;
     drop(file);
-    fs::rename(&guard.path, path).map_err(&io_error)?;
-    guard.armed = false;
-    Ok(())
+    Ok(Some(StagedFile {
+        guard,
+        target: path.to_path_buf(),
+    }))
 }
 
 /// `path` with its links followed: the file a chain of links names, which
@@ -235,6 +308,35 @@ mod tests {
         assert_eq!(fs::read(&p).unwrap(), b"old");
         assert_eq!(fs::read(&done).unwrap(), b"done");
         assert_eq!(entries(dir.path()), vec!["done.bin", "p.bin"]);
+    }
+
+    /// A set whose second output fails leaves the first destination's old
+    /// contents and no temporary file; committed, it puts both in place.
+    #[test]
+    fn an_output_set_puts_nothing_in_place_until_every_output_is_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.obj"), dir.path().join("b.json"));
+        fs::write(&a, b"old a").unwrap();
+        let mut set = OutputSet::new();
+        set.write(&a, |w| w.write_all(b"new a")).unwrap();
+        assert_eq!(fs::read(&a).unwrap(), b"old a", "written before the commit");
+        let e = set
+            .write(&b, |w| {
+                w.write_all(b"partial")?;
+                Err(io::Error::other("disk full"))
+            })
+            .unwrap_err();
+        assert!(e.to_string().contains("b.json"), "{e}");
+        drop(set);
+        assert_eq!(fs::read(&a).unwrap(), b"old a");
+        assert_eq!(entries(dir.path()), vec!["a.obj"]);
+        let mut set = OutputSet::new();
+        set.write(&a, |w| w.write_all(b"new a")).unwrap();
+        set.write(&b, |w| w.write_all(b"new b")).unwrap();
+        set.commit().unwrap();
+        assert_eq!(fs::read(&a).unwrap(), b"new a");
+        assert_eq!(fs::read(&b).unwrap(), b"new b");
+        assert_eq!(entries(dir.path()), vec!["a.obj", "b.json"]);
     }
 
     #[test]

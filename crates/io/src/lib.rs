@@ -65,7 +65,7 @@ mod uri;
 mod validate;
 mod write;
 
-pub use atomic::{remove_unfinished_outputs, write_atomic, write_atomic_file};
+pub use atomic::{remove_unfinished_outputs, write_atomic, write_atomic_file, OutputSet};
 pub use companions::companion_files;
 pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
@@ -87,6 +87,6 @@ pub use scene_hits::{
     SCENE_HIT_RECORD_SIZE,
 };
 pub use write::{
-    save_mesh, save_mesh_as, write_exr_channels, write_exr_rgb, write_gltf, write_gltf_scene,
-    write_mesh, write_mtl, write_obj, write_off, write_ply, write_stl,
+    save_mesh, save_mesh_as, stage_mesh, write_exr_channels, write_exr_rgb, write_gltf,
+    write_gltf_scene, write_mesh, write_mtl, write_obj, write_off, write_ply, write_stl,
 };

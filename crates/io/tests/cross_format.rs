@@ -235,11 +235,19 @@ property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_he
 #[test]
 fn obj_parts_and_materials_round_trip_with_mtl() {
     let cube = load_mesh(&local("cube.obj")).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join("cube_out.obj");
-    save_mesh(&p, &cube).unwrap();
-    assert!(dir.path().join("cube_out.mtl").is_file());
-    let back = load_mesh(&p).unwrap();
+    // Compressed or not, the OBJ brings its library, under the name
+    // without `.gz` and `.obj`.
+    for name in ["cube_out.obj", "cube_out.obj.gz"] {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join(name);
+        save_mesh(&p, &cube).unwrap();
+        assert!(dir.path().join("cube_out.mtl").is_file(), "{name}");
+        let back = load_mesh(&p).unwrap();
+        assert_materials_survive(&back, &cube);
+    }
+}
+
+fn assert_materials_survive(back: &TriangleMesh, cube: &TriangleMesh) {
     assert_eq!(back.parts, cube.parts);
     assert_eq!(back.tri_part, cube.tri_part);
     assert_eq!(back.tri_material, cube.tri_material);

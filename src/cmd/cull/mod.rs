@@ -74,7 +74,7 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
         }
     };
     let saved_truth = match (&args.truth, args.evaluate) {
-        (Some(path), true) => match load_truth(path, &args.input, mesh.num_triangles()) {
+        (Some(path), true) => match load_truth(path, &args.input, &mesh) {
             Ok(t) => Some(t),
             Err(e) => {
                 bar.finish_and_clear();
@@ -117,10 +117,14 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
     } else {
         (None, None)
     };
-    let (saved, save_s) = timed(|| raykit_io::save_mesh(&args.output, &kept));
+    // Every output is written under a temporary name and all are put in
+    // place together at the end: a run that fails part way (a full disk on
+    // the report, say) leaves the old outputs as they were.
+    let mut outputs = raykit_io::OutputSet::new();
+    let (saved, save_s) = timed(|| raykit_io::stage_mesh(&mut outputs, &args.output, &kept));
     saved.with_context(|| format!("cannot write {}", args.output.display()))?;
     if let (Some(path), Some(truth)) = (&args.save_truth, &ground_truth) {
-        save_truth(path, &args, truth)?;
+        save_truth(&mut outputs, path, &args, &mesh, truth)?;
     }
     let stats = &result.stats;
     let parts_out = kept.parts.len().max(1);
@@ -147,12 +151,16 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
     };
     let json = serde_json::to_string_pretty(&report)?;
     if let Some(path) = &args.report {
-        raykit_io::write_atomic(path, |w| {
-            w.write_all(json.as_bytes())?;
-            w.write_all(b"\n")
-        })
-        .with_context(|| format!("cannot write {}", path.display()))?;
+        outputs
+            .write(path, |w| {
+                w.write_all(json.as_bytes())?;
+                w.write_all(b"\n")
+            })
+            .with_context(|| format!("cannot write {}", path.display()))?;
     }
+    outputs
+        .commit()
+        .context("cannot put the outputs in place")?;
     if args.json {
         println!("{json}");
     } else {

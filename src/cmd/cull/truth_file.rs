@@ -3,26 +3,35 @@
 
 use super::args::CullArgs;
 use anyhow::{Context, Result};
+use raykit_core::TriangleMesh;
 use raykit_cull::{GroundTruth, SavedTruth, SavedTruthMismatch};
 use std::path::Path;
 
-/// Write the labels of `truth` to `path` (atomically).
-pub fn save_truth(path: &Path, args: &CullArgs, truth: &GroundTruth) -> Result<()> {
+/// Write the labels of `truth` to `path`, among the run's `outputs`.
+pub fn save_truth(
+    outputs: &mut raykit_io::OutputSet,
+    path: &Path,
+    args: &CullArgs,
+    mesh: &TriangleMesh,
+    truth: &GroundTruth,
+) -> Result<()> {
     let saved = SavedTruth::new(
         &args.input.display().to_string(),
+        mesh,
         truth,
         args.eval_min_opening,
     );
     let json = serde_json::to_string(&saved)?;
-    raykit_io::write_atomic(path, |w| {
-        w.write_all(json.as_bytes())?;
-        w.write_all(b"\n")
-    })
-    .with_context(|| format!("cannot write {}", path.display()))
+    outputs
+        .write(path, |w| {
+            w.write_all(json.as_bytes())?;
+            w.write_all(b"\n")
+        })
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Labels saved by --save-truth, checked against the input's triangles.
-pub fn load_truth(path: &Path, input: &Path, triangles: usize) -> Result<GroundTruth> {
+pub fn load_truth(path: &Path, input: &Path, mesh: &TriangleMesh) -> Result<GroundTruth> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let saved: SavedTruth = serde_json::from_str(&text).with_context(|| {
@@ -31,7 +40,13 @@ pub fn load_truth(path: &Path, input: &Path, triangles: usize) -> Result<GroundT
             path.display()
         )
     })?;
-    saved.to_truth(triangles).map_err(|e| match e {
+    saved.to_truth(mesh).map_err(|e| match e {
+        SavedTruthMismatch::Mesh { saved, mesh } => anyhow::anyhow!(
+            "{}: field mesh_digest is {saved}, but the triangles of {} give {mesh}: the labels \
+             were saved for another mesh (or this one was changed since)",
+            path.display(),
+            input.display()
+        ),
         SavedTruthMismatch::Triangles { saved, mesh } => anyhow::anyhow!(
             "{}: field triangles is {saved}, but {} has {mesh} triangles",
             path.display(),

@@ -20,7 +20,7 @@ pub use off::write_off;
 pub use ply::write_ply;
 pub use stl::write_stl;
 
-use crate::atomic::write_atomic;
+use crate::atomic::OutputSet;
 use crate::format::{is_gzip_path, MeshFormat};
 use flate2::write::GzEncoder;
 use flate2::Compression;
@@ -53,24 +53,53 @@ pub fn save_mesh(path: &Path, mesh: &TriangleMesh) -> io::Result<()> {
 }
 
 /// Save `mesh` to `path` in `format`, atomically; gzip-compressed when `path`
-/// ends in `.gz`. For OBJ with materials, a material library `<stem>.mtl` is
-/// written next to it and referenced with `mtllib`.
+/// ends in `.gz`. For OBJ with materials, a material library `<stem>.mtl`
+/// (the name without `.gz` and `.obj`) is written next to it, uncompressed,
+/// and referenced with `mtllib`; the two are put in place together.
 pub fn save_mesh_as(path: &Path, mesh: &TriangleMesh, format: MeshFormat) -> io::Result<()> {
+    let mut set = OutputSet::new();
+    stage_mesh_as(&mut set, path, mesh, format)?;
+    set.commit()
+}
+
+/// [`save_mesh`] into `set`: the mesh (and its material library) are put in
+/// place with the set's other outputs, when the set is committed.
+pub fn stage_mesh(set: &mut OutputSet, path: &Path, mesh: &TriangleMesh) -> io::Result<()> {
+    let format = MeshFormat::from_path(path).ok_or_else(|| {
+        io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("{}: unknown mesh file extension", path.display()),
+        )
+    })?;
+    stage_mesh_as(set, path, mesh, format)
+}
+
+fn stage_mesh_as(
+    set: &mut OutputSet,
+    path: &Path,
+    mesh: &TriangleMesh,
+    format: MeshFormat,
+) -> io::Result<()> {
     check(mesh)?;
     let gz = is_gzip_path(path);
     let mut mtllib = None;
-    if format == MeshFormat::Obj && !mesh.materials.is_empty() && !gz {
-        let stem = path
+    if format == MeshFormat::Obj && !mesh.materials.is_empty() {
+        let plain = if gz {
+            path.with_extension("")
+        } else {
+            path.to_path_buf()
+        };
+        let stem = plain
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "materials".into());
         let name = format!("{stem}.mtl");
-        write_atomic(&path.with_file_name(&name), |w| {
+        set.write(&path.with_file_name(&name), |w| {
             write_mtl(w, &mesh.materials)
         })?;
         mtllib = Some(name);
     }
-    write_atomic(path, |w| {
+    set.write(path, |w| {
         if gz {
             let mut z = GzEncoder::new(w, Compression::default());
             write_format(&mut z, mesh, format, mtllib.as_deref())?;
