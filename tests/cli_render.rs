@@ -371,3 +371,108 @@ fn an_environment_map_beyond_the_memory_limit_is_an_error_not_an_abort() {
         &["huge.hdr", "16384×16384"],
     );
 }
+
+/// A model at UTM-like coordinates (5·10⁶ from the origin, written in full
+/// f64 digits) renders as the same model at the origin does: framed by
+/// default, and with --eye, --target and a point light given in the file's
+/// coordinates. In f32 its vertices would be stored in steps of 0.5 on a
+/// model 0.15 across.
+#[test]
+fn a_model_far_from_the_origin_renders_as_it_does_at_the_origin() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = raykit_io::load_mesh(&cli::data("meshes/bunny_3674.obj")).unwrap();
+    let offset = [5.0e5, 2.0e5, 5.0e6];
+    let write = |name: &str, shift: [f64; 3]| {
+        let mut obj = String::new();
+        for p in &bunny.positions {
+            let q: Vec<String> = (0..3)
+                .map(|k| format!("{:.9}", p[k] as f64 + shift[k]))
+                .collect();
+            obj += &format!("v {}\n", q.join(" "));
+        }
+        for t in &bunny.indices {
+            obj += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+        }
+        let path = dir.path().join(name);
+        std::fs::write(&path, obj).unwrap();
+        path
+    };
+    let (near, far) = (write("near.obj", [0.0; 3]), write("far.obj", offset));
+    let at = |p: [f64; 3], shift: [f64; 3]| {
+        format!(
+            "{},{},{}",
+            p[0] + shift[0],
+            p[1] + shift[1],
+            p[2] + shift[2]
+        )
+    };
+    let render = |mesh: &Path, shift: [f64; 3], view: bool, out: &str| {
+        let out = dir.path().join(out);
+        let (eye, target) = (at([0.1, 0.25, 0.35], shift), at([-0.02, 0.1, 0.0], shift));
+        let light = format!("point:{}", at([0.3, 0.5, 0.3], shift));
+        let mut args = vec!["render", "--scene", s(mesh), "--width", W, "--height", H];
+        if view {
+            args.extend(["--eye", &eye, "--target", &target, "--light", &light]);
+        }
+        args.extend(["--out", s(&out)]);
+        ok(&raykit(&args));
+        rgb(&out)
+    };
+    for view in [false, true] {
+        let (a, b) = (
+            render(&near, [0.0; 3], view, "near.png"),
+            render(&far, offset, view, "far.png"),
+        );
+        let differing = a
+            .pixels()
+            .zip(b.pixels())
+            .filter(|(p, q)| (0..3).any(|k| p[k].abs_diff(q[k]) > 8))
+            .count();
+        // Rounding the far file's digits to the stored origin moves
+        // vertices by about 1e-10: a few edge pixels may differ.
+        assert!(
+            differing <= 10,
+            "{differing} pixels differ (view given: {view})"
+        );
+    }
+}
+
+/// `raykit export` writes no images: a textured material is named in a
+/// warning, and the file it writes indeed holds none.
+#[test]
+fn export_says_which_textures_it_leaves_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("checker.png");
+    image::RgbImage::from_fn(2, 2, |x, y| {
+        image::Rgb(if (x + y) % 2 == 0 {
+            [255, 0, 0]
+        } else {
+            [0, 0, 255]
+        })
+    })
+    .save(&png)
+    .unwrap();
+    std::fs::write(
+        dir.path().join("quad.mtl"),
+        "newmtl checker\nKd 1 1 1\nmap_Kd checker.png\nnewmtl plain\nKd 0 1 0\n",
+    )
+    .unwrap();
+    let obj = dir.path().join("quad.obj");
+    std::fs::write(
+        &obj,
+        "mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+         usemtl checker\nf 1/1 2/2 3/3\nusemtl plain\nf 1/1 3/3 4/4\n",
+    )
+    .unwrap();
+    let out = dir.path().join("quad.gltf");
+    let o = raykit(&["export", "--scene", s(&obj), "--out", s(&out)]);
+    ok(&o);
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("1 of 2 materials have a base-colour texture"),
+        "{err}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert!(json.get("images").is_none(), "{json}");
+}

@@ -13,7 +13,9 @@ use std::process::ExitCode;
 #[command(
     after_help = "Examples:\n  raykit export --scene builtin:whitted --out whitted.gltf\n  \
 raykit export --scene bunny.obj --out bunny.glb\n\n\
-A scene without a camera or lights is written without them."
+A scene without a camera or lights is written without them. Texture images are not written: \
+materials keep their colour factors and the mesh its texture coordinates, and the export says \
+how many textures it left out."
 )]
 pub struct ExportArgs {
     /// Scene: builtin:NAME[:key=value,...] (`raykit info scenes`) or a mesh file.
@@ -40,6 +42,20 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
         raykit_io::write_gltf_scene(w, &scene.mesh, scene.camera.as_ref(), &scene.lights, binary)
     })
     .with_context(|| format!("cannot write {}", args.out.display()))?;
+    let textured = scene
+        .mesh
+        .materials
+        .iter()
+        .filter(|m| m.base_texture.is_some() || m.diffuse_texture.is_some())
+        .count();
+    if textured > 0 {
+        eprintln!(
+            "raykit: warning: {textured} of {} materials have a base-colour texture, which \
+             {} does not hold (export writes no images): they keep their colour factors only",
+            scene.mesh.materials.len(),
+            args.out.display()
+        );
+    }
     eprintln!(
         "{}: {} triangles, {} materials, {} lights, {} -> {}",
         scene.name,

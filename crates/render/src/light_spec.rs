@@ -23,6 +23,25 @@ pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
     }
 }
 
+/// Parse `x,y,z` in `f64` (a camera position in a far model's
+/// coordinates, where `f32` steps are too coarse).
+pub fn parse_dvec3(s: &str) -> Result<raykit_core::glam::DVec3, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected three numbers x,y,z, got '{s}'"))?;
+    match v[..] {
+        [x, y, z]
+            if v.iter()
+                .all(|c| c.is_finite() && c.abs() <= f32::MAX as f64) =>
+        {
+            Ok(raykit_core::glam::DVec3::new(x, y, z))
+        }
+        _ => Err(format!("expected three finite numbers x,y,z, got '{s}'")),
+    }
+}
+
 fn vec3(s: &str, what: &str) -> Result<Vec3> {
     parse_vec3(s)
         .map_err(anyhow::Error::msg)

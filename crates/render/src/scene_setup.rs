@@ -5,6 +5,7 @@
 use crate::env::{Environment, EquirectMap, DEFAULT_BOX_SCALE};
 use crate::light_spec::{parse_light, parse_vec3};
 use anyhow::{bail, Context, Result};
+use raykit_core::glam::DVec3;
 use raykit_core::raysets::standard_light;
 use raykit_core::{Aabb, Camera, Light, Material, PointLight, Vec3};
 use raykit_scene::Scene;
@@ -12,10 +13,11 @@ use raykit_scene::Scene;
 /// Camera, light, environment and material overrides of a scene.
 #[derive(Clone, Debug)]
 pub struct SceneOptions {
-    /// Camera position (replaces the scene's camera).
-    pub eye: Option<Vec3>,
+    /// Camera position (replaces the scene's camera), in the file's
+    /// coordinates (`f64`: a model far from the origin is framed exactly).
+    pub eye: Option<DVec3>,
     /// Point the camera looks at (default: the scene centre).
-    pub target: Option<Vec3>,
+    pub target: Option<DVec3>,
     /// Up direction.
     pub up: Vec3,
     /// Vertical field of view in degrees (default: the scene camera's, else 40).
@@ -155,8 +157,18 @@ pub fn environment(args: &SceneOptions, bounds: &Aabb) -> Result<Environment> {
 }
 
 /// Apply the overrides to a loaded scene (vertex normals computed where the
-/// file has none); `aspect` is width / height.
-pub fn setup(mut scene: Scene, args: &SceneOptions, aspect: f32) -> Result<RenderSetup> {
+/// file has none); `aspect` is width / height. `origin` is where the
+/// scene's coordinates start in the file's (a far model is stored relative
+/// to a point near it, [`raykit_io::load_keeping_precision`]): `--eye`,
+/// `--target` and the lights' positions are given in the file's
+/// coordinates and moved by it.
+pub fn setup(
+    mut scene: Scene,
+    origin: DVec3,
+    args: &SceneOptions,
+    aspect: f32,
+) -> Result<RenderSetup> {
+    let local = |p: DVec3| (p - origin).as_vec3();
     if let Some(fov) = args.fov {
         if !(1.0..179.0).contains(&fov) {
             bail!("--fov must be between 1 and 179 degrees");
@@ -182,14 +194,14 @@ pub fn setup(mut scene: Scene, args: &SceneOptions, aspect: f32) -> Result<Rende
         Some(c) => Camera { vfov_deg: fov, ..c },
         None => Camera::fit_points(&bounds, &scene.mesh.positions, fov, aspect),
     };
-    if let Some(eye) = args.eye {
+    if let Some(eye) = args.eye.map(local) {
         camera = Camera {
             eye,
-            target: args.target.unwrap_or(bounds.center()),
+            target: args.target.map(local).unwrap_or(bounds.center()),
             up: args.up,
             vfov_deg: fov,
         };
-    } else if let Some(target) = args.target {
+    } else if let Some(target) = args.target.map(local) {
         camera.target = target;
     }
     if camera.eye == camera.target {
@@ -217,9 +229,30 @@ pub fn setup(mut scene: Scene, args: &SceneOptions, aspect: f32) -> Result<Rende
         );
     }
     let mut lights = Vec::new();
+    let centre = (bounds.center().as_dvec3() + origin).as_vec3();
     for spec in &args.light {
-        lights
-            .push(parse_light(spec, bounds.center()).with_context(|| format!("--light '{spec}'"))?);
+        let light = parse_light(spec, centre).with_context(|| format!("--light '{spec}'"))?;
+        lights.push(match light {
+            Light::Point(p) => PointLight {
+                position: local(p.position.as_dvec3()),
+                ..p
+            }
+            .into(),
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+            } => Light::Spot {
+                position: local(position.as_dvec3()),
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+            },
+            directional => directional,
+        });
     }
     if lights.is_empty() {
         lights = scene.lights.clone();

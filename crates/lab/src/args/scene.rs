@@ -5,8 +5,9 @@
 use super::scene_arg;
 use anyhow::Result;
 use clap::Args;
+use raykit_core::glam::DVec3;
 use raykit_core::Vec3;
-use raykit_render::light_spec::{parse_vec3, LIGHT_HELP};
+use raykit_render::light_spec::{parse_dvec3, parse_vec3, LIGHT_HELP};
 use raykit_render::scene_setup::SceneOptions;
 pub use raykit_render::scene_setup::{material_preset, RenderSetup};
 
@@ -18,12 +19,13 @@ pub struct SceneArgs {
     /// overridden).
     #[arg(long, default_value = "builtin:whitted")]
     pub scene: String,
-    /// Camera position x,y,z (replaces the scene's camera).
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub eye: Option<Vec3>,
+    /// Camera position x,y,z (replaces the scene's camera), in the file's
+    /// coordinates, read in f64.
+    #[arg(long, value_parser = parse_dvec3, allow_hyphen_values = true)]
+    pub eye: Option<DVec3>,
     /// Point the camera looks at, x,y,z (default: the scene centre).
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub target: Option<Vec3>,
+    #[arg(long, value_parser = parse_dvec3, allow_hyphen_values = true)]
+    pub target: Option<DVec3>,
     /// Up direction x,y,z.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,1,0")]
     pub up: Vec3,
@@ -100,5 +102,6 @@ pub fn setup(args: &SceneArgs, aspect: f32) -> Result<RenderSetup> {
             anyhow::bail!("--fov must be between 1 and 179 degrees");
         }
     }
-    raykit_render::scene_setup::setup(scene_arg::load(&args.scene)?, &options, aspect)
+    let (scene, origin) = scene_arg::load_keeping_precision(&args.scene)?;
+    raykit_render::scene_setup::setup(scene, origin, &options, aspect)
 }
