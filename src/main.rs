@@ -86,8 +86,8 @@ fn main() -> ExitCode {
 /// On Ctrl-C, SIGTERM or SIGHUP, remove the temporary files of the outputs
 /// being written, leave their destinations as they were, and end with the
 /// status a shell gives a program stopped by that signal (128 + its number:
-/// 130 for Ctrl-C, 143 for SIGTERM). `serve` handles Ctrl-C itself, as a
-/// graceful shutdown.
+/// 130 for Ctrl-C, 143 for SIGTERM). `serve` handles Ctrl-C and SIGTERM
+/// itself, as a graceful shutdown that exits with status 0.
 fn remove_unfinished_outputs_on_stop() {
     let installed = stop_handler(|status| {
         let _writes_stopped = raykit_io::remove_unfinished_outputs();

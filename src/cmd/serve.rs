@@ -20,6 +20,13 @@ curl -X POST localhost:8080/api/scene -H 'Content-Type: application/json' -d '{\
 curl -X PUT localhost:8080/api/camera -H 'Content-Type: application/json' -d '{\"eye\":[0,1,3],\"target\":[0,0,0]}'\n  \
 curl localhost:8080/metrics\n  \
 ffplay http://127.0.0.1:8080/mjpeg                # no JavaScript: MJPEG\n\n\
+Ctrl-C (SIGINT) or SIGTERM (what systemd, docker and kubernetes send to stop) shuts down\n\
+gracefully: WebSocket clients get close code 1001, MJPEG streams end, and the exit status is 0.\n\n\
+Frames are rendered by the quick one-bounce renderer (Blinn-Phong, shadow rays), not the\n\
+Whitted tracer of `raykit render`: mirrors and glass show no reflection or refraction.\n\
+Each frame renders in bands of at most 131072 samples (pixels x spp) per thread (--threads);\n\
+clients' frames take turns a band at a time, so a client asking for --max-width x --max-height\n\
+at --max-spp slows the others in proportion to the clients rendering, not by its whole frame.\n\n\
 The wire protocol and every endpoint are described in crates/serve/PROTOCOL.md.\n\
 Behind a reverse proxy, forward /ws as a WebSocket upgrade; the page uses relative URLs."
 )]
@@ -27,8 +34,9 @@ pub struct ServeArgs {
     /// Scene: builtin:NAME[:key=value,...] (`raykit info scenes`) or a mesh file.
     #[arg(long, default_value = "builtin:cornell")]
     scene: String,
-    /// Address to listen on (0.0.0.0:PORT for the LAN).
-    #[arg(long, default_value = "127.0.0.1:8080")]
+    /// Address to listen on: IP:PORT (0.0.0.0:PORT for the LAN) or HOST:PORT, resolved to
+    /// the host's first IPv4 address (its first address if it has none).
+    #[arg(long, default_value = "127.0.0.1:8080", value_parser = parse_addr)]
     addr: SocketAddr,
     /// Require this token (`?token=` or `Authorization: Bearer`); also from $RAYKIT_TOKEN.
     /// An empty token is refused.
@@ -77,9 +85,34 @@ pub struct ServeArgs {
     /// Render threads (0 = one per core; at most 4096).
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Stop by itself after this many seconds (for scripts); otherwise run until Ctrl-C.
+    /// Stop by itself after this many seconds (for scripts); otherwise run until Ctrl-C or SIGTERM.
     #[arg(long)]
     seconds: Option<f64>,
+}
+
+/// An `--addr` value: `IP:PORT`, or `HOST:PORT` resolved to the host's first
+/// IPv4 address (its first address if it has none).
+fn parse_addr(s: &str) -> Result<SocketAddr, String> {
+    use std::net::ToSocketAddrs;
+    if let Ok(addr) = s.parse() {
+        return Ok(addr);
+    }
+    let help = "give IP:PORT (such as 127.0.0.1:8080) or HOST:PORT (such as localhost:8080)";
+    if s.rsplit_once(':')
+        .is_none_or(|(_, port)| port.parse::<u16>().is_err())
+    {
+        return Err(format!("no port: {help}"));
+    }
+    let addrs: Vec<SocketAddr> = s
+        .to_socket_addrs()
+        .map_err(|e| format!("cannot resolve the host ({e}): {help}"))?
+        .collect();
+    addrs
+        .iter()
+        .find(|a| a.is_ipv4())
+        .or(addrs.first())
+        .copied()
+        .ok_or_else(|| format!("the host has no address: {help}"))
 }
 
 impl ServeArgs {
@@ -103,7 +136,8 @@ impl ServeArgs {
     }
 }
 
-/// Serve until Ctrl-C (or `--seconds`).
+/// Serve until Ctrl-C or SIGTERM (or `--seconds`), then shut down
+/// gracefully ([`raykit_serve::Server::shutdown`]) and exit with status 0.
 pub fn run(args: ServeArgs) -> Result<ExitCode> {
     if args.threads > 0 {
         rayon::ThreadPoolBuilder::new()
@@ -128,11 +162,21 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
     }
     let config = args.config();
     runtime()?.block_on(async move {
-        let server = start(config, loader(), &args.scene).await?;
+        // Listening for the signals before loading the scene: a stop
+        // request while it loads ends the command without serving.
+        let stop = stop_requested()?;
+        tokio::pin!(stop);
+        let server = tokio::select! {
+            server = start(config, loader(), &args.scene) => server?,
+            signal = &mut stop => {
+                eprintln!("raykit serve: {}: stopped before serving", signal?);
+                return Ok(ExitCode::SUCCESS);
+            }
+        };
         let state = server.state();
         let world = state.world();
         eprintln!(
-            "raykit serve: {} ({} triangles) on http://{}/{}  (Ctrl-C stops)",
+            "raykit serve: {} ({} triangles) on http://{}/{}  (Ctrl-C or SIGTERM stops)",
             world.geometry.scene.name,
             world.geometry.scene.mesh.num_triangles(),
             server.addr(),
@@ -143,15 +187,44 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
             },
         );
         match args.seconds {
-            Some(s) => tokio::time::sleep(Duration::from_secs_f64(s)).await,
+            Some(s) => tokio::select! {
+                _ = tokio::time::sleep(Duration::from_secs_f64(s)) => {}
+                signal = &mut stop => { eprintln!("raykit serve: {}", signal?); }
+            },
             None => {
-                tokio::signal::ctrl_c()
-                    .await
-                    .context("waiting for Ctrl-C")?;
+                let signal = stop.await?;
+                eprintln!("raykit serve: {signal}");
             }
         }
         eprintln!("raykit serve: shutting down");
         server.shutdown().await?;
         Ok(ExitCode::SUCCESS)
+    })
+}
+
+/// A future that ends with the signal's name at Ctrl-C (SIGINT) or SIGTERM.
+/// The handlers are installed when this is called (inside the runtime), so
+/// a signal that arrives before the future is polled is not lost.
+#[cfg(unix)]
+fn stop_requested() -> Result<impl std::future::Future<Output = Result<&'static str>>> {
+    use tokio::signal::unix::{signal, SignalKind};
+    let mut interrupt = signal(SignalKind::interrupt()).context("cannot handle Ctrl-C")?;
+    let mut terminate = signal(SignalKind::terminate()).context("cannot handle SIGTERM")?;
+    Ok(async move {
+        tokio::select! {
+            _ = interrupt.recv() => Ok("Ctrl-C"),
+            _ = terminate.recv() => Ok("SIGTERM"),
+        }
+    })
+}
+
+/// A future that ends with the signal's name at Ctrl-C.
+#[cfg(not(unix))]
+fn stop_requested() -> Result<impl std::future::Future<Output = Result<&'static str>>> {
+    Ok(async {
+        tokio::signal::ctrl_c()
+            .await
+            .context("waiting for Ctrl-C")?;
+        Ok("Ctrl-C")
     })
 }

@@ -26,7 +26,8 @@ pub struct EncodedFrame {
 /// the quick one-bounce renderer (Blinn-Phong direct light with shadow rays,
 /// the sky behind), not `raykit render`'s Whitted tracer: mirrors and glass
 /// get their Blinn-Phong terms only, without reflection or refraction (in
-/// `builtin:whitted` the mirror looks black and the glass opaque).
+/// `builtin:whitted` the mirror box is black but for highlights, the glass
+/// sphere opaque white).
 #[derive(Clone)]
 pub struct FrameRequest {
     /// The scene, lights and BVH to render.
@@ -93,10 +94,6 @@ impl FrameRequest {
         (self.size.1 as u64).div_ceil(rows).max(1) as u32
     }
 }
-
-/// Samples (pixels × samples per pixel) of one slice per rayon thread,
-/// about 0.06 s of tracing a simple scene on one core.
-pub const SLICE_SAMPLES_PER_THREAD: u64 = 1 << 17;
 
 /// A frame being rendered band by band.
 struct Job {
@@ -251,9 +248,8 @@ fn work(queue: &(Mutex<Queue>, Condvar)) {
             ..
         } = job;
         let encoding = Instant::now();
-        let payload = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            request.payload(rgb)
-        }));
+        let payload =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| request.payload(rgb)));
         if let Ok(payload) = payload {
             let _ = reply.send(EncodedFrame {
                 payload,
@@ -312,7 +308,15 @@ mod tests {
             samples_per_pixel: r.spp,
             ..RenderOptions::default()
         };
-        render(&g.scene.mesh, &r.world.lights, g.accel.as_ref(), &r.camera, &opts, &|_| {}).rgb
+        render(
+            &g.scene.mesh,
+            &r.world.lights,
+            g.accel.as_ref(),
+            &r.camera,
+            &opts,
+            &|_| {},
+        )
+        .rgb
     }
 
     #[test]
@@ -364,12 +368,13 @@ mod tests {
         // One render thread, and a large frame of hundreds of bands asked
         // for just before a small one: the small one takes its turn after
         // a band or two of the large one, not after all of them.
-        let queue = Arc::new(RenderQueue::new(1, 4096));
+        let queue = RenderQueue::new(1, 4096);
         let large = request((512, 512), 16);
         assert!(large.bands(4096) >= 500);
-        let q = queue.clone();
-        let mut large = tokio::spawn(async move { q.render(large).await });
-        tokio::task::yield_now().await;
+        let large = queue.render(large);
+        tokio::pin!(large);
+        // The first poll puts it in the queue.
+        assert!(futures_util::poll!(&mut large).is_pending());
         let small = request((32, 32), 1);
         let expected = whole(&small);
         let frame = tokio::select! {
@@ -378,6 +383,5 @@ mod tests {
             _ = &mut large => panic!("the large frame was finished first"),
         };
         assert!(frame.payload == expected);
-        large.abort();
     }
 }

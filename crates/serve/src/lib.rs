@@ -57,7 +57,7 @@ pub use config::ServeConfig;
 pub use frame::encode_jpeg;
 pub use mjpeg::BOUNDARY;
 pub use runtime::runtime;
-pub use ws::{CLOSE_GOING_AWAY, CLOSE_TOO_BIG};
+pub use ws::{CLOSE_GOING_AWAY, CLOSE_INVALID_DATA, CLOSE_PROTOCOL, CLOSE_TOO_BIG};
 
 use anyhow::{bail, Context, Result};
 use axum::extract::DefaultBodyLimit;

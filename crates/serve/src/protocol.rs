@@ -291,7 +291,10 @@ mod tests {
         // A misspelt field, or one the message does not have, is an error
         // naming it, not ignored.
         for (typo, field) in [
-            (r#"{"type":"camera","eye":[0,1,3],"taget":[9,9,9]}"#, "taget"),
+            (
+                r#"{"type":"camera","eye":[0,1,3],"taget":[9,9,9]}"#,
+                "taget",
+            ),
             (r#"{"type":"settings","widht":800}"#, "widht"),
             (r#"{"type":"orbit","yaw":0.1,"pich":0.2,"seq":3}"#, "pich"),
             (r#"{"type":"reset","fov":10}"#, "fov"),

@@ -1,6 +1,7 @@
 //! Bad and hostile input: malformed, out-of-range, binary, flooding and
-//! oversized messages get errors (or, for oversize, a 1009 close) and never
-//! stop the server or the other clients; client limits, token checks;
+//! oversized messages get errors (or, for oversize, a 1009 close; for
+//! frames that break the WebSocket protocol, 1002 or 1007) and never stop
+//! the server or the other clients; client limits, token checks;
 //! unknown query parameters, bodies announced over the limit and lights
 //! beyond the camera bound are refused, as are unusable settings at start.
 
@@ -32,6 +33,8 @@ async fn malformed_messages_get_errors_and_the_connection_keeps_working() {
         r#"{"type":"settings","quality":0}"#,
         r#"{"type":"settings","spp":100000}"#,
         r#"{"type":"ack","frame":999}"#,
+        r#"{"type":"reset","fov":10}"#,
+        r#"{"type":"reset","seq":5,"sqe":1}"#,
         "[1,2,3]",
         "",
     ];
@@ -502,4 +505,144 @@ async fn an_empty_token_or_a_missing_scene_folder_is_refused_at_start() {
         "{message}"
     );
     assert!(message.contains(&os), "{message}");
+}
+
+/// A WebSocket client over a plain TCP socket, to send frames a WebSocket
+/// library would refuse to: the handshake, then raw bytes.
+async fn raw_connect(server: &raykit_serve::Server) -> tokio::net::TcpStream {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let mut s = tokio::net::TcpStream::connect(server.addr()).await.unwrap();
+    s.write_all(
+        b"GET /ws HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+          Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n",
+    )
+    .await
+    .unwrap();
+    let mut head = Vec::new();
+    while !head.ends_with(b"\r\n\r\n") {
+        head.push(s.read_u8().await.unwrap());
+    }
+    assert!(head.starts_with(b"HTTP/1.1 101"), "{head:?}");
+    s
+}
+
+/// The payload of the server's close frame, skipping other frames; `None`
+/// if the connection ends without one.
+async fn raw_close(s: &mut tokio::net::TcpStream) -> Option<Vec<u8>> {
+    use tokio::io::AsyncReadExt;
+    let read = async {
+        loop {
+            let b0 = s.read_u8().await.ok()?;
+            let b1 = s.read_u8().await.ok()?;
+            let len = match b1 & 0x7f {
+                126 => s.read_u16().await.ok()? as usize,
+                127 => s.read_u64().await.ok()? as usize,
+                n => n as usize,
+            };
+            let mut payload = vec![0u8; len];
+            s.read_exact(&mut payload).await.ok()?;
+            if b0 & 0x0f == 8 {
+                return Some(payload);
+            }
+        }
+    };
+    tokio::time::timeout(Duration::from_secs(10), read)
+        .await
+        .expect("the server answers within 10 s")
+}
+
+/// A client frame: FIN and `opcode` in the first byte, masked with a zero
+/// key (so the payload is sent as it is) unless `masked` is false.
+fn client_frame(first: u8, payload: &[u8], masked: bool) -> Vec<u8> {
+    let mask = if masked { 0x80 } else { 0 };
+    let mut f = vec![first];
+    if payload.len() < 126 {
+        f.push(mask | payload.len() as u8);
+    } else {
+        f.push(mask | 126);
+        f.extend_from_slice(&(payload.len() as u16).to_be_bytes());
+    }
+    if masked {
+        f.extend_from_slice(&[0, 0, 0, 0]);
+    }
+    f.extend_from_slice(payload);
+    f
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn frames_that_break_the_protocol_are_closed_with_its_codes() {
+    use tokio::io::AsyncWriteExt;
+    let server = server(config()).await;
+    // RFC 6455 §7.4.1: 1007 for a text message that is not UTF-8, 1002 for
+    // a frame the protocol does not allow (§5.1 masking, §5.2 opcodes and
+    // reserved bits, §5.4 continuations, §5.5 control frames of at most
+    // 125 bytes), 1009 for a message over the size limit.
+    let cases: [(&str, Vec<u8>, u16); 7] = [
+        (
+            "invalid UTF-8",
+            client_frame(0x81, &[0xff, 0xfe], true),
+            1007,
+        ),
+        ("unmasked", client_frame(0x81, b"{}", false), 1002),
+        ("reserved opcode", client_frame(0x83, b"", true), 1002),
+        ("reserved bit", client_frame(0xc1, b"{}", true), 1002),
+        ("orphan continuation", client_frame(0x80, b"x", true), 1002),
+        ("200-byte ping", client_frame(0x89, &[0u8; 200], true), 1002),
+        // Only the header: it announces the size, and the server answers
+        // without reading on (unread data would reset the connection).
+        (
+            "over the size limit",
+            client_frame(0x81, &[b' '; 20_000], true)[..8].to_vec(),
+            CLOSE_TOO_BIG,
+        ),
+    ];
+    for (what, frame, code) in cases {
+        let mut s = raw_connect(&server).await;
+        s.write_all(&frame).await.unwrap();
+        let close = raw_close(&mut s).await;
+        let got = close
+            .as_deref()
+            .and_then(|p| p.get(..2))
+            .map(|b| u16::from_be_bytes([b[0], b[1]]));
+        assert_eq!(got, Some(code), "{what}: close frame {close:?}");
+    }
+    // The server carries on.
+    let (mut ws, _) = connect(&server, "").await;
+    next_frame(&mut ws).await;
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn wrong_acks_are_answered_at_most_once_a_second_and_right_ones_still_work() {
+    let server = server(config()).await;
+    let (mut ws, _) = connect(&server, "").await;
+    let (first, _) = next_frame(&mut ws).await;
+    let start = std::time::Instant::now();
+    let n = 5000u64;
+    for i in 0..n {
+        send(
+            &mut ws,
+            &format!(r#"{{"type":"ack","frame":{}}}"#, 123_456 + i),
+        )
+        .await;
+    }
+    // The right ack is still taken: the next frame comes.
+    ack(&mut ws, &first).await;
+    let mut replies = 0u64;
+    loop {
+        match next_message(&mut ws).await {
+            Message::Text(t) if t.contains("ack for frame") => replies += 1,
+            Message::Binary(_) => break,
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+    // Every wrong ack is counted, but at most one reply a second is sent.
+    let seconds = start.elapsed().as_secs();
+    assert!(
+        (1..=seconds + 1).contains(&replies),
+        "{replies} replies to {n} wrong acks in {seconds} s"
+    );
+    // The frame came after the right ack, which came after the wrong ones.
+    assert_eq!(server.state().samples()[0].errors, n);
+    server.shutdown().await.unwrap();
 }
