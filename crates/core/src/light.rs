@@ -86,6 +86,32 @@ impl From<PointLight> for Light {
 }
 
 impl Light {
+    /// The light with its position (a point or spot light's; a directional
+    /// light has none) replaced by `place(position)`: the light moved into
+    /// another frame. Direction and intensity stay.
+    pub fn placed(self, place: impl Fn(Vec3) -> Vec3) -> Light {
+        match self {
+            Light::Point(p) => Light::Point(PointLight {
+                position: place(p.position),
+                ..p
+            }),
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+            } => Light::Spot {
+                position: place(position),
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+            },
+            directional => directional,
+        }
+    }
+
     /// The light arriving at `point`.
     pub fn toward(&self, point: Vec3) -> LightSample {
         match *self {

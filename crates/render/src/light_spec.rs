@@ -10,36 +10,30 @@ light; the colour is its irradiance at the scene centre), `dir:DX,DY,DZ[:R,G,B]`
 light travelling along D, colour = irradiance), `spot:X,Y,Z:TX,TY,TZ:ANGLE[:R,G,B]` (a spot at X \
 aimed at T with an outer half-angle in degrees, colour = irradiance at T). Replaces the scene's lights.";
 
-/// Parse `x,y,z`.
-pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
-    let v: Vec<f32> = s
+/// The three numbers of `x,y,z`, each checked by `ok`.
+fn three<T: std::str::FromStr + Copy>(s: &str, ok: impl Fn(T) -> bool) -> Result<[T; 3], String> {
+    let v: Vec<T> = s
         .split(',')
-        .map(|c| c.trim().parse::<f32>())
+        .map(|c| c.trim().parse::<T>())
         .collect::<Result<_, _>>()
         .map_err(|_| format!("expected three numbers x,y,z, got '{s}'"))?;
     match v[..] {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(x, y, z)),
+        [x, y, z] if v.iter().all(|&c| ok(c)) => Ok([x, y, z]),
         _ => Err(format!("expected three finite numbers x,y,z, got '{s}'")),
     }
 }
 
+/// Parse `x,y,z`.
+pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    three(s, f32::is_finite).map(Vec3::from_array)
+}
+
 /// Parse `x,y,z` in `f64` (a camera position in a far model's
-/// coordinates, where `f32` steps are too coarse).
+/// coordinates, where `f32` steps are too coarse), each within `f32`'s
+/// range.
 pub fn parse_dvec3(s: &str) -> Result<raykit_core::glam::DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|c| c.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("expected three numbers x,y,z, got '{s}'"))?;
-    match v[..] {
-        [x, y, z]
-            if v.iter()
-                .all(|c| c.is_finite() && c.abs() <= f32::MAX as f64) =>
-        {
-            Ok(raykit_core::glam::DVec3::new(x, y, z))
-        }
-        _ => Err(format!("expected three finite numbers x,y,z, got '{s}'")),
-    }
+    three(s, |c: f64| c.is_finite() && c.abs() <= f32::MAX as f64)
+        .map(raykit_core::glam::DVec3::from_array)
 }
 
 fn vec3(s: &str, what: &str) -> Result<Vec3> {

@@ -232,27 +232,7 @@ pub fn setup(
     let centre = (bounds.center().as_dvec3() + origin).as_vec3();
     for spec in &args.light {
         let light = parse_light(spec, centre).with_context(|| format!("--light '{spec}'"))?;
-        lights.push(match light {
-            Light::Point(p) => PointLight {
-                position: local(p.position.as_dvec3()),
-                ..p
-            }
-            .into(),
-            Light::Spot {
-                position,
-                direction,
-                intensity,
-                cos_inner,
-                cos_outer,
-            } => Light::Spot {
-                position: local(position.as_dvec3()),
-                direction,
-                intensity,
-                cos_inner,
-                cos_outer,
-            },
-            directional => directional,
-        });
+        lights.push(light.placed(|p| local(p.as_dvec3())));
     }
     if lights.is_empty() {
         lights = scene.lights.clone();
