@@ -273,18 +273,9 @@ pub fn encode_jpeg(rgb: &[u8], width: u32, height: u32, quality: u8) -> Vec<u8> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::Geometry;
 
     fn world() -> Arc<World> {
-        let g = Arc::new(Geometry::new(raykit_scene::builtin("cornell").unwrap(), 1));
-        Arc::new(World {
-            lights: g.default_lights(),
-            camera: g.default_camera(97.0 / 61.0),
-            full: (97, 61),
-            geometry: g,
-            version: 1,
-            look_version: 1,
-        })
+        Arc::new(crate::world::cornell_world((97, 61)))
     }
 
     fn request(size: (u32, u32), spp: u32) -> FrameRequest {

@@ -190,19 +190,10 @@ mod tests {
     use super::*;
     use crate::camera_control::orbit;
     use crate::protocol::{ClientMessage, SettingsJson};
-    use crate::world::Geometry;
     use std::time::Duration;
 
     fn world() -> World {
-        let g = Arc::new(Geometry::new(raykit_scene::builtin("cornell").unwrap(), 1));
-        World {
-            lights: g.default_lights(),
-            camera: g.default_camera(16.0 / 9.0),
-            full: (64, 36),
-            geometry: g,
-            version: 1,
-            look_version: 1,
-        }
+        crate::world::cornell_world((64, 36))
     }
 
     #[test]

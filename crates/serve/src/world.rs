@@ -95,3 +95,18 @@ pub struct World {
     /// streams use.
     pub look_version: u64,
 }
+
+/// The built-in Cornell box as the world of the unit tests, its camera
+/// framed for `full` (width, height).
+#[cfg(test)]
+pub(crate) fn cornell_world(full: (u32, u32)) -> World {
+    let g = Arc::new(Geometry::new(raykit_scene::builtin("cornell").unwrap(), 1));
+    World {
+        lights: g.default_lights(),
+        camera: g.default_camera(full.0 as f32 / full.1 as f32),
+        full,
+        geometry: g,
+        version: 1,
+        look_version: 1,
+    }
+}
