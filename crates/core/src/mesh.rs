@@ -233,6 +233,31 @@ impl TriangleMesh {
         self.tri_material.get(i).copied().unwrap_or(0)
     }
 
+    /// Panics, naming the triangle, when a triangle refers to a vertex the
+    /// mesh does not have: what a structure built straight from the mesh
+    /// (not through `build_accel`, which validates) checks first, so that
+    /// a hand-made mesh fails with that message rather than an index out of
+    /// bounds deep in the build.
+    pub fn assert_indices_in_range(&self) {
+        let n = self.positions.len();
+        if let Some((t, &i)) = self
+            .indices
+            .iter()
+            .enumerate()
+            .find_map(|(t, tri)| tri.iter().find(|&&i| i as usize >= n).map(|i| (t, i)))
+        {
+            panic!(
+                "{} (check hand-made meshes with TriangleMesh::validate, or build through \
+                 build_accel, which does)",
+                MeshError::IndexOutOfRange {
+                    tri: t,
+                    index: i,
+                    count: n
+                }
+            );
+        }
+    }
+
     /// Check the invariants listed on the type.
     pub fn validate(&self) -> Result<(), MeshError> {
         if self.indices.is_empty() {
@@ -442,6 +467,36 @@ mod tests {
         let mut m = quad();
         m.positions[2].y = f32::NAN;
         assert_eq!(m.validate(), Err(MeshError::NonFinite { vertex: 2 }));
+    }
+
+    /// Structures built straight from a mesh with a vertex index beyond
+    /// its vertices stop with validate's message, naming the triangle.
+    #[test]
+    fn direct_builds_name_the_triangle_with_a_vertex_index_out_of_range() {
+        use crate::accel::bvh::{BuildOptions, Bvh8};
+        use crate::query::SurfaceBvh;
+        use crate::tri::Moller;
+        let mut m = quad();
+        m.indices[1][2] = 9;
+        let want = MeshError::IndexOutOfRange {
+            tri: 1,
+            index: 9,
+            count: 4,
+        }
+        .to_string();
+        let message = |r: std::thread::Result<()>| {
+            let e = r.expect_err("the build must stop");
+            e.downcast_ref::<String>().cloned().unwrap_or_default()
+        };
+        let bvh = std::panic::catch_unwind(|| {
+            Bvh8::<Moller>::build(&m, &BuildOptions::default());
+        });
+        assert!(message(bvh).contains(&want));
+        let surface = std::panic::catch_unwind(|| {
+            SurfaceBvh::build(&m);
+        });
+        assert!(message(surface).contains(&want));
+        quad().assert_indices_in_range();
     }
 
     #[test]

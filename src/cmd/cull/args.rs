@@ -77,8 +77,8 @@ for 6 rounds and then held, until two rounds in a row find nothing (--eval-round
 reports the removal fractions (by triangles, area, parts), false removals (truly visible but\n\
 removed) and missed removals (truly hidden but kept); the JSON report gains `ground_truth` and\n\
 `evaluation`. --save-truth FILE.json keeps its labels; --truth FILE.json compares with saved\n\
-labels instead of evaluating again. Exit status 2 when any triangle the ground truth sees was\n\
-removed.")]
+labels instead of evaluating again. Exit status 3 when any triangle the ground truth sees was\n\
+removed (2 is a usage error, 1 any other failure).")]
 pub struct CullArgs {
     /// Input mesh (OBJ, PLY, PLY.GZ, STL, glTF/GLB, OFF).
     pub(super) input: PathBuf,
@@ -122,7 +122,7 @@ pub struct CullArgs {
     #[arg(long)]
     pub(super) json: bool,
     /// Compare the result with the ray-traced ground truth (slow); exit
-    /// status 2 when a truly visible triangle was removed.
+    /// status 3 when a truly visible triangle was removed.
     #[arg(long)]
     pub(super) evaluate: bool,
     /// Most rounds of the ground truth (each doubles the sample points per

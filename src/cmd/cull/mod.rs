@@ -19,6 +19,9 @@ use raykit_cull::{
 use raykit_lab::measure::timed;
 use std::process::ExitCode;
 
+/// Exit status of an evaluation that found a visible triangle removed.
+pub const FALSE_REMOVAL_STATUS: u8 = 3;
+
 /// Load, cull, write, report.
 pub fn run(args: CullArgs) -> Result<ExitCode> {
     if raykit_io::MeshFormat::from_path(&args.output).is_none() {
@@ -167,7 +170,9 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
         print!("{}", report.summary(&args.output, args.report.as_deref()));
     }
     match &report.evaluation {
-        Some(e) if e.false_removals > 0 => Ok(ExitCode::from(2)),
+        // Not 2: clap ends a usage error with 2, and a script must tell
+        // a false removal from a mistyped option.
+        Some(e) if e.false_removals > 0 => Ok(ExitCode::from(FALSE_REMOVAL_STATUS)),
         _ => Ok(ExitCode::SUCCESS),
     }
 }

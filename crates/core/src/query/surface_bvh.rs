@@ -65,7 +65,12 @@ impl SurfaceBvh {
     /// is tiny ([`UnitScale`]); its point tree, when a query needs it, is
     /// the binned SAH or linear BVH that `options.quality` names, leaves of
     /// up to `options.max_leaf_size`.
+    ///
+    /// # Panics
+    /// When a triangle refers to a vertex the mesh does not have
+    /// ([`TriangleMesh::assert_indices_in_range`]).
     pub fn build_with(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        mesh.assert_indices_in_range();
         let (scale, scaled) = UnitScale::of(mesh);
         let mesh = match scaled {
             Cow::Owned(m) => TriangleMesh::new(m.positions, m.indices),

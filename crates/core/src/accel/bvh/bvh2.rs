@@ -80,7 +80,12 @@ pub struct Bvh2<T: TriangleTest> {
 
 impl<T: TriangleTest> Bvh2<T> {
     /// Build over all triangles of `mesh`.
+    ///
+    /// # Panics
+    /// When a triangle refers to a vertex the mesh does not have
+    /// ([`TriangleMesh::assert_indices_in_range`]).
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        mesh.assert_indices_in_range();
         let tree = build(mesh, options);
         let mut nodes = Vec::with_capacity(tree.root.count_nodes() / 2 + 1);
         let root = flatten(&tree.root, &mut nodes);

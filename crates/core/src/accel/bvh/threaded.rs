@@ -48,7 +48,12 @@ pub struct ThreadedBvh<T: TriangleTest> {
 
 impl<T: TriangleTest> ThreadedBvh<T> {
     /// Build over all triangles of `mesh`.
+    ///
+    /// # Panics
+    /// When a triangle refers to a vertex the mesh does not have
+    /// ([`TriangleMesh::assert_indices_in_range`]).
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        mesh.assert_indices_in_range();
         let tree = build(mesh, options);
         assert!(
             tree.order.len() <= FIRST_MASK as usize + 1,

@@ -139,7 +139,12 @@ pub type Bvh8<T> = WideBvh<Node8, T>;
 
 impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     /// Build over all triangles of `mesh`.
+    ///
+    /// # Panics
+    /// When a triangle refers to a vertex the mesh does not have
+    /// ([`TriangleMesh::assert_indices_in_range`]).
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        mesh.assert_indices_in_range();
         let wide = build_wide::<N, T>(mesh, options);
         // The traversal writes its stack unchecked (see `traverse_with`).
         assert!(

@@ -256,7 +256,12 @@ pub struct BuildTree {
 /// An empty mesh gives a single empty leaf. Degenerate inputs (all centroids
 /// equal) are split at the object median so the depth stays logarithmic.
 /// The result does not depend on the number of threads.
+///
+/// # Panics
+/// When a triangle refers to a vertex the mesh does not have
+/// ([`TriangleMesh::assert_indices_in_range`]).
 pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> BuildTree {
+    mesh.assert_indices_in_range();
     let opts = clamped(options);
     match opts.quality {
         BuildQuality::Sah | BuildQuality::High => sah_build(mesh, &opts),
