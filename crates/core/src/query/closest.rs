@@ -60,7 +60,10 @@ macro_rules! closest_uv {
                 return (1.0, 0.0);
             }
             let vc = d1 * d4 - d3 * d2;
-            if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+            // Each edge region below divides by its edge's squared length:
+            // an edge of length zero (two corners at one point) is left to
+            // the degenerate case, where 0/0 would give NaN.
+            if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 && d1 - d3 > 0.0 {
                 return (d1 / (d1 - d3), 0.0);
             }
             let cp = -c;
@@ -69,11 +72,11 @@ macro_rules! closest_uv {
                 return (0.0, 1.0);
             }
             let vb = d5 * d2 - d1 * d6;
-            if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+            if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 && d2 - d6 > 0.0 {
                 return (0.0, d2 / (d2 - d6));
             }
             let va = d3 * d6 - d5 * d4;
-            if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+            if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 && (d4 - d3) + (d5 - d6) > 0.0 {
                 let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
                 return (1.0 - w, w);
             }
@@ -498,12 +501,15 @@ pub fn closest_point_in(
 }
 
 /// Reference: every triangle of `mesh` in `f64`; the nearest (lowest index
-/// on ties) as `(distance, prim, point)`, `None` for an empty mesh.
+/// on ties) as `(distance, prim, point)`, `None` for an empty mesh. Each
+/// triangle's point comes from [`super::exact::closest_point_on_triangle`],
+/// written apart from the search's kernel (degenerate triangles handled
+/// first, by their edges), so that the reference does not share its faults.
 pub fn closest_point_brute(mesh: &TriangleMesh, p: DVec3) -> Option<(f64, u32, DVec3)> {
     let mut best: Option<(f64, u32, DVec3)> = None;
     for t in 0..mesh.num_triangles() {
         let tri = mesh.triangle(t).map(|c| c.as_dvec3());
-        let (q, _, _) = closest_on_triangle64(p, &tri);
+        let q = super::exact::closest_point_on_triangle(p, &tri);
         let d = q.distance(p);
         if best.is_none_or(|b| d < b.0) {
             best = Some((d, t as u32, q));
@@ -521,8 +527,9 @@ mod tests {
     /// for bit, on triangles of every shape (degenerate ones included: a
     /// repeated corner, collinear corners, a point triangle, slivers at the
     /// thin-triangle angle) and points in every Voronoi region of each; and
-    /// both are within rounding of the `f64` closest point, the degenerate
-    /// and nearly collinear ones too.
+    /// both are within rounding of the `f64` closest point of the separate
+    /// exact kernel, the degenerate and nearly collinear ones too (any two
+    /// corners at one point among them).
     #[test]
     fn four_lane_distances_are_the_scalar_ones() {
         let mut rng = Pcg32::new(11);
@@ -533,10 +540,12 @@ mod tests {
             for t in tris.iter_mut() {
                 *t = [r(), r(), r()];
             }
-            match round % 4 {
+            match round % 6 {
                 1 => tris[1][2] = tris[1][0],
                 2 => tris[2][2] = tris[2][0] * 0.25 + tris[2][1] * 0.75,
                 3 => tris[3] = [tris[3][0]; 3],
+                4 => tris[1][1] = tris[1][0],
+                5 => tris[2][2] = tris[2][1],
                 _ => {}
             }
             // Lane 0 of every round is a sliver at the thin-triangle angle
@@ -547,7 +556,7 @@ mod tests {
             let across = (w - e * (w.dot(e) / e.length_squared())).normalize_or(Vec3::Z);
             let sin = (1.0 / 64.0) * (0.98 + 0.04 * (round % 101) as f32 / 100.0);
             tris[0][2] = a + e * 0.6 + across * (0.6 * e.length() * sin / (1.0 - sin * sin).sqrt());
-            degenerate += usize::from(round % 4 != 0);
+            degenerate += usize::from(round % 6 != 0);
             let p = r() * 1.5;
             let n = 1 + round % LANES;
             let lanes = group_distance2(p, &tris[..n]);
@@ -556,7 +565,7 @@ mod tests {
                 assert_eq!(lanes[k].to_bits(), d2.to_bits(), "round {round}, lane {k}");
 
                 let t64 = tris[k].map(|c| c.as_dvec3());
-                let (q, _, _) = closest_on_triangle64(p.as_dvec3(), &t64);
+                let q = super::super::exact::closest_point_on_triangle(p.as_dvec3(), &t64);
                 let exact = q.distance_squared(p.as_dvec3());
                 assert!(
                     (d2 as f64 - exact).abs() <= 1e-5 * (1.0 + exact),
