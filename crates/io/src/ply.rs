@@ -85,6 +85,17 @@ trait Body<'a> {
     /// Read `float` properties to the digits the text has, where the
     /// encoding is text.
     fn read_wide(&mut self, _wide: bool) {}
+    /// Where the next record starts, for [`Body::end_record`].
+    fn begin_record(&mut self) -> usize {
+        0
+    }
+    /// Why the record begun at `begin` (its [`Body::begin_record`]) does
+    /// not end where it should: ASCII PLY holds one element per line, so a
+    /// line with fewer values than the element's properties (which would
+    /// take values from the next line) or more is malformed.
+    fn end_record(&mut self, _begin: usize) -> Option<String> {
+        None
+    }
 }
 
 struct Ascii<'a> {
@@ -125,6 +136,27 @@ impl<'a> Body<'a> for Ascii<'a> {
 
     fn mark(&self) -> u64 {
         self.ts.line() as u64
+    }
+
+    fn begin_record(&mut self) -> usize {
+        self.ts.line_of_next()
+    }
+
+    fn end_record(&mut self, begin: usize) -> Option<String> {
+        if self.ts.line() != begin {
+            return Some(format!(
+                "has fewer values than its properties: they run on to line {} (ASCII PLY holds \
+                 one element per line)",
+                self.ts.line()
+            ));
+        }
+        let rest = self.ts.rest_of_line();
+        (!rest.is_empty()).then(|| {
+            format!(
+                "has more values than its properties: {:?} is left on the line",
+                String::from_utf8_lossy(rest)
+            )
+        })
     }
 
     /// ASCII reports the line of the last token read, which lies inside the
@@ -348,6 +380,14 @@ fn read_body<'a, B: Body<'a>>(
                 msg,
             )
         };
+        let err_at = |_: &B, line: usize, msg: String| {
+            LoadError::new(
+                path,
+                crate::error::ErrorKind::Malformed,
+                Location::Line(line),
+                msg,
+            )
+        };
         if el.name == "vertex" && std::ptr::eq(el, vertex_el) {
             let (roles, hn, hu) = vertex_roles(path, el)?;
             has_normals = hn;
@@ -361,6 +401,7 @@ fn read_body<'a, B: Body<'a>>(
             }
             let mut v = [0.0f64; 8];
             for i in 0..el.count {
+                let line = b.begin_record();
                 let start = b.mark();
                 b.read_wide(far.keeps_precision());
                 for (p, &role) in el.props.iter().zip(&roles) {
@@ -398,6 +439,9 @@ fn read_body<'a, B: Body<'a>>(
                         format!("vertex {i} of {}{why}", el.count),
                     ));
                 }
+                if let Some(why) = b.end_record(line) {
+                    return Err(err_at(b, line, format!("vertex {i} of {} {why}", el.count)));
+                }
                 mesh.positions.push(pos);
                 if hn {
                     normals.push(Vec3::new(v[3] as f32, v[4] as f32, v[5] as f32));
@@ -410,6 +454,7 @@ fn read_body<'a, B: Body<'a>>(
             let (list, count_ty, item_ty) = face_list(path, el)?;
             mesh.indices.reserve(cap);
             for i in 0..el.count {
+                let line = b.begin_record();
                 for (k, p) in el.props.iter().enumerate() {
                     if k != list {
                         if let Err(f) = skip_prop(b, p.kind) {
@@ -450,14 +495,18 @@ fn read_body<'a, B: Body<'a>>(
                         }
                         poly.push(idx as u32);
                     }
-                    faces.cut_face(&poly, &mesh.positions, &mut mesh.indices);
                 }
+                if let Some(why) = b.end_record(line) {
+                    return Err(err_at(b, line, format!("face {i} of {} {why}", el.count)));
+                }
+                faces.cut_face(&poly, &mesh.positions, &mut mesh.indices);
             }
         } else if !el.props.is_empty() {
             if el.name == "tristrips" {
                 warnings.push("element 'tristrips' skipped: triangle strips are not read".into());
             }
             for i in 0..el.count {
+                let line = b.begin_record();
                 for p in &el.props {
                     if let Err(f) = skip_prop(b, p.kind) {
                         let ty = match p.kind {
@@ -466,6 +515,13 @@ fn read_body<'a, B: Body<'a>>(
                         };
                         return Err(err(b, fail_message(f, &el.name, i, el.count, &p.name, ty)));
                     }
+                }
+                if let Some(why) = b.end_record(line) {
+                    return Err(err_at(
+                        b,
+                        line,
+                        format!("{} {i} of {} {why}", el.name, el.count),
+                    ));
                 }
             }
         }

@@ -129,6 +129,20 @@ impl<'a> TokenStream<'a> {
         Some(&d[start..i])
     }
 
+    /// Skip white space up to the next token (or the end); the line it is on.
+    pub(crate) fn line_of_next(&mut self) -> usize {
+        let d = self.data;
+        let mut i = self.pos;
+        while i < d.len() && d[i].is_ascii_whitespace() {
+            if d[i] == b'\n' || (d[i] == b'\r' && d.get(i + 1) != Some(&b'\n')) {
+                self.line += 1;
+            }
+            i += 1;
+        }
+        self.pos = i;
+        self.line
+    }
+
     /// The rest of the current line (trimmed), consuming it but not its line end.
     pub(crate) fn rest_of_line(&mut self) -> &'a [u8] {
         let d = &self.data[self.pos..];

@@ -577,3 +577,35 @@ fn unknown_extension_missing_file_and_gzip_garbage() {
     std::fs::create_dir(&d).unwrap();
     assert_eq!(load(&d).unwrap_err().kind(), ErrorKind::Io);
 }
+
+/// ASCII PLY holds one element per line: a vertex line with too few or too
+/// many values, or a face line with values left over, is an error naming
+/// that line, where reading on would take the next line's values.
+#[test]
+fn ascii_ply_elements_are_one_line_each() {
+    let head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+                end_header\n";
+    fails_with(
+        "short.ply",
+        &format!("{head}0 0 0\n1 0\n0 1 0 0\n3 0 1 2\n"),
+        "short.ply:11: vertex 1 of 3 has fewer values",
+    );
+    fails_with(
+        "long.ply",
+        &format!("{head}0 0 0\n1 0 0 7\n0 1 0\n3 0 1 2\n"),
+        "long.ply:11: vertex 1 of 3 has more values",
+    );
+    fails_with(
+        "face.ply",
+        &format!("{head}0 0 0\n1 0 0\n0 1 0\n3 0 1 2 9\n"),
+        "face.ply:13: face 0 of 1 has more values",
+    );
+    // Blank lines between elements are white space, as before.
+    let ok = parse(
+        "blank.ply",
+        format!("{head}0 0 0\n\n1 0 0\n0 1 0\n\n3 0 1 2\n").as_bytes(),
+    )
+    .unwrap();
+    assert_eq!(ok.mesh.positions[2], raykit_core::Vec3::new(0.0, 1.0, 0.0));
+}

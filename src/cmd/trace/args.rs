@@ -14,7 +14,7 @@ Several --mesh (or --instanced): an instanced scene under a two-level BVH, each 
 placed once, a glTF file one geometry per mesh and one instance per node. Its hit file: per ray\n\
 f32 t, u32 prim, u32 geometry, u32 instance (16 bytes; a miss is t = +inf and all ids 4294967295;\n\
 prim indexes the geometry's mesh). The JSON line adds \"geometries\", \"instances\",\n\
-\"stored_triangles\", \"instanced_triangles\", \"scene_bytes\" and per --mesh its id ranges\n\
+\"stored_triangles\", \"instanced_triangles\", \"scene_bytes\" and per --mesh its ids as [first, count]\n\
 (\"inputs\").")]
 pub struct TraceArgs {
     /// Mesh file or builtin:NAME; give several (--mesh A --mesh B) for an
