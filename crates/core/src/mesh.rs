@@ -469,36 +469,6 @@ mod tests {
         assert_eq!(m.validate(), Err(MeshError::NonFinite { vertex: 2 }));
     }
 
-    /// Structures built straight from a mesh with a vertex index beyond
-    /// its vertices stop with validate's message, naming the triangle.
-    #[test]
-    fn direct_builds_name_the_triangle_with_a_vertex_index_out_of_range() {
-        use crate::accel::bvh::{BuildOptions, Bvh8};
-        use crate::query::SurfaceBvh;
-        use crate::tri::Moller;
-        let mut m = quad();
-        m.indices[1][2] = 9;
-        let want = MeshError::IndexOutOfRange {
-            tri: 1,
-            index: 9,
-            count: 4,
-        }
-        .to_string();
-        let message = |r: std::thread::Result<()>| {
-            let e = r.expect_err("the build must stop");
-            e.downcast_ref::<String>().cloned().unwrap_or_default()
-        };
-        let bvh = std::panic::catch_unwind(|| {
-            Bvh8::<Moller>::build(&m, &BuildOptions::default());
-        });
-        assert!(message(bvh).contains(&want));
-        let surface = std::panic::catch_unwind(|| {
-            SurfaceBvh::build(&m);
-        });
-        assert!(message(surface).contains(&want));
-        quad().assert_indices_in_range();
-    }
-
     #[test]
     fn area_and_normals_of_unit_square() {
         let mut m = quad();
