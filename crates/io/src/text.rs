@@ -109,16 +109,10 @@ impl<'a> TokenStream<'a> {
     /// Next token, or `None` at the end of the data.
     #[inline]
     pub(crate) fn next_token(&mut self) -> Option<&'a [u8]> {
+        self.line_of_next();
         let d = self.data;
         let mut i = self.pos;
-        while i < d.len() && d[i].is_ascii_whitespace() {
-            if d[i] == b'\n' || (d[i] == b'\r' && d.get(i + 1) != Some(&b'\n')) {
-                self.line += 1;
-            }
-            i += 1;
-        }
         if i >= d.len() {
-            self.pos = i;
             return None;
         }
         let start = i;
@@ -130,6 +124,7 @@ impl<'a> TokenStream<'a> {
     }
 
     /// Skip white space up to the next token (or the end); the line it is on.
+    #[inline]
     pub(crate) fn line_of_next(&mut self) -> usize {
         let d = self.data;
         let mut i = self.pos;
