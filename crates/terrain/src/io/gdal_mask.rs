@@ -13,6 +13,7 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
 use super::file_at::read_at;
+use super::tiff_header::TiffHeader;
 use super::DemError;
 
 /// NewSubfileType of a full-resolution transparency mask.
@@ -34,12 +35,13 @@ pub enum MaskSource {
 }
 
 /// Makes the cells that GDAL's mask marks invalid NaN: the mask inside the
-/// file (`dec` reads `file` and is positioned anywhere after the DEM's
-/// image), else the `.msk` beside `path`. Returns where the mask came from,
+/// file (`dec` reads `file`, whose header is `header`, and is positioned
+/// anywhere after the DEM's image), else the `.msk` beside `path`. Returns where the mask came from,
 /// or `None` when there is none.
 pub fn apply_gdal_mask<R: Read + Seek>(
     path: &Path,
     file: &File,
+    header: TiffHeader,
     dec: &mut Decoder<R>,
     heights: &mut [f32],
     size: (usize, usize),
@@ -52,7 +54,7 @@ pub fn apply_gdal_mask<R: Read + Seek>(
             .map_err(|e| DemError::new(path, &at, format!("unreadable: {e}")))?;
         if subfile_type(path, &at, dec)? == SUBFILE_MASK && dims(dec) == Some(size) {
             let ifd = dec.ifd_pointer().map_or(0, |p| p.0);
-            let valid = read_mask(path, &at, file, ifd, size)?;
+            let valid = read_mask(path, &at, file, header, ifd, size)?;
             blank_invalid(heights, &valid);
             return Ok(Some(MaskSource::Internal(index)));
         }
@@ -62,13 +64,8 @@ pub fn apply_gdal_mask<R: Read + Seek>(
         return Ok(None);
     }
     let side = File::open(&sidecar).map_err(|e| DemError::open(&sidecar, &e))?;
-    let mut head = [0u8; 16];
-    let first_ifd = read_at(&side, &mut head, 0)
-        .ok()
-        .and_then(|()| Header::parse(&head))
-        .map(|h| h.first_ifd(&head))
-        .ok_or_else(|| DemError::at_byte(&sidecar, 0, "not a TIFF file (GDAL mask)"))?;
-    let mut probe = Decoder::new(MaskView::new(&side, 0, None)?)
+    let side_header = TiffHeader::read(&sidecar, &side)?;
+    let mut probe = Decoder::new(MaskView::new(&side, None)?)
         .map_err(|e| DemError::new(&sidecar, "image 0", format!("not a readable TIFF: {e}")))?;
     let got = dims(&mut probe);
     if got != Some(size) {
@@ -86,85 +83,16 @@ pub fn apply_gdal_mask<R: Read + Seek>(
             ),
         ));
     }
-    let valid = read_mask(&sidecar, "image 0", &side, first_ifd, size)?;
+    let valid = read_mask(
+        &sidecar,
+        "image 0",
+        &side,
+        side_header,
+        side_header.first_ifd,
+        size,
+    )?;
     blank_invalid(heights, &valid);
     Ok(Some(MaskSource::Sidecar(sidecar)))
-}
-
-/// A TIFF header: byte order and classic (32-bit offsets) or BigTIFF.
-#[derive(Clone, Copy)]
-struct Header {
-    little_endian: bool,
-    big: bool,
-}
-
-impl Header {
-    fn parse(head: &[u8; 16]) -> Option<Header> {
-        let little_endian = match &head[..2] {
-            b"II" => true,
-            b"MM" => false,
-            _ => return None,
-        };
-        let h = Header {
-            little_endian,
-            big: false,
-        };
-        match h.u16(&head[2..4]) {
-            42 => Some(h),
-            43 => Some(Header { big: true, ..h }),
-            _ => None,
-        }
-    }
-
-    fn u16(self, b: &[u8]) -> u16 {
-        let b = [b[0], b[1]];
-        if self.little_endian {
-            u16::from_le_bytes(b)
-        } else {
-            u16::from_be_bytes(b)
-        }
-    }
-
-    fn first_ifd(self, head: &[u8; 16]) -> u64 {
-        if self.big {
-            let b: [u8; 8] = head[8..16].try_into().unwrap();
-            if self.little_endian {
-                u64::from_le_bytes(b)
-            } else {
-                u64::from_be_bytes(b)
-            }
-        } else {
-            let b: [u8; 4] = head[4..8].try_into().unwrap();
-            if self.little_endian {
-                u32::from_le_bytes(b) as u64
-            } else {
-                u32::from_be_bytes(b) as u64
-            }
-        }
-    }
-
-    /// The header rewritten to start at the IFD at `ifd`.
-    fn pointing_at(self, head: &[u8; 16], ifd: u64) -> Vec<u8> {
-        let mut out = head.to_vec();
-        if self.big {
-            let b = if self.little_endian {
-                ifd.to_le_bytes()
-            } else {
-                ifd.to_be_bytes()
-            };
-            out[8..16].copy_from_slice(&b);
-        } else {
-            let v = ifd as u32;
-            let b = if self.little_endian {
-                v.to_le_bytes()
-            } else {
-                v.to_be_bytes()
-            };
-            out[4..8].copy_from_slice(&b);
-            out.truncate(8);
-        }
-        out
-    }
 }
 
 /// A TIFF file seen with the image at a chosen IFD first and its
@@ -182,9 +110,10 @@ struct MaskView<'a> {
 }
 
 impl<'a> MaskView<'a> {
-    /// The view of `file` starting at the IFD at `ifd` (`None`: the
-    /// file's own first IFD, unpatched).
-    fn new(file: &'a File, ifd: u64, photometric_at: Option<u64>) -> Result<Self, DemError> {
+    /// The view of `file`: with `patch`, (its header, the IFD to start at,
+    /// where that IFD's PhotometricInterpretation value lies); without,
+    /// the file as it is.
+    fn new(file: &'a File, patch: Option<(TiffHeader, u64, u64)>) -> Result<Self, DemError> {
         let len = file.metadata().map(|m| m.len()).unwrap_or(0);
         let mut view = MaskView {
             file,
@@ -192,19 +121,10 @@ impl<'a> MaskView<'a> {
             pos: 0,
             patches: Vec::new(),
         };
-        if let Some(at) = photometric_at {
-            let mut head = [0u8; 16];
-            let n = (len as usize).min(16);
-            let _ = read_at(file, &mut head[..n], 0);
-            if let Some(h) = Header::parse(&head) {
-                view.patches.push((0, h.pointing_at(&head, ifd)));
-                let v = if h.little_endian {
-                    BLACK_IS_ZERO.to_le_bytes()
-                } else {
-                    BLACK_IS_ZERO.to_be_bytes()
-                };
-                view.patches.push((at, v.to_vec()));
-            }
+        if let Some((header, ifd, photometric_at)) = patch {
+            view.patches.push((0, header.pointing_at(ifd)));
+            let grey = header.u16_bytes(BLACK_IS_ZERO);
+            view.patches.push((photometric_at, grey.to_vec()));
         }
         Ok(view)
     }
@@ -245,24 +165,14 @@ impl Seek for MaskView<'_> {
 }
 
 /// Where the value of the IFD at `ifd`'s PhotometricInterpretation entry
-/// lies in `file`, if it has one.
-fn photometric_value_at(file: &File, ifd: u64) -> Option<u64> {
-    let mut head = [0u8; 16];
-    read_at(file, &mut head[..8], 0).ok()?;
-    let _ = read_at(file, &mut head[8..16], 8);
-    let h = Header::parse(&head)?;
+/// lies in `file` (whose header is `h`), if it has one.
+fn photometric_value_at(file: &File, h: TiffHeader, ifd: u64) -> Option<u64> {
     let (count_len, entry_len, value_off) = if h.big { (8, 20, 12) } else { (2, 12, 8) };
     let mut count = [0u8; 8];
     read_at(file, &mut count[..count_len], ifd).ok()?;
-    let n = if h.big {
-        let b: [u8; 8] = count;
-        if h.little_endian {
-            u64::from_le_bytes(b)
-        } else {
-            u64::from_be_bytes(b)
-        }
-    } else {
-        h.u16(&count[..2]) as u64
+    let n = match h.big {
+        true => h.u64(&count),
+        false => h.u16(&count[..2]) as u64,
     };
     let mut entry = [0u8; 2];
     for i in 0..n.min(4096) {
@@ -298,7 +208,8 @@ fn dims<R: Read + Seek>(dec: &mut Decoder<R>) -> Option<(usize, usize)> {
     dec.dimensions().ok().map(|(w, h)| (w as usize, h as usize))
 }
 
-/// The mask stored at the IFD at `ifd` of `file`, as one flag per cell
+/// The mask stored at the IFD at `ifd` of `file` (whose header is
+/// `header`), as one flag per cell
 /// (true = valid). GDAL writes 1-bit masks (rows padded to whole bytes, 1 =
 /// valid) and, beside lossy images, 8-bit ones (0 = invalid, anything else
 /// valid).
@@ -306,14 +217,15 @@ fn read_mask(
     path: &Path,
     at: &str,
     file: &File,
+    header: TiffHeader,
     ifd: u64,
     (w, h): (usize, usize),
 ) -> Result<Vec<bool>, DemError> {
     let undecodable =
         |e: String| DemError::new(path, at, format!("cannot decode the GDAL mask: {e}"));
-    let photometric = photometric_value_at(file, ifd)
+    let photometric = photometric_value_at(file, header, ifd)
         .ok_or_else(|| undecodable("no PhotometricInterpretation (tag 262)".into()))?;
-    let view = MaskView::new(file, ifd, Some(photometric))?;
+    let view = MaskView::new(file, Some((header, ifd, photometric)))?;
     let data = Decoder::new(view)
         .map(|d| d.with_limits(Limits::default()))
         .and_then(|mut d| d.read_image())

@@ -22,6 +22,7 @@ use super::geotiff_lzw_tiles::{read_lzw_tiles, TileLayout, TileSamples};
 use super::geotiff_sparse::{absent_height, block_byte_counts, read_sparse};
 use super::limits::{check_dimensions, ensure_room, zeroed_heights, MAX_SAMPLES};
 use super::nodata::NodataF32;
+use super::tiff_header::TiffHeader;
 use super::DemError;
 use crate::dem::{Dem, GeoRef};
 
@@ -64,7 +65,8 @@ pub const TAG_GDAL_NODATA: u16 = 42113;
 pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
     let path = path.as_ref();
     let mut file = File::open(path).map_err(|e| DemError::open(path, &e))?;
-    let (ifd_at, little_endian) = check_header(path, &mut file)?;
+    let header = TiffHeader::read(path, &file)?;
+    let (ifd_at, little_endian) = (header.first_ifd, header.little_endian);
     let strips_file = file.try_clone().map_err(|e| DemError::open(path, &e))?;
     file.seek(SeekFrom::Start(0))
         .map_err(|e| DemError::at_byte(path, 0, format!("seek failed: {e}")))?;
@@ -244,7 +246,14 @@ pub fn read_geotiff(path: impl AsRef<Path>) -> Result<Dem, DemError> {
             ),
         ));
     }
-    apply_gdal_mask(path, &strips_file, &mut dec, &mut heights, (width, height))?;
+    apply_gdal_mask(
+        path,
+        &strips_file,
+        header,
+        &mut dec,
+        &mut heights,
+        (width, height),
+    )?;
     if (scale, offset) != (1.0, 0.0) {
         use rayon::prelude::*;
         heights
@@ -308,82 +317,6 @@ fn unsupported_compression(code: u64) -> Option<&'static str> {
         50002 => "JPEG XL",
         _ => return None,
     })
-}
-
-/// Checks the TIFF header (8 bytes, 16 for BigTIFF): the first IFD's
-/// offset, and whether the file is little-endian.
-fn check_header(path: &Path, file: &mut File) -> Result<(u64, bool), DemError> {
-    let mut head = [0u8; 16];
-    let mut n = 0;
-    while n < head.len() {
-        match file.read(&mut head[n..]) {
-            Ok(0) => break,
-            Ok(k) => n += k,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => {
-                return Err(DemError::at_byte(
-                    path,
-                    n as u64,
-                    format!("read failed: {e}"),
-                ))
-            }
-        }
-    }
-    let u16_at = |i: usize, le: bool| {
-        let b = [head[i], head[i + 1]];
-        if le {
-            u16::from_le_bytes(b)
-        } else {
-            u16::from_be_bytes(b)
-        }
-    };
-    let le = match &head[..2.min(n)] {
-        b"II" => true,
-        b"MM" => false,
-        _ => {
-            return Err(DemError::at_byte(
-                path,
-                0,
-                format!(
-                    "not a TIFF: expected \"II\" or \"MM\", found {:?}",
-                    String::from_utf8_lossy(&head[..2.min(n)])
-                ),
-            ))
-        }
-    };
-    let need = if n >= 4 && u16_at(2, le) == 43 { 16 } else { 8 };
-    if n < need {
-        return Err(DemError::at_byte(
-            path,
-            n as u64,
-            "file ends inside the TIFF header",
-        ));
-    }
-    match u16_at(2, le) {
-        42 => {
-            let b = [head[4], head[5], head[6], head[7]];
-            let at = if le {
-                u32::from_le_bytes(b)
-            } else {
-                u32::from_be_bytes(b)
-            };
-            Ok((at as u64, le))
-        }
-        43 => {
-            let b: [u8; 8] = head[8..16].try_into().unwrap_or_default();
-            let at = if le {
-                u64::from_le_bytes(b)
-            } else {
-                u64::from_be_bytes(b)
-            };
-            Ok((at, le))
-        }
-        v => Err(DemError::at_byte(
-            path,
-            2,
-            format!("TIFF version {v}; expected 42 (TIFF) or 43 (BigTIFF)"),
-        )),
-    }
 }
 
 /// The samples of an image of 32-bit floats in the machine's byte order,

@@ -26,6 +26,7 @@ mod raw;
 mod samples;
 mod source;
 mod terragen;
+mod tiff_header;
 
 pub use ascii_grid::read_ascii_grid;
 pub use creation_options::layout_from_creation_options;
