@@ -80,6 +80,12 @@ impl CellPlane {
 /// Tolerance of the inside-triangle test in cell units.
 const INSIDE_EPS: f64 = 1e-9;
 
+/// How far [`HeightField::clip`] widens the z range beyond the lowest and
+/// highest heights, relative to the largest height (or the ray's origin
+/// height, or 1 m): far above the rounding of a hit's `t`, far below any
+/// height difference a DEM stores.
+pub const Z_PAD: f64 = 1e-9;
+
 /// A height field ready for ray casting: heights (no-data filled), grid
 /// size, cell size in metres.
 #[derive(Clone, Debug)]
@@ -304,12 +310,21 @@ impl HeightField {
     /// The ray's parameter interval inside the grid's bounding box (x in
     /// `[0, width−1]`, y in `[0, height−1]`, z in `[zmin, zmax]`),
     /// intersected with `[tmin, tmax]`; `None` when empty.
+    ///
+    /// The z range is widened by [`Z_PAD`] of the largest height involved:
+    /// where the surface lies at `zmin` or `zmax` (a flat grid, the sea at
+    /// the lowest height), the box's end and [`HeightField::hit_cell`]'s
+    /// `t` for the same hit come from different formulas and may round to
+    /// either side of each other, which would lose the hit.
     pub fn clip(&self, ray: &GridRay, tmin: f64, tmax: f64) -> Option<(f64, f64)> {
-        let lo = [0.0, 0.0, self.zmin as f64];
+        let (zmin, zmax) = (self.zmin as f64, self.zmax as f64);
+        let scale = zmin.abs().max(zmax.abs()).max(ray.o[2].abs()).max(1.0);
+        let pad = Z_PAD * scale;
+        let lo = [0.0, 0.0, zmin - pad];
         let hi = [
             (self.width - 1) as f64,
             (self.height - 1) as f64,
-            self.zmax as f64,
+            zmax + pad,
         ];
         slab(ray, lo, hi, tmin, tmax)
     }

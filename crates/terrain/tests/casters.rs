@@ -299,3 +299,48 @@ fn infinite_heights_and_absurd_cells_are_refused() {
         assert!(e.contains("cell size"), "{size}: {e}");
     }
 }
+
+/// A surface met at its lowest or highest height lies on a face of the
+/// grid's bounding box, whose end and the cell's own `t` for the same hit
+/// come from different formulas: a grid flat throughout, and a coast whose
+/// sea (half the grid) lies flat at the lowest height. Every caster finds
+/// every hit that testing every cell finds, at the same `t`.
+#[test]
+fn surfaces_at_the_lowest_and_highest_heights_are_hit_by_every_caster() {
+    let (w, h) = (48, 40);
+    let flat = Dem::from_heights(w, h, vec![100.0; w * h]);
+    let mut coast = hills(w, h, 5);
+    for (k, z) in coast.heights.iter_mut().enumerate() {
+        *z = if k % w < w / 2 { 0.0 } else { 1.0 + z.abs() };
+    }
+    for (name, dem) in [("flat", flat), ("coast", coast)] {
+        let field = HeightField::new(&dem).unwrap();
+        let pyramid = MaxMipmap::new(&field);
+        let (eye, target) = raykit_terrain::camera::default_camera(&field);
+        let camera = TerrainCamera {
+            eye,
+            target,
+            vfov_deg: 50.0,
+            width: 64,
+            height: 48,
+        };
+        let mut hits = 0;
+        for caster in [Caster::March, Caster::MaxMipmap, Caster::Boxes { tau: 4.0 }] {
+            let img = cast_image(&field, &pyramid, &camera, caster);
+            for (i, got) in img.hits.iter().enumerate() {
+                let (x, y) = ((i % 64) as u32, (i / 64) as u32);
+                let want = every_cell(&field, &camera.ray(&field, x, y));
+                match (want, got) {
+                    (None, None) => {}
+                    (Some(a), Some(b)) if (a - b.t).abs() <= 1e-9 * a.max(1.0) => hits += 1,
+                    _ => panic!(
+                        "{name}, {caster:?}, pixel ({x}, {y}): every cell gives {want:?}, \
+                         the caster {:?}",
+                        got.map(|g| g.t)
+                    ),
+                }
+            }
+        }
+        assert!(hits > 3 * 64 * 48 / 2, "{name}: {hits} hits");
+    }
+}
