@@ -81,8 +81,17 @@ impl<'a> Shader<'a> {
         if !self.shadows {
             return true;
         }
-        let origin = s.point + s.geometric_normal * self.bias;
-        let ray = Ray::segment(origin, light.to_light, 0.0, light.distance * (1.0 - 1e-4));
-        !self.accel.occluded(&ray)
+        !self.accel.occluded(&shadow_ray(s, light, self.bias))
     }
+}
+
+/// The shadow ray from the surface point `s` towards the light sample
+/// `light` (Whitted 1980's shadow feeler): it starts `bias` off the surface
+/// along the geometric normal and `bias` along the ray, and stops just short
+/// of the light. The start along the ray matters at a concave edge, where
+/// the point offset along one face's normal still lies in the other face's
+/// plane, which a ray from t = 0 would hit.
+pub(crate) fn shadow_ray(s: &Surface, light: &LightSample, bias: f32) -> Ray {
+    let origin = s.point + s.geometric_normal * bias;
+    Ray::segment(origin, light.to_light, bias, light.distance * (1.0 - 1e-4))
 }

@@ -300,3 +300,73 @@ fn shadow_of_a_box_is_ambient_only_and_the_rest_is_lit() {
     }
     assert!(dark >= 20 && lit >= 200, "dark {dark}, lit {lit}");
 }
+
+#[test]
+fn a_concave_corner_facing_the_light_is_lit_along_its_edge() {
+    // A floor (y = 0) meeting a wall (z = -2), the light in front of both:
+    // no point either face shows is in shadow, so every pixel must equal
+    // the render without shadows. The camera looks at a point of the edge
+    // with its right axis along the edge, so the middle row of an image of
+    // odd height sees the edge itself, where each shadow ray starts in the
+    // other face's plane.
+    let mut b = MeshBuilder::new();
+    let grey = b.add_material(material("grey", [0.6, 0.6, 0.6], 0.2, 10.0));
+    b.add_quad(
+        [
+            Vec3::new(-5.0, 0.0, 6.0),
+            Vec3::new(5.0, 0.0, 6.0),
+            Vec3::new(5.0, 0.0, -2.0),
+            Vec3::new(-5.0, 0.0, -2.0),
+        ],
+        grey,
+    );
+    b.add_quad(
+        [
+            Vec3::new(-5.0, 0.0, -2.0),
+            Vec3::new(5.0, 0.0, -2.0),
+            Vec3::new(5.0, 6.0, -2.0),
+            Vec3::new(-5.0, 6.0, -2.0),
+        ],
+        grey,
+    );
+    let mesh = b.finish();
+    let lights = [PointLight::new(Vec3::new(0.3, 4.0, 4.0), Vec3::splat(40.0))];
+    let cam = Camera {
+        eye: Vec3::new(0.0, 3.0, 5.0),
+        target: Vec3::new(0.0, 0.0, -2.0),
+        up: Vec3::Y,
+        vfov_deg: 40.0,
+    };
+    let o = RenderOptions {
+        width: 41,
+        height: 31,
+        ambient: Vec3::splat(0.05),
+        ..RenderOptions::default()
+    };
+    let img = draw(&mesh, &lights, &cam, &o);
+    let unshadowed = draw(
+        &mesh,
+        &lights,
+        &cam,
+        &RenderOptions {
+            shadows: false,
+            ..o.clone()
+        },
+    );
+    let mut on_edge = 0;
+    for y in 0..o.height {
+        for x in 0..o.width {
+            let dir = camera_dir(&cam, o.width, o.height, x, y);
+            // Where the pixel's ray meets the floor's plane, in f64.
+            let p = d(cam.eye) + dir * (-3.0 / dir.y);
+            on_edge += ((p.z + 2.0).abs() < 1e-4) as u32;
+            assert_eq!(
+                img.pixel(x, y),
+                unshadowed.pixel(x, y),
+                "pixel ({x}, {y}), {:.6} from the edge",
+                p.z + 2.0
+            );
+        }
+    }
+    assert!(on_edge >= o.width / 2, "{on_edge} pixels on the edge");
+}

@@ -22,7 +22,7 @@
 use super::optics::{fresnel_dielectric, fresnel_schlick, reflect, refract};
 use crate::env::Environment;
 use crate::lighting::blinn_phong;
-use crate::shade::shadow_bias;
+use crate::shade::{shadow_bias, shadow_ray};
 use crate::shadowmap::ShadowMaps;
 use crate::surface::Surface;
 use raykit_core::glam::Vec3;
@@ -244,8 +244,7 @@ impl<'a> Tracer<'a> {
             ShadowSource::Off => 1.0,
             ShadowSource::Rays => {
                 self.counts.shadow.add(1);
-                let origin = s.point + s.geometric_normal * self.bias;
-                let ray = Ray::segment(origin, ls.to_light, 0.0, ls.distance * (1.0 - 1e-4));
+                let ray = shadow_ray(s, ls, self.bias);
                 if self.accel.occluded(&ray) {
                     0.0
                 } else {

@@ -59,8 +59,10 @@ fn direct(s: Surface, view: vec3f, kd: vec3f, ks: vec3f, shininess: f32) -> vec3
         }
         if sp.shadows != 0u {
             atomicAdd(&counters[0], 1u);
+            // Starting `bias` along the ray too: at a concave edge the
+            // offset origin still lies in the other face's plane.
             let origin = s.point + s.ng * sp.bias;
-            if scene_occluded(make_ray(origin, l, 0.0, ls.distance * sp.shadow_scale)) {
+            if scene_occluded(make_ray(origin, l, sp.bias, ls.distance * sp.shadow_scale)) {
                 continue;
             }
         }
