@@ -214,17 +214,18 @@ def indices(a, name: str) -> np.ndarray:
 MAX_THREADS = 4096
 
 
-def threads(n) -> int:
-    """A thread count: 0, a negative number or None for all cores."""
+def threads(n, name: str = "threads") -> int:
+    """A thread count: 0, a negative number or None for all cores. Errors
+    name the argument ``name``."""
     if n is None:
         return 0
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        raise ValueError(f"threads must be an integer (0 for all cores), got {n!r}")
+        raise ValueError(f"{name} must be an integer (0 for all cores), got {n!r}")
     if n < 0:
         # Open3D takes any non-positive count as "all cores".
         return 0
     if n > MAX_THREADS:
-        raise ValueError(f"threads must be at most {MAX_THREADS} (0 or negative for all cores), got {n}")
+        raise ValueError(f"{name} must be at most {MAX_THREADS} (0 or negative for all cores), got {n}")
     return int(n)
 
 

@@ -5,7 +5,7 @@ low-level calls take arrays already converted to the dtypes named here.
 """
 
 import os
-from typing import Any, List, Optional, Tuple
+from typing import Any, List, Optional, Sequence, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -168,6 +168,19 @@ def shadow(
     threads: int = 0,
     observer: bool = False,
 ) -> npt.NDArray[np.uint8]: ...
+def check_lights(
+    heights: npt.NDArray[np.float32],
+    transform: Transform,
+    lights: Sequence[Tuple[float, float, float]],
+    geographic: bool = False,
+    light_elevation: bool = False,
+    observer: bool = False,
+) -> None: ...
+def default_views(
+    heights: npt.NDArray[np.float32],
+    transform: Transform,
+    geographic: bool = False,
+) -> Tuple[Tuple[float, float, float], Tuple[float, float, float], Tuple[float, float, float]]: ...
 def cast(
     heights: npt.NDArray[np.float32],
     transform: Transform,

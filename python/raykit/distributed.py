@@ -52,7 +52,7 @@ from ._png import write_png
 from .files import PATH_TYPES, fspath
 from .raycasting import RaycastingScene
 from .render import render as render_image
-from .terrain import _cell_size, grid, viewshed
+from .terrain import grid, viewshed
 
 Progress = Union[bool, Callable[[int, int], None], None]
 
@@ -384,58 +384,12 @@ def _viewshed_task(dem, observers: list, height: float, elevation: bool, threads
     return count, masks
 
 
-def _observer_fault(h: np.ndarray, t, geo: bool, x: float, y: float, height: float, elevation: bool) -> str | None:
-    """Why :func:`raykit.terrain.viewshed` would refuse the observer at map
-    position (``x``, ``y``) on the north-up grid ``h`` with transform
-    ``t``, or None: outside the grid points' extent (with the extension's
-    allowance of 10⁻⁹ of the grid for rounding at the edge), a height that
-    is not finite or, above the ground, negative, or no data under it (the
-    corners of the surface's triangle there that carry weight). None too
-    for a rotated transform, which the extension refuses itself."""
-    a, b, c, d, e, f = t
-    if b != 0.0 or d != 0.0 or a == 0.0 or e == 0.0:
-        return None
-    rows, cols = h.shape
-    col, row = (x - c) / a - 0.5, (y - f) / e - 0.5
-    w, n = cols - 1, rows - 1
-    hair = 1e-9 * max(w, n)
-    if not (-hair <= col <= w + hair and -hair <= row <= n + hair):
-        return f"({x}, {y}) lies outside the DEM's grid points"
-    if not math.isfinite(height):
-        return f"the observer height {height} is not finite"
-    if elevation:
-        return None
-    if height < 0.0:
-        return f"the observer height {height} is below the ground"
-    # Through world metres and back, as the extension rounds it.
-    sx, sy = _cell_size(h, t, geo)
-    col, row = min(max(col, 0.0), w) * sx / sx, min(max(row, 0.0), n) * sy / sy
-    cc, rr = min(max(math.floor(col), 0), w - 1), min(max(math.floor(row), 0), n - 1)
-    u, v = col - cc, row - rr
-    if u >= v:
-        corners = [(cc, rr, 1.0 - u), (cc + 1, rr, u - v), (cc + 1, rr + 1, v)]
-    else:
-        corners = [(cc, rr, 1.0 - v), (cc, rr + 1, v - u), (cc + 1, rr + 1, u)]
-    for i, j, weight in corners:
-        if weight != 0.0 and np.isnan(h[j, i]):
-            return f"the ground under ({x}, {y}) has no data (row {j}, column {i})"
-    return None
-
-
 def _check_observers(h, t, geo, observers, height: float, elevation: bool) -> None:
     """Refuse, before any task runs, the first observer that
     :func:`raykit.terrain.viewshed` would refuse, with its message and
-    index."""
-    for i, (x, y) in enumerate(observers):
-        fault = _observer_fault(h, t, geo, x, y, height, elevation)
-        if fault is None:
-            continue
-        try:
-            # The extension's own message; it refuses before computing.
-            viewshed(h, t, observer=(x, y), observer_height=height, observer_elevation=elevation, geographic=geo, threads=1)
-        except ValueError as e:
-            raise ValueError(f"observers[{i}]: {e}") from None
-        raise ValueError(f"observers[{i}]: {fault}")
+    index in ``observers``."""
+    lights = [(x, y, height) for x, y in observers]
+    _raykit.check_lights(h, t, lights, geo, elevation, observer=True)
 
 
 #: The files a run of :func:`viewsheds` writes to ``out``.

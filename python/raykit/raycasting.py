@@ -115,7 +115,7 @@ class RaycastingScene:
             raise ValueError(f"raykit runs on the CPU only; got device {device}")
         self._origin = None if origin is None else _origin_of(origin)
         self._origin_given = origin is not None
-        self._nthreads = _arrays.threads(nthreads)
+        self._nthreads = _arrays.threads(nthreads, "nthreads")
         self._accel_name = accel
         self._test_name = test
         self._vertices: list[np.ndarray] = []
@@ -145,6 +145,16 @@ class RaycastingScene:
         state = self.__dict__.copy()
         state.update(_scene=None, _flat_of_instances=None)
         return state
+
+    def __copy__(self):
+        """A scene of the same geometries, instances and settings that
+        changes apart from this one (``copy.copy``): its lists are its own,
+        the vertex arrays (replaced, never changed in place) are shared,
+        and its structures are built at its first query."""
+        other = type(self).__new__(type(self))
+        own = {k: v.copy() if isinstance(v, (list, dict)) else v for k, v in self.__getstate__().items()}
+        other.__dict__.update(own)
+        return other
 
     def add_triangles(
         self,
@@ -311,6 +321,7 @@ class RaycastingScene:
         self._scene = None
         self._flat_of_instances = None
         self._sphere_of_scene = None
+        self._instanced_cache = None
 
     def _rays(self, rays, every_dtype: bool = False):
         """``rays`` as the engine takes them (:func:`_arrays.ray_rows`):
@@ -340,12 +351,16 @@ class RaycastingScene:
     def instanced(self) -> bool:
         """Whether the scene is traced as instances over per-geometry BVHs
         (it has an instance, a geometry stored for instances only, or a
-        mask) rather than as one concatenated mesh."""
-        if any(m != _MASK_ALL for m in self._geometry_masks):
-            return True
-        return len(self._placements) != len(self._vertices) or any(
-            g != k or t is not None or m != _MASK_ALL for k, (g, t, m) in enumerate(self._placements)
-        )
+        mask) rather than as one concatenated mesh. Kept until the scene
+        changes: every query asks."""
+        cached = self.__dict__.get("_instanced_cache")
+        if cached is None:
+            cached = any(m != _MASK_ALL for m in self._geometry_masks) or (
+                len(self._placements) != len(self._vertices)
+                or any(g != k or t is not None or m != _MASK_ALL for k, (g, t, m) in enumerate(self._placements))
+            )
+            self._instanced_cache = cached
+        return cached
 
     def _mesh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Vertices, triangles (indices shifted to the concatenated vertices)
@@ -469,10 +484,10 @@ class RaycastingScene:
         mask = _check_mask(mask, "mask")
         if self.instanced:
             t, g, inst, p, uv, n = self._built().cast_rays(
-                flat, mask, _arrays.threads(nthreads), _image_width(lead)
+                flat, mask, _arrays.threads(nthreads, "nthreads"), _image_width(lead)
             )
         else:
-            t, g, p, uv, n = self._built().cast_rays(flat, _arrays.threads(nthreads), _image_width(lead))
+            t, g, p, uv, n = self._built().cast_rays(flat, _arrays.threads(nthreads, "nthreads"), _image_width(lead))
             if mask == 0:
                 t, g, p, uv, n = _missed(t, g, p, uv, n)
             inst = None
@@ -506,11 +521,11 @@ class RaycastingScene:
         mask = _check_mask(mask, "mask")
         if self.instanced:
             hit = self._built().test_occlusions(
-                flat, tnear, tfar, mask, _arrays.threads(nthreads), _image_width(lead), moved=t0
+                flat, tnear, tfar, mask, _arrays.threads(nthreads, "nthreads"), _image_width(lead), moved=t0
             )
         else:
             hit = self._built().test_occlusions(
-                flat, tnear, tfar, _arrays.threads(nthreads), _image_width(lead), moved=t0
+                flat, tnear, tfar, _arrays.threads(nthreads, "nthreads"), _image_width(lead), moved=t0
             )
             hit &= mask != 0
         return _arrays.result(hit.reshape(lead))
@@ -529,9 +544,9 @@ class RaycastingScene:
         flat, lead, _ = self._rays(rays, every_dtype=True)
         mask = _check_mask(mask, "mask")
         if self.instanced:
-            counts = self._built().count_intersections(flat, mask, _arrays.threads(nthreads))
+            counts = self._built().count_intersections(flat, mask, _arrays.threads(nthreads, "nthreads"))
         else:
-            counts = _raykit.count_intersections(self._built(), flat, _arrays.threads(nthreads))
+            counts = _raykit.count_intersections(self._built(), flat, _arrays.threads(nthreads, "nthreads"))
             counts *= mask != 0
         return _arrays.result(counts.reshape(lead))
 
@@ -556,11 +571,11 @@ class RaycastingScene:
         mask = _check_mask(mask, "mask")
         if self.instanced:
             splits, ray_ids, t, g, inst, p, uv = self._built().list_intersections(
-                flat, cap, mask, _arrays.threads(nthreads)
+                flat, cap, mask, _arrays.threads(nthreads, "nthreads")
             )
         else:
             splits, ray_ids, t, g, p, uv = _raykit.list_intersections(
-                self._built(), flat, 0 if mask == 0 else cap, _arrays.threads(nthreads)
+                self._built(), flat, 0 if mask == 0 else cap, _arrays.threads(nthreads, "nthreads")
             )
             inst = None
         if t0 is not None:
@@ -596,7 +611,7 @@ class RaycastingScene:
         """
         flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
         scene, geometry_of, mirrored = self._point_scene()
-        pts, g, p, uv, n, _ = _raykit.closest_points(scene, flat, float(max_distance), _arrays.threads(nthreads))
+        pts, g, p, uv, n, _ = _raykit.closest_points(scene, flat, float(max_distance), _arrays.threads(nthreads, "nthreads"))
         if self._origin is not None:
             pts = pts.astype(np.float64) + self._origin
         out = {}
@@ -621,7 +636,7 @@ class RaycastingScene:
         """Distance from each query point to the surface: float32 ``(...)``
         (NaN for points with NaN or infinite coordinates)."""
         flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
-        d = _raykit.distance(self._point_scene()[0], flat, _arrays.threads(nthreads))
+        d = _raykit.distance(self._point_scene()[0], flat, _arrays.threads(nthreads, "nthreads"))
         return _arrays.result(d.reshape(lead))
 
     def compute_signed_distance(self, query_points, nthreads: int = 0, nsamples: int = 1):
@@ -641,7 +656,7 @@ class RaycastingScene:
         """
         _check_nsamples(nsamples)
         flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
-        d = _raykit.signed_distance(self._point_scene()[0], flat, _arrays.threads(nthreads))
+        d = _raykit.signed_distance(self._point_scene()[0], flat, _arrays.threads(nthreads, "nthreads"))
         return _arrays.result(d.reshape(lead))
 
     def compute_occupancy(self, query_points, nthreads: int = 0, nsamples: int = 1):
@@ -651,7 +666,7 @@ class RaycastingScene:
         accepted for Open3D compatibility and must be odd."""
         _check_nsamples(nsamples)
         flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
-        occ = _raykit.occupancy(self._point_scene()[0], flat, _arrays.threads(nthreads))
+        occ = _raykit.occupancy(self._point_scene()[0], flat, _arrays.threads(nthreads, "nthreads"))
         return _arrays.result(occ.reshape(lead))
 
     def compute_winding_number(self, query_points, nthreads: int = 0, *, beta: float = 2.0):
@@ -661,7 +676,7 @@ class RaycastingScene:
         triangles is approximated by a dipole when the point is farther than
         ``beta`` times its radius; ``inf`` sums every triangle exactly)."""
         flat, lead = _arrays.rows(query_points, "query_points", 3, shift=self._origin)
-        w = _raykit.winding_number(self._point_scene()[0], flat, float(beta), _arrays.threads(nthreads))
+        w = _raykit.winding_number(self._point_scene()[0], flat, float(beta), _arrays.threads(nthreads, "nthreads"))
         return _arrays.result(w.reshape(lead))
 
     @staticmethod

@@ -209,71 +209,6 @@ def viewshed(
     )
 
 
-def _cell_size(h: np.ndarray, t, geographic: bool) -> tuple[float, float]:
-    """Metres per cell along columns and rows (degrees converted at the
-    raster's middle latitude for geographic rasters, as raykit-terrain's
-    ``Dem::cell_size_m``)."""
-    a, e = abs(t[0]), abs(t[4])
-    if not geographic:
-        return a, e
-    mid = math.radians(t[5] + t[4] * h.shape[0] * 0.5)
-    return a * 111_320.0 * math.cos(mid), e * 111_320.0
-
-
-def _height_at(z: np.ndarray, x: float, y: float) -> float:
-    """The declared surface's height at grid position (column ``x``, row
-    ``y``), clamped into the grid (raykit-terrain's
-    ``HeightField::height_at``): the plane of the cell's upper triangle
-    (u ≥ v) or lower one."""
-    rows, cols = z.shape
-    c = min(max(math.floor(x), 0), cols - 2)
-    r = min(max(math.floor(y), 0), rows - 2)
-    u, v = x - c, y - r
-    h00, h10 = float(z[r, c]), float(z[r, c + 1])
-    h01, h11 = float(z[r + 1, c]), float(z[r + 1, c + 1])
-    if u >= v:
-        return h00 + (h10 - h00) * u + (h11 - h10) * v
-    return h00 + (h11 - h01) * u + (h01 - h00) * v
-
-
-def _to_map(t, cs: tuple[float, float], w: tuple[float, float, float]) -> tuple[float, float, float]:
-    """World metres (x east and y north of grid point (0, 0), z) as map
-    coordinates, as raykit-terrain's ``MapWorld::to_map``. On a grid of
-    zero-sized cells, which the engine refuses by its transform, NaN."""
-    if not (cs[0] != 0.0 and cs[1] != 0.0):
-        return (math.nan, math.nan, math.nan)
-    col, row = w[0] / cs[0], -w[1] / cs[1]
-    return (t[2] + (col + 0.5) * t[0], t[5] + (row + 0.5) * t[4], w[2])
-
-
-def _centre(z: np.ndarray, cs: tuple[float, float]) -> tuple[float, float, float]:
-    """The surface point at the DEM's centre grid position, world metres:
-    where a camera without a target looks (raykit-terrain's
-    ``camera::centre``)."""
-    rows, cols = z.shape
-    gx, gy = (cols - 1) * 0.5, (rows - 1) * 0.5
-    return (gx * cs[0], -gy * cs[1], _height_at(z, gx, gy))
-
-
-def _default_camera(z: np.ndarray, t, geographic: bool):
-    """The command line's default view (raykit-terrain's
-    ``camera::default_camera``) as map coordinates ``(eye, target)``: the
-    eye 3/4 of the way from the surface point at the centre to the
-    south-west grid point, at the height that looks at the centre 20°
-    below the horizontal or 2% of the grid points' diagonal above the
-    highest point, whichever is higher, looking 20° down towards the
-    centre. ``z``: the heights with no data at the lowest height."""
-    rows, cols = z.shape
-    cs = _cell_size(z, t, geographic)
-    c = _centre(z, cs)
-    w, h = (cols - 1) * cs[0], (rows - 1) * cs[1]
-    ex, ey = c[0] + 0.75 * (0.0 - c[0]), c[1] + 0.75 * (-h - c[1])
-    d = max(math.hypot(c[0] - ex, c[1] - ey), 1e-9)
-    slope = math.tan(math.radians(20.0))
-    ez = max(c[2] + d * slope, float(np.max(z)) + 0.02 * math.hypot(w, h))
-    return _to_map(t, cs, (ex, ey, ez)), _to_map(t, cs, (c[0], c[1], ez - d * slope))
-
-
 @_naming_the_file
 def cast(
     heights,
@@ -375,13 +310,13 @@ def render(
         raise ValueError("the DEM has no valid height (every sample is no-data)")
     # The declared surface: no-data samples at the lowest height.
     filled = np.where(np.isnan(h), np.nanmin(h), h)
-    if eye is None:
-        eye, default_target = _default_camera(filled, t, geo)
-        if target is None:
-            target = default_target
-    elif target is None:
-        cs = _cell_size(h, t, geo)
-        target = _to_map(t, cs, _centre(filled, cs))
+    if eye is None or target is None:
+        default_eye, default_target, centre = _raykit.default_views(h, t, geo)
+        if eye is None:
+            eye = default_eye
+            target = default_target if target is None else target
+        else:
+            target = centre
     out = cast(h, t, eye=eye, target=target, width=width, height=height, fov=fov, caster=caster, tau=tau, geographic=geo, threads=threads)
     mask = None
     if shadows:

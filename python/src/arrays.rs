@@ -4,8 +4,23 @@
 //! reaching a panic.
 
 use crate::errors::value_error;
-use numpy::{Element, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::ndarray::Dimension;
+use numpy::{Element, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::PyResult;
+
+/// The elements of an array in row-major (C) order as one slice. An array
+/// in column-major (Fortran) order is contiguous too, but its slice would
+/// read as the transpose: it is refused like any other layout.
+pub fn c_order<'a, T: Element, D: Dimension>(
+    a: &'a PyReadonlyArray<'_, T, D>,
+    what: &str,
+) -> PyResult<&'a [T]> {
+    let refused = || value_error(format!("{what} must be C-contiguous"));
+    if !a.is_c_contiguous() {
+        return Err(refused());
+    }
+    a.as_slice().map_err(|_| refused())
+}
 
 /// The rows of an `(n, width)` array as one contiguous slice, and `n`.
 pub fn rows<'a, T: Element>(
@@ -20,14 +35,10 @@ pub fn rows<'a, T: Element>(
             shape[0], shape[1]
         )));
     }
-    let s = a
-        .as_slice()
-        .map_err(|_| value_error(format!("{what} must be C-contiguous")))?;
-    Ok((s, shape[0]))
+    Ok((c_order(a, what)?, shape[0]))
 }
 
 /// A one-dimensional array as a slice.
 pub fn flat<'a, T: Element>(a: &'a PyReadonlyArray1<'_, T>, what: &str) -> PyResult<&'a [T]> {
-    a.as_slice()
-        .map_err(|_| value_error(format!("{what} must be C-contiguous")))
+    c_order(a, what)
 }

@@ -213,9 +213,7 @@ pub fn moved_per_ray<'a>(
     let Some(m) = moved else {
         return Ok(None);
     };
-    let m = m
-        .as_slice()
-        .map_err(|_| crate::errors::value_error("moved must be C-contiguous"))?;
+    let m = crate::arrays::c_order(m, "moved")?;
     if m.len() != n {
         return Err(crate::errors::value_error(format!(
             "moved has {} entries for {n} rays",

@@ -3,7 +3,7 @@
 //! BVH — the core's two-level scene (Wald et al. 2014's instancing, as in
 //! Embree and pbrt-v4) — and its ray queries.
 
-use crate::arrays::rows;
+use crate::arrays::{c_order, rows};
 use crate::errors::value_error;
 use crate::hit_arrays::{column, laid_out, matrix, HitColumns};
 use crate::image_order::{moved_per_ray, nearest_by_bands, occlusion_by_bands, HitRow};
@@ -118,9 +118,7 @@ impl InstancedScene {
                     matrix.shape()
                 )));
             }
-            let m = matrix.as_slice().map_err(|_| {
-                value_error(format!("instance {i}: the transform must be C-contiguous"))
-            })?;
+            let m = c_order(matrix, &format!("instance {i}: the transform"))?;
             let id = builder
                 .add_instance(*geometry, affine(m))
                 .map_err(|e| value_error(e.to_string()))?;

@@ -24,6 +24,7 @@ use pyo3::prelude::*;
 /// culling and rendering.
 #[pymodule]
 fn _raykit(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    threads::note_loading_process();
     m.add_class::<scene::Scene>()?;
     m.add_class::<instances::InstancedScene>()?;
     m.add("INVALID_ID", hit_arrays::INVALID_ID)?;
@@ -40,6 +41,8 @@ fn _raykit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(queries::list_intersections, m)?)?;
     m.add_function(wrap_pyfunction!(terrain::load_dem, m)?)?;
     m.add_function(wrap_pyfunction!(terrain::shadow, m)?)?;
+    m.add_function(wrap_pyfunction!(terrain::check_lights, m)?)?;
+    m.add_function(wrap_pyfunction!(terrain::default_views, m)?)?;
     m.add_function(wrap_pyfunction!(terrain::cast, m)?)?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(geotiff::write_geotiff, m)?)?;

@@ -3,12 +3,14 @@
 //! y = d·col + e·row + f at pixel corners), shadow masks and ray-cast
 //! images (raykit-terrain).
 
+use crate::arrays::c_order;
 use crate::errors::{dem_error, value_error};
 use crate::threads::detached;
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use raykit_terrain::camera::{centre, default_camera};
 use raykit_terrain::georef::{format_number, MapWorld};
 use raykit_terrain::io::{load_dem as read_dem, LoadOptions};
 use raykit_terrain::shadow::{shadow_mask_for_targets, Light, ShadowMethod};
@@ -87,10 +89,7 @@ fn dem(heights: &PyReadonlyArray2<'_, f32>, t: Transform, geographic: bool) -> P
              beyond the largest coordinates"
         )));
     }
-    let values = heights
-        .as_slice()
-        .map_err(|_| value_error("heights must be C-contiguous"))?
-        .to_vec();
+    let values = c_order(heights, "heights")?.to_vec();
     let mut dem = Dem::from_heights(cols, rows, values);
     dem.georef = GeoRef {
         origin_x: c,
@@ -138,10 +137,6 @@ pub fn shadow<'py>(
     threads: i64,
     observer: bool,
 ) -> PyResult<Bound<'py, PyArray2<u8>>> {
-    let (what, elevation_flag) = match observer {
-        true => ("observer", "observer_elevation"),
-        false => ("light", "light_elevation"),
-    };
     let method = match method {
         "fast" => ShadowMethod::Fast,
         "brute" => ShadowMethod::BruteForce,
@@ -174,40 +169,9 @@ pub fn shadow<'py>(
                 elevation_deg: el,
             }
         }
-        (None, Some((x, y, h))) => {
-            let n = format_number;
-            let named = format!("{what} ({}, {}, {})", n(x), n(y), n(h));
-            let [wx, wy] = MapWorld::new(&dem, &field)
-                .inside(x, y, what)
-                .map_err(value_error)?;
-            if !h.is_finite() {
-                return Err(value_error(format!(
-                    "{named}: the height must be a finite number"
-                )));
-            }
-            let z = if light_elevation {
-                h
-            } else {
-                if h < 0.0 {
-                    return Err(value_error(format!(
-                        "{named}: the height above the ground must be >= 0 \
-                         (use {elevation_flag}=True for an absolute elevation)"
-                    )));
-                }
-                let (gx, gy) = (wx / field.sx, -wy / field.sy);
-                let given = heights.as_slice().expect("C-contiguous, as dem() checked");
-                if let Some((col, row)) = field
-                    .samples_under(gx, gy)
-                    .find(|&(c, r)| given[r * dem.width + c].is_nan())
-                {
-                    return Err(value_error(format!(
-                        "{named}: the ground there has no data (no height at row \
-                         {row}, column {col}); give the elevation itself with {elevation_flag}=True"
-                    )));
-                }
-                field.height_at(gx, gy) + h
-            };
-            Light::Point([wx, wy, z])
+        (None, Some(at)) => {
+            let given = heights.as_slice().expect("C-contiguous, as dem() checked");
+            point_light(&dem, &field, given, at, light_elevation, observer).map_err(value_error)?
         }
         _ => return Err(value_error("give exactly one of sun, light")),
     };
@@ -231,6 +195,102 @@ pub fn shadow<'py>(
     })?;
     let mask = Array2::from_shape_vec((dem.height, dem.width), mask).expect("one per sample");
     Ok(mask.into_pyarray(py))
+}
+
+/// The point light at map position (`x`, `y`), `h` metres above the
+/// declared surface (or at elevation `h` with `light_elevation`), in world
+/// metres; `given` are the caller's heights, NaN where no data. With
+/// `observer`, the light is a viewshed's observer and errors name it so.
+/// Refused: outside the grid points, a height that is not finite, below
+/// the ground, or over no data without `light_elevation`.
+fn point_light(
+    dem: &Dem,
+    field: &HeightField,
+    given: &[f32],
+    (x, y, h): (f64, f64, f64),
+    light_elevation: bool,
+    observer: bool,
+) -> Result<Light, String> {
+    let (what, elevation_flag) = match observer {
+        true => ("observer", "observer_elevation"),
+        false => ("light", "light_elevation"),
+    };
+    let n = format_number;
+    let named = format!("{what} ({}, {}, {})", n(x), n(y), n(h));
+    let [wx, wy] = MapWorld::new(dem, field).inside(x, y, what)?;
+    if !h.is_finite() {
+        return Err(format!("{named}: the height must be a finite number"));
+    }
+    let z = if light_elevation {
+        h
+    } else {
+        if h < 0.0 {
+            return Err(format!(
+                "{named}: the height above the ground must be >= 0 \
+                 (use {elevation_flag}=True for an absolute elevation)"
+            ));
+        }
+        let (gx, gy) = (wx / field.sx, -wy / field.sy);
+        if let Some((col, row)) = field
+            .samples_under(gx, gy)
+            .find(|&(c, r)| given[r * dem.width + c].is_nan())
+        {
+            return Err(format!(
+                "{named}: the ground there has no data (no height at row \
+                 {row}, column {col}); give the elevation itself with {elevation_flag}=True"
+            ));
+        }
+        field.height_at(gx, gy) + h
+    };
+    Ok(Light::Point([wx, wy, z]))
+}
+
+/// Checks point lights as [`shadow`] would, without computing a mask: the
+/// first that it would refuse raises its `ValueError`, prefixed with
+/// `observers[i]: ` (with `observer`) or `lights[i]: `. One surface serves
+/// every light.
+#[pyfunction]
+#[pyo3(signature = (heights, transform, lights, geographic=false, light_elevation=false, observer=false))]
+pub fn check_lights(
+    heights: PyReadonlyArray2<'_, f32>,
+    transform: Transform,
+    lights: Vec<(f64, f64, f64)>,
+    geographic: bool,
+    light_elevation: bool,
+    observer: bool,
+) -> PyResult<()> {
+    let (dem, field) = surface(&heights, transform, geographic)?;
+    let given = heights.as_slice().expect("C-contiguous, as dem() checked");
+    let list = if observer { "observers" } else { "lights" };
+    for (i, &at) in lights.iter().enumerate() {
+        point_light(&dem, &field, given, at, light_elevation, observer)
+            .map_err(|e| value_error(format!("{list}[{i}]: {e}")))?;
+    }
+    Ok(())
+}
+
+/// The views `raykit terrain render` takes without coordinates, in map
+/// coordinates (x, y in map units, z in metres): the default camera's
+/// eye and target (`camera::default_camera`: the eye 3/4 of the way from
+/// the centre to the south-west grid point, looking 20° down towards the
+/// centre) and the surface point at the centre grid position, which an
+/// eye given without a target looks at.
+#[pyfunction]
+#[pyo3(signature = (heights, transform, geographic=false))]
+#[allow(clippy::type_complexity)]
+pub fn default_views(
+    heights: PyReadonlyArray2<'_, f32>,
+    transform: Transform,
+    geographic: bool,
+) -> PyResult<([f64; 3], [f64; 3], [f64; 3])> {
+    let (dem, field) = surface(&heights, transform, geographic)?;
+    let map = MapWorld::new(&dem, &field);
+    let (eye, target) = default_camera(&field);
+    Ok((
+        map.to_map(eye),
+        map.to_map(target),
+        map.to_map(centre(&field)),
+    ))
 }
 
 /// One ray per pixel of a pinhole camera at map position `eye` looking at

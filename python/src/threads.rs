@@ -7,6 +7,13 @@
 //! loop over many sizes does not keep a pool of each alive. A pool dropped
 //! from the cache lives on until the calls running on it return.
 //!
+//! A child made by `fork()` (multiprocessing's default start method on
+//! Linux) has its parent's memory but none of its threads: the global pool
+//! and the kept pools, if the parent used them, would never run its work.
+//! So a process that is not the one that loaded the module forgets the
+//! kept pools without dropping them (their threads are not there to be
+//! stopped) and installs pools of its own, `threads = 0` included.
+//!
 //! Long calls can be interrupted (Ctrl-C): [`interruptible`] runs the work
 //! on its own thread while the caller's thread waits with the GIL released,
 //! taking the GIL back a few times a second to let Python's signal handlers
@@ -36,13 +43,34 @@ fn largest_kept() -> usize {
     *LARGEST.get_or_init(|| 4 * std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
-/// Pools by size, most recently used last.
-type Kept = Vec<(usize, Arc<ThreadPool>)>;
+/// Pools by size, most recently used last, and the process they belong to.
+struct Kept {
+    process: u32,
+    pools: Vec<(usize, Arc<ThreadPool>)>,
+}
 
 /// The pools kept.
 fn pools() -> &'static Mutex<Kept> {
     static POOLS: OnceLock<Mutex<Kept>> = OnceLock::new();
-    POOLS.get_or_init(|| Mutex::new(Vec::new()))
+    POOLS.get_or_init(|| {
+        Mutex::new(Kept {
+            process: std::process::id(),
+            pools: Vec::new(),
+        })
+    })
+}
+
+/// The process that loaded the module.
+static LOADED_IN: OnceLock<u32> = OnceLock::new();
+
+/// Notes the process loading the module (called once, at import).
+pub fn note_loading_process() {
+    LOADED_IN.get_or_init(std::process::id);
+}
+
+/// Whether this process is a `fork()` of the one that loaded the module.
+fn forked() -> bool {
+    LOADED_IN.get().is_some_and(|&p| p != std::process::id())
 }
 
 /// The pool for `threads` (`None`: rayon's global pool).
@@ -52,13 +80,23 @@ fn pool(threads: i64) -> PyResult<Option<Arc<ThreadPool>>> {
             "threads must be between 0 (all cores) and {MAX_THREADS}, got {threads}"
         )));
     }
-    if threads == 0 {
+    if threads == 0 && !forked() {
         return Ok(None);
     }
-    let n = threads as usize;
-    let mut kept = pools()
+    let n = match threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        t => t as usize,
+    };
+    let mut guard = pools()
         .lock()
         .map_err(|_| PyRuntimeError::new_err("the thread pool registry is poisoned"))?;
+    let kept = &mut *guard;
+    if kept.process != std::process::id() {
+        // The parent's pools: their threads are not in this process.
+        std::mem::forget(std::mem::take(&mut kept.pools));
+        kept.process = std::process::id();
+    }
+    let kept = &mut kept.pools;
     if let Some(i) = kept.iter().position(|(size, _)| *size == n) {
         let entry = kept.remove(i);
         let p = entry.1.clone();

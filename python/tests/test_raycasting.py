@@ -450,3 +450,77 @@ def test_thread_pools_of_many_sizes_do_not_pile_up(bunny):
     while len(os.listdir("/proc/self/task")) > limit and time.monotonic() < deadline:
         time.sleep(0.05)
     assert len(os.listdir("/proc/self/task")) <= limit
+
+
+def _answers_of_a_fresh_scene(args):
+    v, f, rays, points = args
+    s = raykit.RaycastingScene()
+    s.add_triangles(v, f)
+    return s.cast_rays(rays)["t_hit"], s.cast_rays(rays, nthreads=1)["t_hit"], s.compute_distance(points), s.count_intersections(rays)
+
+
+def _answers_of_a_sent_scene(args):
+    scene, rays = args
+    return scene.cast_rays(rays)["t_hit"]
+
+
+def test_a_forked_child_answers_after_the_parent_has_used_every_pool(bunny):
+    # fork() copies the parent's memory but not its threads: pools the
+    # parent started (all cores, and nthreads=1) do not exist in the child.
+    import multiprocessing
+
+    v, f, _ = bunny
+    rays, points = rays_at(v, 300, 13), v[:64] + np.float32(0.01)
+    parent = scene_of(v, f)
+    want = (parent.cast_rays(rays)["t_hit"], parent.cast_rays(rays, nthreads=1)["t_hit"], parent.compute_distance(points), parent.count_intersections(rays))
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        got = pool.apply_async(_answers_of_a_fresh_scene, ((v, f, rays, points),)).get(timeout=120)
+        sent = pool.apply_async(_answers_of_a_sent_scene, ((parent, rays),)).get(timeout=120)
+    for g, w in zip(got, want):
+        np.testing.assert_array_equal(g, w)
+    np.testing.assert_array_equal(sent, want[0])
+
+
+def test_the_extension_refuses_column_major_arrays_it_would_read_transposed(bunny):
+    # Fortran order is contiguous too; read as rows it is the transpose.
+    from raykit import _raykit
+
+    v, f, _ = bunny
+    rays = rays_at(v, 50, 14)
+    offsets = np.array([0, len(f)], np.uint32)
+    scene = _raykit.Scene(v, f.astype(np.uint32), offsets)
+    with pytest.raises(ValueError, match="C-contiguous"):
+        _raykit.Scene(np.asfortranarray(v), f.astype(np.uint32), offsets)
+    with pytest.raises(ValueError, match="C-contiguous"):
+        scene.cast_rays(np.asfortranarray(rays))
+    placed = np.asfortranarray(np.eye(4)[:3])
+    with pytest.raises(ValueError, match="transform must be C-contiguous"):
+        _raykit.InstancedScene([(v, f.astype(np.uint32), 0xFFFFFFFF)], [(0, placed, 0xFFFFFFFF)])
+    heights = np.asfortranarray(np.arange(12, dtype=np.float32).reshape(3, 4))
+    with pytest.raises(ValueError, match="heights must be C-contiguous"):
+        _raykit.shadow(heights, (1.0, 0.0, 0.0, 0.0, -1.0, 3.0), sun=(90.0, 30.0))
+    # The public layer copies such arrays into row order and answers alike.
+    public = raykit.RaycastingScene()
+    public.add_triangles(np.asfortranarray(v), np.asfortranarray(f))
+    np.testing.assert_array_equal(public.cast_rays(np.asfortranarray(rays))["t_hit"], scene.cast_rays(rays)[0])
+
+
+def test_a_shallow_copy_changes_apart_from_its_original(bunny):
+    import copy
+
+    v, f, _ = bunny
+    rays = rays_at(v, 300, 15)
+    scene = scene_of(v, f)
+    alone = scene.cast_rays(rays)["t_hit"]
+    other = copy.copy(scene)
+    np.testing.assert_array_equal(other.cast_rays(rays)["t_hit"], alone)
+    # A second bunny in the copy only: the copy answers as a scene built
+    # with both, the original as one with its own bunny.
+    moved = v + np.float32(0.3 * np.ptp(v[:, 0]))
+    other.add_triangles(moved, f)
+    other.update_vertices(0, v + np.float32(0.05 * np.ptp(v[:, 1])))
+    both = scene_of(v + np.float32(0.05 * np.ptp(v[:, 1])), f)
+    both.add_triangles(moved, f)
+    np.testing.assert_array_equal(other.cast_rays(rays)["t_hit"], both.cast_rays(rays)["t_hit"])
+    np.testing.assert_array_equal(scene.cast_rays(rays)["t_hit"], alone)
+    assert len(scene._vertices) == 1 and scene.instanced == other.instanced == False  # noqa: E712
