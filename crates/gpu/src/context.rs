@@ -46,6 +46,13 @@ impl GpuContext {
     /// (large scenes need storage buffers beyond WebGPU's defaults).
     pub fn new() -> GpuResult<GpuContext> {
         let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
+        if backends.is_empty() {
+            let named = std::env::var("WGPU_BACKEND").unwrap_or_default();
+            return Err(GpuError::NoAdapter(format!(
+                "WGPU_BACKEND={named:?} names no backend; use vulkan, metal, dx12 or gl \
+                 (comma-separated), or unset it to let wgpu choose"
+            )));
+        }
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
         desc.backends = backends;
         let instance = wgpu::Instance::new(desc);

@@ -48,8 +48,8 @@ pub struct Aovs {
     pub depth: Vec<f32>,
     /// Unit shading normal facing the camera, zero where the ray missed.
     pub normal: Vec<Vec3>,
-    /// Triangle index, −1 where the ray missed (exact up to 2²⁴ triangles as
-    /// f32; `id_u32` keeps every index).
+    /// Triangle index, −1 where the ray missed. The EXR file's `id` channel
+    /// holds it as f32, exact for the first 2²⁴ triangles.
     pub id: Vec<i64>,
 }
 

@@ -158,7 +158,8 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0.06, value_parser = radiance)]
     pub(super) ambient: f32,
     /// Also write AOVs of the first hit: any of depth,normal,id (EXR next to
-    /// the output, plus PNG previews).
+    /// the output, plus PNG previews; the id is an f32 channel, exact for
+    /// the first 2^24 triangles, -1 where the ray missed).
     #[arg(long, value_delimiter = ',')]
     pub(super) aov: Vec<String>,
     /// Acceleration structure (`raykit info accels`; default bvh8, the
@@ -183,7 +184,8 @@ pub struct RenderArgs {
     pub(super) out: PathBuf,
     /// Render only horizontal band I of N (I from 0; rows I·H/N up to
     /// (I+1)·H/N) as a PNG part that `raykit merge-tiles` assembles into the
-    /// image a one-process render gives, bit for bit.
+    /// image a one-process render gives, bit for bit. CPU backend only,
+    /// without --aov.
     #[arg(long, value_name = "I/N", value_parser = super::split::parse_tile)]
     pub(super) tile: Option<super::split::TileArg>,
     /// Camera path: FRAMES frames orbiting the camera target about the up

@@ -72,8 +72,11 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             if format != ImageFormat::Png {
                 bail!("--tile writes PNG parts (with their place in the image) for `raykit merge-tiles`: --out must end in .png");
             }
-            if !aovs.is_empty() || backend == BackendArg::Gpu {
-                bail!("--tile renders on the CPU without --aov");
+            if backend == BackendArg::Gpu {
+                bail!("--tile renders on the CPU only: leave out --backend gpu");
+            }
+            if !aovs.is_empty() {
+                bail!("--tile writes PNG parts of the image only: leave out --aov");
             }
             Some(t.window(width, height)?)
         }
