@@ -173,6 +173,26 @@ def test_float64_rays_from_far_away_hit_what_float64_brute_force_hits(bunny):
         assert (scene.count_intersections(r32)[hit32] > 0).all()
 
 
+def test_rays_from_beyond_1e16_still_cross_a_unit_box_twice():
+    """From about 10¹⁶ on, doubles are spaced wider than a unit box: an
+    origin moved up to the box along an axis rounds by more than the box's
+    size. The box's two crossings, which the axis-parallel lines through it
+    make by construction, are still counted and listed."""
+    box = raykit.RaycastingScene()
+    corners = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    box.add_triangles(corners, np.array([tri for a, b, c, d in quads for tri in ((a, b, c), (a, c, d))]))
+    rng = np.random.default_rng(21)
+    for far in (1e15, 3e16, 1e17, 1e18):
+        yz = rng.uniform(-0.4, 0.4, size=(50, 2))
+        rays = np.column_stack([np.full(50, far), yz, np.full(50, -1.0), np.zeros((50, 2))])
+        np.testing.assert_array_equal(box.count_intersections(rays), 2, err_msg=f"{far:g}")
+        np.testing.assert_array_equal(np.diff(box.list_intersections(rays)["ray_splits"]), 2, err_msg=f"{far:g}")
+        # t_hit is float32, as Open3D's: right to its spacing there.
+        t = box.cast_rays(rays)["t_hit"].astype(np.float64)
+        assert (np.abs(t - (far - 0.5)) <= np.spacing(np.float32(far))).all(), f"{far:g}: {t[:3]}"
+
+
 def test_vertices_no_triangle_uses_leave_a_far_model_its_precision(bunny):
     """An unused vertex at zero (or far away) next to a model at UTM
     coordinates: the scene's origin and the trimesh engine's shift come

@@ -32,10 +32,16 @@ pub const FAR_RADII: f32 = 16.0;
 /// on it is where [`FarRays`] traces it. Points before the new origin lie
 /// outside the sphere, so no hit is passed over. Not finite when `dir` is
 /// zero or not finite.
+///
+/// The moved origin `origin + t·dir` rounds to the spacing of doubles at
+/// the origin's (or the centre's) largest coordinate, which from about
+/// 10¹⁶ exceeds a unit model's radius: the start backs off by four such
+/// spacings too, so that however it rounds it stays outside the sphere.
 #[inline]
 pub fn approach_start(origin: DVec3, dir: DVec3, centre: DVec3, radius: f64) -> f64 {
     let dd = dir.dot(dir);
-    (centre - origin).dot(dir) / dd - 2.0 * radius / dd.sqrt()
+    let spacing = f64::EPSILON * origin.abs().max_element().max(centre.abs().max_element());
+    (centre - origin).dot(dir) / dd - (2.0 * radius + 4.0 * spacing) / dd.sqrt()
 }
 
 /// Rays per run of a batch: each run is checked for far origins and, when
