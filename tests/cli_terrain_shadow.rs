@@ -263,6 +263,20 @@ fn a_light_over_no_data_needs_its_elevation() {
         a.extend(["--out", s(&mask)]);
         let o = raykit(&a);
         assert!(o.status.success(), "{light}: {}", text(&o.stderr));
+        // The share lit counts the grid points with data only.
+        let written = read_geotiff(&mask).unwrap();
+        let lit = written.heights.iter().filter(|&&v| v == 1.0).count();
+        let with_data = written
+            .heights
+            .iter()
+            .filter(|&&v| v == 0.0 || v == 1.0)
+            .count();
+        assert_eq!(with_data, 15, "{light}");
+        let line = format!(
+            "{:.1}% of the grid points with data lit",
+            100.0 * lit as f64 / with_data as f64
+        );
+        assert!(text(&o.stderr).contains(&line), "{light}: {}", text(&o.stderr));
     }
 }
 

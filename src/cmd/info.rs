@@ -40,6 +40,12 @@ pub fn run(args: InfoArgs) -> Result<ExitCode> {
             for k in TestKind::ALL {
                 println!("{:<14} {}", k.name(), test_description(k));
             }
+            println!(
+                "\nAll three are watertight on shared edges and corners by a conservative \
+                 tolerance: a ray passing just outside a triangle, within a band of at most \
+                 1/256 of its edges (barycentric), may hit it too, so a crack narrower than \
+                 the band does not let rays through."
+            );
         }
         Topic::Scenes => {
             for info in raykit_scene::BUILTINS {
@@ -91,7 +97,7 @@ fn test_description(kind: TestKind) -> &'static str {
             "Möller–Trumbore 1997: edge vectors, determinant and barycentrics per ray"
         }
         TestKind::Plucker => {
-            "Plücker coordinates (Jones 2000): sign test on precomputed edge lines, then distance; watertight on shared edges"
+            "Plücker coordinates (Jones 2000): sign test on precomputed edge lines, then distance"
         }
         TestKind::Projection => {
             "Wald's projection test (2004): precomputed projection onto the dominant axis plane"

@@ -306,9 +306,14 @@ pub fn run(args: ShadowArgs) -> Result<ExitCode> {
     );
     tif?;
     png?;
+    // Points without data are neither lit nor in shadow.
+    let without_data = nodata
+        .as_deref()
+        .map_or(0, |n| n.iter().filter(|&&b| b).count());
+    let with_data = (cells - without_data).max(1);
     eprintln!(
-        "{named}: {:.1}% of the grid points lit, {:.3} s ({}) -> {} ({}) and {}",
-        100.0 * rasters.lit as f64 / cells as f64,
+        "{named}: {:.1}% of the grid points with data lit, {:.3} s ({}) -> {} ({}) and {}",
+        100.0 * rasters.lit as f64 / with_data as f64,
         secs,
         match method {
             ShadowMethod::Fast => "fast",
