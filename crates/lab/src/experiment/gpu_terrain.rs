@@ -1,14 +1,15 @@
 //! The terrain part of `raykit experiment gpu`: the terrain casters on the
 //! GPU backend — per-ray maximum-mipmap traversal (Tevs et al. 2008) and the
 //! per-frame boxes (τ = 16, the best) — beside the same casters on
-//! the CPU, on one low oblique view per DEM.
+//! the CPU, on one low oblique view per DEM. Every GPU pixel is checked
+//! against the CPU's cell-by-cell march of the same ray.
 
 use crate::measure::median_min_max;
 use anyhow::{anyhow, Result};
-use raykit_gpu::{time_terrain_boxes, time_terrain_casts, GpuContext};
+use raykit_gpu::{time_terrain_boxes, time_terrain_casts, GpuCaster, GpuContext, GpuTerrain};
 use raykit_terrain::io::{load_dem, LoadOptions};
 use raykit_terrain::view::{cast_image, Caster};
-use raykit_terrain::{HeightField, MaxMipmap, TerrainCamera};
+use raykit_terrain::{HeightField, MaxMipmap, TerrainCamera, TerrainHit};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -31,6 +32,24 @@ pub struct TerrainRow {
     pub cpu_boxes16: f64,
     /// Worst (max − min) / median.
     pub spread: f64,
+    /// GPU pixels compared with the CPU march (both GPU casters).
+    pub checked: usize,
+    /// Of those, pixels where hit and miss differ or the distances differ
+    /// by more than [`T_TOLERANCE`] of the distance.
+    pub differ: usize,
+}
+
+/// Relative difference of a GPU hit's distance from the CPU's accepted as
+/// the same hit: the GPU adds an f32 distance to the ray's f64 entry.
+pub const T_TOLERANCE: f64 = 1e-4;
+
+/// Whether a GPU pixel's hit is the CPU's.
+fn same_hit(gpu: &Option<TerrainHit>, cpu: &Option<TerrainHit>) -> bool {
+    match (gpu, cpu) {
+        (None, None) => true,
+        (Some(g), Some(c)) => (g.t - c.t).abs() <= T_TOLERANCE * c.t.abs().max(1.0),
+        _ => false,
+    }
 }
 
 /// A low oblique view across the whole terrain from its north-west corner.
@@ -108,6 +127,27 @@ pub fn measure_dem(
     };
     let cpu_maxmip = cpu(Caster::MaxMipmap);
     let cpu_boxes16 = cpu(Caster::Boxes { tau: 16.0 });
+    let reference = cast_image(field, &pyramid, &cam, Caster::March).hits;
+    let terrain = GpuTerrain::new(ctx, field, &pyramid).map_err(gpu)?;
+    let (mut checked, mut differ) = (0, 0);
+    for caster in [GpuCaster::MaxMipmap, GpuCaster::Boxes { tau: 16.0 }] {
+        let got = terrain
+            .cast(ctx, field, &pyramid, &cam, caster)
+            .map_err(gpu)?
+            .hits;
+        checked += got.len();
+        differ += got
+            .iter()
+            .zip(&reference)
+            .filter(|(g, c)| !same_hit(g, c))
+            .count();
+    }
+    if differ > 0 {
+        eprintln!(
+            "raykit: {path}: {differ} of {checked} GPU terrain pixels differ from the CPU's march \
+             (hit against miss, or distances apart by more than {T_TOLERANCE} of the distance)"
+        );
+    }
     for t in [&g_max, &g_box] {
         let (med, lo, hi) = median_min_max(&t.seconds);
         spread = spread.max((hi - lo) / med);
@@ -123,15 +163,17 @@ pub fn measure_dem(
         cpu_maxmip,
         cpu_boxes16,
         spread,
+        checked,
+        differ,
     })
 }
 
 /// The Markdown section for the rows.
 pub fn markdown(rows: &[TerrainRow], threads: usize) -> String {
-    let mut s = format!("\n## Terrain ray casting (per-frame quadtree boxes) on the GPU backend\n\nMrays/s, median: GPU kernel time (rays made and boxes selected on the host are not included); CPU on {threads} threads, rays made and cast. One low oblique view across the whole DEM.\n\n| DEM | grid | view | GPU max mipmap | GPU boxes τ=16 | CPU max mipmap | CPU boxes τ=16 | noise |\n|---|---|---|---:|---:|---:|---:|---:|\n");
+    let mut s = format!("\n## Terrain ray casting (per-frame quadtree boxes) on the GPU backend\n\nMrays/s, median: GPU kernel time (rays made and boxes selected on the host are not included); CPU on {threads} threads, rays made and cast. One low oblique view across the whole DEM. Checked: the GPU pixels (both casters) compared with the CPU's cell-by-cell march; differ: hit against miss, or distances apart by more than {T_TOLERANCE} of the distance.\n\n| DEM | grid | view | GPU max mipmap | GPU boxes τ=16 | CPU max mipmap | CPU boxes τ=16 | noise | checked | differ |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0}% |\n",
+            "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0}% | {} | {} |\n",
             r.dem,
             r.grid,
             r.view,
@@ -139,7 +181,9 @@ pub fn markdown(rows: &[TerrainRow], threads: usize) -> String {
             r.gpu_boxes16,
             r.cpu_maxmip,
             r.cpu_boxes16,
-            r.spread * 100.0
+            r.spread * 100.0,
+            r.checked,
+            r.differ
         );
     }
     s
