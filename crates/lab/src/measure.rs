@@ -62,6 +62,28 @@ pub fn median_min_max(samples: &[f64]) -> (f64, f64, f64) {
     (median, s[0], s[n - 1])
 }
 
+/// The noise of repeated timings: their spread (max − min) relative to the
+/// median. `None` for fewer than two samples, which measure no spread, and
+/// for a zero median.
+pub fn spread(samples: &[f64]) -> Option<f64> {
+    let (median, lo, hi) = median_min_max(samples);
+    (samples.len() >= 2 && median > 0.0).then(|| (hi - lo) / median)
+}
+
+/// The worse of two noise figures; `None` only when neither was measured.
+pub fn worse_spread(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.max(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// A noise figure as a table shows it: a whole percentage, or `n/a` when
+/// fewer than two repetitions were timed.
+pub fn spread_percent(spread: Option<f64>) -> String {
+    spread.map_or_else(|| "n/a".into(), |s| format!("{:.0}%", 100.0 * s))
+}
+
 /// Median of `samples` (seconds) in milliseconds, and the noise: the spread
 /// (max − min) relative to the median.
 pub fn median_ms(samples: &[f64]) -> (f64, f64) {
@@ -77,6 +99,18 @@ mod tests {
     fn median_of_odd_and_even_samples() {
         assert_eq!(median_min_max(&[3.0, 1.0, 2.0]), (2.0, 1.0, 3.0));
         assert_eq!(median_min_max(&[4.0, 1.0, 2.0, 3.0]), (2.5, 1.0, 4.0));
+    }
+
+    #[test]
+    fn spread_needs_two_samples() {
+        assert_eq!(spread(&[]), None);
+        assert_eq!(spread(&[2.0]), None);
+        let sample = [3.0, 1.0, 2.0];
+        let (median, lo, hi) = median_min_max(&sample);
+        assert_eq!(spread(&sample), Some((hi - lo) / median));
+        assert_eq!(spread_percent(spread(&[2.0])), "n/a");
+        assert_eq!(worse_spread(None, spread(&sample)), spread(&sample));
+        assert_eq!(worse_spread(None, None), None);
     }
 
     #[test]

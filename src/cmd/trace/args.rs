@@ -8,8 +8,9 @@ use std::path::PathBuf;
 #[derive(Args)]
 #[command(after_help = "Prints one JSON line of statistics on stderr:\n\
 {\"accel\", \"bvh_build\", \"test\", \"api\", \"load_ms\", \"build_ms\", \"trace_ms\", \"rays\", \"mrays\", \"per_s\" (rays per second), \"threads\"}\n\
-(trace_ms excludes loading and building; api, on the CPU without instances: batch, or one-ray with --one-ray). Hit file: per ray f32 t, u32 prim (8 bytes; a miss is\n\
-t = +inf, prim = 4294967295). Occlusion file: one byte per ray (1 = occluded).\n\n\
+(trace_ms excludes loading and building; api, on the CPU without instances: batch, or one-ray with --one-ray).\n\
+A kd-tree adds \"kd_split\", its --kd-split rule (sah, median or game:H). Hit file: per ray f32 t, u32 prim\n\
+(8 bytes; a miss is t = +inf, prim = 4294967295). Occlusion file: one byte per ray (1 = occluded).\n\n\
 Several --mesh (or --instanced): an instanced scene under a two-level BVH, each file a geometry\n\
 placed once, a glTF file one geometry per mesh and one instance per node. Its hit file: per ray\n\
 f32 t, u32 prim, u32 geometry, u32 instance (16 bytes; a miss is t = +inf and all ids 4294967295;\n\

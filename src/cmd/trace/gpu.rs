@@ -2,9 +2,10 @@
 
 use super::args::TraceArgs;
 use super::brute_check::check_against_brute;
+use super::warn_unused_kd_split;
 use anyhow::{anyhow, Result};
 use raykit_core::tri::TestKind;
-use raykit_gpu::{GpuScene, GpuTracer};
+use raykit_gpu::{GpuAccelKind, GpuScene, GpuTracer};
 use raykit_lab::args::backend::{gpu_accel, open_gpu};
 use raykit_lab::args::scene_arg;
 use raykit_lab::measure::{per_second, pool, timed};
@@ -32,6 +33,10 @@ pub fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
     let mesh = scene?.mesh;
     let rays = raykit_io::read_rays(&args.rays)?;
     let opts = args.build.options();
+    let is_kd = matches!(kind, GpuAccelKind::KdStack | GpuAccelKind::KdRopes);
+    if !is_kd {
+        warn_unused_kd_split(&args.build, kind.name());
+    }
     let gpu = |e: raykit_gpu::GpuError| anyhow!("{e}");
     let scene = pool
         .install(|| GpuScene::build(&ctx, &mesh, kind, test, &opts))
@@ -54,25 +59,26 @@ pub fn run_gpu(args: TraceArgs) -> Result<ExitCode> {
     } else {
         raykit_io::write_hits(&args.out, &hits)?;
     }
-    eprintln!(
-        "{}",
-        json!({
-            "backend": "gpu",
-            "adapter": ctx.describe(),
-            "accel": kind.name(),
-            "bvh_build": opts.quality.name(),
-            "test": test.name(),
-            "load_ms": load_s * 1e3,
-            "build_ms": scene.build_seconds * 1e3,
-            "upload_ms": scene.upload_seconds * 1e3,
-            "trace_ms": trace_s * 1e3,
-            "kernel_ms": kernel_s * 1e3,
-            "rays": rays.len(),
-            "mrays": per_second(rays.len(), trace_s) / 1e6,
-            "per_s": per_second(rays.len(), trace_s),
-            "kernel_mrays": per_second(rays.len(), kernel_s) / 1e6,
-        })
-    );
+    let mut stats = json!({
+        "backend": "gpu",
+        "adapter": ctx.describe(),
+        "accel": kind.name(),
+        "bvh_build": opts.quality.name(),
+        "test": test.name(),
+        "load_ms": load_s * 1e3,
+        "build_ms": scene.build_seconds * 1e3,
+        "upload_ms": scene.upload_seconds * 1e3,
+        "trace_ms": trace_s * 1e3,
+        "kernel_ms": kernel_s * 1e3,
+        "rays": rays.len(),
+        "mrays": per_second(rays.len(), trace_s) / 1e6,
+        "per_s": per_second(rays.len(), trace_s),
+        "kernel_mrays": per_second(rays.len(), kernel_s) / 1e6,
+    });
+    if is_kd {
+        stats["kd_split"] = json!(opts.kd.split.name());
+    }
+    eprintln!("{stats}");
     let Some(k) = args.verify else {
         return Ok(ExitCode::SUCCESS);
     };

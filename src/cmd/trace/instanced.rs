@@ -33,6 +33,7 @@ pub fn run_instanced(args: TraceArgs) -> Result<ExitCode> {
     crate::paths::ensure_output(&args.out, &inputs)?;
     let pool = pool(args.threads)?;
     let threads = pool.current_num_threads();
+    super::warn_unused_kd_split(&args.build, accel);
     let opts = args.build.options();
     let input = pool.install(|| crate::instanced_arg::load(&args.mesh, &opts))?;
     let rays = raykit_io::read_rays(&args.rays)?;

@@ -14,6 +14,7 @@ use anyhow::{anyhow, bail, Result};
 use raykit_core::accel::{build_accel, AccelKind};
 use raykit_core::tri::TestKind;
 use raykit_lab::args::backend::Backend;
+use raykit_lab::args::build_args::BuildArgs;
 use raykit_lab::args::scene_arg;
 use raykit_lab::measure::{per_second, pool, timed};
 use serde_json::json;
@@ -44,6 +45,17 @@ pub fn parse_names(accel: &str, test: &str) -> Result<(AccelKind, TestKind)> {
     Ok((a, t))
 }
 
+/// Say on stderr that `--kd-split` goes unused: the structure `accel`
+/// traced is no kd-tree.
+fn warn_unused_kd_split(build: &BuildArgs, accel: &str) {
+    if let Some(split) = build.kd_split_given() {
+        eprintln!(
+            "raykit: warning: --kd-split {} is ignored: --accel {accel} is not a kd-tree",
+            split.name()
+        );
+    }
+}
+
 /// Trace the file.
 pub fn run(args: TraceArgs) -> Result<ExitCode> {
     if args.instanced || args.mesh.len() > 1 {
@@ -71,6 +83,10 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
     let mesh = scene?.mesh;
     let rays = raykit_io::read_rays(&args.rays)?;
     let opts = args.build.options();
+    let is_kd = AccelKind::KD.contains(&kind);
+    if !is_kd {
+        warn_unused_kd_split(&args.build, kind.name());
+    }
     let (accel, build_s) = pool.install(|| timed(|| build_accel(kind, test, &mesh, &opts)));
     let (hits, occluded);
     let trace_s;
@@ -105,22 +121,23 @@ pub fn run(args: TraceArgs) -> Result<ExitCode> {
         hits = Some(out);
         occluded = None;
     }
-    eprintln!(
-        "{}",
-        json!({
-            "accel": kind.name(),
-            "bvh_build": opts.quality.name(),
-            "test": test.name(),
-            "api": if args.one_ray { "one-ray" } else { "batch" },
-            "load_ms": load_s * 1e3,
-            "build_ms": build_s * 1e3,
-            "trace_ms": trace_s * 1e3,
-            "rays": rays.len(),
-            "mrays": per_second(rays.len(), trace_s) / 1e6,
-            "per_s": per_second(rays.len(), trace_s),
-            "threads": threads,
-        })
-    );
+    let mut stats = json!({
+        "accel": kind.name(),
+        "bvh_build": opts.quality.name(),
+        "test": test.name(),
+        "api": if args.one_ray { "one-ray" } else { "batch" },
+        "load_ms": load_s * 1e3,
+        "build_ms": build_s * 1e3,
+        "trace_ms": trace_s * 1e3,
+        "rays": rays.len(),
+        "mrays": per_second(rays.len(), trace_s) / 1e6,
+        "per_s": per_second(rays.len(), trace_s),
+        "threads": threads,
+    });
+    if is_kd {
+        stats["kd_split"] = json!(opts.kd.split.name());
+    }
+    eprintln!("{stats}");
     let Some(k) = args.verify else {
         return Ok(ExitCode::SUCCESS);
     };

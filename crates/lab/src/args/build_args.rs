@@ -36,10 +36,10 @@ pub struct BuildArgs {
     #[arg(long, default_value = "sah", value_parser = BuildQuality::from_str)]
     bvh_build: BuildQuality,
     /// kd-tree split rule: `sah` (Wald & Havran's O(N log N) SAH with perfect
-    /// splits), `median` (spatial median) or `game:H` (Kim's (2013) score
-    /// |front-back|·(20-H) + splits·H, H in 0..=20).
-    #[arg(long, default_value = "sah", value_parser = KdSplit::from_str)]
-    kd_split: KdSplit,
+    /// splits; the default), `median` (spatial median) or `game:H` (Kim's
+    /// (2013) score |front-back|·(20-H) + splits·H, H in 0..=20).
+    #[arg(long, value_name = "RULE", value_parser = KdSplit::from_str)]
+    kd_split: Option<KdSplit>,
     /// kd-tree SAH cost of one triangle test relative to a node traversal
     /// (0.001-1000).
     #[arg(long, default_value_t = KdOptions::default().intersection_cost, value_parser = kd_isect_cost)]
@@ -71,6 +71,12 @@ fn kd_isect_cost(text: &str) -> Result<f32, String> {
 }
 
 impl BuildArgs {
+    /// The kd-tree split rule when `--kd-split` was given, so that commands
+    /// tracing a structure that is no kd-tree can say it goes unused.
+    pub fn kd_split_given(&self) -> Option<KdSplit> {
+        self.kd_split
+    }
+
     /// The library's options.
     pub fn options(&self) -> BuildOptions {
         BuildOptions {
@@ -80,7 +86,7 @@ impl BuildArgs {
             traversal_cost: self.traversal_cost,
             quality: self.bvh_build,
             kd: KdOptions {
-                split: self.kd_split,
+                split: self.kd_split.unwrap_or(KdOptions::default().split),
                 intersection_cost: self.kd_isect_cost,
                 subtree_levels: self.kd_subtree_levels,
                 ..KdOptions::default()

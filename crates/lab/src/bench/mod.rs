@@ -8,7 +8,7 @@ pub mod gpu;
 
 use crate::args::backend::Backend;
 use crate::args::scene_arg;
-use crate::measure::{median_min_max, pool, timed};
+use crate::measure::{self, median_min_max, pool, spread_percent, timed, worse_spread};
 use anyhow::{anyhow, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -23,13 +23,14 @@ use std::process::ExitCode;
 /// Arguments of `raykit bench`.
 #[derive(Args)]
 #[command(
-    after_help = "Each figure is the median of --reps runs; the spread (max-min)/median is\n\
-reported so noisy machines show. With --compare, the engines of a cell are\n\
-timed in turn (each repetition times ours, then each Embree's), so that a burst of\n\
-host noise falls on both, and every trace cell runs one untimed round before\n\
-its timed ones. Brute force is\n\
-timed on a sample of each ray set sized to take about a second. The ray sets\n\
-are those of `raykit rays`."
+    after_help = "Each figure is the median of --reps runs, except that a structure whose build\n\
+takes over 5 s on one thread has its builds timed once. The spread (max-min)/median\n\
+of the ray timings is reported so noisy machines show (n/a with --reps 1). With\n\
+--compare, the engines of a cell are timed in turn (each repetition times ours,\n\
+then each Embree's), so that a burst of host noise falls on both, and every trace\n\
+cell runs one untimed round before its timed ones. Brute force is timed on a\n\
+sample of each ray set sized to take about a second. The ray sets are those of\n\
+`raykit rays`."
 )]
 pub struct BenchArgs {
     /// Mesh file or builtin:NAME. With --compare the option may be
@@ -98,7 +99,9 @@ struct SetResult {
     rays: usize,
     mrays_1t: f64,
     mrays_nt: f64,
-    spread: f64,
+    /// Worst (max − min) / median of the timings on one and on all
+    /// threads; `None` (null) with fewer than two repetitions.
+    spread: Option<f64>,
     verify: Option<Verdict>,
 }
 
@@ -265,7 +268,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
                     sets[si].clone()
                 };
                 let shadow = kind_set == RayKind::Shadow;
-                let mut spread: f64 = 0.0;
+                let mut spread = None;
                 let mut speed = |p: &rayon::ThreadPool| {
                     bar.set_message(format!(
                         "{} × {}: {} rays",
@@ -276,10 +279,9 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
                     let times: Vec<f64> = (0..reps)
                         .map(|_| p.install(|| timed(|| answers(accel.as_ref(), &rays, shadow)).1))
                         .collect();
-                    let (med, lo, hi) = median_min_max(&times);
-                    spread = spread.max((hi - lo) / med);
+                    spread = worse_spread(spread, measure::spread(&times));
                     bar.inc(1);
-                    rays.len() as f64 / med / 1e6
+                    rays.len() as f64 / median_min_max(&times).0 / 1e6
                 };
                 let mrays_1t = speed(&one);
                 let mrays_nt = speed(&all);
@@ -404,9 +406,9 @@ fn print_table(report: &Report, mesh: &TriangleMesh) {
     );
     for r in &report.rows {
         let s = &r.sets;
-        let spread = s.iter().map(|x| x.spread).fold(0.0, f64::max);
+        let spread = s.iter().map(|x| x.spread).fold(None, worse_spread);
         println!(
-            "{:<13} {:<10} {:>9.1} {:>9.1} {:>8.1} {:>7.1} | {:>8} {:>8} | {:>8} {:>8} | {:>8} {:>8} | {:>5.0}%",
+            "{:<13} {:<10} {:>9.1} {:>9.1} {:>8.1} {:>7.1} | {:>8} {:>8} | {:>8} {:>8} | {:>8} {:>8} | {:>6}",
             r.accel,
             r.test,
             r.build_ms,
@@ -419,10 +421,10 @@ fn print_table(report: &Report, mesh: &TriangleMesh) {
             rate(s[1].mrays_nt),
             rate(s[2].mrays_1t),
             rate(s[2].mrays_nt),
-            spread * 100.0
+            spread_percent(spread)
         );
     }
-    println!("Mrays/s: primary and incoherent = nearest hit; shadow = occlusion (any hit). noise = worst (max-min)/median.");
+    println!("Mrays/s: primary and incoherent = nearest hit; shadow = occlusion (any hit). noise = worst (max-min)/median, n/a with fewer than 2 runs.");
     let checked: Vec<_> = report
         .rows
         .iter()

@@ -7,7 +7,7 @@ use super::{cached_dragon, shared_mesh, write_csv, write_text};
 use crate::args::build_args::BuildArgs;
 use crate::args::ranges::{self, image_side};
 use crate::args::scene_arg;
-use crate::measure::{median_min_max, pool, timed};
+use crate::measure::{median_min_max, pool, spread, spread_percent, timed, worse_spread};
 use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -76,7 +76,9 @@ struct SpeedRow {
     test: &'static str,
     primary_phong_mrays: f64,
     shadow_mrays: f64,
-    spread: f64,
+    /// Worst (max − min) / median of the two timings; `None` (empty in the
+    /// CSV, null in the JSON) with fewer than two repetitions.
+    spread: Option<f64>,
     disagreements: usize,
 }
 
@@ -236,7 +238,8 @@ pub fn run(args: KdTraversalArgs) -> Result<ExitCode> {
 }
 
 /// Median Mrays/s of Phong-shaded primary rays and of shadow rays, and the
-/// worst spread (max - min) / median.
+/// worst spread (max - min) / median (`None` with fewer than two
+/// repetitions).
 fn measure(
     accel: &dyn Accel,
     mesh: &raykit_core::TriangleMesh,
@@ -245,7 +248,7 @@ fn measure(
     size: u32,
     shadow: &[Ray],
     reps: usize,
-) -> (f64, f64, f64) {
+) -> (f64, f64, Option<f64>) {
     let ropts = RenderOptions {
         width: size,
         height: size,
@@ -261,9 +264,11 @@ fn measure(
         let (_, t) = timed(|| accel.occluded_batch(shadow, &mut occ));
         shad.push(shadow.len() as f64 / t / 1e6);
     }
-    let (pm, plo, phi) = median_min_max(&prim);
-    let (sm, slo, shi) = median_min_max(&shad);
-    (pm, sm, ((phi - plo) / pm).max((shi - slo) / sm))
+    (
+        median_min_max(&prim).0,
+        median_min_max(&shad).0,
+        worse_spread(spread(&prim), spread(&shad)),
+    )
 }
 
 fn markdown(
@@ -324,15 +329,15 @@ fn markdown(
             .iter()
             .filter(|r| r.mesh == m)
             .map(|r| r.spread)
-            .fold(0.0, f64::max);
+            .fold(None, worse_spread);
         let bad: usize = speed
             .iter()
             .filter(|r| r.mesh == m)
             .map(|r| r.disagreements)
             .sum();
         s += &format!(
-            "\nWorst spread (max-min)/median: {:.0}%. Disagreements with the BVH2: {bad}.\n\n",
-            spread * 100.0
+            "\nWorst spread (max-min)/median: {}. Disagreements with the BVH2: {bad}.\n\n",
+            spread_percent(spread)
         );
     }
     s

@@ -10,7 +10,9 @@ use crate::plot::{write_svg, LineChart, Series};
 use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use raykit_core::accel::kdtree::{build_game, build_tree, cut_mesh, KdOptions, KdSplit};
+use raykit_core::accel::kdtree::{
+    build_game, build_tree, cut_mesh, KdBuildNode, KdOptions, KdSplit,
+};
 use raykit_core::accel::{build_accel, kd_accel_from_tree, AccelKind, BuildOptions};
 use raykit_core::query::{parts_in_frustum, parts_overlapping_brute, Frustum};
 use raykit_core::rng::Pcg32;
@@ -63,10 +65,12 @@ pub struct SplitHeuristicArgs {
 struct Row {
     split: String,
     h: Option<u8>,
-    /// Pieces cut by split planes over the build (split polygons).
+    /// Pieces cut by split planes over the build (split polygons); the SAH
+    /// tree, which cuts nothing, counts its leaf references beyond one per
+    /// triangle instead.
     split_polygons: usize,
-    /// Original triangles in more than one piece (SAH: referenced by more
-    /// than one leaf).
+    /// Original triangles in more than one piece (SAH: listed by more than
+    /// one leaf); at most the mesh's triangle count.
     split_triangles: usize,
     cut_mesh_triangles: usize,
     depth: u32,
@@ -217,9 +221,12 @@ fn sweep_point(
     };
 
     // T-junction elimination on the cut mesh.
-    // Without cut polygons (SAH) count the extra leaf references instead.
-    let mut split_triangles = stats.triangle_refs.saturating_sub(mesh.num_triangles());
-    let (mut split_polygons, mut cut_tris) = (split_triangles, 0);
+    // The SAH tree cuts nothing: a triangle crossing a split plane is listed
+    // by the leaves on both sides instead (see `LeafSharing`).
+    let sharing = LeafSharing::of(&root, mesh.num_triangles());
+    let (mut split_polygons, mut split_triangles) =
+        (sharing.extra_references, sharing.shared_triangles);
+    let mut cut_tris = 0;
     let (mut tj, mut fast_ms, mut naive_ms, mut same) = (None, None, None, None);
     // What a frame draws: the pieces of the cut mesh (the whole triangles
     // for the SAH tree), grouped by the part of their source triangle.
@@ -325,6 +332,46 @@ fn sweep_point(
     })
 }
 
+/// How the leaves of a kd-tree share the mesh's triangles: the SAH tree's
+/// counterpart of the game tree's cuts. A triangle that straddles a split
+/// plane is listed by a leaf on each side, so each extra listing stands for
+/// one cut piece.
+#[derive(Debug, PartialEq, Eq)]
+struct LeafSharing {
+    /// Leaf references beyond one per listed triangle.
+    extra_references: usize,
+    /// Triangles listed by more than one leaf.
+    shared_triangles: usize,
+}
+
+impl LeafSharing {
+    /// Count, per triangle of a mesh of `triangles`, the leaves of `root`
+    /// that list it.
+    fn of(root: &KdBuildNode, triangles: usize) -> Self {
+        let mut listed = vec![0usize; triangles];
+        let mut stack = vec![root];
+        while let Some(node) = stack.pop() {
+            match node {
+                KdBuildNode::Leaf(tris) => {
+                    for &t in tris {
+                        listed[t as usize] += 1;
+                    }
+                }
+                KdBuildNode::Inner { children, .. } => stack.extend(children.iter()),
+            }
+        }
+        Self::from_counts(&listed)
+    }
+
+    /// The figures from each triangle's number of listing leaves.
+    fn from_counts(listed: &[usize]) -> Self {
+        LeafSharing {
+            extra_references: listed.iter().map(|&c| c.saturating_sub(1)).sum(),
+            shared_triangles: listed.iter().filter(|&&c| c > 1).count(),
+        }
+    }
+}
+
 /// The views of the frustum measurements: each camera, its frustum, and
 /// the parts a brute force finds in it.
 struct Views {
@@ -360,7 +407,7 @@ fn fmt_opt<T: std::fmt::Display>(v: Option<T>) -> String {
 
 fn markdown(rows: &[Row], name: &str, tris: usize, args: &SplitHeuristicArgs) -> String {
     let mut s = format!(
-        "# Split-heuristic experiment (Kim 2013)\n\n`raykit experiment split-heuristic --size {} --frustums {} --reps {} --threads {} --game-leaf {}` on {name} ({tris} triangles).\n\n{}\nCulled frames/s: per view, the parts in the frustum are found through the tree and the pieces of those parts (the cut mesh's, for the game trees) are rasterized at {FRAME_WIDTH}×{FRAME_HEIGHT} by the CPU rasterizer (Kim 2013's Fig. 7 measured rendering frames of the culled level).\n\n",
+        "# Split-heuristic experiment (Kim 2013)\n\n`raykit experiment split-heuristic --size {} --frustums {} --reps {} --threads {} --game-leaf {}` on {name} ({tris} triangles).\n\n{}\nSplit polygons: pieces cut by a split plane, summed over the build; the SAH tree cuts nothing and counts its leaf references beyond one per triangle instead. Split triangles: original triangles in more than one piece (SAH tree: listed by more than one leaf).\n\nCulled frames/s: per view, the parts in the frustum are found through the tree and the pieces of those parts (the cut mesh's, for the game trees) are rasterized at {FRAME_WIDTH}×{FRAME_HEIGHT} by the CPU rasterizer (Kim 2013's Fig. 7 measured rendering frames of the culled level).\n\n",
         args.size, args.frustums, args.reps, args.threads, args.game_leaf, super::provenance()
     );
     s += "| split | split polygons | split triangles | depth | leaves | build ms | T-junctions | fast ms | naive ms | naive = fast | Mrays/s | frustum queries/s | culled frames/s |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n";
@@ -496,4 +543,76 @@ fn plots(rows: &[Row], out: &std::path::Path, name: &str) -> Result<()> {
         write_svg(&chart, &out.join(file))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raykit_core::Vec3;
+
+    /// A soup of random triangles of side up to `size` in the unit cube:
+    /// enough of them for the SAH tree to split, each wide enough to
+    /// straddle some of its planes.
+    fn soup(n: usize, size: f32, seed: u64) -> TriangleMesh {
+        let mut rng = Pcg32::new(seed);
+        let mut positions = Vec::with_capacity(3 * n);
+        for _ in 0..n {
+            let corner = rng.in_box(Vec3::ZERO, Vec3::ONE);
+            positions.push(corner);
+            for _ in 0..2 {
+                positions.push(corner + rng.in_box(Vec3::ZERO, Vec3::splat(size)));
+            }
+        }
+        let indices = (0..n as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect();
+        TriangleMesh::new(positions, indices)
+    }
+
+    /// The sharing figures of the SAH row against a count through the laid
+    /// out tree's own leaves (`Accel::visit_regions` over the compact
+    /// kd-stack layout, whose triangle order and leaf list differ from the
+    /// pointer tree's).
+    #[test]
+    fn sah_sharing_matches_the_leaves_of_the_laid_out_tree() {
+        for (n, size, seed) in [(200, 0.2, 1), (1000, 0.1, 2), (3000, 0.05, 3)] {
+            let mesh = soup(n, size, seed);
+            let opts = BuildOptions {
+                kd: KdOptions {
+                    split: KdSplit::Sah,
+                    max_leaf_size: 4,
+                    ..KdOptions::default()
+                },
+                ..BuildOptions::default()
+            };
+            let (root, cell) = build_tree(&mesh, &opts.kd);
+            let accel = kd_accel_from_tree(
+                AccelKind::KdStack,
+                TestKind::Moller,
+                &mesh,
+                &root,
+                &cell,
+                &opts,
+                0.0,
+            )
+            .expect("kd-stack is a kd-tree traversal");
+            let mut listed = vec![0usize; n];
+            accel.visit_regions(&mut |_| true, &mut |tris| {
+                for &t in tris {
+                    listed[t as usize] += 1;
+                }
+            });
+            let want_shared = listed.iter().filter(|&&c| c > 1).count();
+            let want_extra =
+                accel.stats().triangle_refs - listed.iter().filter(|&&c| c > 0).count();
+            let got = LeafSharing::of(&root, n);
+            assert_eq!(got.shared_triangles, want_shared, "{n} triangles");
+            assert_eq!(got.extra_references, want_extra, "{n} triangles");
+            assert!(
+                want_shared > 0,
+                "the soup makes the SAH tree share triangles"
+            );
+            assert!(got.shared_triangles <= n);
+        }
+    }
 }

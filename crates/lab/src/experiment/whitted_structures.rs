@@ -7,7 +7,7 @@
 
 use super::{shared_mesh, write_csv, write_text};
 use crate::args::scene::{setup, RenderSetup, SceneArgs};
-use crate::measure::{median_ms, pool, timed};
+use crate::measure::{median_min_max, pool, spread, spread_percent, timed};
 use anyhow::{Context, Result};
 use clap::Args;
 use raykit_core::accel::{Accel, BruteForce, BuildOptions, LinearBoxes, ThreadedBvh};
@@ -145,6 +145,8 @@ struct Row {
     build_ms: Option<f64>,
     ms: Option<f64>,
     fps: Option<f64>,
+    /// (max − min) / median of the frame times; `None` (empty in the CSV,
+    /// null in the JSON) when not run or timed fewer than twice.
     noise: Option<f64>,
     nodes: Option<usize>,
 }
@@ -257,12 +259,13 @@ fn run_scene(
         for _ in 0..args.reps.max(1) {
             times.push(render(accel.as_ref())?.stats.seconds);
         }
-        let (ms, noise) = median_ms(&times);
+        let ms = median_min_max(&times).0 * 1e3;
+        let noise = spread(&times);
         eprintln!(
-            "{name}: {}: {:.1} triangle tests per ray, {ms:.1} ms (noise {:.0}%)",
+            "{name}: {}: {:.1} triangle tests per ray, {ms:.1} ms (noise {})",
             s.name(),
             tests as f64 / rays as f64,
-            100.0 * noise
+            spread_percent(noise)
         );
         rows.push(Row {
             scene: name.into(),
@@ -273,7 +276,7 @@ fn run_scene(
             build_ms: Some(build_s * 1e3),
             ms: Some(ms),
             fps: Some(1e3 / ms),
-            noise: Some(noise),
+            noise,
             nodes: Some(accel.stats().nodes),
         });
     }
@@ -329,7 +332,11 @@ pub fn run(args: WhittedStructuresArgs) -> Result<ExitCode> {
             opt(r.build_ms, 1),
             opt(r.ms, 1),
             opt(r.fps, 2),
-            r.noise.map_or("—".into(), |n| format!("{:.0}%", 100.0 * n)),
+            if r.ms.is_some() {
+                spread_percent(r.noise)
+            } else {
+                "—".into()
+            },
             r.nodes.map_or("—".into(), |n| n.to_string()),
         );
     }
