@@ -56,7 +56,9 @@ pub struct BenchArgs {
     /// Threads of the parallel runs (0 = one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Check this many rays of every set against brute force.
+    /// Check this many rays of every set against brute force (the CPU
+    /// structures; with --backend gpu every answer is checked against the
+    /// CPU structure of the same kind instead).
     #[arg(long, value_name = "N")]
     verify: Option<usize>,
     /// Print JSON instead of a table.
@@ -174,6 +176,12 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         anyhow::bail!("--mesh may be given several times only with --compare; this measurement takes one mesh");
     };
     if args.backend == Backend::Gpu {
+        if let Some(k) = args.verify {
+            eprintln!(
+                "raykit: warning: --verify {k} is not used with --backend gpu: every GPU answer \
+                 is checked against the CPU structure of the same kind"
+            );
+        }
         return gpu::run(gpu::GpuBenchSetup {
             mesh: mesh_spec,
             accel: args.accel.as_deref().unwrap_or("all"),
