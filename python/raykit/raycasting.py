@@ -208,7 +208,9 @@ class RaycastingScene:
         # kept for instances only has its own origin (zero near zero), which
         # its instances' placements absorb.
         own = origin if place else _far_origin(used)
-        v = _check_coordinates(_shifted(raw, own), t)
+        shifted = _shifted(raw, own)
+        v = _check_coordinates(shifted, t)
+        _warn_if_coarse(shifted[_used(t, len(raw))], f"geometry {len(self._vertices)}")
         self._origin = origin
         self._vertices.append(v)
         self._geometry_origins.append(own)
@@ -259,6 +261,10 @@ class RaycastingScene:
         except ValueError as e:
             raise ValueError(f"instance {iid}: {str(e).split(': ', 1)[-1]}") from None
         _check_placement(self._vertices[gid], self._box(gid), m, iid, gid)
+        box = self._box(gid)
+        if box is not None:
+            corners = np.array([[(box[0], box[1])[(k >> a) & 1][a] for a in range(3)] for k in range(8)], dtype=np.float64)
+            _warn_if_coarse(corners @ m[:, :3].T + m[:, 3], f"instance {iid}")
         self._placements.append((gid, m, mask))
         self._changed()
         return iid
@@ -793,7 +799,9 @@ class RaycastingScene:
         alone = len(self._vertices) == 1 and len(self._placements) == 1 and self._placements[0][1] is None
         if alone and not getattr(self, "_origin_given", False):
             own = _far_origin(raw[_used(t, len(raw))])
-        v = _check_coordinates(_shifted(raw, own), t)
+        shifted = _shifted(raw, own)
+        v = _check_coordinates(shifted, t)
+        _warn_if_coarse(shifted[_used(t, len(raw))], f"geometry {gid}")
         self._vertices[gid] = v
         self._geometry_origins[gid] = own
         self._sphere_of_scene = None
@@ -893,6 +901,33 @@ def _check_placement(v: np.ndarray, box, m: np.ndarray, iid: int, gid: int) -> N
             f"instance {iid}: places vertex {int(np.argmax(far))} of geometry {gid} beyond ±{limit:.0e}, where "
             "the f32 products of the ray and winding-number tests overflow; move or scale the placement"
         )
+
+
+#: How far from the origin, in its own sizes, a model may lie before float32
+#: keeps it to more than 1/65,536 of its size (2**8 sizes: float32 has 24 bits).
+_COARSE_SIZES = 256.0
+
+
+def _warn_if_coarse(v: np.ndarray, what: str) -> None:
+    """Warn when the engine's float32 keeps the points ``v`` (float64, in
+    the coordinates they are stored in) coarsely: their box's centre lies
+    more than :data:`_COARSE_SIZES` of its sizes from zero. A scene chooses
+    its origin from its first geometry; one added, moved or placed far from
+    it afterwards keeps only float32's precision there."""
+    finite = v[np.isfinite(v).all(axis=1)]
+    if not len(finite):
+        return
+    lo, hi = finite.min(axis=0), finite.max(axis=0)
+    far, size = float(np.abs((lo + hi) / 2).max()), float((hi - lo).max())
+    if size == 0.0 or far <= _COARSE_SIZES * size:
+        return
+    step = float(np.spacing(np.float32(far)))
+    warnings.warn(
+        f"{what} lies {far:.6g} from the scene's origin, {far / size:.3g} times its size: float32 keeps its "
+        f"vertices {step:.3g} apart there ({step / size:.1e} of its size). Give the scene an origin near it "
+        "(RaycastingScene(origin=...)) to keep its precision.",
+        stacklevel=3,
+    )
 
 
 def _far_origin(v: np.ndarray) -> np.ndarray | None:

@@ -388,3 +388,33 @@ def test_gltf_placed_at_utm_by_its_nodes_keeps_its_digits(model, tmp_path):
     moved = rays.copy()
     moved[:, :3] += at
     assert_same_hits(near.cast_rays(rays), far.cast_rays(moved), rays, "add_gltf")
+
+
+def test_a_geometry_added_moved_or_placed_far_from_the_origin_is_warned_about(model):
+    """float32 at UTM metres is half a metre apart: a model added, moved or
+    placed there in a scene whose origin lies elsewhere is warned about,
+    with the spacing it is kept to; near the origin, or with an origin
+    chosen or given near it, nothing is said."""
+    import warnings
+
+    v, t = model
+    scene = scene_of(v, t)
+    step = float(np.spacing(np.float32(FAR.max())))
+    with pytest.warns(UserWarning, match=f"geometry 1 lies .* {step:.3g} apart"):
+        scene.add_triangles(v + FAR, t)
+    with pytest.warns(UserWarning, match="instance 2 lies"):
+        scene.add_instance(0, np.hstack([np.eye(3), FAR[:, None]]))
+    with pytest.warns(UserWarning, match="geometry 0 lies"):
+        scene.update_vertices(0, v + FAR)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        near = raykit.RaycastingScene(origin=FAR)
+        near.add_triangles(v + FAR, t)
+        near.add_triangles(v + FAR + 500.0, t)
+        near.add_instance(0, np.hstack([np.eye(3), [[700.0], [0.0], [0.0]]]))
+        alone = scene_of(v, t)
+        alone.add_triangles(v + 1000.0, t)
+        chosen = scene_of(v + FAR, t)
+        chosen.update_vertices(0, v + FAR + 10.0)
+        single = scene_of(v, t)
+        single.update_vertices(0, v + FAR)

@@ -234,18 +234,21 @@ def test_a_model_moved_far_is_rebuilt_for_the_tests_that_need_it_near(bunny, tes
     scene = scene_of((v, f), (other, f), test=test)
     scene.stats()
     # The first moved geometry and the other span the way between: a build
-    # over them would not move them either, so they refit.
-    assert not scene.update_vertices(0, v + away)["rebuilt"]
-    assert scene.update_vertices(1, other + away)["rebuilt"]
-    # Made with the first scene's origin (zero), the fresh scene holds the
-    # same float32 vertices.
-    fresh = scene_of((v + away, f), (other + away, f), test=test, origin=[0.0, 0.0, 0.0])
+    # over them would not move them either, so they refit. Both now lie far
+    # from the scene's origin, which the scene warns about.
+    with pytest.warns(UserWarning, match="lies .* from the scene's origin"):
+        assert not scene.update_vertices(0, v + away)["rebuilt"]
+        assert scene.update_vertices(1, other + away)["rebuilt"]
+        # Made with the first scene's origin (zero), the fresh scene holds
+        # the same float32 vertices.
+        fresh = scene_of((v + away, f), (other + away, f), test=test, origin=[0.0, 0.0, 0.0])
     rays = rays_at(np.concatenate([v, other]) + away, 3000, seed=46).astype(np.float64)
     a, b = scene.cast_rays(rays), fresh.cast_rays(rays)
     assert np.isfinite(b["t_hit"]).sum() > 1000
     assert_same_answers(a, b)
     # Deformed in place, the same scene refits.
-    assert not scene.update_vertices(1, other + away + 1e-3 * size)["rebuilt"]
+    with pytest.warns(UserWarning, match="lies"):
+        assert not scene.update_vertices(1, other + away + 1e-3 * size)["rebuilt"]
 
 
 def test_update_vertices_before_a_build_and_bad_input(bunny):
