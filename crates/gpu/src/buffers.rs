@@ -68,6 +68,17 @@ pub fn output(ctx: &GpuContext, what: &str, words: usize) -> GpuResult<wgpu::Buf
 /// Copy the first `words` words of `buffer` back to the host (waits for
 /// the queue).
 pub fn read_words(ctx: &GpuContext, buffer: &wgpu::Buffer, words: usize) -> GpuResult<Vec<u32>> {
+    read_words_at(ctx, buffer, 0, words)
+}
+
+/// Copy `words` words of `buffer`, from word `first` on, back to the host
+/// (waits for the queue).
+pub(crate) fn read_words_at(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    first: usize,
+    words: usize,
+) -> GpuResult<Vec<u32>> {
     if words == 0 {
         return Ok(Vec::new());
     }
@@ -83,7 +94,7 @@ pub fn read_words(ctx: &GpuContext, buffer: &wgpu::Buffer, words: usize) -> GpuR
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("readback"),
         });
-    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+    enc.copy_buffer_to_buffer(buffer, (first * 4) as u64, &staging, 0, bytes);
     ctx.queue.submit([enc.finish()]);
     let (tx, rx) = std::sync::mpsc::channel();
     staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {

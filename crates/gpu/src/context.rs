@@ -107,6 +107,16 @@ impl GpuContext {
         self.info.device_type == wgpu::DeviceType::Cpu
     }
 
+    /// The error for a kernel that found one of its loops cut short by the
+    /// driver (`what`: what the loop was doing, e.g. "a ray's traversal").
+    pub fn loop_limit(&self, what: &str) -> GpuError {
+        GpuError::LoopLimit {
+            what: what.to_string(),
+            adapter: self.info.name.clone(),
+            software: self.is_software(),
+        }
+    }
+
     /// The first validation error reported since the last call, if any.
     pub(crate) fn take_error(&self) -> GpuResult<()> {
         let mut errors = self.errors.lock().unwrap();

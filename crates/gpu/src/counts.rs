@@ -80,6 +80,7 @@ pub fn count_traversal(
         ctx.queue.submit([enc.finish()]);
         ctx.wait()?;
         ctx.take_error()?;
+        up.check(ctx)?;
         let w = read_words(ctx, &counters, 6)?;
         let wide = |i: usize| w[i] as u64 | (w[i + 1] as u64) << 32;
         total.rays += chunk.len() as u64;

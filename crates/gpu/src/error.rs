@@ -28,6 +28,18 @@ pub enum GpuError {
     Readback(String),
     /// The request cannot run on the GPU backend (an unsupported option).
     Unsupported(String),
+    /// The driver cut a kernel's loop short (Mesa's lavapipe ends every
+    /// loop once an invocation has made 65,535 loop passes), so the
+    /// answers would be wrong; the kernel detected it and the results were
+    /// refused.
+    LoopLimit {
+        /// What was cut short, e.g. "a ray's traversal".
+        what: String,
+        /// The adapter's name.
+        adapter: String,
+        /// Whether the adapter is a software rasterizer.
+        software: bool,
+    },
 }
 
 impl fmt::Display for GpuError {
@@ -53,6 +65,23 @@ impl fmt::Display for GpuError {
             GpuError::Shader(why) => write!(f, "GPU pipeline creation failed: {why}"),
             GpuError::Readback(why) => write!(f, "reading results back from the GPU failed: {why}"),
             GpuError::Unsupported(why) => write!(f, "not supported by --backend gpu: {why}"),
+            GpuError::LoopLimit {
+                what,
+                adapter,
+                software,
+            } => {
+                let kind = if *software {
+                    ", a software rasterizer"
+                } else {
+                    ""
+                };
+                write!(
+                    f,
+                    "the GPU adapter ({adapter}{kind}) stopped {what} at its limit on loop \
+                     passes (65,535 per thread in Mesa's lavapipe); the answers would be wrong: \
+                     use the CPU backend (--backend cpu)"
+                )
+            }
         }
     }
 }

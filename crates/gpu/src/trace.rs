@@ -1,7 +1,7 @@
 //! Batch ray queries on the GPU: one thread per ray, nearest hits or
 //! occlusion, over any [`GpuScene`].
 
-use crate::buffers::{output, read_words, storage, uniform};
+use crate::buffers::{output, read_words, read_words_at, storage, uniform};
 use crate::context::GpuContext;
 use crate::error::GpuResult;
 use crate::kernel::{dispatch_timed, grid, wgsl, BindingKind, Kernel, SCENE_GROUP};
@@ -35,12 +35,27 @@ pub struct GpuTracer<'a> {
 }
 
 /// Rays uploaded once, for repeated timing runs.
+///
+/// The output buffer holds four words per ray and a status word after
+/// them, which a kernel sets when a ray's traversal loop was cut short by
+/// the driver (see `shaders/scene.wgsl`); [`GpuTracer::hits`] and
+/// [`GpuTracer::occlusion`] then refuse the results.
 pub struct GpuRays {
     pub(crate) rays: wgpu::Buffer,
     pub(crate) out: wgpu::Buffer,
     pub(crate) params: wgpu::Buffer,
     count: usize,
     pub(crate) groups: (u32, u32),
+}
+
+impl GpuRays {
+    /// An error if a finished run found a ray's traversal loop cut short.
+    pub(crate) fn check(&self, ctx: &GpuContext) -> GpuResult<()> {
+        if read_words_at(ctx, &self.out, self.count * 4, 1)? != [0] {
+            return Err(ctx.loop_limit("a ray's traversal"));
+        }
+        Ok(())
+    }
 }
 
 /// The clock a kernel run is timed with.
@@ -97,7 +112,7 @@ impl<'a> GpuTracer<'a> {
         let (x, y, row) = grid(self.ctx, rays.len())?;
         Ok(GpuRays {
             rays: storage(self.ctx, "rays", &words)?,
-            out: output(self.ctx, "hits", rays.len() * 4)?,
+            out: output(self.ctx, "hits", rays.len() * 4 + 1)?,
             params: uniform(
                 self.ctx,
                 "trace parameters",
@@ -181,9 +196,13 @@ impl<'a> GpuTracer<'a> {
         }
     }
 
-    /// Nearest hits of a finished [`GpuTracer::run`].
+    /// Nearest hits of a finished [`GpuTracer::run`]; an error if the
+    /// driver cut a ray's traversal short.
     pub fn hits(&self, rays: &GpuRays) -> GpuResult<Vec<Option<Hit>>> {
-        let words = read_words(self.ctx, &rays.out, rays.count * 4)?;
+        let mut words = read_words(self.ctx, &rays.out, rays.count * 4 + 1)?;
+        if words.pop() != Some(0) {
+            return Err(self.ctx.loop_limit("a ray's traversal"));
+        }
         Ok(words
             .chunks_exact(4)
             .map(|w| {
@@ -197,8 +216,10 @@ impl<'a> GpuTracer<'a> {
             .collect())
     }
 
-    /// Occlusion flags of a finished [`GpuTracer::run`] with `any`.
+    /// Occlusion flags of a finished [`GpuTracer::run`] with `any`; an
+    /// error if the driver cut a ray's traversal short.
     pub fn occlusion(&self, rays: &GpuRays) -> GpuResult<Vec<bool>> {
+        rays.check(self.ctx)?;
         let words = read_words(self.ctx, &rays.out, rays.count)?;
         Ok(words.into_iter().map(|w| w != 0).collect())
     }

@@ -5,10 +5,14 @@
 fn brute_trace(r: RayIn, any: bool) -> Hit {
     var best = miss_hit();
     let rd = tri_prepare(r);
-    for (var i = 0u; i < accel.num_tris; i++) {
+    var i = 0u;
+    for (; i < accel.num_tris; i++) {
         if test_triangle(i, r, rd, any, &best) {
             return Hit(0.0, 0.0, 0.0, 0u);
         }
+    }
+    if i < accel.num_tris {
+        loop_cut = true;
     }
     return best;
 }

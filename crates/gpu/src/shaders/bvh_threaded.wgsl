@@ -43,15 +43,22 @@ fn bvh_trace(r: RayIn, any: bool) -> Hit {
         let count = packed >> BVH_COUNT_SHIFT;
         if count > 0u {
             let first = packed & BVH_FIRST_MASK;
-            for (var k = 0u; k < count; k++) {
+            var k = 0u;
+            for (; k < count; k++) {
                 if test_triangle(first + k, r, rd, any, &best) {
                     return Hit(0.0, 0.0, 0.0, 0u);
                 }
+            }
+            if k < count {
+                loop_cut = true;
             }
             idx = nodes[8u * idx + 6u];
         } else {
             idx += 1u;
         }
+    }
+    if idx < end {
+        loop_cut = true;
     }
     return best;
 }

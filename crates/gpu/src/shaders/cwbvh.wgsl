@@ -39,7 +39,8 @@ fn cw_node(n: u32, r: RayIn, tfar: f32, oct_inv: u32) -> array<vec2u, 2> {
     let child_base = q1.x;
     let tri_base = q1.y;
     var hits = 0u;
-    for (var s = 0u; s < 8u; s++) {
+    var s = 0u;
+    for (; s < 8u; s++) {
         let child_meta = (select(q1.z, q1.w, s >= 4u) >> (8u * (s & 3u))) & 0xffu;
         if child_meta == 0u {
             continue;
@@ -58,6 +59,9 @@ fn cw_node(n: u32, r: RayIn, tfar: f32, oct_inv: u32) -> array<vec2u, 2> {
                 hits |= (child_meta >> 5u) << (child_meta & 31u);
             }
         }
+    }
+    if s < 8u {
+        loop_cut = true;
     }
     return array<vec2u, 2>(vec2u(child_base, (hits & 0xff000000u) | imask), vec2u(tri_base, hits & 0x00ffffffu));
 }
@@ -97,6 +101,9 @@ fn cw_trace(r: RayIn, any: bool) -> Hit {
                 return Hit(0.0, 0.0, 0.0, 0u);
             }
         }
+        if tris.y != 0u {
+            loop_cut = true;
+        }
         if group.y <= 0x00ffffffu {
             if sp == 0u {
                 break;
@@ -104,6 +111,10 @@ fn cw_trace(r: RayIn, any: bool) -> Hit {
             sp -= 1u;
             group = stack[sp];
         }
+    }
+    // The loop ends by break once no node group is left.
+    if group.y > 0x00ffffffu {
+        loop_cut = true;
     }
     return best;
 }

@@ -36,6 +36,8 @@ fn rope_locate(start: u32, p: vec3f, d: vec3f) -> vec2u {
         let above = (p[a] > s) | ((p[a] == s) & (d[a] > 0.0));
         node = (word & ROPE_OFFSET) + select(0u, 1u, above);
     }
+    // The loop ends only by return.
+    loop_cut = true;
     return vec2u(0u, 0u);
 }
 
@@ -47,11 +49,15 @@ fn ropes_trace(r: RayIn, any: bool) -> Hit {
     // The ray's interval inside the root cell.
     var tmin = r.tnear;
     var scene_exit = inf();
-    for (var a = 0u; a < 3u; a++) {
-        let t0 = (accel.root_min[a] - r.o[a]) * r.inv[a];
-        let t1 = (accel.root_max[a] - r.o[a]) * r.inv[a];
+    var axis = 0u;
+    for (; axis < 3u; axis++) {
+        let t0 = (accel.root_min[axis] - r.o[axis]) * r.inv[axis];
+        let t1 = (accel.root_max[axis] - r.o[axis]) * r.inv[axis];
         tmin = fmax(tmin, fmin(t0, t1));
         scene_exit = fmin(scene_exit, fmax(t0, t1));
+    }
+    if axis < 3u {
+        loop_cut = true;
     }
     scene_exit = fmin(scene_exit * ROBUST_EXIT, r.tfar);
     if !(tmin <= scene_exit) {
@@ -61,24 +67,30 @@ fn ropes_trace(r: RayIn, any: bool) -> Hit {
     let num_leaves = arrayLength(&leaves) / ROPE_LEAF_WORDS;
     var leaf = rope_locate(0u, r.o + r.d * tmin, r.d);
     // The bound only guards against a broken tree.
-    for (var step = 0u; step < num_leaves; step++) {
+    var step = 0u;
+    for (; step < num_leaves; step++) {
         let rec = leaf.x;
         let count = leaf.y;
         if count > 0u {
             let first = leaves[rec + 12u];
             note_bytes(4u);
-            for (var k = 0u; k < count; k++) {
+            var k = 0u;
+            for (; k < count; k++) {
                 note_bytes(4u);
                 if test_triangle(indices[first + k], r, rd, any, &best) {
                     return Hit(0.0, 0.0, 0.0, 0u);
                 }
+            }
+            if k < count {
+                loop_cut = true;
             }
         }
         // The exit face: the nearest of the cell's faces the ray moves towards.
         var exit = inf();
         var face = 0u;
         var plane = 0.0;
-        for (var a = 0u; a < 3u; a++) {
+        var a = 0u;
+        for (; a < 3u; a++) {
             let da = r.d[a];
             if da != 0.0 {
                 let up = da > 0.0;
@@ -91,6 +103,9 @@ fn ropes_trace(r: RayIn, any: bool) -> Hit {
                     plane = pl;
                 }
             }
+        }
+        if a < 3u {
+            loop_cut = true;
         }
         let tfar = fmin(best.t, r.tfar);
         if (tfar <= exit) | (exit >= scene_exit) {
@@ -105,6 +120,9 @@ fn ropes_trace(r: RayIn, any: bool) -> Hit {
         var p = r.o + r.d * exit;
         p[face / 2u] = plane;
         leaf = rope_locate(next, p, r.d);
+    }
+    if step < num_leaves {
+        loop_cut = true;
     }
     return best;
 }

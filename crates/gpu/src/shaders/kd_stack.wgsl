@@ -18,11 +18,15 @@ fn kd_trace(r: RayIn, any: bool) -> Hit {
     // The ray's interval inside the root cell.
     var tmin = r.tnear;
     var tmax = inf();
-    for (var a = 0u; a < 3u; a++) {
-        let t0 = (accel.root_min[a] - r.o[a]) * r.inv[a];
-        let t1 = (accel.root_max[a] - r.o[a]) * r.inv[a];
+    var axis = 0u;
+    for (; axis < 3u; axis++) {
+        let t0 = (accel.root_min[axis] - r.o[axis]) * r.inv[axis];
+        let t1 = (accel.root_max[axis] - r.o[axis]) * r.inv[axis];
         tmin = fmax(tmin, fmin(t0, t1));
         tmax = fmin(tmax, fmax(t0, t1));
+    }
+    if axis < 3u {
+        loop_cut = true;
     }
     tmax = fmin(tmax * ROBUST_EXIT, r.tfar);
     if !(tmin <= tmax) {
@@ -70,11 +74,15 @@ fn kd_trace(r: RayIn, any: bool) -> Hit {
             continue;
         }
         let start = word & ~KD_LEAF;
-        for (var k = 0u; k < data; k++) {
+        var k = 0u;
+        for (; k < data; k++) {
             note_bytes(4u);
             if test_triangle(indices[start + k], r, rd, any, &best) {
                 return Hit(0.0, 0.0, 0.0, 0u);
             }
+        }
+        if k < data {
+            loop_cut = true;
         }
         let tfar = fmin(best.t, r.tfar);
         if tfar <= tmax {
@@ -95,9 +103,15 @@ fn kd_trace(r: RayIn, any: bool) -> Hit {
             }
         }
         if !found {
+            // The pop loop ends by break; with entries left it was cut.
+            if sp != 0u {
+                loop_cut = true;
+            }
             return best;
         }
     }
+    // The loop ends only by return.
+    loop_cut = true;
     return best;
 }
 

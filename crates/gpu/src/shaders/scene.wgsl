@@ -10,6 +10,14 @@
 // declare binding 0 (the nodes, as words or as 16-byte vectors) and define
 // scene_intersect(ray) -> Hit and scene_occluded(ray) -> bool over them.
 // Every triangle record fetched is noted (note_tri, see count_off.wgsl).
+// Every traversal loop is followed by a check that it ended because its
+// condition failed (or by return or break); one that ended with its
+// condition still true was cut short by the driver, and sets loop_cut.
+// Mesa's lavapipe ends every loop of an invocation once the invocation has
+// made 65,535 loop passes in all, and goes on after the loop: without the
+// check, the traversal would return a wrong answer. The entry kernels
+// report loop_cut to the host, which refuses the results; on a GPU without
+// such a limit the checks never fire.
 
 struct AccelParams {
     root_min: vec3f,
@@ -29,6 +37,8 @@ struct AccelParams {
 @group(0) @binding(5) var<storage, read> tri_words1: array<u32>;
 @group(0) @binding(6) var<storage, read> tri_words2: array<u32>;
 @group(0) @binding(7) var<storage, read> tri_words3: array<u32>;
+
+var<private> loop_cut: bool;
 
 struct TriHit {
     hit: bool,

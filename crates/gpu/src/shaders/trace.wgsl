@@ -1,6 +1,8 @@
 // Batch ray queries: one thread per ray of a ray buffer (8 floats per
 // ray: origin, direction, tnear, tfar, as in raykit's ray files).
 // Nearest hits are written as 4 words (t, prim, u, v), occlusion as 1 word.
+// Word 4 * count of the output is the status word: any ray whose traversal
+// loop was cut short (loop_cut, see scene.wgsl) writes 1 there.
 
 struct TraceParams {
     count: u32,
@@ -29,6 +31,9 @@ fn trace_nearest(@builtin(global_invocation_id) gid: vec3u) {
     out[4u * i + 1u] = h.prim;
     out[4u * i + 2u] = bitcast<u32>(h.u);
     out[4u * i + 3u] = bitcast<u32>(h.v);
+    if loop_cut {
+        out[4u * tp.count] = 1u;
+    }
     flush_counts();
 }
 
@@ -39,5 +44,8 @@ fn trace_any(@builtin(global_invocation_id) gid: vec3u) {
         return;
     }
     out[i] = select(0u, 1u, scene_occluded(load_ray(i)));
+    if loop_cut {
+        out[4u * tp.count] = 1u;
+    }
     flush_counts();
 }
