@@ -276,7 +276,11 @@ fn a_light_over_no_data_needs_its_elevation() {
             "{:.1}% of the grid points with data lit",
             100.0 * lit as f64 / with_data as f64
         );
-        assert!(text(&o.stderr).contains(&line), "{light}: {}", text(&o.stderr));
+        assert!(
+            text(&o.stderr).contains(&line),
+            "{light}: {}",
+            text(&o.stderr)
+        );
     }
 }
 
