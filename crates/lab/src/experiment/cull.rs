@@ -40,14 +40,15 @@ Debian's assimp-testmodels (run scripts/fetch-assimp-testmodels.sh first, else t
 reported as skipped), synthetic assemblies with known answers (a box of 64 spheres, nested\n\
 shells, a box with a slit 1/500 of its size wide, a box of 1,000 spheres with 1,280,192\n\
 triangles, eight engines in a closed shell of 100 x 100 squares per face: 1,091,968 triangles),\n\
-the same shell with a 20 x 20-square hole (ground truth by rays) and the engine instanced 3 x 3\n\
-(1,093,464 triangles, no ground truth: too slow to evaluate).\n\
+the same shell with a 20 x 20-square hole and the engine instanced 3 x 3 (1,093,464\n\
+triangles): these two have no ground truth (too slow to evaluate), so no false removals.\n\
 Each model is culled by rays (`raykit cull --mode rays`), and at every resolution by Min's\n\
 (2008) rule (`--mode paper`) and by the conservative grid mode (`--mode conservative`, the\n\
 default of `raykit cull`); times are medians of --reps runs. The ground truth is `raykit cull --evaluate`'s\n\
 (rays from the surface and renders from 10,000+ viewpoints, doubled until stable) or the\n\
 known answer. Writes results.csv, results.md and SVG plots into --out; exit status 1 when\n\
-the conservative mode removed a truly visible triangle."
+the conservative mode (the default of `raykit cull`) removed a truly visible triangle; the\n\
+rays mode's false removals are reported, not failed on."
 )]
 pub struct CullExperimentArgs {
     /// Grid resolutions (points along the longest axis), each in 5..=1024
@@ -168,7 +169,7 @@ pub fn run(args: CullExperimentArgs) -> Result<ExitCode> {
     );
     let false_removals: usize = rows
         .iter()
-        .filter(|r| r.mode != "paper")
+        .filter(|r| r.mode == "conservative")
         .filter_map(|r| r.false_removals)
         .sum();
     Ok(if false_removals == 0 {

@@ -48,9 +48,12 @@ pub struct ServeExperimentArgs {
     /// Length of phase 1's moving part, seconds.
     #[arg(long, default_value_t = 10.0)]
     pub(super) single_seconds: f64,
-    /// Inputs per second each client sends while moving.
+    /// Inputs per second the phase 1 client sends while moving.
     #[arg(long, default_value_t = 60.0)]
     pub(super) input_hz: f64,
+    /// Inputs per second each phase 2 client sends.
+    #[arg(long, default_value_t = 30.0)]
+    pub(super) many_input_hz: f64,
     /// Full resolution (the preview while moving is half).
     #[arg(long, default_value_t = 1280)]
     pub(super) width: u32,
@@ -172,6 +175,7 @@ pub fn run(args: ServeExperimentArgs) -> Result<ExitCode> {
         ("--seconds", args.seconds),
         ("--single-seconds", args.single_seconds),
         ("--input-hz", args.input_hz),
+        ("--many-input-hz", args.many_input_hz),
     ] {
         if !(v.is_finite() && v > 0.0 && v <= 3600.0) {
             bail!("{name} must be a number in (0, 3600], got {v}");
@@ -181,7 +185,7 @@ pub fn run(args: ServeExperimentArgs) -> Result<ExitCode> {
         addr: "127.0.0.1:0".parse()?,
         full: (args.width, args.height),
         max_clients: args.clients.max(1) + 1,
-        max_inputs_per_second: (args.input_hz * 2.0).ceil() as u32 + 10,
+        max_inputs_per_second: (args.input_hz.max(args.many_input_hz) * 2.0).ceil() as u32 + 10,
         ..ServeConfig::default()
     };
     if let Some(p) = config.problem() {
@@ -234,7 +238,7 @@ pub fn run(args: ServeExperimentArgs) -> Result<ExitCode> {
             clients: args.clients,
             moving: Duration::from_secs_f64(args.seconds),
             still: Duration::ZERO,
-            input_hz: 30.0,
+            input_hz: args.many_input_hz,
             settings: None,
         })
         .await?;

@@ -310,12 +310,12 @@ fn part_a(args: &TerrainExperimentArgs, dem: &Dem) -> Result<Vec<CastRow>> {
     Ok(rows)
 }
 
+/// A point light 50 m above the grid point nearest the centre (a sample,
+/// so that gdal_viewshed, which moves its observer to the centre of the
+/// cell it lies in, stands at the same place).
 fn point_light(field: &HeightField) -> (Light, [f64; 2], f64) {
-    let (wx, wy) = (
-        (field.width - 1) as f64 * field.sx,
-        (field.height - 1) as f64 * field.sy,
-    );
-    let (x, y, h) = (0.5 * wx, -0.5 * wy, 50.0);
+    let (col, row) = ((field.width - 1) / 2, (field.height - 1) / 2);
+    let (x, y, h) = (col as f64 * field.sx, -(row as f64) * field.sy, 50.0);
     let pos = light_above_ground(field, x, y, h).expect("the centre is inside");
     (Light::Point(pos), [x, y], h)
 }
@@ -363,13 +363,19 @@ fn part_b(args: &TerrainExperimentArgs) -> Result<Vec<ShadowRow>> {
 /// defaults, a DEFLATE GeoTIFF and a PNG preview; gdal_viewshed writing its
 /// GeoTIFF), run in turn `--reps` times; the mask alone is timed in this
 /// process too.
-fn part_c(args: &TerrainExperimentArgs, generated: &Dem) -> Result<GdalRow> {
+/// Part (c) on `given` (the `--gdal-dem` file, loaded before any part ran)
+/// or else on the generated DEM.
+fn part_c(
+    args: &TerrainExperimentArgs,
+    generated: &Dem,
+    given: Option<(PathBuf, Dem)>,
+) -> Result<GdalRow> {
     let dir = args.out.join("gdal");
     std::fs::create_dir_all(&dir)?;
-    let (input, loaded, name) = match &args.gdal_dem {
-        Some(path) => {
-            let dem = raykit_terrain::io::load_dem(path, &Default::default())?;
-            (path.clone(), dem, path.display().to_string())
+    let (input, loaded, name) = match given {
+        Some((path, dem)) => {
+            let name = path.display().to_string();
+            (path, dem, name)
         }
         None => {
             let input = dir.join("dem.tif");
@@ -527,11 +533,19 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
     if let Some(p) = args.parts.iter().find(|p| !"abc".contains(**p)) {
         bail!("--parts: unknown part '{p}'; the parts are a, b and c");
     }
+    let part = |p: char| args.parts.contains(&p);
+    // A bad --gdal-dem is refused before any part runs or writes.
+    let given = match (&args.gdal_dem, part('c')) {
+        (Some(path), true) => Some((
+            path.clone(),
+            raykit_terrain::io::load_dem(path, &Default::default())?,
+        )),
+        _ => None,
+    };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let head = super::provenance();
     let dem = raykit_terrain::fractal::fractal(args.size, 1, 0.55);
-    let part = |p: char| args.parts.contains(&p);
     let a = if part('a') {
         part_a(&args, &dem)?
     } else {
@@ -543,7 +557,7 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
         Vec::new()
     };
     let c = if part('c') {
-        Some(part_c(&args, &dem)?)
+        Some(part_c(&args, &dem, given)?)
     } else {
         None
     };

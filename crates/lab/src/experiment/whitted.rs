@@ -320,6 +320,11 @@ pub fn run(args: WhittedExperimentArgs) -> Result<ExitCode> {
     if args.width == 0 || args.height == 0 || args.width > 8192 || args.height > 8192 {
         anyhow::bail!("--width and --height must be between 1 and 8192");
     }
+    crate::args::ranges::reps(args.reps)?;
+    // Every scene name is checked before any scene renders or writes.
+    for name in &args.scenes {
+        scene_args(name)?;
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let pool = pool(args.threads)?;
