@@ -85,10 +85,9 @@ pub fn spread_percent(spread: Option<f64>) -> String {
 }
 
 /// Median of `samples` (seconds) in milliseconds, and the noise: the spread
-/// (max − min) relative to the median.
-pub fn median_ms(samples: &[f64]) -> (f64, f64) {
-    let (m, lo, hi) = median_min_max(samples);
-    (m * 1e3, if m > 0.0 { (hi - lo) / m } else { 0.0 })
+/// (max − min) relative to the median, `None` from fewer than two samples.
+pub fn median_ms(samples: &[f64]) -> (f64, Option<f64>) {
+    (median_min_max(samples).0 * 1e3, spread(samples))
 }
 
 #[cfg(test)]
@@ -116,6 +115,6 @@ mod tests {
     #[test]
     fn an_empty_sample_gives_zeros_instead_of_a_panic() {
         assert_eq!(median_min_max(&[]), (0.0, 0.0, 0.0));
-        assert_eq!(median_ms(&[]), (0.0, 0.0));
+        assert_eq!(median_ms(&[]), (0.0, None));
     }
 }

@@ -8,7 +8,7 @@
 
 use super::{write_csv, write_text};
 use crate::args::ranges::{self, image_side, in_range};
-use crate::measure::{median_min_max, median_ms, timed};
+use crate::measure::{median_min_max, median_ms, spread, spread_percent, timed};
 use crate::plot::{write_svg, LineChart, Series};
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -93,7 +93,7 @@ struct CastRow {
     method: String,
     tau: Option<f64>,
     ms: f64,
-    noise: f64,
+    noise: Option<f64>,
     boxes: usize,
     cells_per_ray: f64,
     nodes_per_ray: f64,
@@ -459,10 +459,7 @@ fn part_c(
             .arg(&ours_out);
         ot.push(run(raykit, "raykit terrain shadow")?);
     }
-    let noise = |t: &[f64]| {
-        let (m, lo, hi) = median_min_max(t);
-        (m, (hi - lo) / m)
-    };
+    let noise = |t: &[f64]| (median_min_max(t).0, spread(t));
     let (gdal_s, gdal_noise) = noise(&gt);
     let (command_s, command_noise) = noise(&ot);
     let theirs = raykit_terrain::io::read_geotiff(&output)?;
@@ -494,9 +491,9 @@ fn part_c(
         }
     }
     row.ours_command_s = Some(command_s);
-    row.ours_noise = Some(command_noise);
+    row.ours_noise = command_noise;
     row.gdal_s = Some(gdal_s);
-    row.gdal_noise = Some(gdal_noise);
+    row.gdal_noise = gdal_noise;
     row.ours_over_gdal = Some(command_s / gdal_s);
     row.cells_differing_pct = Some(100.0 * (a + b) as f64 / ours.len() as f64);
     row.lit_by_us_shadowed_by_gdal = Some(a);
@@ -606,11 +603,11 @@ fn part_a_table(args: &TerrainExperimentArgs, a: &[CastRow]) -> String {
     );
     for r in a {
         md += &format!(
-            "| {} | {} | {:.1} | {:.0}% | {} | {:.1} | {:.1} | {:.2} | {} | {:.2} | {} | {} |\n",
+            "| {} | {} | {:.1} | {} | {} | {:.1} | {:.1} | {:.2} | {} | {:.2} | {} | {} |\n",
             r.method,
             opt(r.tau, 0),
             r.ms,
-            100.0 * r.noise,
+            spread_percent(r.noise),
             r.boxes,
             r.cells_per_ray,
             r.nodes_per_ray,
@@ -669,9 +666,9 @@ fn part_c_table(c: &GdalRow) -> String {
         c.light,
         c.ours_s,
         opt(c.ours_command_s, 3),
-        c.ours_noise.map_or("–".into(), |n| format!("{:.0}%", 100.0 * n)),
+        spread_percent(c.ours_noise),
         opt(c.gdal_s, 3),
-        c.gdal_noise.map_or("–".into(), |n| format!("{:.0}%", 100.0 * n)),
+        spread_percent(c.gdal_noise),
         opt(c.ours_over_gdal, 2),
         opt(c.cells_differing_pct, 3),
         c.lit_by_us_shadowed_by_gdal.map_or("–".into(), |v| v.to_string()),

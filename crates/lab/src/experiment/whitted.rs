@@ -6,7 +6,7 @@
 
 use super::{shared_data, shared_mesh, write_csv, write_text};
 use crate::args::scene::{setup, RenderSetup, SceneArgs};
-use crate::measure::{median_ms, pool, timed};
+use crate::measure::{median_ms, pool, spread_percent, timed};
 use anyhow::{Context, Result};
 use clap::Args;
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
@@ -65,7 +65,7 @@ struct Row {
     integrator: String,
     passes: u32,
     ms: f64,
-    noise: f64,
+    noise: Option<f64>,
     raster_ms: f64,
     /// Rays traced per frame, millions.
     rays_millions: f64,
@@ -206,11 +206,11 @@ fn run_scene(
                         rays_millions: f.stats.rays() as f64 / 1e6,
                     });
                     eprintln!(
-                        "{name}: {passes} pass(es), {:?} shadows, {:?}, {:?}: {ms:.1} ms (noise {:.0}%)",
+                        "{name}: {passes} pass(es), {:?} shadows, {:?}, {:?}: {ms:.1} ms (noise {})",
                         shadows,
                         primary,
                         integrator,
-                        100.0 * noise
+                        spread_percent(noise)
                     );
                     if passes == 2 {
                         keep.push((format!("{shadows:?}-{primary:?}-{integrator:?}"), f));
@@ -371,7 +371,7 @@ pub fn run(args: WhittedExperimentArgs) -> Result<ExitCode> {
     );
     for r in &rows {
         md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {:.1} | {:.0}% | {:.1} | {:.2} |\n",
+            "| {} | {} | {} | {} | {} | {} | {:.1} | {} | {:.1} | {:.2} |\n",
             r.scene,
             r.triangles,
             r.passes,
@@ -379,7 +379,7 @@ pub fn run(args: WhittedExperimentArgs) -> Result<ExitCode> {
             r.primary,
             r.integrator,
             r.ms,
-            100.0 * r.noise,
+            spread_percent(r.noise),
             r.raster_ms,
             r.rays_millions
         );

@@ -6,7 +6,7 @@
 
 use super::{shared_data, shared_mesh};
 use crate::args::scene::{setup, RenderSetup, SceneArgs};
-use crate::measure::median_ms;
+use crate::measure::{median_ms, spread_percent};
 use anyhow::{Context, Result};
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
@@ -29,7 +29,7 @@ pub struct EnvRow {
     /// Median frame time.
     pub ms: f64,
     /// Spread (max − min) over the median.
-    pub noise: f64,
+    pub noise: Option<f64>,
     /// Rays traced per frame, millions.
     pub rays_millions: f64,
     /// Paths that ended in the environment, millions.
@@ -113,8 +113,8 @@ pub fn env_table(width: u32, height: u32, reps: usize, out: &Path) -> Result<Env
         let (ms, noise) = median_ms(&times);
         let name = if env_box { "box" } else { "map" };
         eprintln!(
-            "environment {name}: {ms:.1} ms (noise {:.0}%)",
-            100.0 * noise
+            "environment {name}: {ms:.1} ms (noise {})",
+            spread_percent(noise)
         );
         rows.push(EnvRow {
             environment: name.into(),
@@ -160,10 +160,10 @@ pub fn markdown(t: &EnvTable, reps: usize) -> String {
     );
     for r in &t.rows {
         md += &format!(
-            "| {} | {:.1} | {:.0}% | {:.2} | {:.2} |\n",
+            "| {} | {:.1} | {} | {:.2} | {:.2} |\n",
             r.environment,
             r.ms,
-            100.0 * r.noise,
+            spread_percent(r.noise),
             r.rays_millions,
             r.environment_hits_millions
         );
