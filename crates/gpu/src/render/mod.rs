@@ -34,7 +34,7 @@ use raykit_render::whitted::{
 };
 use raykit_render::Image;
 use std::time::Instant;
-use upload::{FrameSettings, ShadeBuffers};
+use upload::{FrameSettings, ShadeBuffers, COUNTER_WORDS};
 
 /// The longest path (`--depth`) one kernel per ray path follows: the size
 /// of its per-thread stack of pending rays.
@@ -184,7 +184,7 @@ pub fn render_whitted_gpu(
         IntegratorKind::Wavefront => stream::run(ctx, gpu, &shade, opts, progress)?,
     };
     let sums = crate::buffers::read_words(ctx, &shade.radiance, 3 * n)?;
-    let counters = crate::buffers::read_words(ctx, &shade.counters, 4)?;
+    let counters = read_counters(ctx, &shade)?;
     let scale = opts.exposure / spp as f32;
     let linear: Vec<Vec3> = sums
         .chunks_exact(3)
@@ -226,8 +226,20 @@ pub fn render_whitted_gpu(
     })
 }
 
-/// Rays counted so far (shadow + secondary), read from the counters.
+/// The ray counters of a finished dispatch; an error if a kernel found one
+/// of a thread's loops cut short by the driver (the status word, see
+/// `shaders/render/shade_data.wgsl`), since the frame would be wrong.
+fn read_counters(ctx: &GpuContext, shade: &ShadeBuffers) -> GpuResult<Vec<u32>> {
+    let c = crate::buffers::read_words(ctx, &shade.counters, COUNTER_WORDS)?;
+    if c[4] != 0 {
+        return Err(ctx.loop_limit("a pixel's rays"));
+    }
+    Ok(c)
+}
+
+/// Rays counted so far (shadow + secondary), read from the counters; an
+/// error if the driver cut a thread's loop short.
 fn counted(ctx: &GpuContext, shade: &ShadeBuffers) -> GpuResult<u64> {
-    let c = crate::buffers::read_words(ctx, &shade.counters, 4)?;
+    let c = read_counters(ctx, shade)?;
     Ok(c[0] as u64 + c[1] as u64)
 }

@@ -138,7 +138,7 @@ pub(super) fn run(
                 dispatch(&mut enc, k, &[&g0, &g1, &g2], (x, y));
             }
             ctx.queue.submit([enc.finish()]);
-            let queued = read_words(ctx, &shade.counters, 4)?[3] as usize;
+            let queued = super::read_counters(ctx, shade)?[3] as usize;
             if first && sample == 0 {
                 // The camera rays sit at their pixels' slots.
                 first_hits = read_words(ctx, &hits.buffer, 4 * n)?;

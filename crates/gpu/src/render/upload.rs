@@ -72,6 +72,10 @@ pub struct FrameSettings {
     pub shadows: bool,
 }
 
+/// Words of [`ShadeBuffers::counters`]: shadow rays, secondary rays,
+/// environment hits, next-queue length, status.
+pub(super) const COUNTER_WORDS: usize = 5;
+
 /// Bind group 1's buffers.
 pub struct ShadeBuffers {
     /// Per-triangle records.
@@ -80,7 +84,8 @@ pub struct ShadeBuffers {
     pub tables: wgpu::Buffer,
     /// `ShadeParams`.
     pub params: wgpu::Buffer,
-    /// Ray counters (4 words).
+    /// Ray counters (4 words) and the status word, which a kernel sets
+    /// when the driver cut one of a thread's loops short.
     pub counters: wgpu::Buffer,
     /// Radiance sums (3 words per pixel).
     pub radiance: wgpu::Buffer,
@@ -166,7 +171,7 @@ impl ShadeBuffers {
             tris: storage(ctx, "shading triangles", &triangle_records(mesh))?,
             tables: storage(ctx, "materials and lights", &tables)?,
             params: uniform(ctx, "shading parameters", &params),
-            counters: output(ctx, "ray counters", 4)?,
+            counters: output(ctx, "ray counters", COUNTER_WORDS)?,
             radiance: output(ctx, "radiance", 3 * pixels)?,
             env_texels: storage(ctx, "environment map", &env.texels)?,
             tex_texels: storage(ctx, "textures", &atlas.texels)?,

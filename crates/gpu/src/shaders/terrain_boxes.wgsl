@@ -5,7 +5,8 @@
 // covering the pixel (the stand-in for the paper's rasterization with a
 // depth test), and marches the cells from there (a 2D DDA whose stretches
 // partition the ray, each cell tested by terrain_cell.wgsl's hit_cell, with
-// the same candidate rule as terrain_maxmip.wgsl).
+// the same candidate rule as terrain_maxmip.wgsl). Output as
+// terrain_maxmip.wgsl's, with the status word after it.
 //
 // Group 1: boxes (8 floats each: lo x, y, z, first column of its pixel
 // rectangle, hi x, y, z, end column; grid units), the rows' lists (offsets of image rows 0..=h into the index list, then the list),
@@ -57,7 +58,8 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
     var start = inf();
     if span >= 0.0 {
         let inv = vec3f(1.0) / d;
-        for (var k = rows[py]; k < rows[py + 1u]; k++) {
+        var k = rows[py];
+        for (; k < rows[py + 1u]; k++) {
             let b = rows[k];
             let fx = f32(px);
             if fx < boxes[8u * b + 3u] || fx >= boxes[8u * b + 7u] {
@@ -65,6 +67,9 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
             }
             visits += 1u;
             start = min(start, box_entry(b, o, inv, min(start, span)));
+        }
+        if k < rows[py + 1u] {
+            loop_cut = true;
         }
     }
     var hit_t = inf();
@@ -80,8 +85,11 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
         var c = u32(clamp(floor(p.x), 0.0, f32(bp.cw - 1u)));
         var r = u32(clamp(floor(p.y), 0.0, f32(bp.ch - 1u)));
         var cand_reach = inf();
+        // The march ends only by break; `ended` tells a break from a cut.
+        var ended = false;
         loop {
             if ta > cand_reach {
+                ended = true;
                 break;
             }
             cells += 1u;
@@ -92,6 +100,7 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
             if h.y > 0.5 && h.x <= cand_reach {
                 hit_t = h.x;
                 hit_id = c | (r << 16u);
+                ended = true;
                 break;
             }
             if h.x < cand_t {
@@ -100,16 +109,19 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
                 cand_id = c | (r << 16u);
             }
             if min(tx, ty) >= span {
+                ended = true;
                 break;
             }
             if tx <= ty {
                 if d.x > 0.0 {
                     c += 1u;
                     if c >= bp.cw {
+                        ended = true;
                         break;
                     }
                 } else {
                     if c == 0u {
+                        ended = true;
                         break;
                     }
                     c -= 1u;
@@ -117,15 +129,20 @@ fn terrain_boxes(@builtin(global_invocation_id) gid: vec3u) {
             } else if d.y > 0.0 {
                 r += 1u;
                 if r >= bp.ch {
+                    ended = true;
                     break;
                 }
             } else {
                 if r == 0u {
+                    ended = true;
                     break;
                 }
                 r -= 1u;
             }
             ta = tb;
+        }
+        if !ended {
+            loop_cut = true;
         }
     }
     write_cast(ray, hit_t, hit_id, cand_t, cand_id, visits, cells);

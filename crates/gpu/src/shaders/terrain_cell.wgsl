@@ -4,6 +4,13 @@
 // the ray, on the declared surface of raykit-terrain's heightfield.rs (two
 // triangles per cell split along the (col, row)-(col+1, row+1) diagonal),
 // in f32 made conservative: see terrain_maxmip.wgsl's header.
+// Every loop is followed by a check that it ended because its condition
+// failed (or by break or return); one that ended with its condition still
+// true was cut short by the driver (Mesa's lavapipe ends every loop of an
+// invocation once it has made 65,535 loop passes in all), and sets
+// loop_cut. write_cast then sets the status word after the results (word
+// 4 * count), and the host refuses them; on a GPU without such a limit the
+// checks never fire.
 
 struct Level {
     // Texels along x, along y, offset of the level's first texel, unused.
@@ -30,6 +37,8 @@ struct TerrainParams {
 const DIAG_EPS: f32 = 1e-5;
 // Multiple of the unit roundoff in the rounding bounds.
 const ROUND: f32 = 8.0 * F32_EPS;
+
+var<private> loop_cut: bool;
 
 fn grid_height(c: u32, r: u32) -> f32 {
     return heights[r * tp.width + c];
@@ -58,7 +67,8 @@ fn hit_cell(c: u32, r: u32, o: vec3f, d: vec3f, a: f32, b: f32) -> vec3f {
     let v0 = pa.y - f32(r);
     let len = b - a;
     var best = vec3f(inf(), 0.0, 0.0);
-    for (var k = 0u; k < 2u; k++) {
+    var k = 0u;
+    for (; k < 2u; k++) {
         let upper = k == 0u;
         // z = h00 + bu u + bv v (heightfield.rs cell_plane).
         var bu = h11 - h01;
@@ -93,6 +103,9 @@ fn hit_cell(c: u32, r: u32, o: vec3f, d: vec3f, a: f32, b: f32) -> vec3f {
         if inside && (t < best.x || (t == best.x && strict)) {
             best = vec3f(t, select(0.0, 1.0, strict), e / abs(denom));
         }
+    }
+    if k < 2u {
+        loop_cut = true;
     }
     return best;
 }
@@ -129,7 +142,8 @@ fn load_terrain_ray(ray: u32) -> TerrainRay {
 }
 
 // Write a ray's result: the accepted hit or, when none followed it, the
-// held-back candidate within the rounding bound; then the two step counts.
+// held-back candidate within the rounding bound; then the two step counts;
+// and the status word when the ray's loops were cut short.
 fn write_cast(ray: u32, hit_t: f32, hit_id: u32, cand_t: f32, cand_id: u32, steps_a: u32, steps_b: u32) {
     var t = hit_t;
     var id = hit_id;
@@ -141,4 +155,7 @@ fn write_cast(ray: u32, hit_t: f32, hit_id: u32, cand_t: f32, cand_id: u32, step
     out[4u * ray + 1u] = id;
     out[4u * ray + 2u] = steps_a;
     out[4u * ray + 3u] = steps_b;
+    if loop_cut {
+        out[4u * tp.count] = 1u;
+    }
 }

@@ -31,7 +31,8 @@
 // ray's entry into the grid's bounding box, span (the last t inside it, or
 // negative when the ray misses the box), direction, unused. Output per ray
 // (4 words): t from the origin (f32 bits, +inf on a miss), cell
-// (col | row << 16, or MISS), nodes visited, cells tested.
+// (col | row << 16, or MISS), nodes visited, cells tested; then one status
+// word for all rays (see terrain_cell.wgsl).
 
 @compute @workgroup_size(64)
 fn terrain_maxmip(@builtin(global_invocation_id) gid: vec3u) {
@@ -62,8 +63,11 @@ fn terrain_maxmip(@builtin(global_invocation_id) gid: vec3u) {
     var j = 0u;
     var ta = 0.0;
     var live = span >= 0.0;
+    // The walk ends only by break; `ended` tells a break from a cut.
+    var ended = false;
     loop {
         if !live || ta > cand_reach {
+            ended = true;
             break;
         }
         let size = 1u << level;
@@ -83,6 +87,7 @@ fn terrain_maxmip(@builtin(global_invocation_id) gid: vec3u) {
             if h.y > 0.5 && h.x <= cand_reach {
                 hit_t = h.x;
                 hit_cell_id = i | (j << 16u);
+                ended = true;
                 break;
             }
             if h.x < cand_t {
@@ -121,10 +126,12 @@ fn terrain_maxmip(@builtin(global_invocation_id) gid: vec3u) {
                 continue;
             }
             // Outside the grid (the pyramid's edge): the ray is leaving.
+            ended = true;
             break;
         }
         // Done with this node: step to the neighbour the ray enters.
         if tb >= span {
+            ended = true;
             break;
         }
         var ni = i32(i);
@@ -137,6 +144,7 @@ fn terrain_maxmip(@builtin(global_invocation_id) gid: vec3u) {
         }
         let lv = tp.levels[level].size;
         if ni < 0 || nj < 0 || ni >= i32(lv.x) || nj >= i32(lv.y) {
+            ended = true;
             break;
         }
         var ui = u32(ni);
@@ -150,9 +158,15 @@ fn terrain_maxmip(@builtin(global_invocation_id) gid: vec3u) {
             uj = uj >> 1u;
             level += 1u;
         }
+        if (i >> 1u) != (ui >> 1u) || (j >> 1u) != (uj >> 1u) {
+            loop_cut = true;
+        }
         i = ui;
         j = uj;
         ta = tb;
+    }
+    if !ended {
+        loop_cut = true;
     }
     write_cast(ray, hit_t, hit_cell_id, cand_t, cand_cell, nodes, cells);
 }

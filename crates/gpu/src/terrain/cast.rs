@@ -47,6 +47,11 @@ struct BoxParams {
 
 /// Up to [`CHUNK`] pixels' rays uploaded with their result buffer, for one
 /// dispatch (repeatable, for timing).
+///
+/// The result buffer holds [`OUT_WORDS`] words per ray and a status word
+/// after them, which a kernel sets when a ray's loop was cut short by the
+/// driver (see `shaders/terrain_cell.wgsl`); [`GpuTerrain::results`] then
+/// refuses the results.
 pub struct GpuView {
     /// The rays as uploaded (the host keeps each ray's `t0`).
     pub rays: Vec<GpuGridRay>,
@@ -109,7 +114,7 @@ impl GpuTerrain {
             boxes,
             box_count,
             ray_buf: storage(ctx, "terrain rays", &ray_words(&rays))?,
-            out: output(ctx, "terrain hits", count * OUT_WORDS)?,
+            out: output(ctx, "terrain hits", count * OUT_WORDS + 1)?,
             params: uniform(ctx, "terrain parameters", &params),
             rays,
             groups: (x, y),
@@ -155,13 +160,17 @@ impl GpuTerrain {
     }
 
     /// The hits and steps of a finished [`GpuTerrain::run`]; distances are
-    /// the CPU ray's parameter (metres from the eye).
+    /// the CPU ray's parameter (metres from the eye). An error if the
+    /// driver cut a ray's march short.
     pub fn results(
         &self,
         ctx: &GpuContext,
         view: &GpuView,
     ) -> GpuResult<(Vec<Option<TerrainHit>>, Vec<Steps>)> {
-        let words = read_words(ctx, &view.out, view.rays.len() * OUT_WORDS)?;
+        let mut words = read_words(ctx, &view.out, view.rays.len() * OUT_WORDS + 1)?;
+        if words.pop() != Some(0) {
+            return Err(ctx.loop_limit("a ray's march over the DEM"));
+        }
         Ok(words
             .chunks_exact(OUT_WORDS)
             .zip(&view.rays)

@@ -81,7 +81,8 @@ fn box_direction(o: vec3f, d: vec3f) -> vec3f {
     }
     var near = -inf();
     var far = inf();
-    for (var a = 0; a < 3; a++) {
+    var a = 0;
+    for (; a < 3; a++) {
         let lo = sp.box_min[a];
         let hi = sp.box_max[a];
         if d[a] == 0.0 {
@@ -94,6 +95,9 @@ fn box_direction(o: vec3f, d: vec3f) -> vec3f {
         let t1 = (hi - o[a]) / d[a];
         near = fmax(near, fmin(t0, t1));
         far = fmin(far, fmax(t0, t1));
+    }
+    if a < 3 {
+        loop_cut = true;
     }
     if !(near <= far && far >= 0.0) {
         return d;

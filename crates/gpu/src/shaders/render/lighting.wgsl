@@ -50,7 +50,8 @@ fn powf(x: f32, y: f32) -> f32 {
 // light in front of the surface.
 fn direct(s: Surface, view: vec3f, kd: vec3f, ks: vec3f, shininess: f32) -> vec3f {
     var out = kd * sp.ambient;
-    for (var i = 0u; i < sp.num_lights; i++) {
+    var i = 0u;
+    for (; i < sp.num_lights; i++) {
         let ls = light_toward(i, s.point);
         let l = ls.to_light;
         let ndl = dot3(s.ns, l);
@@ -69,6 +70,9 @@ fn direct(s: Surface, view: vec3f, kd: vec3f, ks: vec3f, shininess: f32) -> vec3
         let h = normalize_or(l + view, vec3f(0.0));
         let spec = powf(fmax(dot3(s.ns, h), 0.0), shininess);
         out += ls.irradiance * (kd * ndl + ks * spec);
+    }
+    if i < sp.num_lights {
+        loop_cut = true;
     }
     return out;
 }

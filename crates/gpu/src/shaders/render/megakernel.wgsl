@@ -4,6 +4,9 @@
 // of pending rays and their path weights, up to max_depth rays per path.
 // The host refuses depths above STACK, which bounds the stack: each level
 // leaves at most one pending sibling.
+// A thread whose loops were cut short by the driver (loop_cut, see
+// scene.wgsl) sets the status slot counters[4], and the host refuses the
+// frame.
 
 const STACK: u32 = 16u;
 
@@ -67,5 +70,9 @@ fn render_pixel(@builtin(global_invocation_id) gid: vec3u) {
             top += 1u;
         }
     }
+    if top > 0u {
+        loop_cut = true;
+    }
     add_radiance(i, total);
+    report_loop_cut();
 }

@@ -43,7 +43,9 @@ struct ShadeParams {
 // sp.lights_offset.
 @group(1) @binding(1) var<storage, read> tables: array<u32>;
 @group(1) @binding(2) var<uniform> sp: ShadeParams;
-// [shadow rays, secondary rays, environment hits, next-queue length].
+// [shadow rays, secondary rays, environment hits, next-queue length,
+// status]: the status slot is set to 1 by a thread whose loops the driver
+// cut short (report_loop_cut).
 @group(1) @binding(3) var<storage, read_write> counters: array<atomic<u32>>;
 // Linear radiance summed over samples, three f32 bit patterns per pixel.
 @group(1) @binding(4) var<storage, read_write> radiance: array<atomic<u32>>;
@@ -125,17 +127,35 @@ fn surface_at(r: RayIn, h: Hit) -> Surface {
 
 // Add c to pixel p's sum (a compare-and-swap loop per channel: WGSL has no
 // float atomics, and the stream's rays of one pixel may meet in one stage).
+// The swap loop ends only by break, once the sum is stored.
 fn add_radiance(p: u32, c: vec3f) {
-    for (var k = 0u; k < 3u; k++) {
+    var k = 0u;
+    for (; k < 3u; k++) {
         let i = 3u * p + k;
         var old = atomicLoad(&radiance[i]);
+        var stored = false;
         loop {
             let r = atomicCompareExchangeWeak(&radiance[i], old, bitcast<u32>(bitcast<f32>(old) + c[k]));
             if r.exchanged {
+                stored = true;
                 break;
             }
             old = r.old_value;
         }
+        if !stored {
+            loop_cut = true;
+        }
+    }
+    if k < 3u {
+        loop_cut = true;
+    }
+}
+
+// Set the status slot when this thread's loops were cut short (loop_cut,
+// see scene.wgsl); called last by every kernel that traces or shades.
+fn report_loop_cut() {
+    if loop_cut {
+        atomicStore(&counters[4], 1u);
     }
 }
 

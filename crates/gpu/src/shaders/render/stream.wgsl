@@ -4,6 +4,9 @@
 // (state -1 -> -2) and shade adds each hit's local radiance and appends its
 // reflection and refraction rays to the next queue with an atomic counter
 // (state 1), or ends the path on the surface (-3).
+// A thread whose loops were cut short by the driver (loop_cut, see
+// scene.wgsl) sets the status slot counters[4], and the host refuses the
+// frame.
 
 struct StageParams {
     count: u32,
@@ -59,6 +62,7 @@ fn intersect(@builtin(global_invocation_id) gid: vec3u) {
     if h.prim == MISS {
         queue_in[i].state = STATE_MISSED;
     }
+    report_loop_cut();
 }
 
 @compute @workgroup_size(64)
@@ -71,6 +75,7 @@ fn miss(@builtin(global_invocation_id) gid: vec3u) {
     atomicAdd(&counters[2], 1u);
     add_radiance(q.pixel, q.w * environment(q.o, q.d));
     queue_in[i].state = STATE_ENVIRONMENT;
+    report_loop_cut();
 }
 
 fn push(q: QueuedRay, r: RayIn, w: vec3f) {
@@ -99,4 +104,5 @@ fn shade(@builtin(global_invocation_id) gid: vec3u) {
         state = STATE_BOUNCED;
     }
     queue_in[i].state = state;
+    report_loop_cut();
 }
