@@ -5,7 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! command -v gdal_viewshed >/dev/null; then
-  if [ "$(id -u)" = 0 ]; then apt-get install -y -qq gdal-bin >/dev/null; else sudo apt-get install -y -qq gdal-bin >/dev/null; fi
+  if [ "$(id -u)" = 0 ]; then sudo=; else sudo=sudo; fi
+  $sudo apt-get update -qq && $sudo apt-get install -y -qq gdal-bin >/dev/null
 fi
 cargo build --release -q
 ./target/release/raykit experiment terrain "$@"

@@ -482,8 +482,14 @@ fn part_c(
     if !same {
         bail!("raykit terrain shadow wrote a mask that differs from the library's");
     }
-    let (mut a, mut b) = (0usize, 0usize);
-    for (&o, &t) in ours.iter().zip(&theirs.heights) {
+    // Cells without data are neither tool's to light: left out of the
+    // counts and of the share.
+    let (mut a, mut b, mut with_data) = (0usize, 0usize, 0usize);
+    for ((&o, &t), h) in ours.iter().zip(&theirs.heights).zip(&dem.heights) {
+        if h.is_nan() {
+            continue;
+        }
+        with_data += 1;
         match (o, t > 0.5) {
             (1, false) => a += 1,
             (0, true) => b += 1,
@@ -495,7 +501,7 @@ fn part_c(
     row.gdal_s = Some(gdal_s);
     row.gdal_noise = gdal_noise;
     row.ours_over_gdal = Some(command_s / gdal_s);
-    row.cells_differing_pct = Some(100.0 * (a + b) as f64 / ours.len() as f64);
+    row.cells_differing_pct = Some(100.0 * (a + b) as f64 / with_data.max(1) as f64);
     row.lit_by_us_shadowed_by_gdal = Some(a);
     row.shadowed_by_us_lit_by_gdal = Some(b);
     row.note = format!(
@@ -659,6 +665,7 @@ fn part_b_table(b: &[ShadowRow]) -> String {
 fn part_c_table(c: &GdalRow) -> String {
     format!(
         "## (c) gdal_viewshed on the same DEM and light\n\n\
+         Cells differing: of the cells with data.\n\n\
          | DEM | light | ours, mask s | ours, command s (noise) | gdal_viewshed s (noise) | command ÷ gdal | cells differing % | lit by us, not by gdal | lit by gdal, not by us | note |\n\
          |---|---|---:|---:|---:|---:|---:|---:|---:|---|\n\
          | {} | {} | {:.3} | {} ({}) | {} ({}) | {} | {} | {} | {} | {} |\n",
