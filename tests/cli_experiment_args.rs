@@ -61,6 +61,15 @@ fn sizes_reps_and_counts_out_of_range_are_refused_up_front() {
             vec!["--flythrough", "0"],
         ),
         (vec!["terrain", "--width", "0"], vec!["--width", "0"]),
+        (vec!["terrain", "--size", "15"], vec!["--size", "15"]),
+        (
+            vec!["terrain", "--parts", "c", "--size", "16385"],
+            vec!["--size", "16385"],
+        ),
+        (
+            vec!["terrain", "--parts", "b", "--shadow-sizes", "32,15"],
+            vec!["--shadow-sizes", "15"],
+        ),
         (vec!["cull", "--reps", "0"], vec!["--reps", "0"]),
         (vec!["serve", "--format", "raw"], vec!["--connect"]),
         (vec!["serve", "--quality", "50"], vec!["--connect"]),
@@ -96,6 +105,32 @@ fn cull_resolutions_have_the_range_of_raykit_cull() {
             &["--resolutions", &bad],
         );
     }
+}
+
+/// Each part of the terrain experiment reads only its own sizes: part (b)
+/// runs with a `--size` that parts (a) and (c) would refuse, and its
+/// brute-force and fast masks agree.
+#[test]
+fn terrain_part_b_ignores_the_size_of_the_other_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = raykit(&[
+        "experiment",
+        "terrain",
+        "--parts",
+        "b",
+        "--size",
+        "15",
+        "--shadow-sizes",
+        "32",
+        "--reps",
+        "1",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("shadow.csv")).expect("shadow.csv");
+    assert_eq!(csv.lines().count(), 2, "{csv}");
 }
 
 /// The heat maps results.md names are the ones written: the box method's

@@ -147,6 +147,9 @@ def rows(
     return a.reshape(-1, width), lead
 
 
+_FLOAT32 = np.dtype(np.float32)
+
+
 def ray_rows(
     a,
     name: str,
@@ -167,6 +170,19 @@ def ray_rows(
     given. Rays of other dtypes are moved only with ``every_dtype`` (the
     engine's own far-ray move covers float32 rays in Möller's nearest-hit
     and occlusion structures)."""
+    if (
+        type(a) is np.ndarray
+        and a.dtype is _FLOAT32
+        and a.ndim == 2
+        and a.shape[1] == 6
+        and a.flags.c_contiguous
+        and a.flags.aligned
+        and shift is None
+        and not every_dtype
+    ):
+        # Already the engine's rows; checked here in a fraction of the
+        # general path's time, which a call on a few rays would notice.
+        return a, a.shape[:1], None
     raw = reals(a, name, last=6, min_ndim=2)
     if every_dtype and raw.dtype != np.float64:
         raw = raw.astype(np.float64)
@@ -217,6 +233,8 @@ MAX_THREADS = 4096
 def threads(n, name: str = "threads") -> int:
     """A thread count: 0, a negative number or None for all cores. Errors
     name the argument ``name``."""
+    if type(n) is int and 0 <= n <= MAX_THREADS:
+        return n
     if n is None:
         return 0
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):

@@ -63,6 +63,8 @@ _IDENTITY = np.ascontiguousarray(np.eye(4)[:3])
 
 def _check_mask(mask, what: str) -> int:
     """A 32-bit mask as an int, or ``ValueError``."""
+    if type(mask) is int and 0 <= mask <= _MASK_ALL:
+        return mask
     if isinstance(mask, bool) or not isinstance(mask, (int, np.integer)) or not 0 <= int(mask) <= _MASK_ALL:
         raise ValueError(f"{what} must be an integer in [0, 2**32 - 1], got {mask!r}")
     return int(mask)
@@ -260,11 +262,10 @@ class RaycastingScene:
             _raykit.InstancedScene([(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32), 0)], [(0, m, 0)])
         except ValueError as e:
             raise ValueError(f"instance {iid}: {str(e).split(': ', 1)[-1]}") from None
-        _check_placement(self._vertices[gid], self._box(gid), m, iid, gid)
-        box = self._box(gid)
-        if box is not None:
-            corners = np.array([[(box[0], box[1])[(k >> a) & 1][a] for a in range(3)] for k in range(8)], dtype=np.float64)
-            _warn_if_coarse(corners @ m[:, :3].T + m[:, 3], f"instance {iid}")
+        corners = _placed_corners(self._box(gid), m)
+        if corners is not None:
+            _check_placement(self._vertices[gid], corners, m, iid, gid)
+            _warn_if_coarse(corners, f"instance {iid}")
         self._placements.append((gid, m, mask))
         self._changed()
         return iid
@@ -342,14 +343,8 @@ class RaycastingScene:
         scene's coordinates (None when empty), kept until the scene
         changes: rays from afar are moved to it (:func:`_arrays.ray_rows`)."""
         if getattr(self, "_sphere_of_scene", None) is None:
-            corners = []
-            for g, m, _ in self._placements:
-                box = self._box(g)
-                if box is None:
-                    continue
-                lo, hi = box
-                c = np.array([[(lo, hi)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
-                corners.append(c if m is None else c @ m[:, :3].T + m[:, 3])
+            corners = [_placed_corners(self._box(g), m) for g, m, _ in self._placements]
+            corners = [c for c in corners if c is not None]
             self._sphere_of_scene = (_arrays.bounding_sphere(corners),)
         return self._sphere_of_scene[0]
 
@@ -533,7 +528,8 @@ class RaycastingScene:
             hit = self._built().test_occlusions(
                 flat, tnear, tfar, _arrays.threads(nthreads, "nthreads"), _image_width(lead), moved=t0
             )
-            hit &= mask != 0
+            if mask == 0:
+                hit[:] = False
         return _arrays.result(hit.reshape(lead))
 
     def count_intersections(self, rays, nthreads: int = 0, *, mask: int = _MASK_ALL):
@@ -553,7 +549,8 @@ class RaycastingScene:
             counts = self._built().count_intersections(flat, mask, _arrays.threads(nthreads, "nthreads"))
         else:
             counts = _raykit.count_intersections(self._built(), flat, _arrays.threads(nthreads, "nthreads"))
-            counts *= mask != 0
+            if mask == 0:
+                counts[:] = 0
         return _arrays.result(counts.reshape(lead))
 
     def list_intersections(
@@ -881,18 +878,25 @@ def _check_coordinates(v: np.ndarray, t: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(v, dtype=np.float32)
 
 
-def _check_placement(v: np.ndarray, box, m: np.ndarray, iid: int, gid: int) -> None:
+def _placed_corners(box, m: np.ndarray | None) -> np.ndarray | None:
+    """The eight corners of ``box`` (``(lo, hi)``; None when the geometry
+    is empty, giving None) moved by the 3×4 transform ``m`` (None: where
+    they are), as ``(8, 3)`` float64."""
+    if box is None:
+        return None
+    lo, hi = box
+    c = np.array([[(lo, hi)[(k >> a) & 1][a] for a in range(3)] for k in range(8)], dtype=np.float64)
+    return c if m is None else c @ m[:, :3].T + m[:, 3]
+
+
+def _check_placement(v: np.ndarray, corners: np.ndarray, m: np.ndarray, iid: int, gid: int) -> None:
     """Refuse instance ``iid`` when its transform ``m`` (3×4) places a
     vertex ``v`` of geometry ``gid`` beyond the coordinates a mesh may hold,
     as :func:`_check_coordinates` refuses them, naming the instance: the
-    corners of the geometry's ``box`` (``None`` when empty) first, the
-    vertices themselves only where a corner lies beyond."""
-    if box is None:
-        return
-    lo, hi = box
-    corners = np.array([[(lo, hi)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
+    geometry's box's placed ``corners`` (:func:`_placed_corners`) first,
+    the vertices themselves only where a corner lies beyond."""
     limit = float(_raykit.MAX_COORDINATE)
-    if (np.abs(corners @ m[:, :3].T + m[:, 3]) <= limit).all():
+    if (np.abs(corners) <= limit).all():
         return
     placed = v.astype(np.float64) @ m[:, :3].T + m[:, 3]
     far = (np.abs(placed) > limit).any(axis=1)

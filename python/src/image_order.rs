@@ -11,7 +11,9 @@
 //! the rays or of all the hits in traced order is made.
 
 use crate::hit_arrays::{HitColumns, INVALID_ID};
-use crate::threads::Stop;
+use crate::threads::{inline_or_interruptible, Stop};
+use pyo3::prelude::*;
+use raykit_core::accel::BATCH_GRAIN;
 use raykit_core::{Ray, Vec3};
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -36,15 +38,7 @@ impl Bands {
     /// Bands of four rows of blocks when `n` rays form rows of `width`
     /// (at least one block); otherwise runs of consecutive rays.
     pub fn new(n: usize, width: usize) -> Bands {
-        let image = width >= BLOCK
-            && n.is_multiple_of(width)
-            && n / width >= BLOCK
-            && n <= u32::MAX as usize;
-        let (len, width) = if image {
-            (BLOCK * width, Some(width))
-        } else {
-            (GRAIN, None)
-        };
+        let (len, width) = layout(n, width);
         let full = order_of(width, len);
         Bands { len, width, full }
     }
@@ -58,6 +52,40 @@ impl Bands {
             Cow::Owned(order_of(self.width, len))
         }
     }
+}
+
+/// Rays per band of a batch of `n` rays, and the image width when they
+/// form rows of `width` (at least one block); a batch smaller than a band
+/// is one band of its own length.
+fn layout(n: usize, width: usize) -> (usize, Option<usize>) {
+    let image =
+        width >= BLOCK && n.is_multiple_of(width) && n / width >= BLOCK && n <= u32::MAX as usize;
+    if image {
+        (BLOCK * width, Some(width))
+    } else {
+        (GRAIN.min(n).max(1), None)
+    }
+}
+
+/// Run `work` on a batch of `n` rays (rows of `width`) to be traced band by
+/// band over a structure already `built`: a batch of one band of at most
+/// [`BATCH_GRAIN`] rays is a single task (the structures split their
+/// batches no finer), run on the caller's thread; others, and every batch
+/// that builds the structure first, are interruptible
+/// ([`inline_or_interruptible`]).
+pub fn banded<R, F>(
+    py: Python<'_>,
+    threads: i64,
+    (n, width): (usize, usize),
+    built: bool,
+    work: F,
+) -> PyResult<R>
+where
+    F: FnOnce(&Stop) -> R + Send,
+    R: Send,
+{
+    let single = built && n <= BATCH_GRAIN && layout(n, width).0 >= n;
+    inline_or_interruptible(py, threads, n, single, work)
 }
 
 /// The traced order of a band of `len` rays: block by block, each block row

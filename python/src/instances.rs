@@ -6,8 +6,8 @@
 use crate::arrays::{c_order, rows};
 use crate::errors::value_error;
 use crate::hit_arrays::{column, laid_out, matrix, HitColumns};
-use crate::image_order::{moved_per_ray, nearest_by_bands, occlusion_by_bands, HitRow};
-use crate::threads::{detached, interruptible, Stop};
+use crate::image_order::{banded, moved_per_ray, nearest_by_bands, occlusion_by_bands, HitRow};
+use crate::threads::{detached, Stop};
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
@@ -153,7 +153,10 @@ impl InstancedScene {
         Bound<'py, PyArray2<f32>>,
     )> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let c = interruptible(py, threads, n, |stop| self.nearest(r, n, mask, width, stop))?;
+        // The structures are built with the scene.
+        let c = banded(py, threads, (n, width), true, |stop| {
+            self.nearest(r, n, mask, width, stop)
+        })?;
         Ok((
             c.t.into_pyarray(py),
             c.geometry.into_pyarray(py),
@@ -182,7 +185,7 @@ impl InstancedScene {
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
         let moved = moved_per_ray(&moved, n)?;
-        let occluded = interruptible(py, threads, n, |stop| {
+        let occluded = banded(py, threads, (n, width), true, |stop| {
             occlusion_by_bands(r, n, width, (tnear, tfar), moved, stop, |rays, out| {
                 self.scene.occluded_batch(rays, mask, out)
             })

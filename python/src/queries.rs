@@ -7,10 +7,11 @@ use crate::arrays::rows;
 use crate::errors::value_error;
 use crate::hit_arrays::{column, laid_out, matrix, INVALID_ID};
 use crate::scene::Scene;
-use crate::threads::interruptible;
+use crate::threads::{inline_or_interruptible, interruptible};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
+use raykit_core::accel::BATCH_GRAIN;
 use raykit_core::query::ClosestPoint;
 use raykit_core::{Hit, Ray, Vec3};
 use rayon::prelude::*;
@@ -236,7 +237,8 @@ pub fn count_intersections<'py>(
     threads: i64,
 ) -> PyResult<Bound<'py, PyArray1<i32>>> {
     let (r, n) = rows(&rays, 6, "rays")?;
-    let out = interruptible(py, threads, n, |stop| {
+    let single = few_rays_ready(scene, n);
+    let out = inline_or_interruptible(py, threads, n, single, |stop| {
         let built = scene.read();
         let bvh = built.surface();
         let mut counts = vec![0u32; n];
@@ -253,6 +255,14 @@ pub fn count_intersections<'py>(
             .collect::<Vec<i32>>()
     })?;
     Ok(out.into_pyarray(py))
+}
+
+/// Whether counting or listing the hits of `n` rays is a single task of
+/// the multi-hit walks ([`BATCH_GRAIN`] rays each) over a ray tree already
+/// built, which may run on the caller's thread
+/// ([`inline_or_interruptible`]).
+fn few_rays_ready(scene: &Scene, n: usize) -> bool {
+    n <= BATCH_GRAIN && scene.read().has_ray_tree()
 }
 
 /// Every hit of each `(n, 6)` float32 ray for `t >= 0`, sorted by `t`, at
@@ -277,7 +287,8 @@ pub fn list_intersections<'py>(
     Bound<'py, PyArray2<f32>>,
 )> {
     let (r, n) = rows(&rays, 6, "rays")?;
-    let lists: Vec<Vec<Hit>> = interruptible(py, threads, n, |stop| {
+    let single = few_rays_ready(scene, n);
+    let lists: Vec<Vec<Hit>> = inline_or_interruptible(py, threads, n, single, |stop| {
         let built = scene.read();
         let mut lists = Vec::with_capacity(n);
         for rays in self::rays(r).chunks(PIECE) {

@@ -9,8 +9,8 @@ use crate::arrays::{flat, rows};
 use crate::errors::persist_error;
 use crate::errors::value_error;
 use crate::hit_arrays::{matrix, HitColumns, INVALID_ID};
-use crate::image_order::{moved_per_ray, nearest_by_bands, occlusion_by_bands, HitRow};
-use crate::threads::{detached, interruptible, Stop};
+use crate::image_order::{banded, moved_per_ray, nearest_by_bands, occlusion_by_bands, HitRow};
+use crate::threads::{detached, Stop};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -69,6 +69,17 @@ impl Built {
                 })
             })
             .as_deref()
+    }
+
+    /// Whether the ray structure has been built (or loaded), or the scene
+    /// needs none.
+    pub(crate) fn is_built(&self) -> bool {
+        self.ray_structure.get().is_some() || self.mesh.num_triangles() == 0
+    }
+
+    /// Whether the multi-hit queries' ray tree has been built.
+    pub(crate) fn has_ray_tree(&self) -> bool {
+        self.surface.get().is_some_and(SurfaceBvh::has_ray_tree)
     }
 
     /// The BVH of the point and multi-hit queries (built on first use).
@@ -316,7 +327,7 @@ impl Scene {
         Bound<'py, PyArray2<f32>>,
     )> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let c = interruptible(py, threads, n, |stop| {
+        let c = banded(py, threads, (n, width), self.read().is_built(), |stop| {
             self.nearest(&self.read(), r, width, stop)
         })?;
         Ok((
@@ -346,12 +357,20 @@ impl Scene {
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
         let moved = moved_per_ray(&moved, n)?;
-        let occluded = interruptible(py, threads, n, |stop| match self.read().accel() {
-            Some(a) => occlusion_by_bands(r, n, width, (tnear, tfar), moved, stop, |rays, out| {
-                a.occluded_batch(rays, out)
-            }),
-            None => vec![false; n],
-        })?;
+        let occluded = banded(
+            py,
+            threads,
+            (n, width),
+            self.read().is_built(),
+            |stop| match self.read().accel() {
+                Some(a) => {
+                    occlusion_by_bands(r, n, width, (tnear, tfar), moved, stop, |rays, out| {
+                        a.occluded_batch(rays, out)
+                    })
+                }
+                None => vec![false; n],
+            },
+        )?;
         Ok(occluded.into_pyarray(py))
     }
 

@@ -147,6 +147,7 @@ pub fn shadow<'py>(
         }
     };
     let (dem, field) = surface(&heights, transform, geographic)?;
+    let given = heights.as_slice().expect("C-contiguous, as dem() checked");
     let light = match (sun, light) {
         (Some((az, el)), None) => {
             if light_elevation {
@@ -170,12 +171,10 @@ pub fn shadow<'py>(
             }
         }
         (None, Some(at)) => {
-            let given = heights.as_slice().expect("C-contiguous, as dem() checked");
             point_light(&dem, &field, given, at, light_elevation, observer).map_err(value_error)?
         }
         _ => return Err(value_error("give exactly one of sun, light")),
     };
-    let given = heights.as_slice().expect("C-contiguous, as dem() checked");
     let mask = detached(py, threads, || {
         // The quadtree is built only if the light needs it.
         let mut mask = shadow_mask_for_targets(&field, None, &light, method, 0.0, &|_| {});

@@ -456,12 +456,22 @@ def _answers_of_a_fresh_scene(args):
     v, f, rays, points = args
     s = raykit.RaycastingScene()
     s.add_triangles(v, f)
-    return s.cast_rays(rays)["t_hit"], s.cast_rays(rays, nthreads=1)["t_hit"], s.compute_distance(points), s.count_intersections(rays)
+    # A first query on a single ray builds the structure on a pool of this
+    # process, not on the caller's thread through the parent's pool.
+    first = s.test_occlusions(rays[:1], nthreads=1)
+    return (
+        first,
+        s.cast_rays(rays)["t_hit"],
+        s.cast_rays(rays, nthreads=1)["t_hit"],
+        s.compute_distance(points),
+        s.count_intersections(rays),
+        s.test_occlusions(rays[:1], nthreads=1),
+    )
 
 
 def _answers_of_a_sent_scene(args):
     scene, rays = args
-    return scene.cast_rays(rays)["t_hit"]
+    return scene.cast_rays(rays[:1], nthreads=1)["t_hit"], scene.cast_rays(rays)["t_hit"]
 
 
 def test_a_forked_child_answers_after_the_parent_has_used_every_pool(bunny):
@@ -472,13 +482,21 @@ def test_a_forked_child_answers_after_the_parent_has_used_every_pool(bunny):
     v, f, _ = bunny
     rays, points = rays_at(v, 300, 13), v[:64] + np.float32(0.01)
     parent = scene_of(v, f)
-    want = (parent.cast_rays(rays)["t_hit"], parent.cast_rays(rays, nthreads=1)["t_hit"], parent.compute_distance(points), parent.count_intersections(rays))
+    want = (
+        parent.test_occlusions(rays[:1], nthreads=1),
+        parent.cast_rays(rays)["t_hit"],
+        parent.cast_rays(rays, nthreads=1)["t_hit"],
+        parent.compute_distance(points),
+        parent.count_intersections(rays),
+        parent.test_occlusions(rays[:1], nthreads=1),
+    )
     with multiprocessing.get_context("fork").Pool(1) as pool:
         got = pool.apply_async(_answers_of_a_fresh_scene, ((v, f, rays, points),)).get(timeout=120)
         sent = pool.apply_async(_answers_of_a_sent_scene, ((parent, rays),)).get(timeout=120)
     for g, w in zip(got, want):
         np.testing.assert_array_equal(g, w)
-    np.testing.assert_array_equal(sent, want[0])
+    np.testing.assert_array_equal(sent[0], want[1][:1])
+    np.testing.assert_array_equal(sent[1], want[1])
 
 
 def test_the_extension_refuses_column_major_arrays_it_would_read_transposed(bunny):
@@ -524,3 +542,56 @@ def test_a_shallow_copy_changes_apart_from_its_original(bunny):
     np.testing.assert_array_equal(other.cast_rays(rays)["t_hit"], both.cast_rays(rays)["t_hit"])
     np.testing.assert_array_equal(scene.cast_rays(rays)["t_hit"], alone)
     assert len(scene._vertices) == 1 and scene.instanced == other.instanced == False  # noqa: E712
+
+
+def test_calls_on_a_single_ray_answer_as_one_large_batch_in_every_input_form(bunny):
+    """A call on one ray runs on the caller's thread, and rays already in
+    the engine's layout (C-ordered float32 rows) skip the general checks;
+    a batch larger than a band is cut into bands over a pool. Both must
+    give the same answers for every input form, thread count and mask."""
+    v, f, _ = bunny
+    scene = scene_of(v, f)
+    rays = rays_at(v, 9000, 12)
+    ref = scene.cast_rays(rays, nthreads=2)
+    ref_occ = scene.test_occlusions(rays, nthreads=2)
+    ref_count = scene.count_intersections(rays, nthreads=2)
+    assert 1000 < np.isfinite(ref["t_hit"]).sum() < 8000
+    wide = np.zeros((len(rays), 12), np.float32)
+    wide[:, ::2] = rays
+    for i in range(0, len(rays), 450):
+        one = rays[i : i + 1]
+        forms = [
+            one,
+            one.astype(np.float64),
+            one.astype(">f4"),
+            one.tolist(),
+            one.reshape(1, 1, 6),
+            wide[i : i + 1, ::2],
+            # A result array fed back (a numpy subclass answering .numpy()).
+            scene.cast_rays(one)["t_hit"].__class__(one.shape, np.float32, one.copy()),
+        ]
+        for form in forms:
+            for nthreads in (0, 1, 2):
+                a = scene.cast_rays(form, nthreads=nthreads)
+                assert a["t_hit"].reshape(-1)[0] == ref["t_hit"][i], (i, type(form), nthreads)
+                assert a["primitive_ids"].reshape(-1)[0] == ref["primitive_ids"][i]
+                np.testing.assert_array_equal(a["primitive_uvs"].reshape(-1, 2)[0], ref["primitive_uvs"][i])
+                assert scene.test_occlusions(form, nthreads=nthreads).reshape(-1)[0] == ref_occ[i]
+                assert scene.count_intersections(form, nthreads=nthreads).reshape(-1)[0] == ref_count[i]
+    for n in (200, 256, 257, 300):
+        for nthreads in (0, 1):
+            np.testing.assert_array_equal(scene.cast_rays(rays[:n], nthreads=nthreads)["t_hit"], ref["t_hit"][:n])
+            np.testing.assert_array_equal(scene.test_occlusions(rays[:n], nthreads=nthreads), ref_occ[:n])
+    # Mask 0 hides every triangle; any other mask sees the unmasked scene.
+    assert not scene.test_occlusions(rays, mask=0).any()
+    assert not scene.test_occlusions(rays[:1], mask=0).any()
+    assert (scene.count_intersections(rays, mask=0) == 0).all()
+    assert not np.isfinite(scene.cast_rays(rays[:1], mask=0)["t_hit"]).any()
+    np.testing.assert_array_equal(scene.test_occlusions(rays, mask=1), ref_occ)
+    np.testing.assert_array_equal(scene.count_intersections(rays, mask=5), ref_count)
+    # The thread count is checked on the caller's-thread path too.
+    for bad in (-1, 10**6):
+        with pytest.raises(ValueError, match="threads"):
+            scene._built().cast_rays(rays[:1], bad, 0)
+        with pytest.raises(ValueError, match="threads"):
+            scene._built().test_occlusions(rays[:1], 0.0, np.inf, bad, 0)

@@ -239,23 +239,28 @@ impl TriangleMesh {
     /// a hand-made mesh fails with that message rather than an index out of
     /// bounds deep in the build.
     pub fn assert_indices_in_range(&self) {
-        let n = self.positions.len();
-        if let Some((t, &i)) = self
-            .indices
-            .iter()
-            .enumerate()
-            .find_map(|(t, tri)| tri.iter().find(|&&i| i as usize >= n).map(|i| (t, i)))
-        {
+        if let Err(e) = self.indices_in_range() {
             panic!(
-                "{} (check hand-made meshes with TriangleMesh::validate, or build through \
-                 build_accel, which does)",
-                MeshError::IndexOutOfRange {
-                    tri: t,
-                    index: i,
-                    count: n
-                }
+                "{e} (check hand-made meshes with TriangleMesh::validate, or build through \
+                 build_accel, which does)"
             );
         }
+    }
+
+    /// The first triangle referring to a vertex the mesh does not have, as
+    /// [`MeshError::IndexOutOfRange`].
+    fn indices_in_range(&self) -> Result<(), MeshError> {
+        let n = self.positions.len();
+        for (t, tri) in self.indices.iter().enumerate() {
+            if let Some(&i) = tri.iter().find(|&&i| i as usize >= n) {
+                return Err(MeshError::IndexOutOfRange {
+                    tri: t,
+                    index: i,
+                    count: n,
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Check the invariants listed on the type.
@@ -274,15 +279,7 @@ impl TriangleMesh {
         {
             return Err(MeshError::TooFar { vertex: v });
         }
-        for (t, tri) in self.indices.iter().enumerate() {
-            if let Some(&i) = tri.iter().find(|&&i| i as usize >= n) {
-                return Err(MeshError::IndexOutOfRange {
-                    tri: t,
-                    index: i,
-                    count: n,
-                });
-            }
-        }
+        self.indices_in_range()?;
         let check = |what, got: usize, expected: usize| {
             if got != expected {
                 Err(MeshError::Length {

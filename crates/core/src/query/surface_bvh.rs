@@ -101,6 +101,12 @@ impl SurfaceBvh {
         points
     }
 
+    /// Whether the ray-casting tree of the multi-hit queries has been made
+    /// (by [`SurfaceBvh::prepare`] or a first query).
+    pub fn has_ray_tree(&self) -> bool {
+        self.rays.get().is_some()
+    }
+
     /// The ray-casting tree over the triangles; made on first use.
     pub(crate) fn ray_tree(&self) -> &RayTree {
         self.rays.get_or_init(|| RayTree::build(&self.mesh))

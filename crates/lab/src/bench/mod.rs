@@ -27,8 +27,8 @@ use std::process::ExitCode;
 takes over 5 s on one thread has its builds timed once. The spread (max-min)/median\n\
 of the ray timings is reported so noisy machines show (n/a with --reps 1). With\n\
 --compare, the engines of a cell are timed in turn (each repetition times ours,\n\
-then each Embree's), so that a burst of host noise falls on both, and every trace\n\
-cell runs one untimed round before its timed ones. Brute force is timed on a\n\
+then each Embree's), so that a burst of host noise falls on both. Every trace cell\n\
+runs one untimed round before its timed ones. Brute force is timed on a\n\
 sample of each ray set sized to take about a second. The ray sets are those of\n\
 `raykit rays`."
 )]
@@ -291,6 +291,9 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
                     bar.inc(1);
                     rays.len() as f64 / median_min_max(&times).0 / 1e6
                 };
+                // One untimed round, so that the first timed column does not
+                // pay for the first touch of the tree and the rays.
+                all.install(|| answers(accel.as_ref(), &rays, shadow));
                 let mrays_1t = speed(&one);
                 let mrays_nt = speed(&all);
                 let verify = reference

@@ -367,7 +367,7 @@ fn part_b(args: &TerrainExperimentArgs) -> Result<Vec<ShadowRow>> {
 /// or else on the generated DEM.
 fn part_c(
     args: &TerrainExperimentArgs,
-    generated: &Dem,
+    generated: Option<&Dem>,
     given: Option<(PathBuf, Dem)>,
 ) -> Result<GdalRow> {
     let dir = args.out.join("gdal");
@@ -378,6 +378,7 @@ fn part_c(
             (path, dem, name)
         }
         None => {
+            let generated = generated.expect("the DEM is generated when none is given");
             let input = dir.join("dem.tif");
             raykit_terrain::io::write_dem_geotiff(&input, generated)?;
             (input, generated.clone(), format!("fractal:{}", args.size))
@@ -517,15 +518,6 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 
 /// Run the three parts and write the report.
 pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
-    if args.size < 16
-        || args.size > 16384
-        || args
-            .shadow_sizes
-            .iter()
-            .any(|&s| !(16..=16384).contains(&s))
-    {
-        bail!("DEM sizes must be between 16 and 16384");
-    }
     if args.taus.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         bail!("--taus must be positive numbers");
     }
@@ -537,6 +529,20 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
         bail!("--parts: unknown part '{p}'; the parts are a, b and c");
     }
     let part = |p: char| args.parts.contains(&p);
+    // Only the parts asked for read their sizes.
+    let generate = part('a') || (part('c') && args.gdal_dem.is_none());
+    if generate && !(16..=16384).contains(&args.size) {
+        bail!("--size must be between 16 and 16384, got {}", args.size);
+    }
+    if let Some(s) = args
+        .shadow_sizes
+        .iter()
+        .find(|&&s| !(16..=16384).contains(&s))
+    {
+        if part('b') {
+            bail!("--shadow-sizes must be between 16 and 16384, got {s}");
+        }
+    }
     // A bad --gdal-dem is refused before any part runs or writes.
     let given = match (&args.gdal_dem, part('c')) {
         (Some(path), true) => Some((
@@ -548,9 +554,9 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let head = super::provenance();
-    let dem = raykit_terrain::fractal::fractal(args.size, 1, 0.55);
-    let a = if part('a') {
-        part_a(&args, &dem)?
+    let dem = generate.then(|| raykit_terrain::fractal::fractal(args.size, 1, 0.55));
+    let a = if let (true, Some(dem)) = (part('a'), &dem) {
+        part_a(&args, dem)?
     } else {
         Vec::new()
     };
@@ -560,7 +566,7 @@ pub fn run(args: TerrainExperimentArgs) -> Result<ExitCode> {
         Vec::new()
     };
     let c = if part('c') {
-        Some(part_c(&args, &dem, given)?)
+        Some(part_c(&args, dem.as_ref(), given)?)
     } else {
         None
     };

@@ -401,7 +401,7 @@ pub fn run(args: WhittedExperimentArgs) -> Result<ExitCode> {
         }
     }
     md += "\n## Scenes, shadow maps and image differences (2 passes)\n\n\
-           | scene | triangles | lights | BVH build ms | shadow-map build ms | maps MiB | maps vs rays: pixels differing | RMSE | rasterized vs traced: pixels differing | wavefront vs recursive: pixels differing |\n\
+           | scene | triangles | lights | BVH build ms | shadow-map build ms | maps MiB | maps vs rays: pixels differing, % | maps vs rays: RMSE of linear radiance | rasterized vs traced: pixels differing, count | wavefront vs recursive: pixels differing, count |\n\
            |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for s in &summaries {
         md += &format!(
