@@ -7,12 +7,11 @@ use crate::arrays::rows;
 use crate::errors::value_error;
 use crate::hit_arrays::{column, laid_out, matrix, INVALID_ID};
 use crate::scene::Scene;
-use crate::threads::{inline_or_interruptible, interruptible};
+use crate::threads::inline_or_interruptible;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
-use raykit_core::accel::BATCH_GRAIN;
-use raykit_core::query::ClosestPoint;
+use raykit_core::query::{ClosestPoint, QueryKind};
 use raykit_core::{Hit, Ray, Vec3};
 use rayon::prelude::*;
 
@@ -20,7 +19,7 @@ use rayon::prelude::*;
 const GRAIN: usize = 1024;
 
 /// Rays or points handed to the engine at a time: a call stops between
-/// pieces when interrupted ([`interruptible`]). Large enough that each
+/// pieces when interrupted ([`crate::threads::interruptible`]). Large enough that each
 /// piece keeps the engine's own order (Morton order of points) effective.
 const PIECE: usize = 1 << 20;
 
@@ -69,7 +68,8 @@ pub fn closest_points<'py>(
             "max_distance must be >= 0, got {max_distance}"
         )));
     }
-    let (pts, g, p, uv, nrm, dist) = interruptible(py, threads, n, |stop| {
+    let single = scene.read().single_task(QueryKind::Closest, n);
+    let (pts, g, p, uv, nrm, dist) = inline_or_interruptible(py, threads, n, single, |stop| {
         let built = scene.read();
         let bvh = built.surface();
         let qp = points(q);
@@ -142,7 +142,14 @@ fn point_values<'py>(
     what: PointValue,
 ) -> PyResult<Bound<'py, PyArray1<f32>>> {
     let (q, n) = rows(&query_points, 3, "query_points")?;
-    let out = interruptible(py, threads, n, |stop| {
+    let kind = match what {
+        PointValue::Distance => Some(QueryKind::Distance),
+        PointValue::SignedDistance => Some(QueryKind::SignedDistance),
+        PointValue::Occupancy => Some(QueryKind::Inside),
+        PointValue::Winding(_) => None,
+    };
+    let single = kind.is_some_and(|k| scene.read().single_task(k, n));
+    let out = inline_or_interruptible(py, threads, n, single, |stop| {
         let built = scene.read();
         let bvh = built.surface();
         let qp = points(q);
@@ -237,7 +244,7 @@ pub fn count_intersections<'py>(
     threads: i64,
 ) -> PyResult<Bound<'py, PyArray1<i32>>> {
     let (r, n) = rows(&rays, 6, "rays")?;
-    let single = few_rays_ready(scene, n);
+    let single = scene.read().single_task(QueryKind::Count, n);
     let out = inline_or_interruptible(py, threads, n, single, |stop| {
         let built = scene.read();
         let bvh = built.surface();
@@ -255,14 +262,6 @@ pub fn count_intersections<'py>(
             .collect::<Vec<i32>>()
     })?;
     Ok(out.into_pyarray(py))
-}
-
-/// Whether counting or listing the hits of `n` rays is a single task of
-/// the multi-hit walks ([`BATCH_GRAIN`] rays each) over a ray tree already
-/// built, which may run on the caller's thread
-/// ([`inline_or_interruptible`]).
-fn few_rays_ready(scene: &Scene, n: usize) -> bool {
-    n <= BATCH_GRAIN && scene.read().has_ray_tree()
 }
 
 /// Every hit of each `(n, 6)` float32 ray for `t >= 0`, sorted by `t`, at
@@ -287,7 +286,7 @@ pub fn list_intersections<'py>(
     Bound<'py, PyArray2<f32>>,
 )> {
     let (r, n) = rows(&rays, 6, "rays")?;
-    let single = few_rays_ready(scene, n);
+    let single = scene.read().single_task(QueryKind::AllHits, n);
     let lists: Vec<Vec<Hit>> = inline_or_interruptible(py, threads, n, single, |stop| {
         let built = scene.read();
         let mut lists = Vec::with_capacity(n);

@@ -18,7 +18,7 @@ use raykit_core::accel::bvh::DEFAULT_MAX_DEGRADATION;
 use raykit_core::accel::{
     build_accel, load_accel, refit_keeps_precision, AccelKind, BuildOptions, RefitError,
 };
-use raykit_core::query::SurfaceBvh;
+use raykit_core::query::{QueryKind, SurfaceBvh};
 use raykit_core::tri::TestKind;
 use raykit_core::{Accel, MeshError, TriangleMesh, Vec3};
 use rayon::prelude::*;
@@ -77,9 +77,11 @@ impl Built {
         self.ray_structure.get().is_some() || self.mesh.num_triangles() == 0
     }
 
-    /// Whether the multi-hit queries' ray tree has been built.
-    pub(crate) fn has_ray_tree(&self) -> bool {
-        self.surface.get().is_some_and(SurfaceBvh::has_ray_tree)
+    /// Whether the point and multi-hit query `kind` on `n` points or rays
+    /// is a single task over trees already made
+    /// ([`SurfaceBvh::single_task`]), which may run on the caller's thread.
+    pub(crate) fn single_task(&self, kind: QueryKind, n: usize) -> bool {
+        self.surface.get().is_some_and(|s| s.single_task(kind, n))
     }
 
     /// The BVH of the point and multi-hit queries (built on first use).

@@ -456,11 +456,12 @@ def _answers_of_a_fresh_scene(args):
     v, f, rays, points = args
     s = raykit.RaycastingScene()
     s.add_triangles(v, f)
-    # A first query on a single ray builds the structure on a pool of this
-    # process, not on the caller's thread through the parent's pool.
-    first = s.test_occlusions(rays[:1], nthreads=1)
+    # A first query on a single ray or point builds its structure on a pool
+    # of this process, not on the caller's thread through the parent's pool.
     return (
-        first,
+        s.test_occlusions(rays[:1], nthreads=1),
+        s.compute_distance(points[:1], nthreads=1),
+        s.count_intersections(rays[:1], nthreads=1),
         s.cast_rays(rays)["t_hit"],
         s.cast_rays(rays, nthreads=1)["t_hit"],
         s.compute_distance(points),
@@ -484,6 +485,8 @@ def test_a_forked_child_answers_after_the_parent_has_used_every_pool(bunny):
     parent = scene_of(v, f)
     want = (
         parent.test_occlusions(rays[:1], nthreads=1),
+        parent.compute_distance(points[:1], nthreads=1),
+        parent.count_intersections(rays[:1], nthreads=1),
         parent.cast_rays(rays)["t_hit"],
         parent.cast_rays(rays, nthreads=1)["t_hit"],
         parent.compute_distance(points),
@@ -495,8 +498,8 @@ def test_a_forked_child_answers_after_the_parent_has_used_every_pool(bunny):
         sent = pool.apply_async(_answers_of_a_sent_scene, ((parent, rays),)).get(timeout=120)
     for g, w in zip(got, want):
         np.testing.assert_array_equal(g, w)
-    np.testing.assert_array_equal(sent[0], want[1][:1])
-    np.testing.assert_array_equal(sent[1], want[1])
+    np.testing.assert_array_equal(sent[0], want[3][:1])
+    np.testing.assert_array_equal(sent[1], want[3])
 
 
 def test_the_extension_refuses_column_major_arrays_it_would_read_transposed(bunny):
@@ -544,11 +547,12 @@ def test_a_shallow_copy_changes_apart_from_its_original(bunny):
     assert len(scene._vertices) == 1 and scene.instanced == other.instanced == False  # noqa: E712
 
 
-def test_calls_on_a_single_ray_answer_as_one_large_batch_in_every_input_form(bunny):
-    """A call on one ray runs on the caller's thread, and rays already in
-    the engine's layout (C-ordered float32 rows) skip the general checks;
-    a batch larger than a band is cut into bands over a pool. Both must
-    give the same answers for every input form, thread count and mask."""
+def test_calls_on_a_single_ray_or_point_answer_as_one_large_batch_in_every_input_form(bunny):
+    """A call on one ray or point runs on the caller's thread, and rays
+    already in the engine's layout (C-ordered float32 rows) skip the
+    general checks; a batch larger than a band is cut into bands over a
+    pool. Both must give the same answers for every input form, thread
+    count and mask."""
     v, f, _ = bunny
     scene = scene_of(v, f)
     rays = rays_at(v, 9000, 12)
@@ -578,6 +582,18 @@ def test_calls_on_a_single_ray_answer_as_one_large_batch_in_every_input_form(bun
                 np.testing.assert_array_equal(a["primitive_uvs"].reshape(-1, 2)[0], ref["primitive_uvs"][i])
                 assert scene.test_occlusions(form, nthreads=nthreads).reshape(-1)[0] == ref_occ[i]
                 assert scene.count_intersections(form, nthreads=nthreads).reshape(-1)[0] == ref_count[i]
+    points = np.concatenate([v[::40], v[::40] * 1.5 - v.mean(0) * 0.5]).astype(np.float32)
+    ref_d = scene.compute_distance(points, nthreads=2)
+    ref_c = scene.compute_closest_points(points, nthreads=2)
+    ref_s = scene.compute_signed_distance(points, nthreads=2)
+    for i in range(0, len(points), 7):
+        for nthreads in (0, 1):
+            one = points[i : i + 1]
+            assert scene.compute_distance(one, nthreads=nthreads)[0] == ref_d[i]
+            c = scene.compute_closest_points(one, nthreads=nthreads)
+            np.testing.assert_array_equal(c["points"][0], ref_c["points"][i])
+            assert c["primitive_ids"][0] == ref_c["primitive_ids"][i]
+            assert scene.compute_signed_distance(one, nthreads=nthreads)[0] == ref_s[i]
     for n in (200, 256, 257, 300):
         for nthreads in (0, 1):
             np.testing.assert_array_equal(scene.cast_rays(rays[:n], nthreads=nthreads)["t_hit"], ref["t_hit"][:n])

@@ -2,7 +2,9 @@
 //! [`SurfaceBvh`]'s batch queries in one type, with the figures a report
 //! gives (how many were answered, hits, points inside).
 
+use crate::accel::BATCH_GRAIN;
 use crate::hit::Hit;
+use crate::query::batch::COHERENT_CHUNK;
 use crate::query::closest::ClosestPoint;
 use crate::query::surface_bvh::SurfaceBvh;
 use crate::ray::Ray;
@@ -82,6 +84,26 @@ impl SurfaceBvh {
             QueryKind::SignedDistance => self.signed_trees(),
             QueryKind::Count | QueryKind::AllHits => {
                 self.ray_tree();
+            }
+        }
+    }
+
+    /// Whether the batch query of `kind` on `n` points or rays is a single
+    /// task with nothing to make first, so that it starts no parallel work
+    /// and may run alone on any thread: up to [`BATCH_GRAIN`] rays over the
+    /// ray-casting tree, or up to one Morton-ordered piece of points over
+    /// the trees the query walks, once made. For occupancy and signed
+    /// distance those include the point tree's winding-number moments even
+    /// where the crossings are counted: without them, a point too close to
+    /// an edge to count would be summed over the triangles in parallel.
+    pub fn single_task(&self, kind: QueryKind, n: usize) -> bool {
+        match kind {
+            QueryKind::Count | QueryKind::AllHits => n <= BATCH_GRAIN && self.has_ray_tree(),
+            QueryKind::Distance | QueryKind::Closest => {
+                n <= COHERENT_CHUNK && self.has_point_tree()
+            }
+            QueryKind::Inside | QueryKind::SignedDistance => {
+                n <= COHERENT_CHUNK && self.has_closing() && self.winding_tree_made()
             }
         }
     }

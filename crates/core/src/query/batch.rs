@@ -21,7 +21,7 @@ pub(crate) fn answer_each<I: Sync, O: Send>(
 }
 
 /// Points answered in one task, one after another in Morton order.
-const COHERENT_CHUNK: usize = 1024;
+pub(crate) const COHERENT_CHUNK: usize = 1024;
 
 /// Bits per axis of the Morton codes that order the points.
 const MORTON_BITS: u32 = 10;

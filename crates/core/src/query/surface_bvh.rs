@@ -101,10 +101,20 @@ impl SurfaceBvh {
         points
     }
 
-    /// Whether the ray-casting tree of the multi-hit queries has been made
-    /// (by [`SurfaceBvh::prepare`] or a first query).
-    pub fn has_ray_tree(&self) -> bool {
+    /// Whether the ray-casting tree has been made.
+    pub(crate) fn has_ray_tree(&self) -> bool {
         self.rays.get().is_some()
+    }
+
+    /// Whether the ray-casting trees of the surface and its closing cap
+    /// have been made ([`SurfaceBvh::closed_trees`]).
+    pub(crate) fn has_closing(&self) -> bool {
+        self.closing.get().is_some()
+    }
+
+    /// Whether the point tree has been made.
+    pub(crate) fn has_point_tree(&self) -> bool {
+        self.points.get().is_some()
     }
 
     /// The ray-casting tree over the triangles; made on first use.

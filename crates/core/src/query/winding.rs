@@ -347,7 +347,7 @@ impl SurfaceBvh {
     }
 
     /// Whether the point tree and its winding-number moments are made.
-    fn winding_tree_made(&self) -> bool {
+    pub(crate) fn winding_tree_made(&self) -> bool {
         self.points.get().is_some_and(|p| p.moments.get().is_some())
     }
 
@@ -410,7 +410,13 @@ impl SurfaceBvh {
     /// [`SurfaceBvh::inside_trees`], side by side, since neither build
     /// keeps both cores busy throughout.
     pub(crate) fn signed_trees(&self) {
-        rayon::join(|| self.points(), || self.inside_trees());
+        if self.has_point_tree() {
+            // Nothing to overlap: a join from outside the pool would hand
+            // even a one-point query to a pool's thread and back.
+            self.inside_trees();
+        } else {
+            rayon::join(|| self.points(), || self.inside_trees());
+        }
     }
 
     /// [`SurfaceBvh::winding_number`] for many points, in parallel, in
