@@ -1,4 +1,4 @@
-"""The time of one call on a few rays, raykit against Open3D's
+"""The time of one call on a few rays or points, raykit against Open3D's
 RaycastingScene, in one process on the same rays: what a simulation loop
 that casts a ray or a handful per step waits for per call, where the
 engine's own work is a small part.
@@ -7,7 +7,8 @@ engine's own work is a small part.
 
 Default mesh: the Stanford bunny in data/meshes. Rays are incoherent
 (from a sphere around the mesh towards random points of its box), float32
-rows of six, as both engines take them without a copy. Each cell is the
+rows of six, as both engines take them without a copy; points uniform in
+the box grown by 10% per side. Each cell is the
 median over ``--rounds`` rounds of the mean time of ``--calls`` calls, the
 engines taking turns within each round, after a warm-up.
 """
@@ -22,12 +23,22 @@ from pathlib import Path
 
 import numpy as np
 from bench_first_call import rays_towards
+from query_points import query_points
 
 import raykit
 
 BUNNY = str(Path(__file__).resolve().parents[2] / "data" / "meshes" / "bunny_3674.obj")
 
-QUERIES = ["cast_rays", "test_occlusions", "count_intersections"]
+QUERIES = [
+    "cast_rays",
+    "test_occlusions",
+    "count_intersections",
+    "list_intersections",
+    "compute_distance",
+    "compute_closest_points",
+    "compute_signed_distance",
+    "compute_occupancy",
+]
 
 
 def per_call_us(fn, calls: int) -> float:
@@ -60,15 +71,17 @@ def main():
         f"{os.path.basename(args.mesh)}: {len(f):,} triangles; µs per call, median of {args.rounds} rounds "
         f"of {args.calls:,} calls"
     )
-    print("| rays | query | nthreads | raykit µs | Open3D µs | raykit ÷ Open3D (speed) |")
+    print("| rays or points | query | nthreads | raykit µs | Open3D µs | raykit ÷ Open3D (speed) |")
     print("|--:|---|--:|--:|--:|--:|")
     for n in [int(x) for x in args.n.split(",")]:
         rays = rays_towards(lo, hi, n, rng)
-        tensor = o3d.core.Tensor(rays)
+        points = query_points(v, n, False, rng)
         for query in QUERIES:
+            arg = points if query.startswith("compute") else rays
+            tensor = o3d.core.Tensor(arg)
             for nthreads in (0, 1):
                 calls = {
-                    "raykit": lambda: getattr(ours, query)(rays, nthreads=nthreads),
+                    "raykit": lambda: getattr(ours, query)(arg, nthreads=nthreads),
                     "open3d": lambda: getattr(theirs, query)(tensor, nthreads=nthreads),
                 }
                 times = {engine: [] for engine in calls}

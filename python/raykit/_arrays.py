@@ -148,6 +148,8 @@ def rows(
 
 
 _FLOAT32 = np.dtype(np.float32)
+_FLOAT64 = np.dtype(np.float64)
+_NO_SHIFT = (0.0, 0.0, 0.0)
 
 
 def ray_rows(
@@ -156,6 +158,7 @@ def ray_rows(
     shift: np.ndarray | None,
     sphere: tuple[np.ndarray, float] | None,
     every_dtype: bool = False,
+    threads: int = 0,
 ) -> tuple[np.ndarray, tuple[int, ...], np.ndarray | None]:
     """Rays ``(..., 6)`` as :func:`rows` makes them, and how far each was
     moved. Float64 rays whose origin lies more than 16 radii (the engine's
@@ -190,11 +193,11 @@ def ray_rows(
         flat, lead = rows(raw, name, 6, shift=shift)
         return flat, lead, None
     lead = raw.shape[:-1]
-    r = np.require(raw.reshape(-1, 6), dtype=np.float64, requirements=["C", "A"])
+    r = raw.reshape(-1, 6)
+    if not (r.dtype is _FLOAT64 and r.flags.c_contiguous and r.flags.aligned):
+        r = np.array(r, dtype=np.float64, order="C")
     centre, radius = sphere
-    flat, t0 = _raykit.near_rays(
-        r, np.zeros(3) if shift is None else shift, centre, float(radius)
-    )
+    flat, t0 = _raykit.near_rays(r, _NO_SHIFT if shift is None else shift, centre, float(radius), threads)
     return flat, lead, t0
 
 

@@ -330,13 +330,15 @@ class RaycastingScene:
         self._sphere_of_scene = None
         self._instanced_cache = None
 
-    def _rays(self, rays, every_dtype: bool = False):
+    def _rays(self, rays, nthreads, every_dtype: bool = False):
         """``rays`` as the engine takes them (:func:`_arrays.ray_rows`):
         float64 rays from afar moved up to the scene, and rays of every
         dtype where the engine's own move does not cover them (counts and
         hit lists; the Plücker and projection tests)."""
         every = every_dtype or (self._test_name != "moller" and not self.instanced)
-        return _arrays.ray_rows(rays, "rays", self._origin, self._sphere(), every_dtype=every)
+        return _arrays.ray_rows(
+            rays, "rays", self._origin, self._sphere(), every_dtype=every, threads=_arrays.threads(nthreads, "nthreads")
+        )
 
     def _sphere(self):
         """The bounding sphere of the placed geometries' boxes, in the
@@ -481,7 +483,7 @@ class RaycastingScene:
         the instance), the opposite of the placed triangle's own winding.
         ``mask`` is the rays' 32-bit mask (see :meth:`add_triangles`).
         """
-        flat, lead, t0 = self._rays(rays)
+        flat, lead, t0 = self._rays(rays, nthreads)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             t, g, inst, p, uv, n = self._built().cast_rays(
@@ -518,7 +520,7 @@ class RaycastingScene:
         if math.isnan(tnear) or math.isnan(tfar):
             raise ValueError(f"tnear and tfar must be numbers, got {tnear} and {tfar}")
         # A ray moved closer has its interval moved back by as much.
-        flat, lead, t0 = self._rays(rays)
+        flat, lead, t0 = self._rays(rays, nthreads)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             hit = self._built().test_occlusions(
@@ -543,7 +545,7 @@ class RaycastingScene:
         times. Rays with NaN or infinite coordinates count 0. ``mask`` as in
         :meth:`cast_rays`.
         """
-        flat, lead, _ = self._rays(rays, every_dtype=True)
+        flat, lead, _ = self._rays(rays, nthreads, every_dtype=True)
         mask = _check_mask(mask, "mask")
         if self.instanced:
             counts = self._built().count_intersections(flat, mask, _arrays.threads(nthreads, "nthreads"))
@@ -569,7 +571,7 @@ class RaycastingScene:
         edge or corner is listed once, as :meth:`count_intersections` counts
         it.
         """
-        flat, _, t0 = self._rays(rays, every_dtype=True)
+        flat, _, t0 = self._rays(rays, nthreads, every_dtype=True)
         cap = _arrays.max_hits(max_hits)
         mask = _check_mask(mask, "mask")
         if self.instanced:

@@ -102,7 +102,7 @@ class RayMeshIntersector:
         with np.errstate(invalid="ignore", divide="ignore"):
             d = np.where(norm > 0, d / norm, d)
         rays = np.concatenate([o.astype(np.float64), d], axis=1)
-        flat, _, _ = _arrays.ray_rows(rays, "rays", self._shift, self._sphere)
+        flat, _, _ = _arrays.ray_rows(rays, "rays", self._shift, self._sphere, threads=self._threads)
         return flat
 
     def _locations(self, tri: np.ndarray, uv: np.ndarray) -> np.ndarray:

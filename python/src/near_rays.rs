@@ -7,6 +7,7 @@
 //! test.
 
 use crate::arrays::rows;
+use crate::threads::inline_or_interruptible;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -26,7 +27,7 @@ const GRAIN: usize = 4096;
 /// direction's length (a hit's `t` on the moved ray plus `t0` is its `t`
 /// on the ray given).
 #[pyfunction]
-#[pyo3(signature = (rays, shift, centre, radius))]
+#[pyo3(signature = (rays, shift, centre, radius, threads=0))]
 #[allow(clippy::type_complexity)]
 pub fn near_rays<'py>(
     py: Python<'py>,
@@ -34,13 +35,16 @@ pub fn near_rays<'py>(
     shift: [f64; 3],
     centre: [f64; 3],
     radius: f64,
+    threads: i64,
 ) -> PyResult<(Bound<'py, PyArray2<f32>>, Option<Bound<'py, PyArray1<f64>>>)> {
     let (r, n) = rows(&rays, 6, "rays")?;
     let (shift, centre) = (DVec3::from_array(shift), DVec3::from_array(centre));
     let far = (FAR_RADII as f64 * radius).powi(2);
     let mut out = vec![0.0f32; 6 * n];
     let mut moved = vec![0.0f64; n];
-    let any = py.detach(|| {
+    // Up to one task's rays on the caller's thread, more on the pool
+    // `threads` names (a forked child's own).
+    let any = inline_or_interruptible(py, threads, n, n <= GRAIN, |_| {
         out.par_chunks_exact_mut(6)
             .zip(moved.par_iter_mut())
             .zip(r.par_chunks_exact(6))
@@ -60,7 +64,7 @@ pub fn near_rays<'py>(
                 *t0 > 0.0
             })
             .reduce(|| false, |a, b| a || b)
-    });
+    })?;
     let rays = Array2::from_shape_vec((n, 6), out)
         .expect("six per ray")
         .into_pyarray(py);

@@ -228,13 +228,14 @@ impl Scene {
     /// Save the ray structure to `path` (bvh4 and bvh8 have a saved form),
     /// with the mesh's checksum, for `Scene(..., structure=path)`.
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        py.detach(|| {
+        // On all cores: saving checks the tree against the mesh in parallel.
+        detached(py, 0, || {
             let built = self.read();
             let Some(accel) = built.accel() else {
                 return Err(value_error("the scene has no triangles to save"));
             };
             accel.save(&path, &built.mesh).map_err(persist_error)
-        })
+        })?
     }
 
     /// Move the vertices to `vertices` (`(n, 3)` float32, as many as the

@@ -453,12 +453,12 @@ def test_thread_pools_of_many_sizes_do_not_pile_up(bunny):
 
 
 def _answers_of_a_fresh_scene(args):
-    v, f, rays, points = args
+    v, f, rays, points, many, saved = args
     s = raykit.RaycastingScene()
     s.add_triangles(v, f)
     # A first query on a single ray or point builds its structure on a pool
     # of this process, not on the caller's thread through the parent's pool.
-    return (
+    answers = (
         s.test_occlusions(rays[:1], nthreads=1),
         s.compute_distance(points[:1], nthreads=1),
         s.count_intersections(rays[:1], nthreads=1),
@@ -468,6 +468,13 @@ def _answers_of_a_fresh_scene(args):
         s.count_intersections(rays),
         s.test_occlusions(rays[:1], nthreads=1),
     )
+    # Nor does parallel work begun on the caller's thread: the far-ray move
+    # of float64 rays and of counts, and saving.
+    s.save(saved)
+    return answers + (
+        s.count_intersections(many),
+        s.cast_rays(many.astype(np.float64), nthreads=1)["t_hit"],
+    )
 
 
 def _answers_of_a_sent_scene(args):
@@ -475,14 +482,15 @@ def _answers_of_a_sent_scene(args):
     return scene.cast_rays(rays[:1], nthreads=1)["t_hit"], scene.cast_rays(rays)["t_hit"]
 
 
-def test_a_forked_child_answers_after_the_parent_has_used_every_pool(bunny):
+def test_a_forked_child_answers_after_the_parent_has_used_every_pool(bunny, tmp_path):
     # fork() copies the parent's memory but not its threads: pools the
     # parent started (all cores, and nthreads=1) do not exist in the child.
     import multiprocessing
 
     v, f, _ = bunny
-    rays, points = rays_at(v, 300, 13), v[:64] + np.float32(0.01)
+    rays, points, many = rays_at(v, 300, 13), v[:64] + np.float32(0.01), rays_at(v, 5000, 14)
     parent = scene_of(v, f)
+    saved = tmp_path / "child.bvh"
     want = (
         parent.test_occlusions(rays[:1], nthreads=1),
         parent.compute_distance(points[:1], nthreads=1),
@@ -492,14 +500,20 @@ def test_a_forked_child_answers_after_the_parent_has_used_every_pool(bunny):
         parent.compute_distance(points),
         parent.count_intersections(rays),
         parent.test_occlusions(rays[:1], nthreads=1),
+        parent.count_intersections(many),
+        parent.cast_rays(many.astype(np.float64), nthreads=1)["t_hit"],
     )
     with multiprocessing.get_context("fork").Pool(1) as pool:
-        got = pool.apply_async(_answers_of_a_fresh_scene, ((v, f, rays, points),)).get(timeout=120)
+        got = pool.apply_async(_answers_of_a_fresh_scene, ((v, f, rays, points, many, saved),)).get(timeout=120)
         sent = pool.apply_async(_answers_of_a_sent_scene, ((parent, rays),)).get(timeout=120)
     for g, w in zip(got, want):
         np.testing.assert_array_equal(g, w)
     np.testing.assert_array_equal(sent[0], want[3][:1])
     np.testing.assert_array_equal(sent[1], want[3])
+    loaded = raykit.RaycastingScene()
+    loaded.add_triangles(v, f)
+    loaded.load_structure(saved)
+    np.testing.assert_array_equal(loaded.cast_rays(rays)["t_hit"], want[3])
 
 
 def test_the_extension_refuses_column_major_arrays_it_would_read_transposed(bunny):
