@@ -2,6 +2,7 @@
 //! single-band GeoTIFF (raykit-terrain's writer, atomic), placed like a DEM.
 
 use crate::errors::{dem_error, value_error};
+use crate::threads::detached;
 use numpy::{PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use raykit_terrain::io::{load_dem, write_geotiff_f32, write_geotiff_u8, LoadOptions};
@@ -35,8 +36,8 @@ pub fn write_geotiff(
     };
     let georef = match (&like, transform) {
         (Some(dem_path), _) => {
-            let dem = py
-                .detach(|| load_dem(dem_path, &LoadOptions::default()))
+            // On this process's all-cores pool: the reader is parallel.
+            let dem = detached(py, 0, || load_dem(dem_path, &LoadOptions::default()))?
                 .map_err(dem_error)?;
             if (dem.height, dem.width) != (rows, cols) {
                 return Err(value_error(format!(
@@ -67,12 +68,16 @@ pub fn write_geotiff(
     };
     if let Ok(a) = values.extract::<PyReadonlyArray2<'_, u8>>() {
         let data = a.as_array().iter().copied().collect::<Vec<u8>>();
-        py.detach(|| write_geotiff_u8(&path, cols, rows, &data, &georef, nodata))
-            .map_err(dem_error)
+        detached(py, 0, || {
+            write_geotiff_u8(&path, cols, rows, &data, &georef, nodata)
+        })?
+        .map_err(dem_error)
     } else {
         let a: PyReadonlyArray2<'_, f32> = values.extract()?;
         let data = a.as_array().iter().copied().collect::<Vec<f32>>();
-        py.detach(|| write_geotiff_f32(&path, cols, rows, &data, &georef, nodata))
-            .map_err(dem_error)
+        detached(py, 0, || {
+            write_geotiff_f32(&path, cols, rows, &data, &georef, nodata)
+        })?
+        .map_err(dem_error)
     }
 }

@@ -1,6 +1,7 @@
 //! `load_mesh`: any mesh file raykit reads, as numpy arrays.
 
 use crate::errors::load_error;
+use crate::threads::detached;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -23,9 +24,8 @@ pub fn load_mesh(
     Bound<'_, PyArray1<u32>>,
     [f64; 3],
 )> {
-    let loaded = py
-        .detach(|| raykit_io::load_keeping_precision(&path))
-        .map_err(load_error)?;
+    let loaded =
+        detached(py, 0, || raykit_io::load_keeping_precision(&path))?.map_err(load_error)?;
     let mesh = loaded.mesh;
     let n = mesh.positions.len();
     let m = mesh.num_triangles();
@@ -59,9 +59,7 @@ pub fn load_gltf_instances(
     Vec<(u32, Bound<'_, PyArray2<f64>>, u32, String)>,
     Vec<String>,
 )> {
-    let loaded = py
-        .detach(|| raykit_io::load_gltf_instances(&path))
-        .map_err(load_error)?;
+    let loaded = detached(py, 0, || raykit_io::load_gltf_instances(&path))?.map_err(load_error)?;
     let geometries = loaded
         .geometries
         .iter()

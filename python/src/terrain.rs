@@ -34,9 +34,8 @@ pub fn load_dem(
     py: Python<'_>,
     path: PathBuf,
 ) -> PyResult<(Bound<'_, PyArray2<f32>>, Transform, bool, Option<f64>)> {
-    let dem = py
-        .detach(|| read_dem(&path, &LoadOptions::default()))
-        .map_err(dem_error)?;
+    // On this process's all-cores pool: the GeoTIFF reader is parallel.
+    let dem = detached(py, 0, || read_dem(&path, &LoadOptions::default()))?.map_err(dem_error)?;
     let g = &dem.georef;
     let transform = (
         g.pixel_width,
@@ -106,13 +105,17 @@ fn dem(heights: &PyReadonlyArray2<'_, f32>, t: Transform, geographic: bool) -> P
 /// surface, which takes the DEM's copy of the heights: one copy of the
 /// caller's array, not two (the DEM keeps its grid and georeferencing).
 fn surface(
+    py: Python<'_>,
     heights: &PyReadonlyArray2<'_, f32>,
     t: Transform,
     geographic: bool,
+    threads: i64,
 ) -> PyResult<(Dem, HeightField)> {
     let mut dem = dem(heights, t, geographic)?;
     // Infinite heights and absurd cell sizes are refused here, by name.
-    let field = HeightField::take(&mut dem).map_err(value_error)?;
+    // On the call's pool: the height range and the fill of missing
+    // heights are parallel passes over the grid.
+    let field = detached(py, threads, || HeightField::take(&mut dem))?.map_err(value_error)?;
     Ok((dem, field))
 }
 
@@ -146,7 +149,7 @@ pub fn shadow<'py>(
             )))
         }
     };
-    let (dem, field) = surface(&heights, transform, geographic)?;
+    let (dem, field) = surface(py, &heights, transform, geographic, threads)?;
     let given = heights.as_slice().expect("C-contiguous, as dem() checked");
     let light = match (sun, light) {
         (Some((az, el)), None) => {
@@ -251,6 +254,7 @@ fn point_light(
 #[pyfunction]
 #[pyo3(signature = (heights, transform, lights, geographic=false, light_elevation=false, observer=false))]
 pub fn check_lights(
+    py: Python<'_>,
     heights: PyReadonlyArray2<'_, f32>,
     transform: Transform,
     lights: Vec<(f64, f64, f64)>,
@@ -258,7 +262,7 @@ pub fn check_lights(
     light_elevation: bool,
     observer: bool,
 ) -> PyResult<()> {
-    let (dem, field) = surface(&heights, transform, geographic)?;
+    let (dem, field) = surface(py, &heights, transform, geographic, 0)?;
     let given = heights.as_slice().expect("C-contiguous, as dem() checked");
     let list = if observer { "observers" } else { "lights" };
     for (i, &at) in lights.iter().enumerate() {
@@ -278,11 +282,12 @@ pub fn check_lights(
 #[pyo3(signature = (heights, transform, geographic=false))]
 #[allow(clippy::type_complexity)]
 pub fn default_views(
+    py: Python<'_>,
     heights: PyReadonlyArray2<'_, f32>,
     transform: Transform,
     geographic: bool,
 ) -> PyResult<([f64; 3], [f64; 3], [f64; 3])> {
-    let (dem, field) = surface(&heights, transform, geographic)?;
+    let (dem, field) = surface(py, &heights, transform, geographic, 0)?;
     let map = MapWorld::new(&dem, &field);
     let (eye, target) = default_camera(&field);
     Ok((
@@ -339,7 +344,7 @@ pub fn cast<'py>(
             )))
         }
     };
-    let (dem, field) = surface(&heights, transform, geographic)?;
+    let (dem, field) = surface(py, &heights, transform, geographic, threads)?;
     let camera = TerrainCamera {
         eye: MapWorld::new(&dem, &field).to_world(eye),
         target: MapWorld::new(&dem, &field).to_world(target),

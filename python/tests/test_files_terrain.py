@@ -489,3 +489,28 @@ def test_south_up_and_east_to_west_rasters_come_north_up(tmp_path, flip):
         assert 0 < np.mean(want == 1) < 1 or k >= 3, k  # masks with both lit and shadowed cells
         np.testing.assert_array_equal(call(str(path), None), want, err_msg=str(k))
         np.testing.assert_array_equal(call(read, transform), want, err_msg=str(k))
+
+
+def _terrain_answers(path):
+    heights, transform, _ = read_with_gdal(path)
+    big = np.kron(heights, np.ones((2, 2), np.float32))
+    return (
+        raykit.terrain.shadow(path, sun=(135, 8), threads=1),
+        raykit.terrain.shadow(big, transform, sun=(135, 8), threads=1),
+        raykit.terrain.render(big, transform, width=32, height=24, threads=1),
+    )
+
+
+def test_terrain_in_a_forked_child_after_the_parent_has_used_every_pool(data):
+    # The GeoTIFF reader and the height field's passes over a grid of more
+    # than 65,536 cells are parallel; in a fork child they must run on the
+    # child's own pools, not wait for the parent's threads.
+    import multiprocessing
+
+    path = data / "terrain" / "lidar_dem_400.tif"
+    want = _terrain_answers(path)
+    assert (want[1] == 1).any() and (want[1] == 0).any()
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        got = pool.apply_async(_terrain_answers, (path,)).get(timeout=120)
+    for g, w in zip(got, want):
+        np.testing.assert_array_equal(g, w)
