@@ -22,23 +22,12 @@ import time
 from pathlib import Path
 
 import numpy as np
-from bench_first_call import rays_towards
+from bench_first_call import QUERIES, rays_towards
 from query_points import query_points
 
 import raykit
 
 BUNNY = str(Path(__file__).resolve().parents[2] / "data" / "meshes" / "bunny_3674.obj")
-
-QUERIES = [
-    "cast_rays",
-    "test_occlusions",
-    "count_intersections",
-    "list_intersections",
-    "compute_distance",
-    "compute_closest_points",
-    "compute_signed_distance",
-    "compute_occupancy",
-]
 
 
 def per_call_us(fn, calls: int) -> float:

@@ -452,13 +452,10 @@ def test_thread_pools_of_many_sizes_do_not_pile_up(bunny):
     assert len(os.listdir("/proc/self/task")) <= limit
 
 
-def _answers_of_a_fresh_scene(args):
-    v, f, rays, points, many, saved = args
-    s = raykit.RaycastingScene()
-    s.add_triangles(v, f)
-    # A first query on a single ray or point builds its structure on a pool
-    # of this process, not on the caller's thread through the parent's pool.
-    answers = (
+def _answers(s, rays, points, many):
+    """Queries on every pool, single rays and points first: in a fresh
+    scene these build its structures."""
+    return (
         s.test_occlusions(rays[:1], nthreads=1),
         s.compute_distance(points[:1], nthreads=1),
         s.count_intersections(rays[:1], nthreads=1),
@@ -467,14 +464,22 @@ def _answers_of_a_fresh_scene(args):
         s.compute_distance(points),
         s.count_intersections(rays),
         s.test_occlusions(rays[:1], nthreads=1),
-    )
-    # Nor does parallel work begun on the caller's thread: the far-ray move
-    # of float64 rays and of counts, and saving.
-    s.save(saved)
-    return answers + (
         s.count_intersections(many),
         s.cast_rays(many.astype(np.float64), nthreads=1)["t_hit"],
     )
+
+
+def _answers_of_a_fresh_scene(args):
+    v, f, rays, points, many, saved = args
+    s = raykit.RaycastingScene()
+    s.add_triangles(v, f)
+    # A first query on a single ray or point builds its structure on a pool
+    # of this process, not on the caller's thread through the parent's pool;
+    # nor does parallel work begun on the caller's thread wait there (the
+    # far-ray move of float64 rays and of counts, saving).
+    answers = _answers(s, rays, points, many)
+    s.save(saved)
+    return answers
 
 
 def _answers_of_a_sent_scene(args):
@@ -491,18 +496,7 @@ def test_a_forked_child_answers_after_the_parent_has_used_every_pool(bunny, tmp_
     rays, points, many = rays_at(v, 300, 13), v[:64] + np.float32(0.01), rays_at(v, 5000, 14)
     parent = scene_of(v, f)
     saved = tmp_path / "child.bvh"
-    want = (
-        parent.test_occlusions(rays[:1], nthreads=1),
-        parent.compute_distance(points[:1], nthreads=1),
-        parent.count_intersections(rays[:1], nthreads=1),
-        parent.cast_rays(rays)["t_hit"],
-        parent.cast_rays(rays, nthreads=1)["t_hit"],
-        parent.compute_distance(points),
-        parent.count_intersections(rays),
-        parent.test_occlusions(rays[:1], nthreads=1),
-        parent.count_intersections(many),
-        parent.cast_rays(many.astype(np.float64), nthreads=1)["t_hit"],
-    )
+    want = _answers(parent, rays, points, many)
     with multiprocessing.get_context("fork").Pool(1) as pool:
         got = pool.apply_async(_answers_of_a_fresh_scene, ((v, f, rays, points, many, saved),)).get(timeout=120)
         sent = pool.apply_async(_answers_of_a_sent_scene, ((parent, rays),)).get(timeout=120)
