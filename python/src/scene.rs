@@ -330,7 +330,10 @@ impl Scene {
         Bound<'py, PyArray2<f32>>,
     )> {
         let (r, n) = rows(&rays, 6, "rays")?;
-        let c = banded(py, threads, (n, width), self.read().is_built(), |stop| {
+        // Read apart: a guard in the call's arguments would be held while
+        // the work takes the lock again.
+        let built = self.read().is_built();
+        let c = banded(py, threads, (n, width), built, |stop| {
             self.nearest(&self.read(), r, width, stop)
         })?;
         Ok((
@@ -360,20 +363,17 @@ impl Scene {
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (r, n) = rows(&rays, 6, "rays")?;
         let moved = moved_per_ray(&moved, n)?;
-        let occluded = banded(
-            py,
-            threads,
-            (n, width),
-            self.read().is_built(),
-            |stop| match self.read().accel() {
+        let built = self.read().is_built();
+        let occluded = banded(py, threads, (n, width), built, |stop| {
+            match self.read().accel() {
                 Some(a) => {
                     occlusion_by_bands(r, n, width, (tnear, tfar), moved, stop, |rays, out| {
                         a.occluded_batch(rays, out)
                     })
                 }
                 None => vec![false; n],
-            },
-        )?;
+            }
+        })?;
         Ok(occluded.into_pyarray(py))
     }
 
