@@ -262,6 +262,60 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
         self.traverse_from::<ANY>(start, ray, BoxPath::Avx2, reach)
     }
 
+    /// The nearest hit of `ray` from the root, compiled for AVX2 and FMA.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn intersect_avx2(&self, ray: &Ray) -> Option<Hit> {
+        self.root_walk::<false>(ray, BoxPath::Avx2).0
+    }
+
+    /// Whether `ray` hits anything, compiled for AVX2 and FMA.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn occluded_avx2(&self, ray: &Ray) -> bool {
+        self.root_walk::<true>(ray, BoxPath::Avx2).1
+    }
+
+    /// The nearest hit of `ray` from the root, compiled as
+    /// [`WideBvh::traverse_avx512`] is.
+    ///
+    /// # Safety
+    /// The CPU must support every feature named (`BoxPath::Avx512`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn intersect_avx512(&self, ray: &Ray) -> Option<Hit> {
+        self.root_walk::<false>(ray, BoxPath::Avx512).0
+    }
+
+    /// Whether `ray` hits anything, compiled as
+    /// [`WideBvh::traverse_avx512`] is.
+    ///
+    /// # Safety
+    /// The CPU must support every feature named (`BoxPath::Avx512`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn occluded_avx512(&self, ray: &Ray) -> bool {
+        self.root_walk::<true>(ray, BoxPath::Avx512).1
+    }
+
+    /// [`WideBvh::traverse_on`] from the root with the ray's own reach,
+    /// inlined into the entry point of its box kernel `path`.
+    #[inline(always)]
+    fn root_walk<const ANY: bool>(&self, ray: &Ray, path: BoxPath) -> (Option<Hit>, bool) {
+        if self.stats.triangle_refs == 0 {
+            return (None, false);
+        }
+        let (mut tfar, mut best) = (ray.traversal_tfar(), None);
+        let any = self.traverse_on::<ANY>(self.root, ray, path, &mut tfar, &mut best);
+        (best, any)
+    }
+
     /// [`WideBvh::traverse_on`] from `reach` and back to it (an any-hit
     /// query's hit as a `prim` other than [`Reach::NONE`]).
     #[inline(always)]
@@ -407,12 +461,34 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
 }
 
 impl<N: NodeWidth, T: TriangleTest> Accel for WideBvh<N, T> {
+    /// One ray from the root, through an entry point compiled for this
+    /// CPU's box kernel that gives the answer back as it is; the packet
+    /// path's hand-over goes through [`Reach`] instead.
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.traverse::<false>(ray).0
+        match self.path {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `path` is Avx2 only where `BoxPath::detect` found AVX2
+            // and FMA on this CPU (`with_path` checks the same).
+            BoxPath::Avx2 => unsafe { self.intersect_avx2(ray) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `path` is Avx512 only where `BoxPath::detect` found
+            // every feature `intersect_avx512` is compiled for.
+            BoxPath::Avx512 => unsafe { self.intersect_avx512(ray) },
+            _ => self.traverse::<false>(ray).0,
+        }
     }
 
+    /// As [`WideBvh::intersect`], for any hit.
     fn occluded(&self, ray: &Ray) -> bool {
-        self.traverse::<true>(ray).1
+        match self.path {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as in `intersect`.
+            BoxPath::Avx2 => unsafe { self.occluded_avx2(ray) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as in `intersect`.
+            BoxPath::Avx512 => unsafe { self.occluded_avx512(ray) },
+            _ => self.traverse::<true>(ray).1,
+        }
     }
 
     /// Depth first, slot 0 first; a child's box is read from its parent
