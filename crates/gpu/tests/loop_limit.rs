@@ -197,14 +197,13 @@ fn render_exact_or_refused(lights: Vec<Light>, integrator: IntegratorKind, shado
         &scene.mesh,
         &BuildOptions::default(),
     );
-    let ws = WhittedScene {
-        mesh: &scene.mesh,
-        accel: accel.as_ref(),
-        test: TestKind::Moller,
-        lights: &scene.lights,
-        environment: &env,
-        shadow_maps: None,
-    };
+    let ws = WhittedScene::new(
+        &scene.mesh,
+        accel.as_ref(),
+        TestKind::Moller,
+        &scene.lights,
+        &env,
+    );
     let cpu = render_whitted(&ws, &camera, &opts, &|_, _| {}).unwrap();
     let g = GpuScene::build(
         gpu(),

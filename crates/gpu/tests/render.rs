@@ -50,14 +50,7 @@ fn camera(scene: &Scene) -> Camera {
 
 fn cpu_frame(scene: &Scene, env: &Environment, opts: &WhittedOptions, test: TestKind) -> Frame {
     let accel = build_accel(AccelKind::Bvh4, test, &scene.mesh, &BuildOptions::default());
-    let ws = WhittedScene {
-        mesh: &scene.mesh,
-        accel: accel.as_ref(),
-        test,
-        lights: &scene.lights,
-        environment: env,
-        shadow_maps: None,
-    };
+    let ws = WhittedScene::new(&scene.mesh, accel.as_ref(), test, &scene.lights, env);
     render_whitted(&ws, &camera(scene), opts, &|_, _| {}).unwrap()
 }
 

@@ -27,14 +27,7 @@ fn bvh(mesh: &TriangleMesh) -> Box<dyn Accel> {
 
 fn frame(mesh: &TriangleMesh, env: &Environment, camera: &Camera, opts: &WhittedOptions) -> Frame {
     let accel = bvh(mesh);
-    let scene = WhittedScene {
-        mesh,
-        accel: accel.as_ref(),
-        test: TestKind::Moller,
-        lights: &[],
-        environment: env,
-        shadow_maps: None,
-    };
+    let scene = WhittedScene::new(mesh, accel.as_ref(), TestKind::Moller, &[], env);
     render_whitted(&scene, camera, opts, &|_, _| {}).expect("renders")
 }
 
@@ -352,14 +345,13 @@ fn whitted_frame(opts: &WhittedOptions) -> Frame {
     let scene = raykit_scene::whitted(1);
     let accel = bvh(&scene.mesh);
     let env = Environment::Sky;
-    let ws = WhittedScene {
-        mesh: &scene.mesh,
-        accel: accel.as_ref(),
-        test: TestKind::Moller,
-        lights: &scene.lights,
-        environment: &env,
-        shadow_maps: None,
-    };
+    let ws = WhittedScene::new(
+        &scene.mesh,
+        accel.as_ref(),
+        TestKind::Moller,
+        &scene.lights,
+        &env,
+    );
     render_whitted(&ws, &scene.camera.unwrap(), opts, &|_, _| {}).unwrap()
 }
 
@@ -529,14 +521,7 @@ fn textured_diffuse_surface_shows_its_texture_under_a_directional_light() {
         irradiance: Vec3::splat(1.0),
     }];
     let env = Environment::Constant(Vec3::ZERO);
-    let scene = WhittedScene {
-        mesh: &mesh,
-        accel: accel.as_ref(),
-        test: TestKind::Moller,
-        lights: &lights,
-        environment: &env,
-        shadow_maps: None,
-    };
+    let scene = WhittedScene::new(&mesh, accel.as_ref(), TestKind::Moller, &lights, &env);
     let camera = Camera {
         eye: v(0.0, 0.0, 4.0),
         target: Vec3::ZERO,

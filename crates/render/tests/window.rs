@@ -53,14 +53,13 @@ fn whitted(opts: &WhittedOptions) -> Frame {
         &BuildOptions::default(),
     );
     let env = Environment::Sky;
-    let ws = WhittedScene {
-        mesh: &scene.mesh,
-        accel: accel.as_ref(),
-        test: TestKind::Moller,
-        lights: &scene.lights,
-        environment: &env,
-        shadow_maps: None,
-    };
+    let ws = WhittedScene::new(
+        &scene.mesh,
+        accel.as_ref(),
+        TestKind::Moller,
+        &scene.lights,
+        &env,
+    );
     render_whitted(&ws, &scene.camera.unwrap(), opts, &|_, _| {}).unwrap()
 }
 

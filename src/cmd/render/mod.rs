@@ -191,14 +191,14 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             } else {
                 None
             };
-            let scene = WhittedScene {
+            let scene = WhittedScene::new(
                 mesh,
-                accel: accel.as_ref(),
+                accel.as_ref(),
                 test,
-                lights: &setup.lights,
-                environment: &setup.environment,
-                shadow_maps: maps.as_ref(),
-            };
+                &setup.lights,
+                &setup.environment,
+            )
+            .with_shadow_maps(maps.as_ref());
             for AnimationFrame {
                 number,
                 camera,

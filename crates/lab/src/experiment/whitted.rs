@@ -159,14 +159,14 @@ fn run_scene(
         maps = Some(m);
     }
     let maps = maps.expect("at least one build");
-    let ws = WhittedScene {
+    let ws = WhittedScene::new(
         mesh,
-        accel: accel.as_ref(),
-        test: TestKind::Moller,
-        lights: &lights,
-        environment: &environment,
-        shadow_maps: Some(&maps),
-    };
+        accel.as_ref(),
+        TestKind::Moller,
+        &lights,
+        &environment,
+    )
+    .with_shadow_maps(Some(&maps));
     let mut keep: Vec<(String, Frame)> = Vec::new();
     for passes in [1u32, 2] {
         for shadows in [ShadowMode::Rays, ShadowMode::Maps] {

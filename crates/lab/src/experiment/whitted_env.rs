@@ -88,14 +88,13 @@ pub fn env_table(width: u32, height: u32, reps: usize, out: &Path) -> Result<Env
             mesh,
             &BuildOptions::default(),
         );
-        let ws = WhittedScene {
+        let ws = WhittedScene::new(
             mesh,
-            accel: accel.as_ref(),
-            test: TestKind::Moller,
-            lights: &lights,
-            environment: &environment,
-            shadow_maps: None,
-        };
+            accel.as_ref(),
+            TestKind::Moller,
+            &lights,
+            &environment,
+        );
         let opts = WhittedOptions {
             width,
             height,

@@ -208,14 +208,7 @@ fn run_scene(
         ..WhittedOptions::default()
     };
     let render = |accel: &dyn Accel| {
-        let ws = WhittedScene {
-            mesh,
-            accel,
-            test: TestKind::Moller,
-            lights: &lights,
-            environment: &environment,
-            shadow_maps: None,
-        };
+        let ws = WhittedScene::new(mesh, accel, TestKind::Moller, &lights, &environment);
         pool.install(|| render_whitted(&ws, &camera, &opts, &|_, _| {}))
     };
     let mut reference_rays = None;

@@ -34,6 +34,36 @@ pub struct WhittedScene<'a> {
     pub shadow_maps: Option<&'a ShadowMaps>,
 }
 
+impl<'a> WhittedScene<'a> {
+    /// A scene whose shadows are traced as rays (no shadow maps; see
+    /// [`WhittedScene::with_shadow_maps`]).
+    pub fn new(
+        mesh: &'a TriangleMesh,
+        accel: &'a dyn Accel,
+        test: TestKind,
+        lights: &'a [Light],
+        environment: &'a Environment,
+    ) -> Self {
+        WhittedScene {
+            mesh,
+            accel,
+            test,
+            lights,
+            environment,
+            shadow_maps: None,
+        }
+    }
+
+    /// The same scene with the shadow maps of its lights (Williams 1978),
+    /// for the options that ask for them.
+    pub fn with_shadow_maps(self, shadow_maps: Option<&'a ShadowMaps>) -> Self {
+        WhittedScene {
+            shadow_maps,
+            ..self
+        }
+    }
+}
+
 /// Where the time of a frame went and how many rays it traced.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameStats {
