@@ -402,3 +402,229 @@ fn saved_labels_are_refused_for_another_mesh_with_as_many_triangles() {
     );
     assert!(!output.exists(), "no output is written on errors");
 }
+
+/// Each triangle of `got` lies within `tol` of a distinct triangle of
+/// `want` (corner by corner), and the two have as many.
+fn same_triangles(got: &TriangleMesh, want: &TriangleMesh, tol: f32, what: &str) {
+    assert_eq!(got.num_triangles(), want.num_triangles(), "{what}");
+    let mut used = vec![false; want.num_triangles()];
+    for t in 0..got.num_triangles() {
+        let g = got.triangle(t);
+        let hit = (0..want.num_triangles()).find(|&u| {
+            !used[u]
+                && want
+                    .triangle(u)
+                    .iter()
+                    .zip(&g)
+                    .all(|(a, b)| (*a - *b).abs().max_element() <= tol)
+        });
+        match hit {
+            Some(u) => used[u] = true,
+            None => panic!("{what}: triangle {t} {g:?} is not in the expected output"),
+        }
+    }
+}
+
+/// A box (one mesh) with a ball mesh placed by eleven nodes: eight inside
+/// the box, one through its wall and two outside. The culled glTF keeps the
+/// instancing (the outside balls share one mesh; the ball through the wall
+/// keeps part of it, a mesh of its own, or, with `--shared-meshes`, all of
+/// it and the shared mesh), and holds the triangles that the flattened
+/// writer, given the same cull, writes to an OBJ file.
+#[test]
+fn an_instanced_assembly_keeps_its_instancing() {
+    use raykit_core::glam::{DAffine3, DVec3};
+    use raykit_io::{load_gltf_instances, write_gltf_placed, PlacedMesh};
+
+    let dir = tempfile::tempdir().unwrap();
+    let mut shell = closed_box(&Aabb::new(Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0)), 3);
+    shell.parts = vec![Part {
+        name: "shell".into(),
+        node: None,
+    }];
+    let ball = icosphere(Vec3::ZERO, 0.15, 1);
+    let at = |x: f64, y: f64, z: f64, name: String| PlacedMesh {
+        mesh: 1,
+        to_world: DAffine3::from_translation(DVec3::new(x, y, z)),
+        name,
+    };
+    let mut nodes = vec![PlacedMesh {
+        mesh: 0,
+        to_world: DAffine3::IDENTITY,
+        name: "shell".into(),
+    }];
+    for k in 0..SPHERES {
+        nodes.push(at(
+            0.5 + (k & 1) as f64,
+            0.3 + 0.4 * ((k >> 1) & 1) as f64,
+            0.3 + 0.4 * ((k >> 2) & 1) as f64,
+            format!("inside{k}"),
+        ));
+    }
+    nodes.push(at(2.0, 0.5, 0.5, "wall".into()));
+    nodes.push(at(3.0, 0.5, 0.5, "out0".into()));
+    nodes.push(at(-1.0, 0.5, 0.5, "out1".into()));
+    let input = dir.path().join("instanced.glb");
+    raykit_io::write_atomic(&input, |w| {
+        write_gltf_placed(w, &[shell, ball.clone()], &nodes, true)
+    })
+    .unwrap();
+
+    for (flags, meshes_out) in [(&[][..], 3), (&["--shared-meshes"][..], 2)] {
+        let what = format!("{flags:?}");
+        let glb = dir.path().join("out.glb");
+        let obj = dir.path().join("out.obj");
+        let mut args = vec!["cull", s(&input), s(&glb), "--resolution", "64"];
+        args.extend(flags);
+        let o = raykit(&args);
+        assert!(o.status.success(), "{what}: {}", text(&o.stderr));
+        let out = text(&o.stdout);
+        assert!(
+            out.contains(&format!(
+                "instancing: 12 nodes placing 2 meshes -> 4 nodes placing {meshes_out} meshes"
+            )),
+            "{what}: {out}"
+        );
+
+        let inst = load_gltf_instances(&glb).unwrap();
+        assert_eq!(inst.geometries.len(), meshes_out, "{what}");
+        let names: Vec<&str> = inst.instances.iter().map(|i| i.name.as_str()).collect();
+        assert_eq!(names, ["shell", "wall", "out0", "out1"], "{what}");
+        let [_, wall, out0, out1] = &inst.instances[..] else {
+            unreachable!()
+        };
+        assert_eq!(
+            out0.geometry, out1.geometry,
+            "{what}: the outside balls share a mesh"
+        );
+        for (i, n) in inst
+            .instances
+            .iter()
+            .zip([&nodes[0], &nodes[9], &nodes[10], &nodes[11]])
+        {
+            assert_eq!(i.to_world_f64, n.to_world, "{what}: {}", i.name);
+        }
+        let whole = inst.geometries[out0.geometry as usize].num_triangles();
+        assert_eq!(
+            whole,
+            ball.num_triangles(),
+            "{what}: the outside balls are whole"
+        );
+        let wall_kept = inst.geometries[wall.geometry as usize].num_triangles();
+        if flags.is_empty() {
+            assert_ne!(wall.geometry, out0.geometry, "{what}");
+            assert!(
+                0 < wall_kept && wall_kept < whole,
+                "{what}: the ball through the wall keeps {wall_kept} of {whole}"
+            );
+        } else {
+            assert_eq!(wall.geometry, out0.geometry, "{what}: one ball mesh");
+        }
+
+        // The same cull through the flattened writer (shared meshes are a
+        // glTF output's: refused for an OBJ), and with them the ball
+        // through the wall made whole.
+        let mut args = vec!["cull", s(&input), s(&obj), "--resolution", "64"];
+        let o = raykit(&[args.as_slice(), flags].concat());
+        if !flags.is_empty() {
+            assert!(!o.status.success(), "{what}");
+            let err = text(&o.stderr);
+            assert!(
+                err.contains(
+                    "--shared-meshes needs a glTF or GLB input and a .gltf or .glb output"
+                ),
+                "{err}"
+            );
+            args.truncate(5);
+            let o = raykit(&args);
+            assert!(o.status.success(), "{what}: {}", text(&o.stderr));
+        } else {
+            assert!(o.status.success(), "{what}: {}", text(&o.stderr));
+        }
+        let flat = raykit_io::load_mesh(&obj).unwrap();
+        let want = if flags.is_empty() {
+            flat
+        } else {
+            let wall = flat.parts.iter().position(|p| p.name == "wall").unwrap() as u32;
+            let keep: Vec<bool> = (0..flat.num_triangles())
+                .map(|t| flat.part_of(t) != wall)
+                .collect();
+            let mut w = flat.retain_triangles(&keep);
+            w.append(&icosphere(Vec3::new(2.0, 0.5, 0.5), 0.15, 1));
+            w
+        };
+        let got = raykit_io::load_mesh(&glb).unwrap();
+        same_triangles(&got, &want, 1e-6, &what);
+    }
+}
+
+/// The 2CylinderEngine (67 nodes placing 29 meshes) culled by parts keeps
+/// every mesh shared as in the file, and its triangles are those the
+/// flattened writer puts in an OBJ file for the same cull.
+#[test]
+fn the_engine_culled_by_parts_keeps_its_29_meshes() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = cli::data("meshes/2CylinderEngine.glb");
+    let glb = dir.path().join("engine.glb");
+    let obj = dir.path().join("engine.obj");
+    for out in [&glb, &obj] {
+        let o = raykit(&["cull", s(&input), s(out), "--by", "part"]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+    }
+    let before = raykit_io::load_gltf_instances(&input).unwrap();
+    let after = raykit_io::load_gltf_instances(&glb).unwrap();
+    assert_eq!((before.instances.len(), before.geometries.len()), (67, 29));
+    // Every part has a visible triangle: all 67 nodes stay, in order, each
+    // placing its mesh whole with its transform, and the meshes the file
+    // shared are shared still.
+    assert_eq!(after.instances.len(), 67);
+    assert_eq!(after.geometries.len(), 29);
+    for (i, b) in after.instances.iter().zip(&before.instances) {
+        assert_eq!(i.name, b.name);
+        assert!(
+            i.to_world_f64.abs_diff_eq(b.to_world_f64, 1e-9),
+            "{}: {:?} against {:?}",
+            i.name,
+            i.to_world_f64,
+            b.to_world_f64
+        );
+        assert_eq!(
+            after.geometries[i.geometry as usize].indices,
+            before.geometries[b.geometry as usize].indices,
+            "{}",
+            i.name
+        );
+    }
+    for (a, x) in after.instances.iter().zip(&before.instances) {
+        for (b, y) in after.instances.iter().zip(&before.instances) {
+            assert_eq!(
+                a.geometry == b.geometry,
+                x.geometry == y.geometry,
+                "{} and {}",
+                a.name,
+                b.name
+            );
+        }
+    }
+    let flat = raykit_io::load_mesh(&obj).unwrap();
+    let got = raykit_io::load_mesh(&glb).unwrap();
+    assert_eq!(got.num_triangles(), flat.num_triangles());
+    let sorted = |m: &TriangleMesh| {
+        let mut v: Vec<[i64; 9]> = (0..m.num_triangles())
+            .map(|t| {
+                let c = m.triangle(t);
+                std::array::from_fn(|k| (c[k / 3][k % 3] * 1e4).round() as i64)
+            })
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    let (a, b) = (sorted(&got), sorted(&flat));
+    let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+    // Rounding to 0.1 mm may split a corner the two writers round apart.
+    assert!(
+        differ * 1000 <= a.len(),
+        "{differ} of {} triangles differ",
+        a.len()
+    );
+}

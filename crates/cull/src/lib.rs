@@ -60,7 +60,7 @@ pub use grid::Grid;
 pub use independent::independent_truth;
 pub use propagate::{propagate, Classification, Tag};
 pub use rays::{visible_by_rays, RayOptions, RayRound, RayStats};
-pub use report::{CullMode, CullReport, Removal};
+pub use report::{CullMode, CullReport, Instancing, Removal};
 pub use saved_truth::{SavedTruth, SavedTruthMismatch};
 pub use visible::{confirm_frontier, touches_outside, visible_from_outside};
 

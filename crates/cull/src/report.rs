@@ -43,6 +43,24 @@ impl CullResult {
     }
 }
 
+/// A glTF assembly written with its instancing: the nodes placing meshes
+/// and the meshes they place, read and written.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Instancing {
+    /// Nodes placing a mesh in the input (one per copy of a node with
+    /// `EXT_mesh_gpu_instancing`).
+    pub nodes_in: usize,
+    /// Meshes those nodes place.
+    pub meshes_in: usize,
+    /// Nodes written (those that keep any triangle).
+    pub nodes_out: usize,
+    /// Meshes written: one per mesh and set of kept triangles.
+    pub meshes_out: usize,
+    /// Whether every node of a mesh was made to keep what any of them
+    /// keeps, so that each mesh is written once.
+    pub shared: bool,
+}
+
 /// The report of one run: the run's figures and the library's statistics.
 #[derive(Clone, Debug, Serialize)]
 pub struct CullReport {
@@ -80,6 +98,9 @@ pub struct CullReport {
     pub save_s: f64,
     /// The library's figures.
     pub stats: CullStats,
+    /// How a glTF input's instancing was written, when it was.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub instancing: Option<Instancing>,
     /// The ground truth, when evaluated.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ground_truth: Option<GroundTruth>,
@@ -151,6 +172,20 @@ impl CullReport {
             r.parts_removed,
             pct(r.parts_removed, r.parts_in)
         );
+        if let Some(i) = &r.instancing {
+            say!(
+                "instancing: {} nodes placing {} meshes -> {} nodes placing {} meshes{}",
+                i.nodes_in,
+                i.meshes_in,
+                i.nodes_out,
+                i.meshes_out,
+                if i.shared {
+                    " (each mesh keeps what any of its nodes sees)"
+                } else {
+                    " (nodes that keep the same triangles of a mesh share it)"
+                }
+            );
+        }
         if let Some(x) = &s.rays {
             say!(
                 "rays: {} seen by {} views of {}x{}, {} by escape rays and shared directions in {} rounds \

@@ -87,6 +87,7 @@ pub use scene_hits::{
     SCENE_HIT_RECORD_SIZE,
 };
 pub use write::{
-    save_mesh, save_mesh_as, stage_mesh, write_exr_channels, write_exr_rgb, write_gltf,
-    write_gltf_scene, write_mesh, write_mtl, write_obj, write_off, write_ply, write_stl,
+    save_mesh, save_mesh_as, stage_gltf_placed, stage_mesh, write_exr_channels, write_exr_rgb,
+    write_gltf, write_gltf_placed, write_gltf_scene, write_mesh, write_mtl, write_obj, write_off,
+    write_ply, write_stl, PlacedMesh,
 };

@@ -83,7 +83,9 @@ pub struct CullArgs {
     /// Input mesh (OBJ, PLY, PLY.GZ, STL, glTF/GLB, OFF).
     pub(super) input: PathBuf,
     /// Output mesh, format from its extension (obj, ply, stl, off, gltf, glb; .gz
-    /// compresses); never the input file. glTF/GLB keep one node per remaining part.
+    /// compresses); never the input file. glTF/GLB keep one node per remaining part;
+    /// from a glTF/GLB input they keep its instancing: a mesh that several nodes place is
+    /// written once for all of them that keep the same triangles of it.
     pub(super) output: PathBuf,
     /// How visibility is found: ray tracing, or Min's (2008) grid.
     #[arg(long, value_enum, default_value = "conservative")]
@@ -107,6 +109,11 @@ pub struct CullArgs {
     /// Remove hidden triangles, or whole parts with no visible triangle.
     #[arg(long, value_enum, default_value = "triangle")]
     pub(super) by: ByArg,
+    /// glTF/GLB input and output: every node of a mesh keeps what any of
+    /// them sees, so that each mesh is written once, as in the input (removes
+    /// less; never a triangle that the nodes' own results keep).
+    #[arg(long)]
+    pub(super) shared_meshes: bool,
     /// Min's (2008) rule alone (`--mode paper`; may remove visible
     /// triangles seen through openings finer than the grid).
     #[arg(long, conflicts_with_all = ["confirm", "mode"])]

@@ -3,6 +3,7 @@
 //! default), or by Min's (2008) grid method.
 
 mod args;
+mod placed;
 mod truth_file;
 
 pub use args::CullArgs;
@@ -14,8 +15,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use raykit_core::TriangleMesh;
 use raykit_cull::{
     compare, cull, cull_by_rays, independent_truth, CullOptions, CullReport, EvalOptions,
-    GroundTruth, RayOptions,
+    GroundTruth, Instancing, RayOptions,
 };
+use raykit_io::MeshFormat;
 use raykit_lab::measure::timed;
 use std::process::ExitCode;
 
@@ -24,11 +26,16 @@ pub const FALSE_REMOVAL_STATUS: u8 = 3;
 
 /// Load, cull, write, report.
 pub fn run(args: CullArgs) -> Result<ExitCode> {
-    if raykit_io::MeshFormat::from_path(&args.output).is_none() {
+    let Some(out_format) = MeshFormat::from_path(&args.output) else {
         bail!(
             "{}: unknown mesh file extension; expected .obj, .ply, .stl, .off, .gltf or .glb (optionally .gz)",
             args.output.display()
         );
+    };
+    let gltf = |f: Option<MeshFormat>| matches!(f, Some(MeshFormat::Gltf | MeshFormat::Glb));
+    let placed_output = gltf(Some(out_format)) && gltf(MeshFormat::from_path(&args.input));
+    if args.shared_meshes && !placed_output {
+        bail!("--shared-meshes needs a glTF or GLB input and a .gltf or .glb output");
     }
     // Every output is checked before any work: not an input (the mesh or
     // saved labels), in a folder that takes files, and no two the same.
@@ -101,6 +108,15 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
     bar.finish_and_clear();
     let result = result.with_context(|| format!("{}", args.input.display()))?;
     let keep = result.keep(&mesh, args.by.into());
+    let scene = if placed_output {
+        placed::instances_of(&args.input, &mesh)?
+    } else {
+        None
+    };
+    let keep = match &scene {
+        Some(s) if args.shared_meshes => placed::shared_keep(s, &mesh, &keep),
+        _ => keep,
+    };
     let kept = mesh.retain_triangles(&keep);
     if kept.num_triangles() == 0 {
         bail!(
@@ -124,7 +140,21 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
     // place together at the end: a run that fails part way (a full disk on
     // the report, say) leaves the old outputs as they were.
     let mut outputs = raykit_io::OutputSet::new();
-    let (saved, save_s) = timed(|| raykit_io::stage_mesh(&mut outputs, &args.output, &kept));
+    let mut instancing = None;
+    let (saved, save_s) = timed(|| match &scene {
+        Some(s) => {
+            let (meshes, nodes) = placed::placed_meshes(s, &mesh, &keep);
+            instancing = Some(Instancing {
+                nodes_in: s.instances.len(),
+                meshes_in: s.geometries.len(),
+                nodes_out: nodes.len(),
+                meshes_out: meshes.len(),
+                shared: args.shared_meshes,
+            });
+            raykit_io::stage_gltf_placed(&mut outputs, &args.output, &meshes, &nodes)
+        }
+        None => raykit_io::stage_mesh(&mut outputs, &args.output, &kept),
+    });
     saved.with_context(|| format!("cannot write {}", args.output.display()))?;
     if let (Some(path), Some(truth)) = (&args.save_truth, &ground_truth) {
         save_truth(&mut outputs, path, &args, &mesh, truth)?;
@@ -149,6 +179,7 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
         cull_s,
         save_s,
         stats: stats.clone(),
+        instancing,
         ground_truth,
         evaluation,
     };

@@ -18,7 +18,7 @@ use std::io::{self, Write};
 
 /// The buffer, buffer views and accessors being written.
 #[derive(Default)]
-struct Buffers {
+pub(super) struct Buffers {
     bin: Vec<u8>,
     views: Vec<String>,
     accessors: Vec<String>,
@@ -54,7 +54,7 @@ impl Buffers {
     /// Triangle primitives over the given vertex arrays and triangles, one
     /// per material run (`runs`: material and range of `tris`), sharing the
     /// vertex accessors; returns their JSON, comma-separated.
-    fn primitive(
+    pub(super) fn primitive(
         &mut self,
         positions: &[Vec3],
         normals: Option<&[Vec3]>,
@@ -115,7 +115,7 @@ impl Buffers {
 /// Runs of consecutive triangles (indices into `tris` of one part) with the
 /// same material, and that material's index (`None` when the mesh has no
 /// materials).
-fn material_runs(
+pub(super) fn material_runs(
     mesh: &TriangleMesh,
     tris: &[usize],
 ) -> Vec<(Option<usize>, std::ops::Range<usize>)> {
@@ -220,6 +220,29 @@ pub fn write_gltf_scene(
         nodes.push(format!(r#"{{"mesh":{}{name}}}"#, meshes.len()));
         meshes.push(format!(r#"{{"primitives":[{prim}]{name}}}"#));
     }
+    let extras = scene_extras(
+        &mesh.materials,
+        camera.map(|c| (c, mesh)),
+        lights,
+        &mut nodes,
+    );
+    let roots: Vec<usize> = (0..nodes.len()).collect();
+    document(w, buf, &extras, &roots, &nodes, &meshes, binary)
+}
+
+/// Write the glTF document: `extras` (from `scene_extras`), the scene of
+/// the `roots` nodes, `nodes` and `meshes` as JSON objects, and the
+/// accessors, views and buffer of `buf`, as GLB (`binary`) or `.gltf`
+/// with the buffer embedded as a base64 data URI.
+pub(super) fn document(
+    w: &mut dyn Write,
+    buf: Buffers,
+    extras: &str,
+    roots: &[usize],
+    nodes: &[String],
+    meshes: &[String],
+    binary: bool,
+) -> io::Result<()> {
     let Buffers {
         mut bin,
         views,
@@ -233,8 +256,7 @@ pub fn write_gltf_scene(
             base64_encode(&bin)
         )
     };
-    let extras = scene_extras(mesh, camera, lights, &mut nodes);
-    let roots: Vec<String> = (0..nodes.len()).map(|i| i.to_string()).collect();
+    let roots: Vec<String> = roots.iter().map(|i| i.to_string()).collect();
     let json = format!(
         r#"{{"asset":{{"version":"2.0","generator":"raykit-io"}}{}"scene":0,"scenes":[{{"nodes":[{}]}}],"nodes":[{}],"meshes":[{}],"accessors":[{}],"bufferViews":[{}],"buffers":[{{"byteLength":{}{uri}}}]}}"#,
         extras,

@@ -17,25 +17,22 @@ use raykit_core::glam::{Mat3, Quat};
 use raykit_core::{Camera, Light, Material, TriangleMesh, Vec3};
 
 /// JSON fields (`,"materials":[…],…,`) to place between `asset` and `scene`,
-/// and the camera and light nodes appended to `nodes`. Returns `","` when
-/// there is nothing to add.
+/// and the camera and light nodes appended to `nodes`; the camera's near
+/// plane is set from the size of `mesh`. Returns `","` when there is
+/// nothing to add.
 pub(super) fn scene_extras(
-    mesh: &TriangleMesh,
-    camera: Option<&Camera>,
+    materials: &[Material],
+    camera: Option<(&Camera, &TriangleMesh)>,
     lights: &[Light],
     nodes: &mut Vec<String>,
 ) -> String {
     let mut out = String::from(",");
     let mut used = Vec::new();
-    if !mesh.materials.is_empty() {
-        let ms: Vec<String> = mesh
-            .materials
-            .iter()
-            .map(|m| material(m, &mut used))
-            .collect();
+    if !materials.is_empty() {
+        let ms: Vec<String> = materials.iter().map(|m| material(m, &mut used)).collect();
         out += &format!(r#""materials":[{}],"#, ms.join(","));
     }
-    if let Some(c) = camera {
+    if let Some((c, mesh)) = camera {
         let (right, up, forward) = c.basis();
         let q = Quat::from_mat3(&Mat3::from_cols(right, up, -forward)).normalize();
         let b = mesh.bounds();

@@ -6,6 +6,7 @@
 
 mod exr;
 mod gltf;
+mod gltf_placed;
 mod gltf_scene;
 mod json;
 mod obj;
@@ -15,6 +16,7 @@ mod stl;
 
 pub use self::exr::{write_exr_channels, write_exr_rgb};
 pub use self::gltf::{write_gltf, write_gltf_scene};
+pub use self::gltf_placed::{write_gltf_placed, PlacedMesh};
 pub use obj::{write_mtl, write_obj};
 pub use off::write_off;
 pub use ply::write_ply;
@@ -99,14 +101,51 @@ fn stage_mesh_as(
         })?;
         mtllib = Some(name);
     }
+    stage_compressed(set, path, |w| {
+        write_format(w, mesh, format, mtllib.as_deref())
+    })
+}
+
+/// Meshes stored once and placed by nodes ([`write_gltf_placed`]) into
+/// `set`, as GLB or `.gltf` by the extension of `path` (gzip-compressed when
+/// it ends in `.gz`); any other extension is refused.
+pub fn stage_gltf_placed(
+    set: &mut OutputSet,
+    path: &Path,
+    meshes: &[TriangleMesh],
+    nodes: &[PlacedMesh],
+) -> io::Result<()> {
+    let binary = match MeshFormat::from_path(path) {
+        Some(MeshFormat::Glb) => true,
+        Some(MeshFormat::Gltf) => false,
+        _ => {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "{}: placed meshes are written as .gltf or .glb",
+                    path.display()
+                ),
+            ))
+        }
+    };
+    stage_compressed(set, path, |w| write_gltf_placed(w, meshes, nodes, binary))
+}
+
+/// `write` into `set` at `path`, through gzip when `path` ends in `.gz`.
+fn stage_compressed(
+    set: &mut OutputSet,
+    path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> io::Result<()> {
+    let gz = is_gzip_path(path);
     set.write(path, |w| {
         if gz {
             let mut z = GzEncoder::new(w, Compression::default());
-            write_format(&mut z, mesh, format, mtllib.as_deref())?;
+            write(&mut z)?;
             z.finish()?;
             Ok(())
         } else {
-            write_format(w, mesh, format, mtllib.as_deref())
+            write(w)
         }
     })
 }
