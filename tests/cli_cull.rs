@@ -466,7 +466,7 @@ fn an_instanced_assembly_keeps_its_instancing() {
     nodes.push(at(-1.0, 0.5, 0.5, "out1".into()));
     let input = dir.path().join("instanced.glb");
     raykit_io::write_atomic(&input, |w| {
-        write_gltf_placed(w, &[shell, ball.clone()], &nodes, true)
+        write_gltf_placed(w, &[shell, ball.clone()], &nodes, None, &[], true)
     })
     .unwrap();
 

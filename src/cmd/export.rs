@@ -13,9 +13,10 @@ use std::process::ExitCode;
 #[command(
     after_help = "Examples:\n  raykit export --scene builtin:whitted --out whitted.gltf\n  \
 raykit export --scene bunny.obj --out bunny.glb\n\n\
-A scene without a camera or lights is written without them. Texture images are not written: \
-materials keep their colour factors and the mesh its texture coordinates, and the export says \
-how many textures it left out."
+A scene without a camera or lights is written without them. A glTF or GLB file keeps its \
+instancing: each mesh is written once, and each node that places it with its transform. Texture \
+images are not written: materials keep their colour factors and the mesh its texture \
+coordinates, and the export says how many textures it left out."
 )]
 pub struct ExportArgs {
     /// Scene: builtin:NAME[:key=value,...] (`raykit info scenes`) or a mesh file.
@@ -38,10 +39,33 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
     };
     crate::paths::ensure_output(&args.out, &[std::path::Path::new(&args.scene)])?;
     let scene = scene_arg::load(&args.scene)?;
-    raykit_io::write_atomic(&args.out, |w| {
-        raykit_io::write_gltf_scene(w, &scene.mesh, scene.camera.as_ref(), &scene.lights, binary)
+    let placed = placed_scene(&args.scene, &scene.mesh)?;
+    raykit_io::write_atomic(&args.out, |w| match &placed {
+        Some((meshes, nodes)) => raykit_io::write_gltf_placed(
+            w,
+            meshes,
+            nodes,
+            scene.camera.as_ref(),
+            &scene.lights,
+            binary,
+        ),
+        None => raykit_io::write_gltf_scene(
+            w,
+            &scene.mesh,
+            scene.camera.as_ref(),
+            &scene.lights,
+            binary,
+        ),
     })
     .with_context(|| format!("cannot write {}", args.out.display()))?;
+    if let Some((meshes, nodes)) = &placed {
+        eprintln!(
+            "{}: instancing kept: {} nodes placing {} meshes",
+            args.scene,
+            nodes.len(),
+            meshes.len()
+        );
+    }
     let textured = scene
         .mesh
         .materials
@@ -70,4 +94,48 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
         args.out.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// A glTF or GLB file's meshes, each once, and the nodes placing them, when
+/// `spec` names such a file whose flattened load is `flat`
+/// ([`raykit_io::GltfInstances::matches_flattened`]); `None` for a built-in
+/// scene or another format, which are written flattened.
+fn placed_scene(
+    spec: &str,
+    flat: &raykit_core::TriangleMesh,
+) -> Result<Option<(Vec<raykit_core::TriangleMesh>, Vec<raykit_io::PlacedMesh>)>> {
+    let path = std::path::Path::new(spec);
+    if !matches!(
+        raykit_io::MeshFormat::from_path(path),
+        Some(raykit_io::MeshFormat::Gltf | raykit_io::MeshFormat::Glb)
+    ) {
+        return Ok(None);
+    }
+    let scene = raykit_io::load_gltf_instances(path)
+        .with_context(|| format!("{spec}: reading its instancing"))?;
+    if !scene.matches_flattened(flat) {
+        return Ok(None);
+    }
+    // Meshes without triangles (which the flattened output drops too) are
+    // left out with their nodes; the others keep their order.
+    let mut index = vec![None; scene.geometries.len()];
+    let mut meshes = Vec::new();
+    for (g, m) in scene.geometries.into_iter().enumerate() {
+        if m.num_triangles() > 0 {
+            index[g] = Some(meshes.len());
+            meshes.push(m);
+        }
+    }
+    let nodes = scene
+        .instances
+        .iter()
+        .filter_map(|i| {
+            index[i.geometry as usize].map(|mesh| raykit_io::PlacedMesh {
+                mesh,
+                to_world: i.to_world_f64,
+                name: i.name.clone(),
+            })
+        })
+        .collect();
+    Ok(Some((meshes, nodes)))
 }

@@ -146,6 +146,24 @@ impl GltfInstances {
             .sum()
     }
 
+    /// Whether `flat` is this file's flattened load as culling or export
+    /// may have it: one part per instance, in order, each with as many
+    /// triangles as its geometry (then triangle `p` of part `i` is triangle
+    /// `p` of instance `i`'s geometry).
+    pub fn matches_flattened(&self, flat: &TriangleMesh) -> bool {
+        let mut per_part = vec![0usize; self.instances.len()];
+        for t in 0..flat.num_triangles() {
+            match per_part.get_mut(flat.part_of(t) as usize) {
+                Some(n) => *n += 1,
+                None => return false,
+            }
+        }
+        self.instances
+            .iter()
+            .zip(&per_part)
+            .all(|(i, &n)| self.geometries[i.geometry as usize].num_triangles() == n)
+    }
+
     /// Add the geometries and instances to `builder` (geometry ids offset
     /// by the geometries it already holds); returns the id of the first
     /// geometry added. A node whose world transform is singular (a zero

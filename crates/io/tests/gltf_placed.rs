@@ -173,7 +173,7 @@ fn bad_nodes_and_meshes_are_refused_by_name() {
         to_world: DAffine3::IDENTITY,
         name: String::new(),
     }];
-    let e = write_gltf_placed(&mut out, &meshes, &missing, true).unwrap_err();
+    let e = write_gltf_placed(&mut out, &meshes, &missing, None, &[], true).unwrap_err();
     assert!(
         e.to_string()
             .contains("node 0 places mesh 2, but there are 2 meshes"),
@@ -181,14 +181,14 @@ fn bad_nodes_and_meshes_are_refused_by_name() {
     );
     let mut nan = nodes();
     nan[3].to_world.translation.x = f64::NAN;
-    let e = write_gltf_placed(&mut out, &meshes, &nan, true).unwrap_err();
+    let e = write_gltf_placed(&mut out, &meshes, &nan, None, &[], true).unwrap_err();
     assert!(
         e.to_string()
             .contains("node 3: the transform is not finite"),
         "{e}"
     );
     let empty = [tile(), TriangleMesh::default()];
-    let e = write_gltf_placed(&mut out, &empty, &nodes()[..1], false).unwrap_err();
+    let e = write_gltf_placed(&mut out, &empty, &nodes()[..1], None, &[], false).unwrap_err();
     assert!(
         e.to_string()
             .contains("mesh 1: cannot write an invalid mesh: the mesh has no triangles"),
@@ -196,7 +196,7 @@ fn bad_nodes_and_meshes_are_refused_by_name() {
     );
     let mut broken = tetra();
     broken.indices[2] = [0, 1, 9];
-    let e = write_gltf_placed(&mut out, &[tile(), broken], &nodes(), false).unwrap_err();
+    let e = write_gltf_placed(&mut out, &[tile(), broken], &nodes(), None, &[], false).unwrap_err();
     assert!(e.to_string().contains("mesh 1"), "{e}");
 
     let dir = tempfile::tempdir().unwrap();

@@ -13,8 +13,8 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// The input's instances, when it is a glTF file whose flattened load is
-/// `mesh` (one part per instance, each with its mesh's triangle count);
-/// `None` for any other input.
+/// `mesh` ([`GltfInstances::matches_flattened`]); `None` for any other
+/// input.
 pub(super) fn instances_of(input: &Path, mesh: &TriangleMesh) -> Result<Option<GltfInstances>> {
     if !matches!(
         raykit_io::MeshFormat::from_path(input),
@@ -24,19 +24,7 @@ pub(super) fn instances_of(input: &Path, mesh: &TriangleMesh) -> Result<Option<G
     }
     let scene = raykit_io::load_gltf_instances(input)
         .with_context(|| format!("{}: reading its instancing", input.display()))?;
-    let mut per_part = vec![0usize; scene.instances.len()];
-    for t in 0..mesh.num_triangles() {
-        match per_part.get_mut(mesh.part_of(t) as usize) {
-            Some(n) => *n += 1,
-            None => return Ok(None),
-        }
-    }
-    let matches = scene
-        .instances
-        .iter()
-        .zip(&per_part)
-        .all(|(i, &n)| scene.geometries[i.geometry as usize].num_triangles() == n);
-    Ok(matches.then_some(scene))
+    Ok(scene.matches_flattened(mesh).then_some(scene))
 }
 
 /// Each instance's triangles of `keep` (the flattened mesh's mask), as a

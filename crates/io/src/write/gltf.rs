@@ -222,7 +222,7 @@ pub fn write_gltf_scene(
     }
     let extras = scene_extras(
         &mesh.materials,
-        camera.map(|c| (c, mesh)),
+        camera.map(|c| (c, mesh.bounds())),
         lights,
         &mut nodes,
     );

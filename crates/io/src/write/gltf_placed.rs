@@ -4,13 +4,14 @@
 //! matrix, so that a mesh drawn many times (an assembly's repeated bolt) is
 //! written once, as the file it came from stored it. The transforms are
 //! written in `f64`, so that a model placed far from the origin keeps its
-//! digits. The materials of all meshes are written one after another.
+//! digits. The materials of all meshes are written one after another; a
+//! camera and lights as [`super::write_gltf_scene`] writes them.
 
 use super::gltf::{document, material_runs, Buffers};
 use super::gltf_scene::scene_extras;
 use super::json::json_string;
-use raykit_core::glam::{DAffine3, DMat4};
-use raykit_core::TriangleMesh;
+use raykit_core::glam::{DAffine3, DMat4, DVec3};
+use raykit_core::{Aabb, Camera, Light, TriangleMesh};
 use std::io::{self, Write};
 
 /// One node of [`write_gltf_placed`]: mesh `mesh` placed by `to_world`.
@@ -24,14 +25,17 @@ pub struct PlacedMesh {
     pub name: String,
 }
 
-/// Write `meshes`, each once, and one node per entry of `nodes`, as GLB
-/// (`binary`) or `.gltf`. Meshes no node places are written all the same;
+/// Write `meshes`, each once, one node per entry of `nodes`, and the
+/// `camera` and `lights` (in the scene's coordinates), as GLB (`binary`) or
+/// `.gltf`. Meshes no node places are written all the same;
 /// a node naming a mesh that is not there, a transform that is not finite
 /// or an invalid mesh (one without triangles among them) is refused.
 pub fn write_gltf_placed(
     w: &mut dyn Write,
     meshes: &[TriangleMesh],
     nodes: &[PlacedMesh],
+    camera: Option<&Camera>,
+    lights: &[Light],
     binary: bool,
 ) -> io::Result<()> {
     let invalid = |msg: String| io::Error::new(io::ErrorKind::InvalidInput, msg);
@@ -91,7 +95,30 @@ pub fn write_gltf_placed(
         };
         node_json.push(format!(r#"{{"mesh":{}{matrix}{name}}}"#, n.mesh));
     }
-    let extras = scene_extras(&materials, None, &[], &mut node_json);
+    let extras = scene_extras(
+        &materials,
+        camera.map(|c| (c, placed_bounds(meshes, nodes))),
+        lights,
+        &mut node_json,
+    );
     let roots: Vec<usize> = (0..node_json.len()).collect();
     document(w, buf, &extras, &roots, &node_json, &mesh_json, binary)
+}
+
+/// The scene's bounds: each node's mesh's box corners carried by its
+/// transform.
+fn placed_bounds(meshes: &[TriangleMesh], nodes: &[PlacedMesh]) -> Aabb {
+    let mut b = Aabb::EMPTY;
+    for n in nodes {
+        let m = meshes[n.mesh].bounds();
+        for k in 0..8 {
+            let corner = DVec3::new(
+                if k & 1 == 0 { m.min.x } else { m.max.x } as f64,
+                if k & 2 == 0 { m.min.y } else { m.max.y } as f64,
+                if k & 4 == 0 { m.min.z } else { m.max.z } as f64,
+            );
+            b = b.grow(n.to_world.transform_point3(corner).as_vec3());
+        }
+    }
+    b
 }

@@ -14,15 +14,15 @@
 
 use super::json::json_string;
 use raykit_core::glam::{Mat3, Quat};
-use raykit_core::{Camera, Light, Material, TriangleMesh, Vec3};
+use raykit_core::{Aabb, Camera, Light, Material, Vec3};
 
 /// JSON fields (`,"materials":[…],…,`) to place between `asset` and `scene`,
 /// and the camera and light nodes appended to `nodes`; the camera's near
-/// plane is set from the size of `mesh`. Returns `","` when there is
-/// nothing to add.
+/// plane is set from the size of the scene's bounds, given with it.
+/// Returns `","` when there is nothing to add.
 pub(super) fn scene_extras(
     materials: &[Material],
-    camera: Option<(&Camera, &TriangleMesh)>,
+    camera: Option<(&Camera, Aabb)>,
     lights: &[Light],
     nodes: &mut Vec<String>,
 ) -> String {
@@ -32,10 +32,9 @@ pub(super) fn scene_extras(
         let ms: Vec<String> = materials.iter().map(|m| material(m, &mut used)).collect();
         out += &format!(r#""materials":[{}],"#, ms.join(","));
     }
-    if let Some((c, mesh)) = camera {
+    if let Some((c, b)) = camera {
         let (right, up, forward) = c.basis();
         let q = Quat::from_mat3(&Mat3::from_cols(right, up, -forward)).normalize();
-        let b = mesh.bounds();
         let znear = b.placing_length() * 1e-4;
         out += &format!(
             r#""cameras":[{{"type":"perspective","perspective":{{"yfov":{},"znear":{znear}}}}}],"#,

@@ -128,7 +128,9 @@ pub fn stage_gltf_placed(
             ))
         }
     };
-    stage_compressed(set, path, |w| write_gltf_placed(w, meshes, nodes, binary))
+    stage_compressed(set, path, |w| {
+        write_gltf_placed(w, meshes, nodes, None, &[], binary)
+    })
 }
 
 /// `write` into `set` at `path`, through gzip when `path` ends in `.gz`.
