@@ -4,24 +4,30 @@
 //! Collision Detection", 2005, 5.1.5): the Voronoi region of the point among
 //! the triangle's corners, edges and face from six dot products, then the
 //! projection onto that feature, computed for four triangles of a leaf at
-//! once without branches. The tree is searched nearest box first
+//! once without branches, from the leaf's corners kept in structure of
+//! arrays (`super::corner_groups`). The tree is searched nearest box first
 //! ([`SurfaceBvh::closest_point`]): of a node's children within reach, the
 //! nearest is walked next and the others are pushed as they come (sorting
-//! them cost more in mispredicted branches than it saved), and a box no
-//! nearer than the best triangle so far (or than the search radius) is
-//! never opened. The search runs in `f32` relative to the query point; the
+//! them cost more in mispredicted branches than it saved), each one's
+//! memory requested when it is pushed, and a box no nearer than the best
+//! triangle so far (or than the search radius) is never opened. The search runs in `f32` relative to the query point; the
 //! winning triangle is then solved again in `f64` for the reported point,
 //! barycentrics and distance. [`closest_point_in`] runs the same search
 //! through any [`Accel`]'s regions, and [`closest_point_brute`] tests every
 //! triangle in `f64` (the reference of the tests).
 
 use super::batch::answer_coherent;
+use super::corner_groups::{Group, LANES};
 use super::exact::Triangle64;
 use super::point_tree::PointTree;
-use super::surface_bvh::{stack_of, SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
+use super::surface_bvh::{SurfaceBvh, EMPTY, SMALL_STACK, WIDTH};
+use crate::accel::bvh::prefetch_lines;
+#[cfg(target_arch = "x86_64")]
+use crate::accel::bvh::BoxPath;
 use crate::accel::Accel;
 use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
+use std::mem::MaybeUninit;
 
 /// The point of a surface closest to a query point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -151,27 +157,17 @@ pub(crate) fn triangle_distance2(p: Vec3, tri: &[Vec3; 3]) -> (f32, f32, f32) {
     (q.length_squared(), u, v)
 }
 
-/// Triangles whose distances one [`group_distance2`] computes together.
-const LANES: usize = 4;
-
-/// [`triangle_distance2`]'s squared distances from `p` to up to [`LANES`]
-/// triangles at once. Lanes past `tris.len()` repeat the last triangle.
+/// [`triangle_distance2`]'s squared distances from `p` to the `n` (one
+/// to [`LANES`]) triangles of group `g` of `tree`.
 #[inline(always)]
-fn group_distance2(p: Vec3, tris: &[[Vec3; 3]]) -> [f32; LANES] {
-    let mut c = [[[0f32; LANES]; 3]; 3];
-    for k in 0..LANES {
-        let t = &tris[k.min(tris.len() - 1)];
-        for (corner, out) in t.iter().zip(c.iter_mut()) {
-            let r = *corner - p;
-            out[0][k] = r.x;
-            out[1][k] = r.y;
-            out[2][k] = r.z;
-        }
-    }
-    let (mut d2, degenerate) = distance2_lanes(&c);
+fn group_distance2(p: Vec3, tree: &PointTree, g: usize, n: usize) -> [f32; LANES] {
+    let (mut d2, degenerate) = distance2_lanes(&tree.groups.corners[g], p);
     if degenerate != 0 {
-        for (k, t) in tris.iter().enumerate().take(LANES) {
-            d2[k] = triangle_distance2(p, t).0;
+        let first = tree.groups.first[g] as usize;
+        for (k, t) in tree.tris[first..first + n].iter().enumerate() {
+            if degenerate & (1 << k) != 0 {
+                d2[k] = triangle_distance2(p, t).0;
+            }
         }
     }
     d2
@@ -179,7 +175,10 @@ fn group_distance2(p: Vec3, tris: &[[Vec3; 3]]) -> [f32; LANES] {
 
 /// [`triangle_distance2`] in [`LANES`] lanes without branches, so that each
 /// lane-wise step compiles to one vector operation: lane `k` holds the
-/// corners `c[corner][axis][k]` of a triangle relative to its query point.
+/// corners `g[corner][axis][k]` of a triangle, taken relative to `p` lane
+/// by lane so that no step spans more than one vector of [`LANES`] (a
+/// subtraction of the whole group at once compiles to 512-bit operations
+/// where AVX-512 is enabled, which lower the clock).
 /// Every region's candidate is computed and the one of Ericson's order
 /// selected, so each distance is [`triangle_distance2`]'s bit for bit.
 /// Thin and degenerate triangles, and triangles whose products overflow,
@@ -188,14 +187,16 @@ fn group_distance2(p: Vec3, tris: &[[Vec3; 3]]) -> [f32; LANES] {
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // lanes of structure-of-arrays
 #[allow(clippy::manual_clamp)] // `clamp` panics on a NaN bound
-fn distance2_lanes(c: &[[[f32; LANES]; 3]; 3]) -> ([f32; LANES], u32) {
-    let [a, b, cc] = c;
+fn distance2_lanes(g: &Group, p: Vec3) -> ([f32; LANES], u32) {
+    let [a, b, c] = g;
     let mut d2 = [0f32; LANES];
     let mut degenerate = 0u32;
     for k in 0..LANES {
-        let (ax, ay, az) = (a[0][k], a[1][k], a[2][k]);
-        let (abx, aby, abz) = (b[0][k] - ax, b[1][k] - ay, b[2][k] - az);
-        let (acx, acy, acz) = (cc[0][k] - ax, cc[1][k] - ay, cc[2][k] - az);
+        let (ax, ay, az) = (a[0][k] - p.x, a[1][k] - p.y, a[2][k] - p.z);
+        let (bx, by, bz) = (b[0][k] - p.x, b[1][k] - p.y, b[2][k] - p.z);
+        let (cx, cy, cz) = (c[0][k] - p.x, c[1][k] - p.y, c[2][k] - p.z);
+        let (abx, aby, abz) = (bx - ax, by - ay, bz - az);
+        let (acx, acy, acz) = (cx - ax, cy - ay, cz - az);
         let dot = |vx: f32, vy: f32, vz: f32| {
             (
                 abx * vx + aby * vy + abz * vz,
@@ -203,8 +204,8 @@ fn distance2_lanes(c: &[[[f32; LANES]; 3]; 3]) -> ([f32; LANES], u32) {
             )
         };
         let (d1, d2_) = dot(-ax, -ay, -az);
-        let (d3, d4) = dot(-b[0][k], -b[1][k], -b[2][k]);
-        let (d5, d6) = dot(-cc[0][k], -cc[1][k], -cc[2][k]);
+        let (d3, d4) = dot(-bx, -by, -bz);
+        let (d5, d6) = dot(-cx, -cy, -cz);
         let vc = d1 * d4 - d3 * d2_;
         let vb = d5 * d2_ - d1 * d6;
         let va = d3 * d6 - d5 * d4;
@@ -367,19 +368,76 @@ impl SurfaceBvh {
     }
 }
 
+/// An entry of the search's stack: a child reference, its triangle count
+/// (zero for an inner node) and its box's squared distance.
+type Entry = (u32, u32, f32);
+
 impl PointTree {
     /// The search behind [`SurfaceBvh::closest_point`]: the nearest
     /// triangle's index in leaf order, `p` and `max_distance` at the
     /// surface's scale. `hint`, a triangle near `p` (in leaf
     /// order; the answer for a neighbouring point), starts the search with
     /// its distance as the bound, which prunes the tree from the first node
-    /// on; the answer is the same with or without it.
+    /// on; the answer is the same with or without it. The search is
+    /// compiled once per instruction set ([`PointTree::path`]), so that the
+    /// boxes' and triangles' lanes take the widest vectors and VEX's
+    /// three-operand forms; the arithmetic is the same, bit for bit (no
+    /// fused multiply-adds).
     pub(crate) fn nearest_triangle(
         &self,
         p: Vec3,
         max_distance: f32,
         hint: Option<usize>,
     ) -> Option<usize> {
+        #[cfg(target_arch = "x86_64")]
+        match self.path {
+            // SAFETY: `path` was detected on this CPU.
+            BoxPath::Avx512 => return unsafe { self.nearest_avx512(p, max_distance, hint) },
+            // SAFETY: as above.
+            BoxPath::Avx2 => return unsafe { self.nearest_avx2(p, max_distance, hint) },
+            _ => {}
+        }
+        self.nearest_from(p, max_distance, hint)
+    }
+
+    /// [`PointTree::nearest_triangle`] compiled for AVX-512 (F, VL, BW, DQ)
+    /// besides AVX2: compares into mask registers, 32 vector registers.
+    ///
+    /// # Safety
+    /// The CPU must support every feature named (`BoxPath::Avx512`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn nearest_avx512(
+        &self,
+        p: Vec3,
+        max_distance: f32,
+        hint: Option<usize>,
+    ) -> Option<usize> {
+        self.nearest_from(p, max_distance, hint)
+    }
+
+    /// [`PointTree::nearest_triangle`] compiled for AVX2: a node's eight
+    /// box distances in one vector each step.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn nearest_avx2(
+        &self,
+        p: Vec3,
+        max_distance: f32,
+        hint: Option<usize>,
+    ) -> Option<usize> {
+        self.nearest_from(p, max_distance, hint)
+    }
+
+    /// The body of [`PointTree::nearest_triangle`]: of a node's children
+    /// within reach (in slot order, from a mask of the eight compares), the
+    /// nearest is walked next and the others pushed; a leaf's triangles are
+    /// solved a group at a time from their corners in structure of arrays.
+    #[inline(always)]
+    fn nearest_from(&self, p: Vec3, max_distance: f32, hint: Option<usize>) -> Option<usize> {
         if !p.is_finite() || self.nodes.is_empty() || max_distance.is_nan() || max_distance < 0.0 {
             return None;
         }
@@ -397,24 +455,35 @@ impl PointTree {
                 best = Some(h);
             }
         }
-        let (mut small, mut big) = ([(0u32, 0u32, 0f32); SMALL_STACK], Vec::new());
-        let stack = stack_of(&mut small, &mut big, self.stack_need);
+        // Left uninitialised (zeroing it was a memset per query, a quarter
+        // of the instructions of a search near the surface): only entries
+        // below `sp`, each written before, are read.
+        let mut small = [const { MaybeUninit::<Entry>::uninit() }; SMALL_STACK];
+        let mut big = Vec::new();
+        let stack: &mut [MaybeUninit<Entry>] = if self.stack_need <= SMALL_STACK {
+            &mut small
+        } else {
+            big.resize(self.stack_need, MaybeUninit::uninit());
+            &mut big
+        };
+        stack[0] = MaybeUninit::new((0, 0, 0.0));
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
-            let (child, count, d2) = stack[sp];
+            // SAFETY: entries below `sp` have been written.
+            let (child, count, d2) = unsafe { stack[sp].assume_init() };
             if d2 > best2 {
                 continue;
             }
             if count > 0 {
-                let (first, end) = (child as usize, (child + count) as usize);
-                for start in (first..end).step_by(LANES) {
-                    let group = &self.tris[start..end.min(start + LANES)];
-                    let d = group_distance2(p, group);
-                    for (k, &dt) in d.iter().enumerate().take(group.len()) {
+                let (g0, count) = (child as usize, count as usize);
+                for g in 0..count.div_ceil(LANES) {
+                    let n = (count - g * LANES).min(LANES);
+                    let d = group_distance2(p, self, g0 + g, n);
+                    for (k, &dt) in d.iter().enumerate().take(n) {
                         if dt < best2 || (best.is_none() && dt <= limit2) {
                             best2 = dt;
-                            best = Some(start + k);
+                            best = Some(self.groups.first[g0 + g] as usize + k);
                         }
                     }
                 }
@@ -422,27 +491,53 @@ impl PointTree {
             }
             let node = &self.nodes[child as usize];
             let d2 = box_distance2(&node.min, &node.max, p);
+            let mut within = 0u32;
+            for (k, (&d, &c)) in d2.iter().zip(&node.child).enumerate() {
+                within |= u32::from(d <= best2 && c != EMPTY) << k;
+            }
             let mut nearest = (f32::INFINITY, usize::MAX);
-            for (k, &d) in d2.iter().enumerate() {
-                if d <= best2 && node.child[k] != EMPTY {
-                    if d < nearest.0 {
-                        if nearest.1 != usize::MAX && sp < stack.len() {
-                            stack[sp] = (node.child[nearest.1], node.count[nearest.1], nearest.0);
-                            sp += 1;
-                        }
-                        nearest = (d, k);
-                    } else if sp < stack.len() {
-                        stack[sp] = (node.child[k], node.count[k], d);
+            while within != 0 {
+                let k = within.trailing_zeros() as usize;
+                within &= within - 1;
+                self.prefetch(node.child[k], node.count[k]);
+                let d = d2[k];
+                if d < nearest.0 {
+                    if nearest.1 != usize::MAX && sp < stack.len() {
+                        let n = nearest.1;
+                        stack[sp] = MaybeUninit::new((node.child[n], node.count[n], nearest.0));
                         sp += 1;
                     }
+                    nearest = (d, k);
+                } else if sp < stack.len() {
+                    stack[sp] = MaybeUninit::new((node.child[k], node.count[k], d));
+                    sp += 1;
                 }
             }
             if nearest.1 != usize::MAX && sp < stack.len() {
-                stack[sp] = (node.child[nearest.1], node.count[nearest.1], nearest.0);
+                let n = nearest.1;
+                stack[sp] = MaybeUninit::new((node.child[n], node.count[n], nearest.0));
                 sp += 1;
             }
         }
         best
+    }
+
+    /// Request the memory that child `child` (of `count` triangles) will
+    /// read when it is visited: a node's boxes and references (its first
+    /// four cache lines; the triangle ranges after them are not read), or a
+    /// leaf's first group of corners. Its lines then arrive while the
+    /// nearer children are searched, as the ray traversal prefetches
+    /// (`accel::bvh::prefetch`).
+    #[inline(always)]
+    fn prefetch(&self, child: u32, count: u32) {
+        if count == 0 {
+            let node = self.nodes.as_ptr().wrapping_add(child as usize);
+            prefetch_lines(node as *const u8, 4);
+        } else {
+            let group = self.groups.corners.as_ptr().wrapping_add(child as usize) as *const u8;
+            prefetch_lines(group, 2);
+            prefetch_lines(group.wrapping_add(std::mem::size_of::<Group>() - 1), 1);
+        }
     }
 }
 
@@ -520,11 +615,47 @@ pub fn closest_point_brute(mesh: &TriangleMesh, p: DVec3) -> Option<(f64, u32, D
 
 #[cfg(test)]
 mod tests {
+    use super::super::corner_groups::group_of;
     use super::*;
     use crate::rng::Pcg32;
 
+    /// The kernel as an instruction set's search compiles it.
+    type Kernel = unsafe fn(&Group, Vec3) -> ([f32; LANES], u32);
+
+    /// [`distance2_lanes`] compiled for AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn lanes_avx2(g: &Group, p: Vec3) -> ([f32; LANES], u32) {
+        distance2_lanes(g, p)
+    }
+
+    /// [`distance2_lanes`] compiled for AVX-512 besides.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512bw,avx512dq,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn lanes_avx512(g: &Group, p: Vec3) -> ([f32; LANES], u32) {
+        distance2_lanes(g, p)
+    }
+
+    /// The wider compilations of the kernel this CPU runs.
+    fn kernels() -> Vec<(&'static str, Kernel)> {
+        let mut v: Vec<(&'static str, Kernel)> = Vec::new();
+        #[cfg(target_arch = "x86_64")]
+        {
+            let path = BoxPath::detect();
+            if matches!(path, BoxPath::Avx2 | BoxPath::Avx512) {
+                v.push(("avx2", lanes_avx2));
+            }
+            if path == BoxPath::Avx512 {
+                v.push(("avx512", lanes_avx512));
+            }
+        }
+        v
+    }
+
     /// The four-lane kernel gives the scalar kernel's squared distance bit
-    /// for bit, on triangles of every shape (degenerate ones included: a
+    /// for bit (for every lane it solves; the others go to the scalar
+    /// kernel), and so does it as compiled for each wider instruction set
+    /// this CPU runs, on triangles of every shape (degenerate ones included: a
     /// repeated corner, collinear corners, a point triangle, slivers at the
     /// thin-triangle angle) and points in every Voronoi region of each; and
     /// both are within rounding of the `f64` closest point of the separate
@@ -559,10 +690,23 @@ mod tests {
             degenerate += usize::from(round % 6 != 0);
             let p = r() * 1.5;
             let n = 1 + round % LANES;
-            let lanes = group_distance2(p, &tris[..n]);
+            let group = group_of(&tris[..n]);
+            let (lanes, unsolved) = distance2_lanes(&group, p);
+            for (kernel, other) in kernels() {
+                // SAFETY: `kernels` lists those this CPU runs.
+                let (l, u) = unsafe { other(&group, p) };
+                let bits = |d: [f32; LANES]| d.map(f32::to_bits);
+                assert_eq!(
+                    (bits(l), u),
+                    (bits(lanes), unsolved),
+                    "{kernel}, round {round}"
+                );
+            }
             for k in 0..n {
                 let (d2, _, _) = triangle_distance2(p, &tris[k]);
-                assert_eq!(lanes[k].to_bits(), d2.to_bits(), "round {round}, lane {k}");
+                if unsolved & (1 << k) == 0 {
+                    assert_eq!(lanes[k].to_bits(), d2.to_bits(), "round {round}, lane {k}");
+                }
 
                 let t64 = tris[k].map(|c| c.as_dvec3());
                 let q = super::super::exact::closest_point_on_triangle(p.as_dvec3(), &t64);

@@ -37,6 +37,7 @@ pub mod answers;
 pub(crate) mod batch;
 pub mod closest;
 mod closing;
+mod corner_groups;
 pub mod exact;
 pub mod frustum;
 mod moments;

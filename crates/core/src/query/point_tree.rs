@@ -11,12 +11,15 @@
 //! leaves (packs of precomputed Möller data), its leaves keep the
 //! triangles' corners, which the closest-point and solid-angle kernels
 //! need, and every child slot keeps the range of triangles below it, from
-//! which the winding-number moments are made ([`super::winding`]).
+//! which the winding-number moments are made ([`super::winding`]). The
+//! closest-point search reads the leaves' corners from their copy in
+//! structure of arrays ([`CornerGroups`]).
 
+use super::corner_groups::CornerGroups;
 use super::moments::Moments;
 use super::surface_node::{SurfaceNode, EMPTY, WIDTH};
 use crate::aabb::Aabb;
-use crate::accel::bvh::{build, BuildNode, BuildOptions};
+use crate::accel::bvh::{build, BoxPath, BuildNode, BuildOptions};
 use crate::mesh::TriangleMesh;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -31,6 +34,12 @@ pub(crate) struct PointTree {
     pub(crate) tris: Vec<[Vec3; 3]>,
     /// Mesh triangle index of each triangle in leaf order.
     pub(crate) prims: Vec<u32>,
+    /// The leaves' corners in groups for the closest-point kernel; a leaf
+    /// slot's `child` is its first group.
+    pub(crate) groups: CornerGroups,
+    /// The instruction set the closest-point search is compiled for,
+    /// detected once at build.
+    pub(crate) path: BoxPath,
     /// Most traversal stack entries a query can need (each inner node
     /// visited pushes at most eight and pops one).
     pub(crate) stack_need: usize,
@@ -53,6 +62,8 @@ impl PointTree {
             nodes: Vec::new(),
             tris,
             prims: tree.order,
+            groups: CornerGroups::default(),
+            path: BoxPath::detect(),
             stack_need: 1,
             moments: OnceLock::new(),
         };
@@ -60,6 +71,7 @@ impl PointTree {
             points.nodes.push(SurfaceNode::default());
             let depth = fill(&mut points.nodes, 0, &root_slots(&tree.root), PAR_LEVELS);
             points.stack_need = stack_need(depth);
+            points.groups = CornerGroups::build(&mut points.nodes, &points.tris);
         }
         points
     }
@@ -70,11 +82,12 @@ impl PointTree {
             .get_or_init(|| Moments::build(&self.nodes, &self.tris))
     }
 
-    /// Bytes held: nodes, corners, triangle indices and the moments where
-    /// they have been made.
+    /// Bytes held: nodes, corners (and their groups), triangle indices and
+    /// the moments where they have been made.
     pub(crate) fn bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<SurfaceNode>()
             + self.tris.len() * (std::mem::size_of::<[Vec3; 3]>() + std::mem::size_of::<u32>())
+            + self.groups.bytes()
             + self.moments.get().map_or(0, Moments::bytes)
     }
 }
@@ -208,6 +221,7 @@ pub(crate) fn widen(node: &BuildNode) -> Vec<&BuildNode> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::corner_groups::LANES;
     use super::*;
     use crate::rng::Pcg32;
 
@@ -242,8 +256,16 @@ mod tests {
                     }
                 }
                 if node.count[k] > 0 {
-                    assert_eq!(node.child[k] as usize, r.start);
                     assert_eq!(node.count[k] as usize, r.len());
+                    let g = node.child[k] as usize;
+                    for (i, t) in r.clone().enumerate() {
+                        let (group, lane) = (g + i / LANES, i % LANES);
+                        assert_eq!(bvh.groups.first[group] as usize, t - i % LANES);
+                        let c = &bvh.groups.corners[group];
+                        for (j, v) in bvh.tris[t].iter().enumerate() {
+                            assert_eq!(*v, Vec3::new(c[j][0][lane], c[j][1][lane], c[j][2][lane]));
+                        }
+                    }
                     for t in r {
                         seen[bvh.prims[t] as usize] += 1;
                         assert_eq!(bvh.tris[t], mesh.triangle(bvh.prims[t] as usize));

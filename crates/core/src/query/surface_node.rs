@@ -11,7 +11,8 @@ pub(crate) const EMPTY: u32 = u32::MAX;
 /// An inner node: the boxes of up to eight children (structure of arrays;
 /// an unused slot has the empty box, `min = +inf`, `max = -inf`), and per
 /// child either an inner node (`count == 0`, `child` its index), a leaf
-/// (`count > 0`, `child` its first triangle in leaf order) or nothing
+/// (`count > 0` triangles from `first` in leaf order, `child` the first of
+/// their corner groups, `super::corner_groups`) or nothing
 /// (`child == EMPTY`).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]

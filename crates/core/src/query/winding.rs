@@ -504,7 +504,7 @@ impl PointTree {
                     continue;
                 }
                 if node.count[k] > 0 {
-                    let first = node.child[k] as usize;
+                    let first = node.first[k] as usize;
                     for t in &self.tris[first..first + node.count[k] as usize] {
                         w += solid_angle32(t[0] - q, t[1] - q, t[2] - q);
                     }

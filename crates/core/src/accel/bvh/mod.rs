@@ -32,7 +32,7 @@ mod box4;
 mod box8;
 mod box_path;
 #[cfg(target_arch = "x86_64")]
-pub(crate) use box_path::avx2;
+pub(crate) use box_path::{avx2, BoxPath};
 mod boxes;
 pub(crate) mod build;
 mod bvh2;
@@ -42,7 +42,7 @@ mod enter;
 mod fit;
 #[cfg(target_arch = "x86_64")]
 mod frustum;
-mod huge_pages;
+pub(crate) mod huge_pages;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 mod mapped;
@@ -55,6 +55,7 @@ mod packet_agreement;
 mod persist;
 mod persist_error;
 mod prefetch;
+pub(crate) use prefetch::prefetch_lines;
 mod ray_box;
 mod refit;
 mod refit_report;
