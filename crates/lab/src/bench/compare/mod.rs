@@ -135,7 +135,10 @@ fn compare_mesh(
     } else {
         &[]
     };
-    for (threads, p) in [(1, one), (n, all)] {
+    // One thread, then all of them: the same cells once when all is one.
+    let both = [(1, one), (n, all)];
+    let pools_all: &[(usize, &ThreadPool)] = if n == 1 { &both[..1] } else { &both };
+    for &(threads, p) in pools_all {
         // The devices (Embree's thread pools) are made outside the timing.
         let device3 = if e3 {
             Some(Embree3Device::new(threads)?)
@@ -235,11 +238,7 @@ fn compare_mesh(
             let rays = &sets[si];
             let shadow = set == RayKind::Shadow;
             let m = rays.len() as f64 / 1e6;
-            let pools: &[(usize, &ThreadPool)] = if one_ray_api {
-                &[(1, one)]
-            } else {
-                &[(1, one), (n, all)]
-            };
+            let pools: &[(usize, &ThreadPool)] = if one_ray_api { &[(1, one)] } else { pools_all };
             let apis = if one_ray_api { single } else { all_apis };
             for &(threads, p) in pools {
                 let mut runs: Vec<Run> = ours
@@ -287,7 +286,7 @@ fn compare_mesh(
     if let Some(em) = &embree3 {
         let primary = &sets[0];
         let m = primary.len() as f64 / 1e6;
-        for (threads, p) in [(1, one), (n, all)] {
+        for &(threads, p) in pools_all {
             let mut runs: Vec<Run> = ours
                 .iter()
                 .map(|o| -> Run {
