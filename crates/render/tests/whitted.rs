@@ -16,6 +16,10 @@ use raykit_render::whitted::{
 use raykit_render::Encoding;
 use raykit_scene::{material, MeshBuilder};
 
+#[path = "support/builtin_frame.rs"]
+mod builtin_frame;
+use builtin_frame::whitted_frame;
+
 fn bvh(mesh: &TriangleMesh) -> Box<dyn Accel> {
     build_accel(
         AccelKind::Bvh2,
@@ -339,20 +343,6 @@ fn compare(a: &Frame, b: &Frame, what: &str) {
         "{what}: {differing} of {} 8-bit values differ",
         a.image.rgb.len()
     );
-}
-
-fn whitted_frame(opts: &WhittedOptions) -> Frame {
-    let scene = raykit_scene::whitted(1);
-    let accel = bvh(&scene.mesh);
-    let env = Environment::Sky;
-    let ws = WhittedScene::new(
-        &scene.mesh,
-        accel.as_ref(),
-        TestKind::Moller,
-        &scene.lights,
-        &env,
-    );
-    render_whitted(&ws, &scene.camera.unwrap(), opts, &|_, _| {}).unwrap()
 }
 
 #[test]

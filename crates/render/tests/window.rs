@@ -5,11 +5,12 @@
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
-use raykit_render::env::Environment;
-use raykit_render::whitted::{
-    render_whitted, Frame, IntegratorKind, PrimaryMode, WhittedOptions, WhittedScene,
-};
+use raykit_render::whitted::{Frame, IntegratorKind, PrimaryMode, WhittedOptions};
 use raykit_render::{render, RenderOptions, Tile};
+
+#[path = "support/builtin_frame.rs"]
+mod builtin_frame;
+use builtin_frame::whitted_frame;
 
 /// Windows that cover a `w` × `h` frame once: uneven bands and a grid of
 /// rectangles that do not line up with the renderer's 32-pixel tiles.
@@ -44,25 +45,6 @@ fn paste<T: Copy + Default>(w: u32, h: u32, parts: &[(Tile, Vec<T>)], per_pixel:
     out
 }
 
-fn whitted(opts: &WhittedOptions) -> Frame {
-    let scene = raykit_scene::whitted(1);
-    let accel = build_accel(
-        AccelKind::Bvh2,
-        TestKind::Moller,
-        &scene.mesh,
-        &BuildOptions::default(),
-    );
-    let env = Environment::Sky;
-    let ws = WhittedScene::new(
-        &scene.mesh,
-        accel.as_ref(),
-        TestKind::Moller,
-        &scene.lights,
-        &env,
-    );
-    render_whitted(&ws, &scene.camera.unwrap(), opts, &|_, _| {}).unwrap()
-}
-
 #[test]
 fn whitted_windows_assemble_into_the_whole_frame() {
     let (w, h) = (77u32, 58u32);
@@ -80,12 +62,12 @@ fn whitted_windows_assemble_into_the_whole_frame() {
             primary,
             ..WhittedOptions::default()
         };
-        let whole = whitted(&opts);
+        let whole = whitted_frame(&opts);
         for split in splits(w, h) {
             let parts: Vec<Frame> = split
                 .iter()
                 .map(|t| {
-                    whitted(&WhittedOptions {
+                    whitted_frame(&WhittedOptions {
                         window: Some(*t),
                         ..opts.clone()
                     })

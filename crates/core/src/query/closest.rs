@@ -10,11 +10,12 @@
 //! nearest is walked next and the others are pushed as they come (sorting
 //! them cost more in mispredicted branches than it saved), each one's
 //! memory requested when it is pushed, and a box no nearer than the best
-//! triangle so far (or than the search radius) is never opened. The search runs in `f32` relative to the query point; the
-//! winning triangle is then solved again in `f64` for the reported point,
-//! barycentrics and distance. [`closest_point_in`] runs the same search
-//! through any [`Accel`]'s regions, and [`closest_point_brute`] tests every
-//! triangle in `f64` (the reference of the tests).
+//! triangle so far (or than the search radius) is never opened. The search
+//! runs in `f32` relative to the query point; the winning triangle is then
+//! solved again in `f64` for the reported point, barycentrics and distance.
+//! [`closest_point_in`] runs the same search through any [`Accel`]'s
+//! regions, and [`closest_point_brute`] tests every triangle in `f64` (the
+//! reference of the tests).
 
 use super::batch::answer_coherent;
 use super::corner_groups::{Group, LANES};
@@ -455,9 +456,8 @@ impl PointTree {
                 best = Some(h);
             }
         }
-        // Left uninitialised (zeroing it was a memset per query, a quarter
-        // of the instructions of a search near the surface): only entries
-        // below `sp`, each written before, are read.
+        // Left uninitialised (zeroing it would be a memset per query): only
+        // entries below `sp`, each written before, are read.
         let mut small = [const { MaybeUninit::<Entry>::uninit() }; SMALL_STACK];
         let mut big = Vec::new();
         let stack: &mut [MaybeUninit<Entry>] = if self.stack_need <= SMALL_STACK {

@@ -2,8 +2,7 @@
 //! corners in groups of [`LANES`] triangles, one array per corner and axis,
 //! so that the closest-point kernel (`super::closest`) loads a group's
 //! coordinates as whole vectors instead of gathering them from the
-//! triangles' corners on every visit (the gather was about a tenth of a
-//! search's instructions).
+//! triangles' corners on every visit.
 
 use super::surface_node::{SurfaceNode, WIDTH};
 use crate::accel::bvh::huge_pages;
