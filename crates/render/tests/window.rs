@@ -3,14 +3,12 @@
 //! both renderers, every integrator and primary source, and jittered
 //! samples.
 
-use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
-use raykit_core::tri::TestKind;
 use raykit_render::whitted::{Frame, IntegratorKind, PrimaryMode, WhittedOptions};
 use raykit_render::{render, RenderOptions, Tile};
 
 #[path = "support/builtin_frame.rs"]
 mod builtin_frame;
-use builtin_frame::whitted_frame;
+use builtin_frame::{whitted_frame, whitted_scene};
 
 /// Windows that cover a `w` × `h` frame once: uneven bands and a grid of
 /// rectangles that do not line up with the renderer's 32-pixel tiles.
@@ -120,13 +118,7 @@ fn whitted_windows_assemble_into_the_whole_frame() {
 
 #[test]
 fn blinn_phong_windows_assemble_into_the_whole_frame() {
-    let scene = raykit_scene::whitted(1);
-    let accel = build_accel(
-        AccelKind::Bvh2,
-        TestKind::Moller,
-        &scene.mesh,
-        &BuildOptions::default(),
-    );
+    let (scene, accel) = whitted_scene();
     let camera = scene.camera.unwrap();
     let (w, h) = (70u32, 45u32);
     for spp in [1, 4] {

@@ -4,11 +4,13 @@
 
 use raykit_core::accel::{build_accel, AccelKind, BuildOptions};
 use raykit_core::tri::TestKind;
+use raykit_core::Accel;
 use raykit_render::env::Environment;
 use raykit_render::whitted::{render_whitted, Frame, WhittedOptions, WhittedScene};
+use raykit_scene::Scene;
 
-/// The built-in Whitted scene's frame with `opts`.
-pub fn whitted_frame(opts: &WhittedOptions) -> Frame {
+/// The built-in Whitted scene and its binary BVH with Möller's test.
+pub fn whitted_scene() -> (Scene, Box<dyn Accel>) {
     let scene = raykit_scene::whitted(1);
     let accel = build_accel(
         AccelKind::Bvh2,
@@ -16,6 +18,12 @@ pub fn whitted_frame(opts: &WhittedOptions) -> Frame {
         &scene.mesh,
         &BuildOptions::default(),
     );
+    (scene, accel)
+}
+
+/// The built-in Whitted scene's frame with `opts`.
+pub fn whitted_frame(opts: &WhittedOptions) -> Frame {
+    let (scene, accel) = whitted_scene();
     let env = Environment::Sky;
     let ws = WhittedScene::new(
         &scene.mesh,
