@@ -110,8 +110,8 @@ pub struct CullArgs {
     #[arg(long, value_enum, default_value = "triangle")]
     pub(super) by: ByArg,
     /// glTF/GLB input and output: every node of a mesh keeps what any of
-    /// them sees, so that each mesh is written once, as in the input (removes
-    /// less; never a triangle that the nodes' own results keep).
+    /// them sees, so that each mesh is written once, as in the input. It
+    /// removes less: every triangle that a node's own result keeps stays.
     #[arg(long)]
     pub(super) shared_meshes: bool,
     /// Min's (2008) rule alone (`--mode paper`; may remove visible
