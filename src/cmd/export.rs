@@ -98,24 +98,17 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
 
 /// A glTF or GLB file's meshes, each once, and the nodes placing them, when
 /// `spec` names such a file whose flattened load is `flat`
-/// ([`raykit_io::GltfInstances::matches_flattened`]); `None` for a built-in
-/// scene or another format, which are written flattened.
+/// ([`raykit_io::load_gltf_instances_of`]); `None` for a built-in scene or
+/// another format, which are written flattened.
 fn placed_scene(
     spec: &str,
     flat: &raykit_core::TriangleMesh,
 ) -> Result<Option<(Vec<raykit_core::TriangleMesh>, Vec<raykit_io::PlacedMesh>)>> {
-    let path = std::path::Path::new(spec);
-    if !matches!(
-        raykit_io::MeshFormat::from_path(path),
-        Some(raykit_io::MeshFormat::Gltf | raykit_io::MeshFormat::Glb)
-    ) {
+    let Some(scene) = raykit_io::load_gltf_instances_of(std::path::Path::new(spec), flat)
+        .with_context(|| format!("{spec}: reading its instancing"))?
+    else {
         return Ok(None);
-    }
-    let scene = raykit_io::load_gltf_instances(path)
-        .with_context(|| format!("{spec}: reading its instancing"))?;
-    if !scene.matches_flattened(flat) {
-        return Ok(None);
-    }
+    };
     // Meshes without triangles (which the flattened output drops too) are
     // left out with their nodes; the others keep their order.
     let mut index = vec![None; scene.geometries.len()];

@@ -58,6 +58,11 @@ impl MeshFormat {
         })
     }
 
+    /// Whether this is glTF, as JSON or binary.
+    pub fn is_gltf(self) -> bool {
+        matches!(self, MeshFormat::Gltf | MeshFormat::Glb)
+    }
+
     /// The usual file extension, without the dot.
     pub fn extension(self) -> &'static str {
         match self {

@@ -57,6 +57,21 @@ pub fn load_gltf_instances(path: &Path) -> Result<GltfInstances, LoadError> {
     parse_gltf_instances(path, &bytes)
 }
 
+/// The instancing of the file at `path` whose flattened load is `flat`, for
+/// output that keeps it: `None` when `path` is not glTF or GLB, or when
+/// `flat` is not that file's flattened load
+/// ([`GltfInstances::matches_flattened`]).
+pub fn load_gltf_instances_of(
+    path: &Path,
+    flat: &TriangleMesh,
+) -> Result<Option<GltfInstances>, LoadError> {
+    if !crate::MeshFormat::from_path(path).is_some_and(crate::MeshFormat::is_gltf) {
+        return Ok(None);
+    }
+    let scene = load_gltf_instances(path)?;
+    Ok(scene.matches_flattened(flat).then_some(scene))
+}
+
 /// [`load_gltf_instances`] on the file's bytes.
 pub fn parse_gltf_instances(path: &Path, data: &[u8]) -> Result<GltfInstances, LoadError> {
     let opened = open_gltf(path, data)?;

@@ -69,7 +69,9 @@ pub use atomic::{remove_unfinished_outputs, write_atomic, write_atomic_file, Out
 pub use companions::companion_files;
 pub use error::{ErrorKind, LoadError, Location};
 pub use format::{MeshFormat, PlyEncoding, StlEncoding};
-pub use gltf_instances::{load_gltf_instances, parse_gltf_instances, GltfInstance, GltfInstances};
+pub use gltf_instances::{
+    load_gltf_instances, load_gltf_instances_of, parse_gltf_instances, GltfInstance, GltfInstances,
+};
 pub use image_merge::{merge_png_parts, MergeError};
 pub use image_part::{read_png_part, write_png_part, ImagePart, MAX_IMAGE_SIDE, PART_KEYWORD};
 pub use load::{load, load_keeping_precision, load_mesh, parse_mesh, LoadedMesh};

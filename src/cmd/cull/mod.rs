@@ -32,8 +32,8 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
             args.output.display()
         );
     };
-    let gltf = |f: Option<MeshFormat>| matches!(f, Some(MeshFormat::Gltf | MeshFormat::Glb));
-    let placed_output = gltf(Some(out_format)) && gltf(MeshFormat::from_path(&args.input));
+    let placed_output =
+        out_format.is_gltf() && MeshFormat::from_path(&args.input).is_some_and(MeshFormat::is_gltf);
     if args.shared_meshes && !placed_output {
         bail!("--shared-meshes needs a glTF or GLB input and a .gltf or .glb output");
     }
@@ -109,7 +109,8 @@ pub fn run(args: CullArgs) -> Result<ExitCode> {
     let result = result.with_context(|| format!("{}", args.input.display()))?;
     let keep = result.keep(&mesh, args.by.into());
     let scene = if placed_output {
-        placed::instances_of(&args.input, &mesh)?
+        raykit_io::load_gltf_instances_of(&args.input, &mesh)
+            .with_context(|| format!("{}: reading its instancing", args.input.display()))?
     } else {
         None
     };

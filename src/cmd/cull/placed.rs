@@ -6,26 +6,9 @@
 //! ([`raykit_io::load_gltf_instances`]), so its part `i` is instance `i` and
 //! the part's triangles are the instance's mesh's, in order.
 
-use anyhow::{Context, Result};
 use raykit_core::TriangleMesh;
 use raykit_io::{GltfInstances, PlacedMesh};
 use std::collections::HashMap;
-use std::path::Path;
-
-/// The input's instances, when it is a glTF file whose flattened load is
-/// `mesh` ([`GltfInstances::matches_flattened`]); `None` for any other
-/// input.
-pub(super) fn instances_of(input: &Path, mesh: &TriangleMesh) -> Result<Option<GltfInstances>> {
-    if !matches!(
-        raykit_io::MeshFormat::from_path(input),
-        Some(raykit_io::MeshFormat::Gltf | raykit_io::MeshFormat::Glb)
-    ) {
-        return Ok(None);
-    }
-    let scene = raykit_io::load_gltf_instances(input)
-        .with_context(|| format!("{}: reading its instancing", input.display()))?;
-    Ok(scene.matches_flattened(mesh).then_some(scene))
-}
 
 /// Each instance's triangles of `keep` (the flattened mesh's mask), as a
 /// mask over its mesh's triangles.
@@ -56,13 +39,13 @@ pub(super) fn shared_keep(scene: &GltfInstances, mesh: &TriangleMesh, keep: &[bo
             *u |= k;
         }
     }
+    let any: Vec<bool> = masks.iter().map(|m| m.contains(&true)).collect();
     let mut out = Vec::with_capacity(keep.len());
     let mut next = vec![0usize; scene.instances.len()];
     for t in 0..mesh.num_triangles() {
         let part = mesh.part_of(t) as usize;
-        let any = masks[part].iter().any(|&k| k);
         let g = scene.instances[part].geometry as usize;
-        out.push(any && union[g][next[part]]);
+        out.push(any[part] && union[g][next[part]]);
         next[part] += 1;
     }
     out
@@ -82,7 +65,7 @@ pub(super) fn placed_meshes(
     let mut meshes = Vec::new();
     let mut nodes = Vec::new();
     for (i, m) in scene.instances.iter().zip(&masks) {
-        if !m.iter().any(|&k| k) {
+        if !m.contains(&true) {
             continue;
         }
         let k = *index.entry((i.geometry, m.as_slice())).or_insert_with(|| {
