@@ -52,8 +52,8 @@
 
 use super::node_width::NodeWidth;
 use super::persist_error::PersistError;
-use super::refit::{check_mesh, stored_sah};
-use super::tri4::{Tri4, Tri4Leaves};
+use super::refit::{check_mesh, left_out, stored_sah};
+use super::tri4::{never_hit, Tri4, Tri4Leaves, Unhittable};
 use super::wide_bvh::WideBvh;
 use super::wide_leaf::Leaves;
 use super::wide_node::Child4;
@@ -329,7 +329,7 @@ pub(crate) fn save<B: WideParts>(
 ) -> Result<(), PersistError> {
     let fault = Fault(path);
     let p = bvh.parts();
-    check_mesh(mesh, p.stats.triangle_refs).map_err(|e| {
+    check_mesh(mesh, p.stats.triangle_refs + left_out(p.leaves)).map_err(|e| {
         let e = e.to_string();
         let detail = e.strip_prefix("refit: ").unwrap_or(&e);
         let hint = "pass the mesh the tree was built over or last refit to";
@@ -509,9 +509,17 @@ pub(crate) unsafe fn load<B: WideParts>(
     let built_sah = f64::from_bits(u64_at(&meta, 32));
     let sah_cost = f64::from_bits(u64_at(&meta, 40));
 
-    let shape = check_tree::<B>(&mut nodes, root, form, &packs, units, triangles, &fault)?;
+    // Packed leaves leave out the triangles no ray can hit: those in no
+    // pack must be such, or the file is not a tree of this mesh.
+    let unhittable = if form == FORM_PACKED {
+        left_out_of(&packs, mesh, &fault)?
+    } else {
+        Unhittable::none()
+    };
+    let in_leaves = triangles - unhittable.prims.len();
+    let shape = check_tree::<B>(&mut nodes, root, form, &packs, units, in_leaves, &fault)?;
     let leaves = if form == FORM_PACKED {
-        Leaves::Packed(Tri4Leaves::from_packs(packs))
+        Leaves::Packed(Tri4Leaves::from_packs(packs, unhittable))
     } else {
         if prims.len() != triangles {
             return Err(fault.at(
@@ -535,7 +543,7 @@ pub(crate) unsafe fn load<B: WideParts>(
         node_bytes,
         depth: shape.depth,
         sah_cost,
-        triangle_refs: triangles,
+        triangle_refs: in_leaves,
     };
     Ok(B::from_parts(PartsOwned {
         nodes,
@@ -546,6 +554,42 @@ pub(crate) unsafe fn load<B: WideParts>(
         stack: shape.stack,
         built_sah: Some(built_sah),
     }))
+}
+
+/// The triangles of `mesh` in no pack of `packs`, each checked to be one
+/// that no ray can hit ([`Unhittable`]): a tree over packs leaves only
+/// those out.
+fn left_out_of(
+    packs: &[Tri4],
+    mesh: &TriangleMesh,
+    fault: &Fault<'_>,
+) -> Result<Unhittable, PersistError> {
+    let mut packed = vec![false; mesh.num_triangles()];
+    for p in packs {
+        for &t in &p.prim {
+            // Checked against the mesh's count as the packs were read.
+            if let Some(seen) = packed.get_mut(t as usize) {
+                *seen = true;
+            }
+        }
+    }
+    let prims: Vec<u32> = (0..packed.len() as u32)
+        .filter(|&i| !packed[i as usize])
+        .collect();
+    if let Some(&i) = prims.iter().find(|&&i| {
+        let [a, b, c] = mesh.triangle(i as usize);
+        !never_hit(a, b, c)
+    }) {
+        return Err(fault.at(
+            0,
+            "leaf units",
+            format!(
+                "triangle {i} of the mesh is in no leaf, though a ray can hit it: pass the mesh \
+                 the tree was built over or last refit to"
+            ),
+        ));
+    }
+    Ok(Unhittable::with_prims(prims, mesh))
 }
 
 /// The error for a file whose first bytes are not [`MAGIC`].

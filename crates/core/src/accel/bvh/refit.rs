@@ -17,6 +17,7 @@
 use super::fit::{fit_boxes, triangle_units, UnitReach};
 use super::node_width::NodeWidth;
 use super::refit_report::{RefitError, RefitReport};
+use super::tri4::Unhittable;
 use super::wide_bvh::WideBvh;
 use super::wide_leaf::Leaves;
 use super::wide_node::Child4;
@@ -55,7 +56,7 @@ pub(crate) fn refit<B: WideParts>(
     bvh: &mut B,
     mesh: &TriangleMesh,
 ) -> Result<RefitReport, RefitError> {
-    let tree = bvh.parts().stats.triangle_refs;
+    let tree = bvh.parts().stats.triangle_refs + left_out(bvh.parts().leaves);
     check_mesh(mesh, tree)?;
     let built_sah = match bvh.parts().built_sah {
         Some(s) => s,
@@ -71,6 +72,14 @@ pub(crate) fn refit<B: WideParts>(
         refit_sah: sah,
         rebuilt: false,
     })
+}
+
+/// Triangles of the mesh that `leaves` leave out ([`Unhittable`]).
+pub(super) fn left_out<T: TriangleTest>(leaves: &Leaves<T>) -> usize {
+    match leaves {
+        Leaves::Packed(p) => p.unhittable.prims.len(),
+        Leaves::Single(_) => 0,
+    }
 }
 
 /// The mesh has the tree's triangle count and every index is in range.
@@ -120,6 +129,8 @@ fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &Trian
                 .with_min_len(1024)
                 .map(|pack| pack.reload(mesh))
                 .collect_into_vec(&mut bounds);
+            let prims = std::mem::take(&mut packs.unhittable.prims);
+            packs.unhittable = Unhittable::with_prims(prims, mesh);
             UnitReach {
                 bounds,
                 per_unit: 4,
@@ -139,14 +150,20 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     /// box is recomputed bottom-up in O(n) and the topology kept
     /// (Embree's refit); the answers are exact as after a build,
     /// the speed may degrade ([`RefitReport::degradation`]).
+    ///
+    /// The triangles that packed leaves leave out because no ray can hit
+    /// them ([`super::tri4::Unhittable`]) stay out while they have no
+    /// area; when one has gained area, the tree is built again with the
+    /// default options instead (`rebuilt` in the report).
     pub fn refit(&mut self, mesh: &TriangleMesh) -> Result<RefitReport, RefitError> {
-        refit(self, mesh)
+        self.refit_or_rebuild(mesh, &BuildOptions::default(), f64::INFINITY)
     }
 
     /// Refit the tree to `mesh` as [`Self::refit`], and rebuild it
     /// with `options` when the refit tree's SAH cost is more than
     /// `max_degradation` times the built tree's (see
-    /// [`super::DEFAULT_MAX_DEGRADATION`]); the rebuilt tree is the new
+    /// [`super::DEFAULT_MAX_DEGRADATION`]) or when a triangle the packed
+    /// leaves left out has gained area; the rebuilt tree is the new
     /// reference for later refits.
     pub fn refit_or_rebuild(
         &mut self,
@@ -155,7 +172,11 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
         max_degradation: f64,
     ) -> Result<RefitReport, RefitError> {
         let mut report = refit(self, mesh)?;
-        if report.degradation() > max_degradation {
+        let hittable_again = match &self.leaves {
+            Leaves::Packed(p) => !p.unhittable.still_unhittable(mesh),
+            Leaves::Single(_) => false,
+        };
+        if hittable_again || report.degradation() > max_degradation {
             *self = Self::build(mesh, options);
             let sah = stored_sah(&self.parts());
             self.built_sah = Some(sah);

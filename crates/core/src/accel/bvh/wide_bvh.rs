@@ -144,8 +144,20 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
     /// When a triangle refers to a vertex the mesh does not have
     /// ([`TriangleMesh::assert_indices_in_range`]).
     pub fn build(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        Self::build_leaving_out(mesh, options, true)
+    }
+
+    /// [`WideBvh::build`] with every triangle in the leaves, those no ray
+    /// can hit too: for the walk to every crossing
+    /// ([`WideBvh::crossings`]), whose exact test of the crossings near an
+    /// edge works on the corners, not on the stored edges.
+    pub(crate) fn build_keeping_all(mesh: &TriangleMesh, options: &BuildOptions) -> Self {
+        Self::build_leaving_out(mesh, options, false)
+    }
+
+    fn build_leaving_out(mesh: &TriangleMesh, options: &BuildOptions, leave_out: bool) -> Self {
         mesh.assert_indices_in_range();
-        let wide = build_wide::<N, T>(mesh, options);
+        let wide = build_wide::<N, T>(mesh, options, leave_out);
         // The traversal writes its stack unchecked (see `traverse_with`).
         assert!(
             wide.stack < N::STACK,
@@ -492,37 +504,34 @@ impl<N: NodeWidth, T: TriangleTest> Accel for WideBvh<N, T> {
     }
 
     /// Depth first, slot 0 first; a child's box is read from its parent
-    /// node, the root's from `root_box`.
+    /// node, the root's from `root_box`. The triangles that packed leaves
+    /// leave out ([`super::tri4::Unhittable`]) come last, as one more leaf
+    /// below the root with their own bounds, which the root's region
+    /// includes.
     fn visit_regions(&self, enter: &mut dyn FnMut(&Aabb) -> bool, leaf: &mut dyn FnMut(&[u32])) {
-        let root = Aabb::new(self.root_box.min.into(), self.root_box.max.into());
-        if self.stats.triangle_refs == 0 || !enter(&root) {
+        let unhittable = match &self.leaves {
+            Leaves::Packed(p) if !p.unhittable.prims.is_empty() => Some(&p.unhittable),
+            _ => None,
+        };
+        let tree = self.stats.triangle_refs > 0;
+        let mut root = if tree {
+            Aabb::new(self.root_box.min.into(), self.root_box.max.into())
+        } else {
+            Aabb::EMPTY
+        };
+        if let Some(u) = unhittable {
+            root = root.union(u.bounds);
+        }
+        if !(tree || unhittable.is_some()) || !enter(&root) {
             return;
         }
-        let mut stack = vec![self.root];
-        let mut accepted = Vec::with_capacity(<N as WideSlots>::WIDTH);
-        let mut prims = Vec::new();
-        while let Some(cur) = stack.pop() {
-            if cur.count > 0 {
-                let (first, count) = (cur.index as usize, cur.count as usize);
-                match &self.leaves {
-                    Leaves::Single(tris) => leaf(tris.prims(first, count)),
-                    Leaves::Packed(packs) => {
-                        prims.clear();
-                        packs.prims(cur, &mut prims);
-                        leaf(&prims);
-                    }
-                }
-                continue;
+        if tree {
+            self.visit_tree_regions(enter, leaf);
+        }
+        if let Some(u) = unhittable {
+            if enter(&u.bounds) {
+                leaf(&u.prims);
             }
-            let node = &self.nodes[cur.index as usize];
-            accepted.clear();
-            for (slot, &child) in node.children().iter().enumerate() {
-                if child != Child4::EMPTY && enter(&node.slot_box(slot)) {
-                    accepted.push(child);
-                }
-            }
-            // Push in reverse so that slot 0 is visited first.
-            stack.extend(accepted.iter().rev());
         }
     }
 
@@ -687,6 +696,42 @@ impl<N: NodeWidth, T: TriangleTest> WideParts for WideBvh<N, T> {
             small_stack: p.stack <= SMALL_STACK,
             path: BoxPath::detect(),
             built_sah: p.built_sah,
+        }
+    }
+}
+
+impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
+    /// [`Accel::visit_regions`] over the tree, its root's region accepted.
+    fn visit_tree_regions(
+        &self,
+        enter: &mut dyn FnMut(&Aabb) -> bool,
+        leaf: &mut dyn FnMut(&[u32]),
+    ) {
+        let mut stack = vec![self.root];
+        let mut accepted = Vec::with_capacity(<N as WideSlots>::WIDTH);
+        let mut prims = Vec::new();
+        while let Some(cur) = stack.pop() {
+            if cur.count > 0 {
+                let (first, count) = (cur.index as usize, cur.count as usize);
+                match &self.leaves {
+                    Leaves::Single(tris) => leaf(tris.prims(first, count)),
+                    Leaves::Packed(packs) => {
+                        prims.clear();
+                        packs.prims(cur, &mut prims);
+                        leaf(&prims);
+                    }
+                }
+                continue;
+            }
+            let node = &self.nodes[cur.index as usize];
+            accepted.clear();
+            for (slot, &child) in node.children().iter().enumerate() {
+                if child != Child4::EMPTY && enter(&node.slot_box(slot)) {
+                    accepted.push(child);
+                }
+            }
+            // Push in reverse so that slot 0 is visited first.
+            stack.extend(accepted.iter().rev());
         }
     }
 }

@@ -18,6 +18,9 @@
 
 #[cfg(target_arch = "x86_64")]
 mod sse;
+mod unhittable;
+
+pub(crate) use unhittable::{never_hit, Unhittable};
 
 use super::wide_node::Child4;
 use crate::aabb::Aabb;
@@ -212,9 +215,13 @@ impl Ray4 {
 }
 
 /// The packed leaves of a [`super::Bvh4`] over [`Moller`]: Embree-style
-/// `triangle4` packs (Wald et al. 2014), a leaf's packs consecutive.
+/// `triangle4` packs (Wald et al. 2014), a leaf's packs consecutive, and
+/// the mesh triangles left out of them because no ray can hit them
+/// ([`Unhittable`]).
 pub(crate) struct Tri4Leaves {
     packs: super::mapped::Store<Tri4>,
+    /// The triangles in no pack.
+    pub unhittable: Unhittable,
 }
 
 impl Tri4Leaves {
@@ -263,6 +270,7 @@ impl Tri4Leaves {
         (
             Tri4Leaves {
                 packs: packs.into(),
+                unhittable: Unhittable::none(),
             },
             reach,
         )
@@ -274,8 +282,8 @@ impl Tri4Leaves {
     }
 
     /// Packs made elsewhere (a saved structure, `super::persist`).
-    pub(crate) fn from_packs(packs: super::mapped::Store<Tri4>) -> Self {
-        Tri4Leaves { packs }
+    pub(crate) fn from_packs(packs: super::mapped::Store<Tri4>, unhittable: Unhittable) -> Self {
+        Tri4Leaves { packs, unhittable }
     }
 
     /// The packs, to rewrite their triangles in place (`super::refit`).
