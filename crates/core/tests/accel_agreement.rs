@@ -18,25 +18,10 @@ fn random_soup(n: usize, seed: u64) -> TriangleMesh {
 /// and vertices often), plus coincident duplicate triangles for ties.
 fn grid_with_duplicates(n: usize, seed: u64) -> TriangleMesh {
     let mut rng = Pcg32::new(seed);
-    let mut positions = Vec::new();
-    for y in 0..=n {
-        for x in 0..=n {
-            let h = 0.1 * rng.next_f32();
-            positions.push(Vec3::new(x as f32 / n as f32, h, y as f32 / n as f32));
-        }
-    }
-    let mut indices = Vec::new();
-    let w = n as u32 + 1;
-    for y in 0..n as u32 {
-        for x in 0..n as u32 {
-            let a = y * w + x;
-            indices.push([a, a + 1, a + w + 1]);
-            indices.push([a, a + w + 1, a + w]);
-        }
-    }
-    let dups: Vec<[u32; 3]> = indices.iter().step_by(7).copied().collect();
-    indices.extend(dups);
-    TriangleMesh::new(positions, indices)
+    let mut mesh = soup::grid(n, || 0.1 * rng.next_f32());
+    let dups: Vec<[u32; 3]> = mesh.indices.iter().step_by(7).copied().collect();
+    mesh.indices.extend(dups);
+    mesh
 }
 
 fn random_rays(mesh: &TriangleMesh, n: usize, seed: u64) -> Vec<Ray> {

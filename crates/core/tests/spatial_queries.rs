@@ -25,23 +25,7 @@ fn random_soup(n: usize, seed: u64) -> TriangleMesh {
 /// of [`grid_boxes`] put their faces.
 fn grid(n: usize, flat: bool, seed: u64) -> TriangleMesh {
     let mut rng = Pcg32::new(seed);
-    let mut positions = Vec::new();
-    for y in 0..=n {
-        for x in 0..=n {
-            let h = if flat { 0.5 } else { 0.2 * rng.next_f32() };
-            positions.push(Vec3::new(x as f32 / n as f32, h, y as f32 / n as f32));
-        }
-    }
-    let w = n as u32 + 1;
-    let mut indices = Vec::new();
-    for y in 0..n as u32 {
-        for x in 0..n as u32 {
-            let a = y * w + x;
-            indices.push([a, a + 1, a + w + 1]);
-            indices.push([a, a + w + 1, a + w]);
-        }
-    }
-    TriangleMesh::new(positions, indices)
+    soup::grid(n, || if flat { 0.5 } else { 0.2 * rng.next_f32() })
 }
 
 /// Several soups, each a part, some far apart and some overlapping.

@@ -5,6 +5,7 @@
 //! refit that gives one of them area rebuilds the tree.
 
 mod shared_meshes;
+mod soup;
 
 use raykit_core::accel::{Accel, BruteForce, BuildOptions, Bvh4, Bvh8};
 use raykit_core::query::triangles_in_box;
@@ -20,22 +21,11 @@ use std::path::PathBuf;
 /// exactly zero in `f32`), some short, some across the whole grid.
 fn grid_with_slivers(n: usize, seed: u64) -> TriangleMesh {
     let mut rng = Pcg32::new(seed);
-    let mut positions = Vec::new();
-    for y in 0..=n {
-        for x in 0..=n {
-            let h = 0.1 * rng.next_f32();
-            positions.push(Vec3::new(x as f32 / n as f32, h, y as f32 / n as f32));
-        }
-    }
-    let w = n as u32 + 1;
-    let mut indices = Vec::new();
-    for y in 0..n as u32 {
-        for x in 0..n as u32 {
-            let a = y * w + x;
-            indices.push([a, a + 1, a + w + 1]);
-            indices.push([a, a + w + 1, a + w]);
-        }
-    }
+    let TriangleMesh {
+        mut positions,
+        mut indices,
+        ..
+    } = soup::grid(n, || 0.1 * rng.next_f32());
     let grid = positions.len() as u32;
     for k in 0..(n * n / 3) as u32 {
         let a = rng.below(grid);
