@@ -140,7 +140,9 @@ pub trait Accel: Send + Sync {
 
     /// Refit the structure to `mesh`, the mesh it was built over with
     /// moved vertices: boxes recomputed bottom-up in O(n), topology kept
-    /// (see `bvh/refit.rs`). The wide BVHs ([`Bvh4`], [`Bvh8`]) refit; the
+    /// (see `bvh/refit.rs`; built again instead when a triangle that
+    /// packed leaves left out for having no area has gained one). The wide
+    /// BVHs ([`Bvh4`], [`Bvh8`]) refit; the
     /// other structures refuse with [`RefitError::Unsupported`] (build
     /// them again). The scaling and placement [`build_accel`] chose stay:
     /// [`refit_keeps_precision`] says whether they suit the moved mesh.

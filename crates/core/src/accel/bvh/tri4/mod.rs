@@ -291,9 +291,9 @@ impl Tri4Leaves {
         &mut self.packs
     }
 
-    /// Bytes held.
+    /// Bytes held: the packs and the left-out triangles' indices.
     pub fn bytes(&self) -> usize {
-        std::mem::size_of_val(&self.packs[..])
+        std::mem::size_of_val(&self.packs[..]) + std::mem::size_of_val(&self.unhittable.prims[..])
     }
 
     /// Mesh triangle indices of the leaf `leaf`, appended to `out`.
