@@ -425,7 +425,7 @@ fn check_wide_builds(mesh: &TriangleMesh, rays: &[Ray]) {
 /// triangles among large ones, so that most leaf and inner boxes are far
 /// larger than the triangles whose bands they must hold. The wide BVHs
 /// store each box as the union of its triangles' bands
-/// (`NodeBox::triangle_reach`), not padded by the box's own size, so these
+/// (`TriangleTest::reach`), not padded by the box's own size, so these
 /// are the rays a box too tight would lose. From near and from 10⁴ times
 /// the model's size away, where the tests' rounding bounds, and so the
 /// band, are widest.
@@ -457,12 +457,14 @@ fn rays_through_the_edge_tolerance_band_agree_with_brute_force() {
 }
 
 /// The band of a triangle square to an axis, whose box is thinnest across
-/// its plane (`NodeBox::triangle_reach`). Rays through the band of tiny
-/// axis-square triangles (some thin, half of them 10³ triangle sizes from
-/// the origin) among large ones: grazing the plane at 10⁻⁵ to 10⁻¹ radians
-/// or crossing it at random angles, from near and far. The Plücker test's
-/// band is a tube around the triangle, not a band in its plane: a box flat
-/// across the plane loses some of its hits here.
+/// its plane (`TriangleTest::reach`: Möller's and the projection test's
+/// hits lie in the plane, so their boxes are only the clearance thick
+/// there). Rays through the band of tiny axis-square triangles (some thin,
+/// half of them 10³ triangle sizes from the origin) among large ones:
+/// grazing the plane at 10⁻⁵ to 10⁻¹ radians or crossing it at random
+/// angles, from near and far. The Plücker test's band is a tube around the
+/// triangle, not a band in its plane: a box flat across the plane loses
+/// some of its hits here, so its boxes keep the tube.
 #[test]
 fn rays_through_the_band_of_axis_square_triangles_agree_with_brute_force() {
     let mut rng = Pcg32::new(91);
@@ -515,4 +517,81 @@ fn rays_through_the_band_of_axis_square_triangles_agree_with_brute_force() {
     let met = band_hits(&mesh, &rays, &aimed);
     assert!(met > 500, "only {met} rays hit inside the band");
     check_wide_builds(&mesh, &rays);
+}
+
+/// Coplanar faces square to an axis, as a CAD model's duplicated faces: two
+/// flat grids in the plane y = 0.5, the second shifted by a third of a
+/// cell, so that nearly every point of the plane lies on a triangle of each,
+/// in different leaves. A ray meets the two at distances an ulp or a few
+/// apart, and the wide BVHs must answer the nearer one exactly as brute
+/// force does. A box flat in the plane would not always: its entry equals
+/// those distances up to rounding, so a walk that had found the farther hit
+/// first could prune it (`tri::reach`'s clearance).
+#[test]
+fn coplanar_faces_give_brute_forces_nearest_distance_exactly() {
+    let n = 24;
+    let mut rng = Pcg32::new(97);
+    // Corners moved off the regular grid, so that each triangle's distances
+    // round differently.
+    let cell = 1.0 / n as f32;
+    let mut jitter =
+        |p: Vec3| p + Vec3::new(rng.range_f32(-0.3, 0.3), 0.0, rng.range_f32(-0.3, 0.3)) * cell;
+    let first = soup::grid(n, || 0.37);
+    let mut positions: Vec<Vec3> = first.positions.iter().map(|&p| jitter(p)).collect();
+    let shift = Vec3::new(cell / 3.0, 0.0, cell / 3.0);
+    positions.extend(first.positions.iter().map(|&p| jitter(p + shift)));
+    let base = first.positions.len() as u32;
+    let mut indices = first.indices.clone();
+    indices.extend(first.indices.iter().map(|t| t.map(|i| i + base)));
+    let mesh = TriangleMesh::new(positions, indices);
+    // 40,000 rays: with boxes flat in the plane, 1 to 16 in 200,000 took
+    // the farther hit.
+    let rays: Vec<Ray> = (0..40_000)
+        .map(|i| {
+            let target = Vec3::new(rng.next_f32(), 0.37, rng.next_f32());
+            let dir = if i % 2 == 0 {
+                rng.unit_vector()
+            } else {
+                // Grazing the plane.
+                let a = rng.range_f32(0.0, std::f32::consts::TAU);
+                Vec3::new(a.cos(), rng.range_f32(-0.05, 0.05), a.sin())
+            };
+            let dist = [0.5f32, 2.0, 20.0][i % 3];
+            let origin = target - dir.normalize() * dist;
+            Ray::new(origin, target - origin)
+        })
+        .collect();
+    for test in TestKind::ALL {
+        let brute = build_accel(AccelKind::Brute, test, &mesh, &BuildOptions::default());
+        let mut want = vec![None; rays.len()];
+        brute.intersect_batch(&rays, &mut want);
+        let hits = want.iter().flatten().count();
+        assert!(hits > rays.len() / 2, "only {hits} rays hit the plane");
+        for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
+            for leaf in [1, 16] {
+                let opts = BuildOptions {
+                    quality,
+                    max_leaf_size: leaf,
+                    packed_leaf_size: leaf,
+                    ..BuildOptions::default()
+                };
+                for kind in [AccelKind::Bvh4, AccelKind::Bvh8] {
+                    let accel = build_accel(kind, test, &mesh, &opts);
+                    let mut got = vec![None; rays.len()];
+                    accel.intersect_batch(&rays, &mut got);
+                    let differ = (0..rays.len())
+                        .filter(|&i| want[i].map(|h| h.t) != got[i].map(|h| h.t))
+                        .count();
+                    assert_eq!(
+                        differ,
+                        0,
+                        "{} × {} ({quality:?}, leaves of {leaf}): {differ} of {} rays differ from brute force",
+                        kind.name(),
+                        test.name(),
+                        rays.len()
+                    );
+                }
+            }
+        }
+    }
 }

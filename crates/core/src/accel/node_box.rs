@@ -29,21 +29,8 @@ impl From<Aabb> for NodeBox {
 }
 
 impl NodeBox {
-    /// The box of the triangle `a`, `b`, `c` padded by `4 ·
-    /// MAX_EDGE_TOLERANCE` of the triangle's own largest extent: every
-    /// point a triangle test may report as a hit on it lies inside (the
-    /// padding of `From<Aabb>`, taken per triangle). The union of these
-    /// over a subtree's triangles is the tightest box with that property;
-    /// the wide BVHs store such unions ([`NodeBox::exact`]).
-    #[inline]
-    pub fn triangle_reach(a: Vec3, b: Vec3, c: Vec3) -> Aabb {
-        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
-        let pad = Vec3::splat(4.0 * MAX_EDGE_TOLERANCE * (hi - lo).max_element().max(0.0));
-        Aabb::new(lo - pad, hi + pad)
-    }
-
     /// `b` stored as it is, with no padding added: for boxes that already
-    /// hold their triangles' reach ([`NodeBox::triangle_reach`]).
+    /// hold their triangles' reach ([`crate::tri::TriangleTest::reach`]).
     #[inline]
     pub fn exact(b: Aabb) -> NodeBox {
         NodeBox {

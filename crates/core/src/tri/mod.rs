@@ -35,6 +35,7 @@
 //! as `intersect_strict`, and the uncapped tolerance as `intersect_uncapped`,
 //! for comparison. The [`reference`](mod@reference) module holds the `f64`
 //! reference they are all tested against.
+use crate::aabb::Aabb;
 use crate::ray::Ray;
 use glam::Vec3;
 use std::fmt::Debug;
@@ -43,6 +44,7 @@ pub mod crossing_once;
 pub mod moller;
 pub mod plucker;
 pub mod projection;
+pub mod reach;
 pub mod reference;
 
 pub use crossing_once::crossing_once;
@@ -96,6 +98,14 @@ pub trait TriangleTest: Send + Sync + 'static {
 
     /// Precompute the per-ray data.
     fn prepare(ray: &Ray) -> Self::RayData;
+
+    /// A box holding every point at which this test may report a hit on
+    /// the triangle `a`, `b`, `c`, its tolerance band included
+    /// ([`reach`]): the tube [`reach::around`] unless the test reports hits
+    /// only in the triangle's plane.
+    fn reach(a: Vec3, b: Vec3, c: Vec3) -> Aabb {
+        reach::around(a, b, c)
+    }
 
     /// Nearest-hit test: the hit if the ray meets the triangle at a distance
     /// `t` with `ray.tnear <= t <= tfar`.

@@ -87,6 +87,7 @@
 //! boundary; `t` is within `1e-5 t + 1.5` such units.
 
 use super::{TriHit, TriangleTest, MAX_EDGE_TOLERANCE};
+use crate::aabb::Aabb;
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -360,6 +361,13 @@ impl TriangleTest for Moller {
         let words = [tri.v0.to_array(), tri.e1.to_array(), tri.e2.to_array()];
         out.extend(words.iter().flatten().map(|x| x.to_bits()));
         out.extend([tri.e1_max.to_bits(), tri.e2_max.to_bits()]);
+    }
+
+    /// The band lies in the plane: the test widens the barycentrics of
+    /// the point where the ray meets it.
+    #[inline]
+    fn reach(a: Vec3, b: Vec3, c: Vec3) -> Aabb {
+        super::reach::in_plane(a, b, c)
     }
 
     #[inline]

@@ -94,6 +94,7 @@
 //! `t` is within `1e-5 t + 1.0` such units.
 
 use super::{TriHit, TriangleTest, MAX_EDGE_TOLERANCE};
+use crate::aabb::Aabb;
 use crate::ray::Ray;
 use glam::{DVec3, Vec3};
 
@@ -301,6 +302,13 @@ impl TriangleTest for Projection {
             c_d: ((au * ebv - av * ebu) * inv) as f32,
             _pad1: 0,
         }
+    }
+
+    /// The band lies in the plane: the test widens the barycentrics of
+    /// the point where the ray meets it.
+    #[inline]
+    fn reach(a: Vec3, b: Vec3, c: Vec3) -> Aabb {
+        super::reach::in_plane(a, b, c)
     }
 
     #[inline]

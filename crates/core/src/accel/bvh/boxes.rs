@@ -14,7 +14,7 @@
 //! that case counts as a hit where [`NodeBox::entry`] may count a miss: the
 //! test accepts a superset of [`NodeBox::entry`]'s boxes and so stays
 //! conservative with respect to the triangle tests (the boxes hold their
-//! triangles' tolerance bands, see [`NodeBox::triangle_reach`]). The exit
+//! triangles' tolerance bands, see [`crate::tri::TriangleTest::reach`]). The exit
 //! is widened by [`NodeBox::ROBUST_EXIT`]. No fused multiply-add is used:
 //! its single rounding would change the distances and void that argument.
 //!

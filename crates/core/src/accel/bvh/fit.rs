@@ -1,6 +1,6 @@
 //! The boxes a wide BVH ([`super::Bvh4`], [`super::Bvh8`]) stores: each the
 //! union of the tolerance bands of the triangles below it
-//! ([`NodeBox::triangle_reach`]), fitted bottom-up over the finished tree,
+//! ([`TriangleTest::reach`]), fitted bottom-up over the finished tree,
 //! after a build and after a refit.
 //!
 //! The triangle tests report hits up to a small fraction of a triangle
@@ -17,6 +17,7 @@ use super::wide_node::{Child4, WideSlots};
 use crate::aabb::Aabb;
 use crate::accel::node_box::NodeBox;
 use crate::mesh::TriangleMesh;
+use crate::tri::TriangleTest;
 use rayon::prelude::*;
 
 /// The reach of a tree's leaf units, in leaf order: one box per pack of
@@ -26,22 +27,22 @@ pub(crate) struct UnitReach {
     pub per_unit: usize,
 }
 
-/// The reach of triangle `prim` of `mesh`.
+/// The reach of triangle `prim` of `mesh` under the test `T`.
 #[inline]
-fn triangle_reach(mesh: &TriangleMesh, prim: u32) -> Aabb {
+fn triangle_reach<T: TriangleTest>(mesh: &TriangleMesh, prim: u32) -> Aabb {
     let [a, b, c] = mesh.triangle(prim as usize);
-    NodeBox::triangle_reach(a, b, c)
+    T::reach(a, b, c)
 }
 
 /// The reach of each triangle of `prims` (one-triangle leaves, in leaf
 /// order) over `mesh`, in parallel; packed leaves take their packs' reach
 /// while packing (`Tri4Leaves::from_refs`, the refit).
-pub(crate) fn triangle_units(prims: &[u32], mesh: &TriangleMesh) -> UnitReach {
+pub(crate) fn triangle_units<T: TriangleTest>(prims: &[u32], mesh: &TriangleMesh) -> UnitReach {
     let mut bounds = Vec::new();
     prims
         .par_iter()
         .with_min_len(4096)
-        .map(|&prim| triangle_reach(mesh, prim))
+        .map(|&prim| triangle_reach::<T>(mesh, prim))
         .collect_into_vec(&mut bounds);
     UnitReach {
         bounds,

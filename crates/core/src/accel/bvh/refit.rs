@@ -138,7 +138,7 @@ fn refit_parts<N: WideNode, T: TriangleTest>(p: PartsMut<'_, N, T>, mesh: &Trian
         }
         Leaves::Single(leaf_tris) => {
             leaf_tris.recompute(mesh);
-            triangle_units(leaf_tris.prims(0, leaf_tris.len()), mesh)
+            triangle_units::<T>(leaf_tris.prims(0, leaf_tris.len()), mesh)
         }
     };
     p.stats.sah_cost = fit_boxes(p.nodes, p.root, p.root_box, &units);

@@ -103,7 +103,7 @@ pub(crate) fn build_wide<N: WideSlots, T: TriangleTest>(
                 (Leaves::Packed(packs), units)
             } else {
                 let tris = LeafTriangles::new(mesh, order);
-                let units = triangle_units(tris.prims(0, tris.len()), mesh);
+                let units = triangle_units::<T>(tris.prims(0, tris.len()), mesh);
                 (Leaves::Single(tris), units)
             }
         },

@@ -24,7 +24,6 @@ pub(crate) use unhittable::{never_hit, Unhittable};
 
 use super::wide_node::Child4;
 use crate::aabb::Aabb;
-use crate::accel::node_box::NodeBox;
 use crate::hit::Hit;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
@@ -78,13 +77,13 @@ impl Tri4 {
     }
 
     /// Store mesh triangle `prim` of `mesh` in lane `lane`, and return its
-    /// reach ([`NodeBox::triangle_reach`]), taken while its corners are at
+    /// reach ([`TriangleTest::reach`]), taken while its corners are at
     /// hand: the packing and the refit both fit boxes to it.
     #[inline]
     pub(crate) fn load(&mut self, lane: usize, mesh: &TriangleMesh, prim: u32) -> Aabb {
         let [a, b, c] = mesh.triangle(prim as usize);
         self.set(lane, &Moller::precompute(a, b, c), prim);
-        NodeBox::triangle_reach(a, b, c)
+        Moller::reach(a, b, c)
     }
 
     /// Every used lane loaded again from `mesh` (its vertices moved; the
@@ -239,7 +238,7 @@ impl Tri4Leaves {
     /// intermediate array of all triangles (the packing took
     /// 115–150 ms of the full dragon's build on one thread, sequential).
     /// Returns the packs and each pack's reach (the union of its
-    /// triangles' [`NodeBox::triangle_reach`], for `fit`).
+    /// triangles' [`TriangleTest::reach`], for `fit`).
     pub(crate) fn from_refs<'a>(
         mesh: &TriangleMesh,
         order: &[u32],

@@ -14,7 +14,6 @@
 //! area ([`Unhittable::still_unhittable`]).
 
 use crate::aabb::Aabb;
-use crate::accel::node_box::NodeBox;
 use crate::mesh::TriangleMesh;
 use crate::tri::{Moller, TriangleTest};
 use glam::Vec3;
@@ -24,7 +23,7 @@ use rayon::prelude::*;
 pub(crate) struct Unhittable {
     /// Mesh triangle indices, ascending.
     pub prims: Vec<u32>,
-    /// Union of their reach ([`NodeBox::triangle_reach`]); empty when
+    /// Union of their reach ([`TriangleTest::reach`]); empty when
     /// there are none.
     pub bounds: Aabb,
 }
@@ -64,7 +63,7 @@ impl Unhittable {
     pub fn with_prims(prims: Vec<u32>, mesh: &TriangleMesh) -> Self {
         let bounds = prims.iter().fold(Aabb::EMPTY, |b, &i| {
             let [p, q, r] = mesh.triangle(i as usize);
-            b.union(NodeBox::triangle_reach(p, q, r))
+            b.union(Moller::reach(p, q, r))
         });
         Unhittable { prims, bounds }
     }
