@@ -405,18 +405,25 @@ fn band_hits(mesh: &TriangleMesh, rays: &[Ray], aimed: &[u32]) -> usize {
         .count()
 }
 
-/// Every builder and leaf size of `Bvh4` and `Bvh8` against brute force.
-fn check_wide_builds(mesh: &TriangleMesh, rays: &[Ray]) {
-    for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
-        for leaf in [1, 16] {
-            let opts = BuildOptions {
+/// The options of every builder with leaves of one and of sixteen
+/// triangles, for the wide BVHs.
+fn wide_build_options() -> impl Iterator<Item = BuildOptions> {
+    [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast]
+        .into_iter()
+        .flat_map(|quality| {
+            [1, 16].map(|leaf| BuildOptions {
                 quality,
                 max_leaf_size: leaf,
                 packed_leaf_size: leaf,
                 ..BuildOptions::default()
-            };
-            check_kinds(mesh, rays, &opts, &[AccelKind::Bvh4, AccelKind::Bvh8]);
-        }
+            })
+        })
+}
+
+/// Every builder and leaf size of `Bvh4` and `Bvh8` against brute force.
+fn check_wide_builds(mesh: &TriangleMesh, rays: &[Ray]) {
+    for opts in wide_build_options() {
+        check_kinds(mesh, rays, &opts, &[AccelKind::Bvh4, AccelKind::Bvh8]);
     }
 }
 
@@ -567,30 +574,24 @@ fn coplanar_faces_give_brute_forces_nearest_distance_exactly() {
         brute.intersect_batch(&rays, &mut want);
         let hits = want.iter().flatten().count();
         assert!(hits > rays.len() / 2, "only {hits} rays hit the plane");
-        for quality in [BuildQuality::Sah, BuildQuality::High, BuildQuality::Fast] {
-            for leaf in [1, 16] {
-                let opts = BuildOptions {
-                    quality,
-                    max_leaf_size: leaf,
-                    packed_leaf_size: leaf,
-                    ..BuildOptions::default()
-                };
-                for kind in [AccelKind::Bvh4, AccelKind::Bvh8] {
-                    let accel = build_accel(kind, test, &mesh, &opts);
-                    let mut got = vec![None; rays.len()];
-                    accel.intersect_batch(&rays, &mut got);
-                    let differ = (0..rays.len())
-                        .filter(|&i| want[i].map(|h| h.t) != got[i].map(|h| h.t))
-                        .count();
-                    assert_eq!(
-                        differ,
-                        0,
-                        "{} × {} ({quality:?}, leaves of {leaf}): {differ} of {} rays differ from brute force",
-                        kind.name(),
-                        test.name(),
-                        rays.len()
-                    );
-                }
+        for opts in wide_build_options() {
+            for kind in [AccelKind::Bvh4, AccelKind::Bvh8] {
+                let accel = build_accel(kind, test, &mesh, &opts);
+                let mut got = vec![None; rays.len()];
+                accel.intersect_batch(&rays, &mut got);
+                let differ = (0..rays.len())
+                    .filter(|&i| want[i].map(|h| h.t) != got[i].map(|h| h.t))
+                    .count();
+                assert_eq!(
+                    differ,
+                    0,
+                    "{} × {} ({:?}, leaves of {}): {differ} of {} rays differ from brute force",
+                    kind.name(),
+                    test.name(),
+                    opts.quality,
+                    opts.max_leaf_size,
+                    rays.len()
+                );
             }
         }
     }
