@@ -22,6 +22,7 @@ use crate::accel::bvh::BuildOptions;
 use crate::mesh::TriangleMesh;
 use crate::unit_scale::UnitScale;
 use std::borrow::Cow;
+use std::sync::atomic::AtomicUsize;
 use std::sync::OnceLock;
 
 pub use super::surface_node::WIDTH;
@@ -52,6 +53,9 @@ pub struct SurfaceBvh {
     /// closed or crossings are not counted), made on the first occupancy
     /// query.
     closing: OnceLock<(CapTree, Option<Box<SurfaceBvh>>)>,
+    /// Points summed over every triangle so far, while the point tree was
+    /// not made (see [`super::winding::SUM_DIRECTLY_IN_ALL`]).
+    pub(crate) summed_directly: AtomicUsize,
 }
 
 impl SurfaceBvh {
@@ -85,6 +89,7 @@ impl SurfaceBvh {
             points: OnceLock::new(),
             rays: OnceLock::new(),
             closing: OnceLock::new(),
+            summed_directly: AtomicUsize::new(0),
         }
     }
 

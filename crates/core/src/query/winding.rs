@@ -40,7 +40,8 @@
 //! one is too close to an edge, a corner or the point to be sure of, two
 //! other rays are tried, and if they are unsure too the surface's solid
 //! angles are summed: over every triangle when a batch has only a few such
-//! points ([`SUM_DIRECTLY`]), so that they need no point tree, and through
+//! points ([`SUM_DIRECTLY`]) and the batches before have not summed many
+//! ([`SUM_DIRECTLY_IN_ALL`]), so that they need no point tree, and through
 //! the tree otherwise. Occupancy needs only the side of ½, so it sums at a
 //! coarser accuracy first ([`COARSE_BETA`]) and again at the default only
 //! close to ½.
@@ -76,6 +77,15 @@ pub const COARSE_MARGIN: f32 = 0.05;
 /// pays at most about a fifth of that, and a later batch may still make
 /// the tree.
 pub const SUM_DIRECTLY: usize = 16;
+
+/// At most this many points in all, over every batch, are summed over
+/// every triangle before the point tree is made. Batches that leave one or
+/// two points open pay a whole pass over the triangles for each (on the
+/// 2CylinderEngine about a tenth of making the tree, BENCHMARKS.md), so a
+/// stream of them makes the tree once their sums have cost two to three
+/// times what the tree does, and no call after that pays for a pass
+/// (renting until the rent reaches the price).
+pub const SUM_DIRECTLY_IN_ALL: usize = 32;
 
 /// Barill et al.'s default accuracy: a child is approximated when the
 /// query point is farther than twice its radius from its centre.
@@ -320,7 +330,10 @@ impl SurfaceBvh {
         // points whose exact sum lies near ½ are left to the tree, so that
         // each answer is the one `is_inside` gives.
         let mut open = open;
-        if open.len() <= SUM_DIRECTLY && !self.winding_tree_made() {
+        if open.len() <= SUM_DIRECTLY
+            && !self.winding_tree_made()
+            && self.may_sum_directly(open.len())
+        {
             let at: Vec<Vec3> = open.iter().map(|&i| self.scale.point(points[i])).collect();
             let sums = self.winding_numbers_exact(&at);
             let mut near_half = Vec::new();
@@ -344,6 +357,17 @@ impl SurfaceBvh {
             inside[i] = s;
         }
         inside
+    }
+
+    /// Whether `n` more points may be summed over every triangle within
+    /// [`SUM_DIRECTLY_IN_ALL`]; if so they are counted as summed.
+    fn may_sum_directly(&self, n: usize) -> bool {
+        use std::sync::atomic::Ordering;
+        self.summed_directly
+            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |done| {
+                (done + n <= SUM_DIRECTLY_IN_ALL).then_some(done + n)
+            })
+            .is_ok()
     }
 
     /// Whether the point tree and its winding-number moments are made.
@@ -549,7 +573,7 @@ pub fn winding_number_brute(mesh: &TriangleMesh, q: DVec3) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{atan2, winding_number_brute, SurfaceBvh, SUM_DIRECTLY};
+    use super::{atan2, winding_number_brute, SurfaceBvh, SUM_DIRECTLY, SUM_DIRECTLY_IN_ALL};
     use crate::icosphere::Icosphere;
     use crate::mesh::TriangleMesh;
     use crate::rng::Pcg32;
@@ -602,6 +626,54 @@ mod tests {
 
     /// The inline arctangent against `f64`'s over every octant, the axes,
     /// the origin and a wide range of magnitudes.
+    /// Batches that each leave a few points uncountable sum them over
+    /// every triangle until [`SUM_DIRECTLY_IN_ALL`] have been, then make
+    /// the point tree; every answer is the `f64` winding number's side.
+    #[test]
+    fn many_small_batches_make_the_tree_once_their_direct_sums_add_up() {
+        let sphere = Icosphere::new(3);
+        let mut positions = sphere.positions.clone();
+        let mut indices = sphere.indices.clone();
+        let n = positions.len() as u32;
+        positions.extend(sphere.positions.iter().map(|&p| p * 0.5));
+        indices.extend(sphere.indices.iter().map(|t| t.map(|i| i + n)));
+        let mesh = TriangleMesh::new(positions, indices);
+        let bvh = SurfaceBvh::build(&mesh);
+        let mut rng = Pcg32::new(10);
+        let per_batch = 5;
+        let mut summed = 0;
+        for batch in 0..2 * SUM_DIRECTLY_IN_ALL / per_batch {
+            // Centroids of the inner sphere's triangles: on the surface, so
+            // their crossings cannot be counted.
+            let mut points: Vec<Vec3> = (0..per_batch)
+                .map(|_| {
+                    let i = sphere.indices.len() + rng.below(sphere.indices.len() as u32) as usize;
+                    let t = mesh.triangle(i);
+                    (t[0] + t[1] + t[2]) / 3.0
+                })
+                .collect();
+            points.extend((0..20).map(|_| rng.in_box(Vec3::splat(-1.2), Vec3::splat(1.2))));
+            let mut inside = vec![false; points.len()];
+            bvh.inside_batch(&points, &mut inside);
+            let open = points
+                .iter()
+                .filter(|&&p| bvh.winding_number_counted(p).is_none())
+                .count();
+            assert_eq!(open, per_batch, "batch {batch}");
+            summed += open;
+            assert_eq!(
+                bvh.winding_tree_made(),
+                summed > SUM_DIRECTLY_IN_ALL,
+                "batch {batch}: {summed} points left open so far"
+            );
+            for (p, &inside) in points.iter().zip(&inside) {
+                let w = winding_number_brute(&mesh, p.as_dvec3());
+                assert_eq!(inside, w >= 0.5, "at {p}: f64 winding number {w}");
+            }
+        }
+        assert!(bvh.winding_tree_made());
+    }
+
     #[test]
     fn inline_atan2_is_within_its_bound() {
         let mut rng = Pcg32::new(11);
