@@ -72,10 +72,11 @@ pub const COARSE_MARGIN: f32 = 0.05;
 /// At most this many points whose crossings are too close to an edge to
 /// count are summed over every triangle rather than through the point
 /// tree, when the tree and its moments are not made yet. Making them costs
-/// about as much as summing 65-90 points directly (the full dragon and the
-/// 2CylinderEngine, BENCHMARKS.md); a batch that sums at most this many
-/// pays at most about a fifth of that, and a later batch may still make
-/// the tree.
+/// about as much as summing 65-90 points together in one pass over the
+/// triangles (the full dragon and the 2CylinderEngine, BENCHMARKS.md; a
+/// pass for only one or two points costs more per point, its loads of the
+/// triangles unshared); a batch that sums at most this many pays at most
+/// about a fifth of that, and a later batch may still make the tree.
 pub const SUM_DIRECTLY: usize = 16;
 
 /// At most this many points in all, over every batch, are summed over
@@ -579,13 +580,11 @@ mod tests {
     use crate::rng::Pcg32;
     use glam::Vec3;
 
-    /// Points on the inner of two nested spheres are within rounding error
-    /// of a crossing on every ray, so occupancy sums them; their winding
-    /// number is 1½. A few are summed over every triangle without making the
-    /// point tree, more through the tree; either way each answer is
-    /// `is_inside`'s and the `f64` sum's, and the points counted keep theirs.
-    #[test]
-    fn points_that_cannot_be_counted_are_summed_directly_or_through_the_tree() {
+    /// Two nested unit and half-unit icospheres, and a source of points on
+    /// the inner one (its triangles' centroids): within rounding error of a
+    /// crossing on every ray, so their crossings cannot be counted; their
+    /// winding number is 1½.
+    fn nested_spheres() -> (TriangleMesh, impl FnMut(&mut Pcg32) -> Vec3) {
         let sphere = Icosphere::new(3);
         let mut positions = sphere.positions.clone();
         let mut indices = sphere.indices.clone();
@@ -593,15 +592,25 @@ mod tests {
         positions.extend(sphere.positions.iter().map(|&p| p * 0.5));
         indices.extend(sphere.indices.iter().map(|t| t.map(|i| i + n)));
         let mesh = TriangleMesh::new(positions, indices);
-        let inner = sphere.indices.len();
+        let inner = mesh.clone();
+        let first = sphere.indices.len();
+        let on_inner = move |rng: &mut Pcg32| {
+            let t = inner.triangle(first + rng.below(first as u32) as usize);
+            (t[0] + t[1] + t[2]) / 3.0
+        };
+        (mesh, on_inner)
+    }
+
+    /// Points on the inner of two nested spheres cannot be counted, so
+    /// occupancy sums them. A few are summed over every triangle without making the
+    /// point tree, more through the tree; either way each answer is
+    /// `is_inside`'s and the `f64` sum's, and the points counted keep theirs.
+    #[test]
+    fn points_that_cannot_be_counted_are_summed_directly_or_through_the_tree() {
+        let (mesh, mut on_inner) = nested_spheres();
         let mut rng = Pcg32::new(9);
         for on_surface in [SUM_DIRECTLY, SUM_DIRECTLY + 1, 3 * SUM_DIRECTLY] {
-            let mut points: Vec<Vec3> = (0..on_surface)
-                .map(|_| {
-                    let t = mesh.triangle(sphere.indices.len() + rng.below(inner as u32) as usize);
-                    (t[0] + t[1] + t[2]) / 3.0
-                })
-                .collect();
+            let mut points: Vec<Vec3> = (0..on_surface).map(|_| on_inner(&mut rng)).collect();
             points.extend((0..200).map(|_| rng.in_box(Vec3::splat(-1.2), Vec3::splat(1.2))));
             let bvh = SurfaceBvh::build(&mesh);
             let mut batch = vec![false; points.len()];
@@ -624,34 +633,18 @@ mod tests {
         }
     }
 
-    /// The inline arctangent against `f64`'s over every octant, the axes,
-    /// the origin and a wide range of magnitudes.
     /// Batches that each leave a few points uncountable sum them over
     /// every triangle until [`SUM_DIRECTLY_IN_ALL`] have been, then make
     /// the point tree; every answer is the `f64` winding number's side.
     #[test]
     fn many_small_batches_make_the_tree_once_their_direct_sums_add_up() {
-        let sphere = Icosphere::new(3);
-        let mut positions = sphere.positions.clone();
-        let mut indices = sphere.indices.clone();
-        let n = positions.len() as u32;
-        positions.extend(sphere.positions.iter().map(|&p| p * 0.5));
-        indices.extend(sphere.indices.iter().map(|t| t.map(|i| i + n)));
-        let mesh = TriangleMesh::new(positions, indices);
+        let (mesh, mut on_inner) = nested_spheres();
         let bvh = SurfaceBvh::build(&mesh);
         let mut rng = Pcg32::new(10);
         let per_batch = 5;
         let mut summed = 0;
         for batch in 0..2 * SUM_DIRECTLY_IN_ALL / per_batch {
-            // Centroids of the inner sphere's triangles: on the surface, so
-            // their crossings cannot be counted.
-            let mut points: Vec<Vec3> = (0..per_batch)
-                .map(|_| {
-                    let i = sphere.indices.len() + rng.below(sphere.indices.len() as u32) as usize;
-                    let t = mesh.triangle(i);
-                    (t[0] + t[1] + t[2]) / 3.0
-                })
-                .collect();
+            let mut points: Vec<Vec3> = (0..per_batch).map(|_| on_inner(&mut rng)).collect();
             points.extend((0..20).map(|_| rng.in_box(Vec3::splat(-1.2), Vec3::splat(1.2))));
             let mut inside = vec![false; points.len()];
             bvh.inside_batch(&points, &mut inside);
@@ -674,6 +667,8 @@ mod tests {
         assert!(bvh.winding_tree_made());
     }
 
+    /// The inline arctangent against `f64`'s over every octant, the axes,
+    /// the origin and a wide range of magnitudes.
     #[test]
     fn inline_atan2_is_within_its_bound() {
         let mut rng = Pcg32::new(11);
