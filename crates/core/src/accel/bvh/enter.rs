@@ -118,22 +118,27 @@ pub(crate) fn prefetch_entered<const ANY: bool, N>(
     leaf: &impl LeafTest,
 ) {
     while mask != 0 {
-        prefetch_with::<ANY, N>(nodes, children[mask.trailing_zeros() as usize], leaf);
+        prefetch_with::<ANY, N, _>(nodes, children[mask.trailing_zeros() as usize], leaf);
         mask &= mask - 1;
     }
 }
 
 /// Request child `c`: an inner node from `nodes`, a leaf through `leaf`:
 /// all its packs for a nearest-hit query, the first for an any-hit query
-/// (`ANY`), which stops at the first pack with a hit.
+/// (`ANY`), which stops at the first pack with a hit, unless its leaf test
+/// goes through them all ([`LeafTest::EVERY_PACK`]).
 #[inline(always)]
-pub(crate) fn prefetch_with<const ANY: bool, N>(nodes: &[N], c: Child4, leaf: &impl LeafTest) {
+pub(crate) fn prefetch_with<const ANY: bool, N, L: LeafTest>(nodes: &[N], c: Child4, leaf: &L) {
     if c.count == 0 {
         prefetch_node(nodes, c.index as usize);
     } else {
         // Nearest-hit queries test every pack of a leaf: all are fetched.
         // Any-hit queries stop at the first pack with a hit: only the first.
-        let count = if ANY { c.count.min(4) } else { c.count };
+        let count = if ANY && !L::EVERY_PACK {
+            c.count.min(4)
+        } else {
+            c.count
+        };
         leaf.prefetch(c.index as usize, count as usize);
     }
 }

@@ -37,6 +37,11 @@ pub(crate) trait LeafTest {
     /// leaves do nothing).
     #[inline(always)]
     fn prefetch(&self, _first: usize, _count: usize) {}
+
+    /// Whether an any-hit walk's leaf test still goes through every pack
+    /// of a leaf (a walk to every crossing), so that every pack is fetched
+    /// in that walk's order too, not only the first.
+    const EVERY_PACK: bool = false;
 }
 
 impl<L: LeafTest> LeafTest for &L {
@@ -55,6 +60,8 @@ impl<L: LeafTest> LeafTest for &L {
     fn prefetch(&self, first: usize, count: usize) {
         (**self).prefetch(first, count)
     }
+
+    const EVERY_PACK: bool = L::EVERY_PACK;
 }
 
 /// [`LeafTest`] over packs of four.

@@ -64,6 +64,9 @@ impl<V: CrossingVisitor, const SURE: bool> CrossingLeaf<'_, V, SURE> {
 }
 
 impl<V: CrossingVisitor, const SURE: bool> LeafTest for CrossingLeaf<'_, V, SURE> {
+    /// The walk tests every pack of the leaves it enters, in either order.
+    const EVERY_PACK: bool = true;
+
     /// Every pack of the leaf, as the nearest-hit leaves fetch them.
     #[inline(always)]
     fn prefetch(&self, first: usize, count: usize) {
@@ -139,10 +142,11 @@ impl<N: NodeWidth> WideBvh<N, Moller> {
     /// Walk every triangle `ray` may cross over `[ray.tnear, reach]`,
     /// handing each to `visitor` (see [`CrossingVisitor`]; `reach` starts
     /// at `ray.tfar`); returns the visitor. `NEAR_FIRST` walks as nearest
-    /// hits do (children nearest first, every pack of a leaf fetched);
-    /// otherwise as occlusion rays do (unsorted, the first pack fetched),
-    /// cheaper for short rays that cross little. `SURE` classifies each
-    /// crossing's certainty. A ray that is not valid crosses nothing.
+    /// hits do (children nearest first), for visitors that lower the
+    /// reach; otherwise as occlusion rays do (children unsorted), cheaper.
+    /// Either way every pack of an entered leaf is fetched, since every
+    /// one is tested. `SURE` classifies each crossing's certainty. A ray
+    /// that is not valid crosses nothing.
     pub(crate) fn crossings<const NEAR_FIRST: bool, const SURE: bool, V: CrossingVisitor>(
         &self,
         ray: &Ray,
@@ -209,12 +213,11 @@ impl<N: NodeWidth> WideBvh<N, Moller> {
     }
 
     /// [`WideBvh::crossings`] for each of `rays`, [`WALKS`] rays stepped in
-    /// turn (`walk.rs`) in the nearest-hit walk's order: `visitor(ray)`
-    /// makes each ray's visitor and `done(i, visitor)` receives ray `i`'s
-    /// when its walk ends (to read or take its state). The nearest-hit
-    /// walk fetches every pack of the leaves it enters, where the occlusion
-    /// walk fetches the first; a walk to every crossing tests them all
-    /// (the two orders measured in BENCHMARKS.md).
+    /// turn (`walk.rs`) in the occlusion walk's order (children unsorted:
+    /// the visitors of a batch never lower the reach, so sorting would only
+    /// cost), every pack of an entered leaf fetched: `visitor(ray)` makes
+    /// each ray's visitor and `done(i, visitor)` receives ray `i`'s when
+    /// its walk ends (to read or take its state).
     pub(crate) fn crossings_batch<const SURE: bool, V: CrossingVisitor>(
         &self,
         rays: &[Ray],
@@ -281,9 +284,9 @@ impl<N: NodeWidth> WideBvh<N, Moller> {
         let done =
             |i, _, _, leaf: &CrossingLeaf<'_, V, SURE>| done(i, &mut leaf.visitor.borrow_mut());
         if self.small_stack {
-            self.group::<false, SMALL_STACK, _>(rays, path, leaf, done)
+            self.group::<true, SMALL_STACK, _>(rays, path, leaf, done)
         } else {
-            self.group::<false, LARGE_STACK, _>(rays, path, leaf, done)
+            self.group::<true, LARGE_STACK, _>(rays, path, leaf, done)
         }
     }
 }

@@ -131,7 +131,7 @@ impl<N: NodeWidth, T: TriangleTest> WideBvh<N, T> {
                 // mispredicted branches (incoherent rays, full dragon:
                 // about +5%, three interleaved runs).
                 if h.mask().count_ones() == 1 {
-                    prefetch_with::<ANY, _>(&self.nodes, next, &w.leaf);
+                    prefetch_with::<ANY, _, _>(&self.nodes, next, &w.leaf);
                 }
                 return None;
             }
