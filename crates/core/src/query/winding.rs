@@ -602,9 +602,10 @@ mod tests {
     }
 
     /// Points on the inner of two nested spheres cannot be counted, so
-    /// occupancy sums them. A few are summed over every triangle without making the
-    /// point tree, more through the tree; either way each answer is
-    /// `is_inside`'s and the `f64` sum's, and the points counted keep theirs.
+    /// occupancy sums them. A few are summed over every triangle without
+    /// making the point tree, more through the tree; either way each answer
+    /// is `is_inside`'s and the `f64` sum's, and the points counted keep
+    /// theirs.
     #[test]
     fn points_that_cannot_be_counted_are_summed_directly_or_through_the_tree() {
         let (mesh, mut on_inner) = nested_spheres();
